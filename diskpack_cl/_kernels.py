@@ -1,0 +1,45 @@
+"""Locate the ``.cl`` sources and build each program once per context."""
+
+from __future__ import annotations
+
+import importlib.resources
+from pathlib import Path
+
+__all__ = ["kernel_dir", "build_program"]
+
+_PROGRAMS: dict = {}
+
+
+def kernel_dir() -> Path:
+    """Folder holding the OpenCL sources (installed wheel first, then checkout)."""
+    tried = []
+    try:
+        p = Path(str(importlib.resources.files("diskpack_cl") / "kernels"))
+        if (p / "common.h").is_file():
+            return p
+        tried.append(str(p))
+    except (ModuleNotFoundError, TypeError):  # pragma: no cover
+        pass
+    p = Path(__file__).resolve().parents[1] / "kernels"
+    if (p / "common.h").is_file():
+        return p
+    tried.append(str(p))
+    raise FileNotFoundError("OpenCL kernel sources not found; looked in " + ", ".join(tried))
+
+
+def build_program(ctx, stem: str, defines: dict | None = None):
+    """Build ``kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
+
+    Built programs and their kernel objects are memoized by
+    (context, stem, defines), so each combination compiles once per process.
+    """
+    import pyopencl as cl
+
+    defines = dict(sorted((defines or {}).items()))
+    key = (ctx.int_ptr, stem, tuple(defines.items()))
+    if key not in _PROGRAMS:
+        src = (kernel_dir() / f"{stem}.cl").read_text()
+        opts = ["-I", str(kernel_dir())] + [f"-D{k}={v}" for k, v in defines.items()]
+        prg = cl.Program(ctx, src).build(options=opts)
+        _PROGRAMS[key] = {k.function_name: k for k in prg.all_kernels()}
+    return _PROGRAMS[key]
