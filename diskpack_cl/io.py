@@ -1,13 +1,49 @@
-"""File input and output: point sets and atomic writes."""
+"""File input and output: point sets and atomic writes.
+
+Point files hold an ``(n, 2)`` array of float64 coordinates ``x, y``:
+
+=========== ==========================================================
+extension   layout
+=========== ==========================================================
+``.npz``    numpy archive; the key ``points`` holds the array, other
+            keys (``rho``, ``radii``, ...) may sit beside it
+``.npy``    a single numpy array of shape ``(n, 2)``
+``.csv``    a header line ``x,y`` then one ``x,y`` pair a line; more
+            columns may follow ``x`` and ``y``, a headerless file of
+            exactly two columns is also read
+``.txt``    two numbers a line separated by white space; ``#`` starts
+``.xy``     a comment
+=========== ==========================================================
+
+Writers go through :func:`atomic_write`: an interrupted or failed write leaves
+no partial file and no temporary file behind, and an existing file is kept.
+Text formats are written with 17 significant digits, so float64 coordinates
+round-trip exactly.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import io as _stdio
 import os
 import tempfile
+import warnings
+import zipfile
 from pathlib import Path
 
-__all__ = ["atomic_write"]
+import numpy as np
+
+__all__ = [
+    "POINT_FORMATS",
+    "atomic_write",
+    "check_points_path",
+    "read_points",
+    "validate_points",
+    "write_points",
+]
+
+#: Extensions understood by :func:`read_points` and :func:`write_points`.
+POINT_FORMATS = (".npz", ".npy", ".csv", ".txt", ".xy")
 
 
 @contextlib.contextmanager
@@ -41,3 +77,276 @@ def atomic_write(path, mode="wb"):
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def _suffix(path):
+    return Path(path).suffix.lower()
+
+
+def check_points_path(path, *, for_writing=False):
+    """Return the lower-case extension of `path`, or raise if it is unknown.
+
+    With ``for_writing=True`` also check that the output folder exists, so a
+    command can fail before a long computation rather than after it.
+
+    Raises
+    ------
+    ValueError
+        The extension is not one of :data:`POINT_FORMATS`.
+    FileNotFoundError
+        ``for_writing`` and the output folder does not exist.
+
+    Examples
+    --------
+    >>> check_points_path("out/points.NPZ")
+    '.npz'
+    """
+    suffix = _suffix(path)
+    if suffix not in POINT_FORMATS:
+        raise ValueError(
+            f"{path}: unknown point file extension {suffix or '(none)'!r}; "
+            f"use one of {', '.join(POINT_FORMATS)}")
+    if for_writing:
+        directory = Path(path).parent
+        if not directory.is_dir():
+            raise FileNotFoundError(f"{path}: output directory does not exist: {directory}")
+    return suffix
+
+
+def validate_points(points, *, min_points=2, domain=None, source=None):
+    """Check a point array and return it as a C-contiguous ``(n, 2)`` float64 array.
+
+    Parameters
+    ----------
+    points : array_like
+        Coordinates, shape ``(n, 2)``.
+    min_points : int, optional
+        Smallest accepted ``n``.
+    domain : diskpack_cl.geometry.Domain, optional
+        For a bounded domain (``periodic=False``), every point must lie in the
+        closed rectangle ``[0, W] x [0, H]``. Periodic domains accept any
+        finite coordinates; callers wrap them onto the torus.
+    source : str or path, optional
+        Named in error messages (the file the points came from).
+
+    Raises
+    ------
+    ValueError
+        Not numeric, not two columns, fewer than `min_points` rows, NaN or
+        infinite coordinates, or points outside a bounded `domain`.
+
+    Examples
+    --------
+    >>> validate_points([[0.1, 0.2], [0.3, 0.4]]).shape
+    (2, 2)
+    >>> validate_points([[0.1, float("nan")], [0.3, 0.4]])
+    Traceback (most recent call last):
+    ...
+    ValueError: points: 1 point has NaN or infinite coordinates (first: row 0)
+    """
+    name = str(source) if source is not None else "points"
+    try:
+        p = np.asarray(points)
+        if p.dtype.kind not in "biuf":
+            raise TypeError(f"dtype {p.dtype}")
+        p = np.ascontiguousarray(p, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: points must be numeric ({exc})") from None
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"{name}: points must have shape (n, 2), got {p.shape}")
+    n = p.shape[0]
+    if n < min_points:
+        raise ValueError(f"{name}: has {n} point{'s' if n != 1 else ''}, "
+                         f"need at least {min_points}")
+    bad = ~np.isfinite(p).all(axis=1)
+    if bad.any():
+        k = int(bad.sum())
+        raise ValueError(f"{name}: {k} point{'s have' if k > 1 else ' has'} NaN or infinite "
+                         f"coordinates (first: row {int(np.argmax(bad))})")
+    if domain is not None and not domain.periodic:
+        size = np.array([domain.width, domain.height])
+        out = ((p < 0) | (p > size)).any(axis=1)
+        if out.any():
+            k = int(out.sum())
+            raise ValueError(
+                f"{name}: {k} point{'s lie' if k > 1 else ' lies'} outside the domain "
+                f"[0, {domain.width:g}] x [0, {domain.height:g}] "
+                f"(first: row {int(np.argmax(out))})")
+    return p
+
+
+def _read_text(path, suffix):
+    """Parse a csv/txt/xy file with numpy's C reader; return a float array."""
+    usecols = None
+    skiprows = 0
+    delimiter = "," if suffix == ".csv" else None
+    with open(path, encoding="utf-8", errors="strict") as fh:
+        for lineno, line in enumerate(fh):
+            text = line.split("#", 1)[0].strip()
+            if not text:
+                continue
+            fields = [f.strip() for f in text.split(delimiter)]
+            try:
+                [float(f) for f in fields]
+            except ValueError:
+                if suffix != ".csv":
+                    raise ValueError(
+                        f"{path}: malformed {suffix} file: line {lineno + 1} is not "
+                        f"two numbers: {text[:60]!r}") from None
+                names = [f.lower() for f in fields]
+                if "x" not in names or "y" not in names:
+                    raise ValueError(
+                        f"{path}: malformed .csv file: header must name columns x,y, "
+                        f"got {text[:60]!r}") from None
+                usecols = (names.index("x"), names.index("y"))
+                skiprows = lineno + 1
+            break
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
+            data = np.loadtxt(path, dtype=np.float64, delimiter=delimiter, comments="#",
+                              skiprows=skiprows, usecols=usecols, ndmin=2, encoding="utf-8")
+    except ValueError as exc:
+        detail = str(exc).split("; use `usecols`")[0]
+        raise ValueError(f"{path}: malformed {suffix} file: {detail}") from None
+    if data.size == 0:
+        data = data.reshape(0, 2)
+    return data
+
+
+def read_points(path, *, min_points=2, domain=None):
+    """Read an ``(n, 2)`` float64 point array from a ``.npz/.npy/.csv/.txt/.xy`` file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Point file; the format follows the extension (see the module docstring).
+    min_points : int, optional
+        Smallest accepted number of points.
+    domain : diskpack_cl.geometry.Domain, optional
+        Passed to :func:`validate_points`.
+
+    Returns
+    -------
+    points : ndarray, shape (n, 2), float64
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    ValueError
+        Unknown extension, unreadable or malformed file, wrong shape, too few
+        points, NaN/inf coordinates. The message names the file.
+
+    Examples
+    --------
+    >>> import tempfile, os, numpy as np
+    >>> p = os.path.join(tempfile.mkdtemp(), "pts.csv")
+    >>> write_points(p, np.array([[0.25, 0.5], [0.75, 0.125]]))
+    >>> open(p).read().splitlines()[0]
+    'x,y'
+    >>> read_points(p)
+    array([[0.25 , 0.5  ],
+           [0.75 , 0.125]])
+    """
+    suffix = check_points_path(path)
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if not p.is_file():
+        raise ValueError(f"{path}: not a regular file")
+    try:
+        if suffix == ".npz":
+            archive = np.load(p, allow_pickle=False)
+            if not isinstance(archive, np.lib.npyio.NpzFile):
+                raise ValueError(f"{path}: unreadable .npz file: not a numpy zip archive")
+            with archive:
+                if "points" not in archive.files:
+                    raise ValueError(f"{path}: .npz file has no array 'points' "
+                                     f"(keys: {', '.join(archive.files) or 'none'})")
+                data = archive["points"]
+        elif suffix == ".npy":
+            with open(p, "rb") as fh:
+                if fh.read(6) != b"\x93NUMPY":
+                    raise ValueError(f"{path}: unreadable .npy file: not a numpy array file")
+            data = np.load(p, allow_pickle=False)
+        else:
+            data = _read_text(p, suffix)
+    except ValueError as exc:
+        msg = str(exc)
+        if not msg.startswith(str(path)):
+            msg = f"{path}: unreadable {suffix} file: {msg}"
+        raise ValueError(msg) from None
+    except (OSError, EOFError, zipfile.BadZipFile, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: unreadable {suffix} file: {exc}") from None
+    return validate_points(data, min_points=min_points, domain=domain, source=path)
+
+
+def write_points(path, points, **extra):
+    """Write an ``(n, 2)`` point array atomically; the format follows the extension.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file (``.npz/.npy/.csv/.txt/.xy``).
+    points : array_like, shape (n, 2)
+        Finite coordinates, ``n >= 1``.
+    **extra : array_like
+        Additional arrays. ``.npz`` stores them under their keyword names.
+        ``.csv`` stores 1-D arrays of length n as extra columns after ``x,y``.
+        The other formats hold points only and raise ``ValueError`` if extras
+        are given.
+
+    Raises
+    ------
+    ValueError
+        Unknown extension, invalid points, or extras the format cannot hold.
+    FileNotFoundError
+        The output folder does not exist.
+
+    Examples
+    --------
+    >>> import tempfile, os, numpy as np
+    >>> p = os.path.join(tempfile.mkdtemp(), "pts.npz")
+    >>> write_points(p, np.zeros((3, 2)), rho=np.array([0.7, 0.8]))
+    >>> sorted(np.load(p).files)
+    ['points', 'rho']
+    """
+    suffix = check_points_path(path)
+    pts = validate_points(points, min_points=1, source=path)
+    if "points" in extra:
+        raise ValueError(f"{path}: 'points' is reserved; pass it as the points argument")
+    if suffix == ".npz":
+        arrays = {"points": pts}
+        for key, value in extra.items():
+            arr = np.asarray(value)
+            if arr.dtype.kind == "O":
+                raise ValueError(f"{path}: extra array {key!r} is not numeric")
+            arrays[key] = arr
+        with atomic_write(path, "wb") as fh:
+            np.savez(fh, **arrays)
+        return
+    if extra and suffix != ".csv":
+        raise ValueError(f"{path}: {suffix} files hold points only; "
+                         f"use .npz or .csv to also store {', '.join(extra)}")
+    columns = [pts]
+    names = ["x", "y"]
+    for key, value in extra.items():
+        col = np.asarray(value, dtype=np.float64)
+        if col.shape != (pts.shape[0],):
+            raise ValueError(f"{path}: extra column {key!r} must have shape "
+                             f"({pts.shape[0]},), got {col.shape}")
+        columns.append(col[:, None])
+        names.append(str(key))
+    if suffix == ".npy":
+        with atomic_write(path, "wb") as fh:
+            np.save(fh, pts)
+        return
+    table = np.hstack(columns)
+    buf = _stdio.StringIO()
+    if suffix == ".csv":
+        np.savetxt(buf, table, fmt="%.17g", delimiter=",", header=",".join(names), comments="")
+    else:
+        np.savetxt(buf, table, fmt="%.17g", delimiter=" ")
+    with atomic_write(path, "wb") as fh:
+        fh.write(buf.getvalue().encode("utf-8"))
