@@ -1,0 +1,244 @@
+"""Image input for stippling: grayscale float images in [0, 1], 1 = white.
+
+Every image Pillow reads is accepted (PNG, JPEG, TIFF, BMP, WebP, ...), 8- and
+16-bit. Colour is converted to luma with the ITU-R BT.601 weights applied to
+the gamma-encoded values, ``Y' = 0.299 R' + 0.587 G' + 0.114 B'`` (the same
+weights as Pillow's ``convert("L")``), computed in float64 so that 16-bit
+precision survives. Transparent pixels are composited on white (paper), the
+EXIF orientation tag is honoured, and Pillow's decompression-bomb limit
+(``PIL.Image.MAX_IMAGE_PIXELS``) is kept unless ``allow_large=True``.
+
+A uniform image is accepted here; :func:`diskpack_cl.stipple.stipple` refuses
+a white one ("nothing to stipple") and stipples any other uniform tone as a
+uniform point set.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import warnings
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["load_gray", "to_gray", "sample_image_path", "LUMA_601"]
+
+#: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
+LUMA_601 = (0.299, 0.587, 0.114)
+
+
+def sample_image_path():
+    """Path of the bundled sample photograph (512x512 8-bit grayscale PNG).
+
+    It is a portrait of astronaut Eileen Collins (NASA, public domain); see
+    ``diskpack_cl/data/README.md``.
+
+    Examples
+    --------
+    >>> from diskpack_cl.image import sample_image_path, load_gray
+    >>> load_gray(sample_image_path()).shape
+    (512, 512)
+    """
+    ref = resources.files("diskpack_cl") / "data" / "astronaut.png"
+    with resources.as_file(ref) as p:
+        return Path(p)
+
+
+@contextlib.contextmanager
+def _bomb_limit(allow_large):
+    """Keep Pillow's decompression-bomb check, or lift it for this block."""
+    from PIL import Image
+
+    if not allow_large:
+        with warnings.catch_warnings():
+            # Pillow only warns between 1x and 2x the limit; make it an error.
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            yield
+        return
+    old = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None
+    try:
+        yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = old
+
+
+def load_gray(path, *, invert=False, allow_large=False):
+    """Read an image file as a float64 gray image in [0, 1], 1 = white.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any file Pillow can read.
+    invert : bool, optional
+        Return ``1 - gray`` (for light-on-dark stippling).
+    allow_large : bool, optional
+        Lift Pillow's decompression-bomb limit (``PIL.Image.MAX_IMAGE_PIXELS``,
+        about 89 Mpixel). By default an image larger than the limit is refused.
+
+    Returns
+    -------
+    gray : (H, W) float64 ndarray
+        Row 0 is the top of the image (after EXIF orientation).
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    ValueError
+        The file is empty, not an image, truncated or corrupt, has zero
+        size, or exceeds the decompression-bomb limit.
+
+    Examples
+    --------
+    >>> from diskpack_cl.image import load_gray, sample_image_path
+    >>> g = load_gray(sample_image_path())
+    >>> g.dtype, float(g.min()) >= 0.0, float(g.max()) <= 1.0
+    (dtype('float64'), True, True)
+    """
+    from PIL import Image, ImageOps, UnidentifiedImageError
+
+    path = Path(os.fspath(path))
+    if not path.exists():
+        raise FileNotFoundError(f"image file not found: {path}")
+    if path.is_dir():
+        raise ValueError(f"not an image file (it is a directory): {path}")
+    if path.stat().st_size == 0:
+        raise ValueError(f"image file is empty (0 bytes): {path}")
+    try:
+        with _bomb_limit(allow_large):
+            with Image.open(path) as im:
+                im.load()
+                im = ImageOps.exif_transpose(im)
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
+        raise ValueError(
+            f"image is larger than Pillow's decompression-bomb limit "
+            f"({Image.MAX_IMAGE_PIXELS} pixels): {path}; pass allow_large=True "
+            f"(CLI: --allow-large) if you trust the file"
+        ) from exc
+    except UnidentifiedImageError as exc:
+        raise ValueError(f"not an image Pillow can read: {path}") from exc
+    except (OSError, SyntaxError, EOFError) as exc:
+        raise ValueError(f"image file is truncated or corrupt: {path} ({exc})") from exc
+    return _pil_to_gray(im, invert=invert, name=str(path))
+
+
+def _pil_to_gray(im, *, invert=False, name="image"):
+    from PIL import Image
+
+    if im.width == 0 or im.height == 0:
+        raise ValueError(f"image has zero size ({im.width}x{im.height}): {name}")
+    mode = im.mode
+    if mode == "P":
+        im = im.convert("RGBA" if "transparency" in im.info else "RGB")
+    elif mode == "PA":
+        im = im.convert("RGBA")
+    elif mode in ("CMYK", "YCbCr", "LAB", "HSV"):
+        im = im.convert("RGB")
+    elif mode == "1":
+        im = im.convert("L")
+    elif mode in ("RGBa", "La"):  # premultiplied alpha
+        im = im.convert("RGBA" if mode == "RGBa" else "LA")
+    mode = im.mode
+    if mode.startswith("I;16"):
+        g = np.asarray(im, dtype=np.float64) / 65535.0
+    elif mode == "I":
+        a = np.asarray(im, dtype=np.float64)
+        # 32-bit integer images: 16-bit data (PNG, TIFF) stored as "I".
+        scale = 65535.0 if a.max(initial=0) > 255 else 255.0
+        g = a / scale
+    elif mode == "F":
+        g = np.asarray(im, dtype=np.float64)
+        if not np.all(np.isfinite(g)) or g.min() < 0.0 or g.max() > 1.0:
+            raise ValueError(f"float image values must be finite and in [0, 1]: {name}")
+    else:
+        if mode not in ("L", "LA", "RGB", "RGBA"):
+            im = im.convert("RGBA" if "A" in mode else "RGB")
+        g = _array_to_gray(np.asarray(im), name=name)
+        return 1.0 - g if invert else g
+    g = np.clip(g, 0.0, 1.0)
+    return 1.0 - g if invert else np.ascontiguousarray(g)
+
+
+def _array_to_gray(a, *, name="array"):
+    """(H,W), (H,W,1..4) array -> float64 gray in [0, 1]; alpha over white."""
+    a = np.asarray(a)
+    if a.dtype == np.bool_:
+        f = a.astype(np.float64)
+    elif np.issubdtype(a.dtype, np.integer):
+        info = np.iinfo(a.dtype)
+        if info.min < 0 and a.min(initial=0) < 0:
+            raise ValueError(f"integer image values must be non-negative: {name}")
+        bits = 8 if info.max <= 255 else 16 if info.max <= 65535 else None
+        if bits is None:
+            top = float(a.max(initial=0))
+            bits = 8 if top <= 255 else 16
+        f = a.astype(np.float64) / (2.0**bits - 1.0)
+    elif np.issubdtype(a.dtype, np.floating):
+        f = a.astype(np.float64)
+        if not np.all(np.isfinite(f)):
+            raise ValueError(f"image values must be finite: {name}")
+        if f.size and (f.min() < 0.0 or f.max() > 1.0):
+            raise ValueError(
+                f"float image values must be in [0, 1] (1 = white), got "
+                f"[{f.min():.4g}, {f.max():.4g}]: {name}"
+            )
+    else:
+        raise ValueError(f"unsupported image dtype {a.dtype}: {name}")
+    if f.ndim == 3 and f.shape[2] == 1:
+        f = f[:, :, 0]
+    if f.ndim == 2:
+        g = f
+    elif f.ndim == 3 and f.shape[2] in (2, 3, 4):
+        c = f.shape[2]
+        if c in (2, 4):
+            alpha, f = f[:, :, -1], f[:, :, :-1]
+        else:
+            alpha = None
+        if f.shape[2] == 3:
+            g = f @ np.asarray(LUMA_601)
+        else:
+            g = f[:, :, 0]
+        if alpha is not None:
+            g = alpha * g + (1.0 - alpha)
+    else:
+        raise ValueError(f"image must be (H, W) or (H, W, 1..4), got shape {a.shape}: {name}")
+    if g.shape[0] == 0 or g.shape[1] == 0:
+        raise ValueError(f"image has zero size ({g.shape[1]}x{g.shape[0]}): {name}")
+    return np.ascontiguousarray(np.clip(g, 0.0, 1.0))
+
+
+def to_gray(image, *, invert=False, allow_large=False):
+    """Anything image-like -> float64 gray in [0, 1], 1 = white (a new array).
+
+    Parameters
+    ----------
+    image : str, os.PathLike, PIL.Image.Image or array_like
+        A file path (read with :func:`load_gray`), a Pillow image, or an array:
+        ``(H, W)`` gray or ``(H, W, 3|4)`` RGB(A). Integer arrays are scaled
+        by their bit depth (uint8 by 255, uint16 by 65535); float arrays must
+        already lie in [0, 1] with 1 = white; bool arrays are 0/1.
+    invert : bool, optional
+        Return ``1 - gray``.
+    allow_large : bool, optional
+        Passed to :func:`load_gray` for paths.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> to_gray(np.array([[0, 255]], dtype=np.uint8))
+    array([[0., 1.]])
+    """
+    if isinstance(image, (str, os.PathLike)):
+        return load_gray(image, invert=invert, allow_large=allow_large)
+    try:
+        from PIL import Image, ImageOps
+
+        if isinstance(image, Image.Image):
+            return _pil_to_gray(ImageOps.exif_transpose(image), invert=invert)
+    except ImportError:  # pragma: no cover - Pillow is a dependency
+        pass
+    g = _array_to_gray(image)
+    return 1.0 - g if invert else g
