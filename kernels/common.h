@@ -1,0 +1,28 @@
+/* Shared definitions for the diskpack_cl kernels.
+ *
+ * Build-time switches (pass with -D):
+ *   PERIODIC  1: the domain is a torus of size W x H (sites repeat with period W, H)
+ *             0: the domain is the closed rectangle [0,W] x [0,H]
+ */
+#ifndef DISKPACK_COMMON_H
+#define DISKPACK_COMMON_H
+
+#ifndef PERIODIC
+#error "define PERIODIC to 0 or 1"
+#endif
+
+/* Squared length of a 2-vector. */
+inline float len2(float dx, float dy) { return dx * dx + dy * dy; }
+
+/* Distance from point (px,py) to the axis-aligned box [x0,x1] x [y0,y1]. */
+inline float box_dist(float px, float py, float x0, float y0, float x1, float y1)
+{
+    float dx = fmax(fmax(x0 - px, px - x1), 0.0f);
+    float dy = fmax(fmax(y0 - py, py - y1), 0.0f);
+    return sqrt(dx * dx + dy * dy);
+}
+
+/* Floor division for bucket indices that may leave the grid on a torus. */
+inline int floordiv(int a, int b) { return (a >= 0) ? a / b : -((-a + b - 1) / b); }
+
+#endif

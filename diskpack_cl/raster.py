@@ -1,0 +1,288 @@
+"""Raster stage: discrete power diagram and inscribed-circle estimates in OpenCL.
+
+The kernels (``kernels/power_diagram.cl``, ``kernels/inscribed_circle.cl``)
+label every grid cell with the site of least power distance, give it its
+analytic distance to the boundary of that site's power cell, and reduce the
+distances per site to a maximal-inscribed-circle estimate.  The estimate is
+only a starting point: :func:`diskpack_cl.geometry.exact_mic` refines it to a
+certified float64 result.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._device import describe, get_context
+from ._kernels import build_program
+from .geometry import Domain
+
+__all__ = ["PowerRaster", "RasterResult", "auto_grid"]
+
+INT_MAX = np.iinfo(np.int32).max
+
+
+def auto_grid(n, domain, cells_per_site=64):
+    """Raster shape ``(ny, nx)`` with about `cells_per_site` grid cells per site.
+
+    64 grid cells (8 x 8 across a cell) put the raster MIC estimate within a
+    grid cell of the exact one, which is enough for the exact stage to find
+    the active constraints at once on most cells.
+    """
+    h = np.sqrt(domain.area / (max(int(n), 1) * cells_per_site))
+    return (max(int(np.ceil(domain.height / h)), 4), max(int(np.ceil(domain.width / h)), 4))
+
+
+@dataclass
+class RasterResult:
+    """Output of :meth:`PowerRaster.compute`.
+
+    Attributes
+    ----------
+    centers : (n, 2) float64
+        Grid-cell centre where each power cell's distance map peaks.
+    radii : (n,) float64
+        That peak distance (raster MIC radius estimate); -1 where the cell
+        owns no grid cell (empty, or smaller than the raster resolves).
+    timings : dict
+        Seconds spent in ``raster_labels`` and ``mic_estimate``.
+    """
+
+    centers: np.ndarray
+    radii: np.ndarray
+    shape: tuple
+    cell_size: tuple
+    timings: dict = field(default_factory=dict)
+    _owner: object = None
+
+    @property
+    def labels(self):
+        """(ny, nx) int32 owning site of each grid cell."""
+        return self._owner._fetch("label").reshape(self.shape)
+
+    @property
+    def dist(self):
+        """(ny, nx) float32 distance from each grid-cell centre to its cell's boundary."""
+        return self._owner._fetch("dist").reshape(self.shape)
+
+    @property
+    def neighbor(self):
+        """(ny, nx) int32 site across the nearest boundary line (-1: domain edge)."""
+        return self._owner._fetch("nbr").reshape(self.shape)
+
+    def adjacency(self):
+        """Sorted unique pairs ``(i, j)``, i < j, of sites whose raster cells touch."""
+        lab = self.labels
+        pairs = [np.stack([lab[:, :-1].ravel(), lab[:, 1:].ravel()], 1),
+                 np.stack([lab[:-1, :].ravel(), lab[1:, :].ravel()], 1)]
+        if self._owner.domain.periodic:
+            pairs += [np.stack([lab[:, -1], lab[:, 0]], 1), np.stack([lab[-1, :], lab[0, :]], 1)]
+        p = np.concatenate(pairs)
+        p = np.sort(p[p[:, 0] != p[:, 1]], axis=1)
+        return np.unique(p, axis=0)
+
+
+class PowerRaster:
+    """OpenCL processing object for the discrete power diagram of one grid.
+
+    Parameters
+    ----------
+    domain : Domain
+        Unit torus or image rectangle.
+    shape : tuple of int
+        Raster size ``(ny, nx)``.
+    device : str or pyopencl.Context, optional
+        See :func:`diskpack_cl._device.get_context`.
+    profile : bool
+        Wait for each kernel so that stage timings are exact.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from diskpack_cl.geometry import Domain
+    >>> pr = PowerRaster(Domain.torus(), (64, 64))        # doctest: +SKIP
+    >>> est = pr.compute(np.random.default_rng(0).random((50, 2)))  # doctest: +SKIP
+    >>> est.radii.shape                                    # doctest: +SKIP
+    (50,)
+    """
+
+    def __init__(self, domain: Domain, shape, device=None, profile=True):
+        import pyopencl as cl
+
+        self.domain = domain
+        self.shape = (int(shape[0]), int(shape[1]))
+        if min(self.shape) < 1:
+            raise ValueError(f"raster shape must be positive, got {shape}")
+        self.ctx = get_context(device)
+        self.device_name = describe(self.ctx)
+        self.queue = cl.CommandQueue(self.ctx)
+        self.profile = profile
+        periodic = int(domain.periodic)
+        self._k_labels = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic})["power_labels"]
+        k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
+        self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
+        npix = self.shape[0] * self.shape[1]
+        mf = cl.mem_flags
+        self._pix = {
+            "label": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32),
+            "dist": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.float32),
+            "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32),
+        }
+        self._site_bufs = {}
+        self._pts = np.zeros((0, 2))
+        self._cache = {}
+
+    # -- buffers -----------------------------------------------------------
+    def _site_buffer(self, name, host):
+        import pyopencl as cl
+
+        nbytes = max(host.nbytes, 4)
+        buf = self._site_bufs.get(name)
+        if buf is None or buf.size < nbytes:
+            buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, nbytes)
+            self._site_bufs[name] = buf
+        if host.nbytes:
+            cl.enqueue_copy(self.queue, buf, host)
+        return buf
+
+    def _fetch(self, name):
+        import pyopencl as cl
+
+        if name not in self._cache:
+            buf, dtype = self._pix[name]
+            out = np.empty(self.shape[0] * self.shape[1], dtype)
+            cl.enqueue_copy(self.queue, out, buf)
+            self._cache[name] = out
+        return self._cache[name]
+
+    def _buckets(self, pts, w):
+        dom = self.domain
+        n = len(pts)
+        # about two sites per bucket keeps both ring searches short
+        nbx = max(1, int(np.sqrt(n / 2.0 * dom.width / dom.height)))
+        nby = max(1, int(np.sqrt(n / 2.0 * dom.height / dom.width)))
+        bw, bh = dom.width / nbx, dom.height / nby
+        bxi = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
+        byi = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
+        bid = byi * nbx + bxi
+        order = np.argsort(bid, kind="stable")
+        counts = np.bincount(bid, minlength=nbx * nby)
+        start = np.zeros(nbx * nby + 1, np.int32)
+        np.cumsum(counts, out=start[1:])
+        wmax = np.zeros(nbx * nby, np.float32)
+        nonempty = counts > 0
+        if n:
+            wmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+        return order, start, wmax, (nbx, nby, bw, bh)
+
+    # -- work --------------------------------------------------------------
+    def compute(self, points, weights=None):
+        """Label the raster and estimate every power cell's inscribed circle.
+
+        Parameters
+        ----------
+        points : (n, 2) array_like
+            Sites inside the domain (wrapped into it on a torus).
+        weights : (n,) array_like, optional
+            Power weights (squared radii); zeros give the Voronoi diagram.
+
+        Returns
+        -------
+        RasterResult
+        """
+        import pyopencl as cl
+
+        t0 = time.perf_counter()
+        pts = np.asarray(points, np.float64)
+        n = len(pts)
+        if self.domain.periodic:
+            pts = self.domain.wrap(pts)
+        w = np.zeros(n) if weights is None else np.asarray(weights, np.float64)
+        # Float32 kernels: only relative power distances matter, and the
+        # largest weight shifts all of them equally, so subtract it.
+        w32 = (w - (w.max() if n else 0.0)).astype(np.float32)
+        order, start, wmax_b, (nbx, nby, bw, bh) = self._buckets(pts, w32)
+        sites = np.ascontiguousarray(pts[order], np.float32)
+        ids = order.astype(np.int32)
+        wsorted = np.ascontiguousarray(w32[order])
+        b_site = self._site_buffer("site", sites)
+        b_w = self._site_buffer("weight", wsorted)
+        b_id = self._site_buffer("id", ids)
+        b_start = self._site_buffer("start", start)
+        b_wmax = self._site_buffer("wmax", wmax_b)
+        ny, nx = self.shape
+        dom = self.domain
+        self._cache = {}
+        self._pts = pts
+        ev = self._k_labels(
+            self.queue, (nx, ny), None, b_site, b_w, b_id, b_start, b_wmax,
+            np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
+            np.float32(dom.width), np.float32(dom.height), np.float32(wmax_b.max() if n else 0),
+            np.int32(nx), np.int32(ny),
+            self._pix["label"][0], self._pix["dist"][0], self._pix["nbr"][0])
+        if self.profile:
+            ev.wait()
+        t1 = time.perf_counter()
+        npix = nx * ny
+        rbits = np.full(n, -1, np.int32)
+        argpix = np.full(n, INT_MAX, np.int32)
+        b_r = self._site_buffer("rbits", rbits)
+        b_a = self._site_buffer("argpix", argpix)
+        lab, dist = self._pix["label"][0], self._pix["dist"][0]
+        self._k_max(self.queue, (npix,), None, lab, dist, np.int32(npix), b_r)
+        self._k_argmax(self.queue, (npix,), None, lab, dist, np.int32(npix), b_r, b_a)
+        cl.enqueue_copy(self.queue, rbits, b_r)
+        cl.enqueue_copy(self.queue, argpix, b_a)
+        has = rbits >= 0
+        radii = np.full(n, -1.0)
+        radii[has] = rbits[has].view(np.float32)
+        hx, hy = dom.width / nx, dom.height / ny
+        centers = pts.copy()
+        iy, ix = np.divmod(argpix[has].astype(np.int64), nx)
+        centers[has, 0] = (ix + 0.5) * hx
+        centers[has, 1] = (iy + 0.5) * hy
+        t2 = time.perf_counter()
+        return RasterResult(centers, radii, self.shape, (hx, hy),
+                            {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self)
+
+    def centroids(self, density=None):
+        """Density-weighted centroids of the cells of the last :meth:`compute`.
+
+        Parameters
+        ----------
+        density : (ny, nx) array_like, optional
+            Non-negative density per grid cell (uniform when omitted).
+
+        Returns
+        -------
+        centroids : (n, 2) float64
+            NaN where a cell has zero mass (wrapped into the torus there).
+        mass : (n,) float64
+            Integral of the density over each cell (grid-cell area units).
+        """
+        lab = self._fetch("label")
+        n = len(self._pts)
+        ny, nx = self.shape
+        hx, hy = self.domain.width / nx, self.domain.height / ny
+        dens = np.ones(nx * ny) if density is None else np.asarray(density, np.float64).ravel()
+        if dens.size != nx * ny:
+            raise ValueError(f"density must have the raster shape {self.shape}")
+        iy, ix = np.divmod(np.arange(nx * ny), nx)
+        # offsets from the owning site, so that a cell crossing the seam of a
+        # torus averages its own contiguous piece
+        dx = (ix + 0.5) * hx - self._pts[lab, 0]
+        dy = (iy + 0.5) * hy - self._pts[lab, 1]
+        if self.domain.periodic:
+            dx -= self.domain.width * np.round(dx / self.domain.width)
+            dy -= self.domain.height * np.round(dy / self.domain.height)
+        mass = np.bincount(lab, dens, minlength=n)
+        sx = np.bincount(lab, dens * dx, minlength=n)
+        sy = np.bincount(lab, dens * dy, minlength=n)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            c = self._pts + np.stack([sx / mass, sy / mass], 1)
+        if self.domain.periodic:
+            c = self.domain.wrap(c)
+        return c, mass
+
