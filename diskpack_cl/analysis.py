@@ -36,6 +36,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import Delaunay, cKDTree
 
+from .geometry import normalized_radius  # exact rho on the unit torus, owned by geometry
+
 __all__ = [
     "HEXAGONAL_SPACING",
     "HexaticOrder",
@@ -363,31 +365,6 @@ def nearest_neighbor_distances(points, periodic=True):
         tree = cKDTree(p)
     dist, _ = tree.query(p, k=2)
     return dist[:, 1]
-
-
-def _min_distance_torus(points):
-    """Smallest pairwise distance on the unit torus (cKDTree with boxsize=1)."""
-    return float(nearest_neighbor_distances(points, periodic=True).min())
-
-
-try:  # the exact version is owned by geometry
-    from .geometry import normalized_radius
-except ImportError:  # pragma: no cover - until geometry provides it
-
-    def normalized_radius(points):
-        """Normalized Poisson disk radius rho on the unit torus.
-
-        ``rho = (d_min / 2) / r_max`` with ``r_max = sqrt(1 / (2 sqrt(3) n))``,
-        the disk radius of a hexagonal packing of n points in unit area
-        (Lagae and Dutre 2008).
-
-        Examples
-        --------
-        >>> round(normalized_radius([[0.25, 0.5], [0.75, 0.5]]), 4)
-        0.6581
-        """
-        p = _as_points(points)
-        return _min_distance_torus(p) / 2.0 / _r_max(len(p))
 
 
 def mean_normalized_radius(points):
