@@ -1,0 +1,162 @@
+"""Stippling writers: SVG, PNG, NPZ, CSV, pen path, atomicity."""
+
+import csv
+import xml.etree.ElementTree as ET
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from diskpack_cl import export
+from diskpack_cl.export import (
+    check_output_path,
+    path_travel,
+    pen_path_order,
+    write_csv,
+    write_npz,
+    write_png,
+    write_stipple,
+    write_svg,
+)
+
+SVG = "{http://www.w3.org/2000/svg}"
+INK = "{http://www.inkscape.org/namespaces/inkscape}"
+
+
+@pytest.fixture
+def result():
+    rng = np.random.default_rng(3)
+    W, H = 80, 60
+    pts = np.column_stack([rng.uniform(2, W - 2, 200), rng.uniform(2, H - 2, 200)])
+    cert = SimpleNamespace(valid=True, min_gap=0.01, n_pairs=123)
+    return SimpleNamespace(points=pts, radii=rng.uniform(0.3, 1.0, 200), k=0.5,
+                           width=W, height=H, certificate=cert,
+                           base_radii=np.ones(200), params={"n": 200})
+
+
+def _svg_circles(path):
+    root = ET.parse(path).getroot()
+    layers = [g for g in root.iter(SVG + "g") if g.get(INK + "groupmode") == "layer"]
+    assert len(layers) == 1
+    return root, layers[0], layers[0].findall(SVG + "circle")
+
+
+def test_svg_layer_circles_and_size(tmp_path, result):
+    out = tmp_path / "a.svg"
+    info = write_svg(out, result, width_mm=160.0)
+    root, layer, circles = _svg_circles(out)
+    assert len(circles) == 200
+    assert root.get("width") == "160.0000mm"
+    assert root.get("height") == "120.0000mm"  # aspect 80:60 kept
+    assert root.get("viewBox") == "0 0 160.0000 120.0000"
+    assert info["travel_after_mm"] < info["travel_before_mm"]
+    # the circles are the input dots (in some order), scaled to mm
+    xy = np.array([[float(c.get("cx")), float(c.get("cy"))] for c in circles])
+    key = lambda a: a[np.lexsort(a.T)]
+    np.testing.assert_allclose(key(xy), key(result.points * 2.0), atol=1e-4)
+
+
+def test_svg_dpi_and_fixed_dot(tmp_path, result):
+    out = tmp_path / "b.svg"
+    write_svg(out, result, dpi=25.4, dot_mm=0.5)  # 1 px = 1 mm
+    root, _, circles = _svg_circles(out)
+    assert root.get("width") == "80.0000mm" and root.get("height") == "60.0000mm"
+    assert {c.get("r") for c in circles} == {"0.2500"}
+
+
+def test_svg_box_fit_and_conflicts(tmp_path, result):
+    out = tmp_path / "c.svg"
+    info = write_svg(out, result, width_mm=100.0, height_mm=30.0)
+    assert info["height_mm"] == pytest.approx(30.0) and info["width_mm"] == pytest.approx(40.0)
+    with pytest.raises(ValueError, match="either by width_mm/height_mm or by dpi"):
+        write_svg(out, result, width_mm=10, dpi=300)
+
+
+def test_png_size_and_antialiasing(tmp_path, result):
+    out = tmp_path / "a.png"
+    info = write_png(out, result, scale=2.0)
+    with Image.open(out) as im:
+        assert im.size == (160, 120) == (info["width"], info["height"])
+        a = np.asarray(im)
+    assert a.min() < 64 and a.max() == 255
+    assert len(np.unique(a)) > 3  # grey edge pixels: anti-aliased
+
+
+def test_png_coverage_matches_ink(tmp_path):
+    # one disk of radius 10 px: the ink equals its area within 1%
+    res = SimpleNamespace(points=np.array([[32.3, 31.7]]), radii=np.array([10.0]),
+                          width=64, height=64)
+    out = tmp_path / "d.png"
+    write_png(out, res)
+    ink = (255 - np.asarray(Image.open(out), dtype=float)).sum() / 255
+    assert ink == pytest.approx(np.pi * 100, rel=0.01)
+
+
+def test_npz_round_trip(tmp_path, result):
+    out = tmp_path / "a.npz"
+    write_npz(out, result)
+    with np.load(out) as z:
+        np.testing.assert_array_equal(z["points"], result.points)
+        np.testing.assert_array_equal(z["radii"], result.radii)
+        assert float(z["k"]) == 0.5 and int(z["width"]) == 80 and int(z["height"]) == 60
+        assert bool(z["certificate_valid"]) and int(z["certificate_n_pairs"]) == 123
+
+
+def test_csv_round_trip(tmp_path, result):
+    out = tmp_path / "a.csv"
+    write_csv(out, result)
+    with open(out, newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["x", "y", "r"]
+    a = np.array(rows[1:], dtype=float)
+    np.testing.assert_array_equal(a[:, :2], result.points)
+    np.testing.assert_array_equal(a[:, 2], result.radii)
+
+
+def test_dispatch_and_errors(tmp_path, result):
+    for ext in ("svg", "png", "npz", "csv"):
+        write_stipple(tmp_path / f"x.{ext.upper()}", result)
+        assert (tmp_path / f"x.{ext.upper()}").stat().st_size > 0
+    with pytest.raises(ValueError, match=r"unknown output extension '\.pdf'.*\.csv, \.npz, \.png, \.svg"):
+        write_stipple(tmp_path / "x.pdf", result)
+    with pytest.raises(FileNotFoundError, match="output directory does not exist"):
+        write_stipple(tmp_path / "missing" / "x.svg", result)
+    with pytest.raises(FileNotFoundError):
+        check_output_path(tmp_path / "missing" / "x.png")
+    assert not (tmp_path / "x.pdf").exists()
+
+
+def test_failure_mid_write_leaves_nothing(tmp_path, result, monkeypatch):
+    out = tmp_path / "a.svg"
+    calls = []
+
+    def boom(*a):
+        calls.append(1)
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(export, "_svg_circles", boom)
+    with pytest.raises(RuntimeError, match="disk full"):
+        write_svg(out, result)
+    assert calls and list(tmp_path.iterdir()) == []
+    # an existing file is left untouched
+    out.write_text("old")
+    with pytest.raises(RuntimeError):
+        write_svg(out, result)
+    assert out.read_text() == "old" and len(list(tmp_path.iterdir())) == 1
+
+
+@pytest.mark.parametrize("method", ["greedy", "hilbert", "auto"])
+def test_pen_path_permutation_and_shorter(method):
+    p = np.random.default_rng(7).random((3000, 2)) * 100
+    order, before, after = pen_path_order(p, method=method)
+    np.testing.assert_array_equal(np.sort(order), np.arange(3000))
+    assert after < 0.2 * before
+    assert after == pytest.approx(path_travel(p, order))
+
+
+def test_pen_path_small_and_bad():
+    assert pen_path_order(np.zeros((0, 2)))[0].size == 0
+    assert list(pen_path_order(np.ones((1, 2)))[0]) == [0]
+    with pytest.raises(ValueError, match="pen path method"):
+        pen_path_order(np.ones((3, 2)), method="tsp")
