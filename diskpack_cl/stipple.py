@@ -107,11 +107,10 @@ class StippleResult:
     def summary(self):
         """A JSON-ready dict: sizes, k, certificate fields, timings."""
         cert = self.certificate
-        cdict = {}
-        for name in ("valid", "min_gap", "n_pairs", "n_checked", "min_edge_gap"):
-            if hasattr(cert, name):
-                v = getattr(cert, name)
-                cdict[name] = v.item() if hasattr(v, "item") else v
+        if hasattr(cert, "as_dict"):
+            cdict = cert.as_dict()
+        else:
+            cdict = {"valid": bool(getattr(cert, "valid", False))}
         return {
             "n": int(self.n),
             "width": int(self.width),
@@ -482,6 +481,7 @@ def stipple(
     invert=False,
     refine_every=1,
     start=None,
+    k0=1e-6,
     callback=None,
 ):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
@@ -524,6 +524,8 @@ def stipple(
         and certified.
     start : (n, 2) array_like, optional
         Start points instead of error diffusion (must lie inside the image).
+    k0 : float, optional
+        Initial scale factor (the paper: 1e-6, so that no disks overlap).
     callback : callable, optional
         Called with each history entry (a dict) after every iteration.
 
@@ -583,7 +585,9 @@ def stipple(
 
     pr = PowerRaster(dom, shape=(ny, nx), device=device)
     dens = _upsample(np.maximum(darkness, 1e-6), s)
-    k = 1e-6
+    if not (np.isfinite(k0) and k0 > 0):
+        raise ValueError(f"k0 must be > 0, got {k0}")
+    k = float(k0)
     history = []
     stage = {"raster": 0.0, "exact": 0.0, "centroids": 0.0}
     it_total = 0

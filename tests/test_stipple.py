@@ -1,0 +1,229 @@
+"""Algorithm 2 (stippling) and the error-diffusion start, on small images."""
+
+import numpy as np
+import pytest
+
+from diskpack_cl.stipple import (
+    _fs_wavefront,
+    error_diffusion,
+    largest_valid_k,
+    make_schedule,
+    stipple,
+)
+
+SHORT = [("pack", 6), ("lloyd", 3), ("pack", 4)]
+
+
+def gradient(h=64, w=64):
+    return np.tile(np.linspace(0.0, 1.0, w), (h, 1))
+
+
+def _fs_reference(v):
+    H, W = v.shape
+    b = v.astype(float).copy()
+    q = np.zeros_like(b)
+    for r in range(H):
+        for c in range(W):
+            x = b[r, c]
+            qq = max(np.floor(x + 0.5), 0.0)
+            e = x - qq
+            q[r, c], b[r, c] = qq, e
+            if c + 1 < W:
+                b[r, c + 1] += e * 7 / 16
+            if r + 1 < H:
+                if c > 0:
+                    b[r + 1, c - 1] += e * 3 / 16
+                b[r + 1, c] += e * 5 / 16
+                if c + 1 < W:
+                    b[r + 1, c + 1] += e / 16
+    return q, b
+
+
+def brute_force_valid(p, r, W, H):
+    d = np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    pair = np.all(d > r[:, None] + r[None, :])
+    edge = np.all((p[:, 0] - r >= 0) & (p[:, 0] + r <= W) & (p[:, 1] - r >= 0) & (p[:, 1] + r <= H))
+    return pair and edge
+
+
+# ---------------------------------------------------------------- start
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (9, 1), (7, 13), (16, 16)])
+def test_wavefront_equals_raster_order(shape):
+    v = np.random.default_rng(0).random(shape) * 2.7
+    q, e = _fs_wavefront(v)
+    q2, e2 = _fs_reference(v)
+    np.testing.assert_array_equal(q, q2)
+    np.testing.assert_allclose(e, e2, atol=1e-12)
+
+
+@pytest.mark.parametrize("n", [1, 7, 100, 1000, 4096, 20000])
+def test_error_diffusion_exact_count_inside(n):
+    g = gradient()
+    p = error_diffusion(g, n, seed=3)
+    assert p.shape == (n, 2)
+    assert np.all(p >= 0) and np.all(p[:, 0] < 64) and np.all(p[:, 1] < 64)
+    np.testing.assert_array_equal(p, error_diffusion(g, n, seed=3))
+    assert not np.array_equal(p, error_diffusion(g, n, seed=4))
+
+
+def test_error_diffusion_follows_darkness():
+    g = gradient(64, 128)
+    p = error_diffusion(g, 3000, seed=0)
+    left = np.count_nonzero(p[:, 0] < 64)
+    # darkness integrates to 3/4 on the left half and 1/4 on the right
+    assert abs(left / 3000 - 0.75) < 0.02
+    # white columns (gray exactly 1) get no point
+    assert np.all(p[:, 0] < 127)
+
+
+def test_error_diffusion_bad_input():
+    with pytest.raises(ValueError, match="nothing to stipple: the image is white"):
+        error_diffusion(np.ones((8, 8)), 10)
+    with pytest.raises(ValueError, match="n must be >= 1"):
+        error_diffusion(gradient(), 0)
+
+
+# ---------------------------------------------------------------- schedules
+
+
+def test_schedules():
+    paper = [("pack", 40), ("lloyd", 10), ("pack", 40), ("lloyd", 10), ("pack", 20)]
+    assert make_schedule("paper") == paper
+    assert make_schedule(beta=40, lloyd=10, rounds=3) == paper
+    assert make_schedule(method="lloyd") == [("lloyd", 50)]
+    assert make_schedule(method="lloyd", lloyd=7) == [("lloyd", 7)]
+    with pytest.raises(ValueError, match="unknown schedule"):
+        make_schedule("fast")
+    with pytest.raises(ValueError, match="method must be"):
+        make_schedule(method="cvt")
+
+
+# ---------------------------------------------------------------- largest k
+
+
+def test_largest_valid_k_matches_brute_force():
+    rng = np.random.default_rng(5)
+    p = rng.uniform(1, 49, (300, 2))
+    r = rng.uniform(0.01, 1.0, 300) ** 2
+    k = largest_valid_k(p, r, 50, 50)
+    d = np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    edge = np.minimum.reduce([p[:, 0], 50 - p[:, 0], p[:, 1], 50 - p[:, 1]])
+    k_bf = min(np.min(d / (r[:, None] + r[None, :])), np.min(edge / r))
+    assert k == k_bf
+
+
+# ---------------------------------------------------------------- stipple
+
+
+@pytest.fixture(scope="module")
+def small_result():
+    return stipple(gradient(), 150, seed=2, schedule=SHORT)
+
+
+def test_stipple_exact_n_inside_certified(small_result):
+    res = small_result
+    p, r = res.points, res.radii
+    assert p.shape == (150, 2) and r.shape == (150,)
+    assert res.width == 64 and res.height == 64
+    assert np.all(np.isfinite(p)) and np.all(r > 0)
+    assert np.all(p > 0) and np.all(p < 64)
+    assert res.certificate.valid
+    assert brute_force_valid(p, r, 64, 64)
+    # k is the largest valid one: 0.1% more is invalid
+    assert not brute_force_valid(p, r * 1.001, 64, 64)
+    np.testing.assert_allclose(r, res.k * res.base_radii)
+    assert [h["kind"] for h in res.history] == ["pack"] * 6 + ["lloyd"] * 3 + ["pack"] * 4
+    assert all(np.isfinite(h["k"]) and h["empty"] >= 0 for h in res.history)
+
+
+def test_stipple_radii_follow_gray(small_result):
+    # radii are re-sampled at the final positions: larger where lighter
+    res = small_result
+    order = np.argsort(res.points[:, 0])
+    assert np.corrcoef(res.points[order, 0], res.base_radii[order])[0, 1] > 0.9
+
+
+def test_stipple_deterministic(small_result):
+    again = stipple(gradient(), 150, seed=2, schedule=SHORT)
+    np.testing.assert_array_equal(again.points, small_result.points)
+    np.testing.assert_array_equal(again.radii, small_result.radii)
+    other = stipple(gradient(), 150, seed=3, schedule=SHORT)
+    assert not np.array_equal(other.points, small_result.points)
+
+
+def test_stipple_input_not_mutated():
+    g = gradient()
+    g0 = g.copy()
+    res = stipple(g, 50, seed=0, schedule=[("pack", 2)])
+    np.testing.assert_array_equal(g, g0)
+    assert not np.may_share_memory(res.points, g)
+
+
+def test_lloyd_method_certified():
+    res = stipple(gradient(), 120, seed=1, method="lloyd", lloyd=5)
+    assert [h["kind"] for h in res.history] == ["lloyd"] * 5
+    assert res.certificate.valid and brute_force_valid(res.points, res.radii, 64, 64)
+
+
+def test_empty_power_cell_handled():
+    # a light point (big radius) 0.5 px from a dark point (floor radius):
+    # with k0 = 10 the dark point's power cell is empty in the first iteration
+    g = np.ones((32, 32))
+    g[:, :16] = 0.0
+    rng = np.random.default_rng(0)
+    start = np.column_stack([rng.uniform(1, 31, 40), rng.uniform(1, 31, 40)])
+    start[0] = [16.2, 16.0]   # white pixel, r = 1
+    start[1] = [15.7, 16.0]   # black pixel, r = 0.1 ** 1.5
+    seen = []
+    res = stipple(g, 40, seed=0, start=start, k0=10.0, schedule=[("pack", 4), ("lloyd", 2), ("pack", 2)],
+                  callback=seen.append)
+    assert res.history[0]["empty"] >= 1
+    assert seen == res.history
+    assert res.points.shape == (40, 2) and np.all(np.isfinite(res.points))
+    assert res.certificate.valid and brute_force_valid(res.points, res.radii, 32, 32)
+
+
+def test_uniform_gray_and_black_images_work():
+    for v in (0.0, 0.5):
+        res = stipple(np.full((32, 40), v), 60, seed=0, schedule=[("pack", 3)])
+        assert res.points.shape == (60, 2) and res.certificate.valid
+
+
+def test_stipple_rgb_uint8_array():
+    rgb = np.zeros((32, 32, 3), np.uint8)
+    rgb[:, 16:] = 255
+    res = stipple(rgb, 30, seed=0, schedule=[("lloyd", 2)])
+    assert res.points.shape == (30, 2)
+    assert np.count_nonzero(res.points[:, 0] < 16) >= 28
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"n": 0}, "n must be >= 1"),
+        ({"n": 2.5}, "n must be an integer"),
+        ({"n": 10, "gamma": 0}, "gamma must be > 0"),
+        ({"n": 10, "gamma": -1}, "gamma must be > 0"),
+        ({"n": 2000, "supersample": 1}, "too large for a 64x64 image at supersample 1"),
+        ({"n": 10, "schedule": "nope"}, "unknown schedule"),
+        ({"n": 10, "method": "cvt"}, "method must be"),
+        ({"n": 10, "floor": 0}, "floor must be in"),
+    ],
+)
+def test_stipple_bad_input(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        stipple(gradient(), **kwargs)
+
+
+def test_stipple_white_image():
+    with pytest.raises(ValueError, match="nothing to stipple: the image is white"):
+        stipple(np.ones((16, 16)), 10)
+
+
+def test_stipple_float_out_of_range():
+    with pytest.raises(ValueError, match=r"must be in \[0, 1\]"):
+        stipple(gradient() * 255.0, 10)
