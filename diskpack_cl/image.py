@@ -198,7 +198,9 @@ def _array_to_gray(a, *, name="array"):
         else:
             alpha = None
         if f.shape[2] == 3:
-            g = f @ np.asarray(LUMA_601)
+            # written around G so that neutral colours (R = G = B) stay exact
+            R, G, B = f[:, :, 0], f[:, :, 1], f[:, :, 2]
+            g = G + LUMA_601[0] * (R - G) + LUMA_601[2] * (B - G)
         else:
             g = f[:, :, 0]
         if alpha is not None:

@@ -552,7 +552,7 @@ def stipple(
     if not (np.isfinite(floor) and 0 < floor <= 1):
         raise ValueError(f"floor must be in (0, 1], got {floor}")
     darkness = 1.0 - gray
-    if not darkness.max() > 0:
+    if not darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
     s = _auto_supersample(n, W, H) if supersample is None else int(supersample)
     if s < 1:
