@@ -36,7 +36,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import Delaunay, cKDTree
 
-from .geometry import normalized_radius  # exact rho on the unit torus, owned by geometry
+from .geometry import Domain, normalized_radius  # rho: exact on the unit torus, owned by geometry
 
 __all__ = [
     "HEXAGONAL_SPACING",
@@ -316,6 +316,8 @@ def _r_max(n):
 
 def _box(periodic):
     """None (bounded plane) or the (W, H) of a torus, from ``periodic``."""
+    if isinstance(periodic, Domain):
+        return np.array([periodic.width, periodic.height]) if periodic.periodic else None
     if periodic is True:
         return np.array([1.0, 1.0])
     if periodic is False or periodic is None:
@@ -338,10 +340,11 @@ def nearest_neighbor_distances(points, periodic=True):
     Parameters
     ----------
     points : array_like, shape (n, 2), n >= 2
-    periodic : bool or (W, H)
+    periodic : bool, (W, H) or Domain
         ``True``: the unit torus [0,1)^2 (points are wrapped into it);
         ``(W, H)``: the torus [0,W) x [0,H); ``False``: the plane (a bounded
-        domain, no wrap).
+        domain, no wrap); a :class:`~diskpack_cl.geometry.Domain`: its torus
+        or its rectangle.
 
     Returns
     -------

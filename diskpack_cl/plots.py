@@ -165,7 +165,9 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     import matplotlib
 
     ax_per.imshow(
-        np.where(P > 0, P, np.nan), cmap=matplotlib.colormaps["gray"].with_extremes(bad="k"), norm=LogNorm(vmin=0.05, vmax=vmax, clip=True),
+        np.where(P > 0, P, np.nan),
+        cmap=matplotlib.colormaps["gray"].with_extremes(bad="k"),
+        norm=LogNorm(vmin=0.05, vmax=vmax, clip=True),
         extent=(-k - 0.5, k + 0.5, -k - 0.5, k + 0.5), origin="lower", interpolation="nearest",
     )
     ax_per.set(xticks=[-k, 0, k], yticks=[-k, 0, k])

@@ -10,6 +10,7 @@ from scipy import ndimage
 from scipy.spatial import Delaunay
 
 from diskpack_cl import analysis as A
+from diskpack_cl.geometry import Domain
 
 skimage_metrics = pytest.importorskip("skimage.metrics")
 
@@ -183,6 +184,8 @@ def test_nearest_neighbor_distances_match_brute_force(n, seed, w, h):
     torus = np.hypot(d[..., 0], d[..., 1])
     np.fill_diagonal(torus, np.inf)
     np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=(w, h)), torus.min(axis=1))
+    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=Domain(w, h, True)), torus.min(axis=1))
+    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=Domain.rect(w, h)), plane.min(axis=1))
 
 
 def test_nearest_neighbor_distances_wrap_and_errors():
