@@ -282,7 +282,7 @@ def read_points(path, *, min_points=2, domain=None):
     return validate_points(data, min_points=min_points, domain=domain, source=path)
 
 
-def write_points(path, points, **extra):
+def write_points(path, points, /, **extra):
     """Write an ``(n, 2)`` point array atomically; the format follows the extension.
 
     Parameters
