@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy import ndimage
-from scipy.spatial import Delaunay, cKDTree
+from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from .geometry import Domain, normalized_radius  # rho: exact on the unit torus, owned by geometry
 
@@ -475,7 +475,8 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
     Returns
     -------
     HexaticOrder
-        ``psi6`` (n,) per-point |psi_6| and ``mean``.
+        ``psi6`` (n,) per-point |psi_6| and ``mean``. A point that coincides
+        with another has no neighbours of its own and gets 0.
 
     References
     ----------
@@ -502,7 +503,10 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
         allp, tri = _torus_delaunay(p, box)
     else:
         allp = p
-        tri = Delaunay(p)
+        try:
+            tri = Delaunay(p)
+        except QhullError as exc:
+            raise ValueError("points are collinear: no Delaunay triangulation") from exc
     indptr, indices = tri.vertex_neighbor_vertices
     counts = np.diff(indptr[: n + 1])
     src = np.repeat(np.arange(n), counts)

@@ -287,6 +287,8 @@ def test_psi6_errors():
         A.hexatic_order([[0.1, 0.1], [0.5, 0.5]])
     with pytest.raises(ValueError, match="width and height must be positive, got 0 x 1"):
         A.hexatic_order(np.random.default_rng(0).random((5, 2)), width=0, height=1)
+    with pytest.raises(ValueError, match="points are collinear: no Delaunay triangulation"):
+        A.hexatic_order([[0.1, 0.5], [0.5, 0.5], [0.9, 0.5]], periodic=False)
 
 
 # ---------------------------------------------------------------------------
