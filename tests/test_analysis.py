@@ -12,9 +12,6 @@ from scipy.spatial import Delaunay
 from diskpack_cl import analysis as A
 from diskpack_cl.geometry import Domain
 
-skimage_metrics = pytest.importorskip("skimage.metrics")
-
-
 def hex_lattice(m, r, shift=(0.0, 0.0)):
     """r rows of m points on the unit torus, odd rows offset by half a spacing (r even)."""
     iy, ix = np.mgrid[0:r, 0:m]
@@ -309,6 +306,7 @@ def test_ssim_of_identical_images_is_one():
     noise=st.floats(0, 0.5),
 )
 def test_ssim_matches_scikit_image(ny, nx, seed, blur, noise):
+    skimage_metrics = pytest.importorskip("skimage.metrics")  # a test-only reference
     rng = np.random.default_rng(seed)
     a = ndimage.gaussian_filter(rng.random((ny, nx)), blur)
     b = np.clip(a + noise * rng.standard_normal((ny, nx)), 0, 1)
