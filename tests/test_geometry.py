@@ -1,0 +1,236 @@
+"""Exact geometry (exact_mic, distances, certificates) against brute-force linprog references."""
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from diskpack_cl import reference as ref
+from diskpack_cl.geometry import (Domain, certify_disks, coincident_pairs, exact_mic, min_distance,
+                                  normalized_radius)
+
+SETTINGS = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+RTOL = 1e-9
+
+
+@st.composite
+def cells(draw, n_min=2, n_max=30):
+    periodic = draw(st.booleans())
+    dom = Domain.torus() if periodic else Domain.rect(draw(st.sampled_from([1.0, 3.0, 100.0])),
+                                                      draw(st.sampled_from([1.0, 2.0, 60.0])))
+    n = draw(st.integers(n_min, n_max))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    kind = draw(st.sampled_from(["voronoi", "power", "power-empty"]))
+    spacing = np.sqrt(dom.area / n)
+    w = None
+    if kind == "power":
+        w = (0.4 * spacing * rng.random(n)) ** 2
+    elif kind == "power-empty":
+        # a few heavy sites swallow their light neighbours: empty cells
+        w = (0.1 * spacing * rng.random(n)) ** 2
+        heavy = rng.random(n) < 0.3
+        w[heavy] = (1.2 * spacing * (1 + rng.random(heavy.sum()))) ** 2
+    return dom, pts, w
+
+
+def _check_against_linprog(dom, pts, w, mic):
+    scale = max(dom.width, dom.height)
+    for i in range(len(pts)):
+        r = ref.chebyshev_ref(pts, w, dom, i)
+        assert abs(mic.radii[i] - r.radius) <= RTOL * scale, (i, mic.radii[i], r.radius)
+        assert mic.empty[i] == (r.radius < 0), i
+        if r.radius < 0:
+            X = dom.wrap(pts) if dom.periodic else pts
+            assert np.array_equal(mic.centers[i], X[i])
+        elif r.unique:
+            d = mic.centers[i] - r.center
+            if dom.periodic:
+                d -= np.round(d)
+            assert np.hypot(*d) <= 1e-7 * scale, (i, mic.centers[i], r.center)
+
+
+def _disk_inside_cell(dom, pts, w, centers, radii, empty):
+    """Brute force: every other site image leaves the disk on i's side of its bisector."""
+    X = dom.wrap(pts) if dom.periodic else np.asarray(pts, float)
+    wv = np.zeros(len(X)) if w is None else w
+    scale = max(dom.width, dom.height)
+    pos, site = ref.images(X, dom)
+    for i in np.flatnonzero(~empty):
+        d = centers[i] - X[i]
+        if dom.periodic:
+            d -= np.round(d)
+        c = X[i] + d
+        a = pos - X[i]
+        L = np.hypot(a[:, 0], a[:, 1])
+        k = L > 0
+        slack = (L[k] ** 2 - wv[site[k]] + wv[i]) / (2 * L[k]) - (a[k] @ d) / L[k] - radii[i]
+        assert slack.min() >= -1e-10 * scale, (i, slack.min())
+        if not dom.periodic:
+            assert c[0] - radii[i] >= -1e-10 * scale and c[0] + radii[i] <= dom.width * (1 + 1e-12)
+            assert c[1] - radii[i] >= -1e-10 * scale and c[1] + radii[i] <= dom.height * (1 + 1e-12)
+
+
+@SETTINGS
+@given(case=cells())
+def test_exact_mic_matches_linprog(case):
+    dom, pts, w = case
+    p0 = pts.copy()
+    w0 = None if w is None else w.copy()
+    mic = exact_mic(pts, w, dom)
+    assert np.array_equal(pts, p0)
+    assert (w is None) or np.array_equal(w, w0)
+    assert not np.may_share_memory(mic.centers, pts)
+    _check_against_linprog(dom, pts, w, mic)
+    _disk_inside_cell(dom, pts, w, mic.centers, mic.radii, mic.empty)
+
+
+@SETTINGS
+@given(case=cells(), seed=st.integers(0, 2**32 - 1))
+def test_exact_mic_does_not_depend_on_the_estimate(case, seed):
+    dom, pts, w = case
+    rng = np.random.default_rng(seed)
+    n = len(pts)
+    base = exact_mic(pts, w, dom)
+    bad_c = rng.random((n, 2)) * (dom.width, dom.height)
+    bad_r = rng.random(n) * max(dom.width, dom.height) - 0.2 * max(dom.width, dom.height)
+    est = (bad_c.copy(), bad_r.copy())
+    mic = exact_mic(pts, w, dom, estimate=est)
+    assert np.array_equal(est[0], bad_c) and np.array_equal(est[1], bad_r)
+    scale = max(dom.width, dom.height)
+    assert np.all(np.abs(mic.radii - base.radii) <= RTOL * scale)
+    assert np.array_equal(mic.empty, base.empty)
+    _check_against_linprog(dom, pts, w, mic)
+
+
+@SETTINGS
+@given(case=cells(), shift=st.sampled_from([-5.0, -0.01, 0.5, 3.0]))
+def test_exact_mic_weight_shift_invariance(case, shift):
+    """Adding a constant to every weight leaves the power diagram unchanged."""
+    dom, pts, w = case
+    w = np.zeros(len(pts)) if w is None else w
+    scale = max(dom.width, dom.height)
+    a = exact_mic(pts, w, dom)
+    b = exact_mic(pts, w + shift * scale ** 2, dom)
+    assert np.all(np.abs(a.radii - b.radii) <= RTOL * scale)
+
+
+def test_exact_mic_clustered_points_on_torus():
+    """Large empty regions: cells reach across the seam far beyond the mean spacing."""
+    rng = np.random.default_rng(2)
+    dom = Domain.torus()
+    pts = rng.random((300, 2)) * 0.15
+    mic = exact_mic(pts, None, dom)
+    _disk_inside_cell(dom, pts, None, mic.centers, mic.radii, mic.empty)
+    for i in np.argsort(mic.radii)[-8:]:
+        r = ref.chebyshev_ref(pts, None, dom, i)
+        assert abs(mic.radii[i] - r.radius) <= RTOL, (i, mic.radii[i], r.radius)
+
+
+@pytest.mark.parametrize("pts", [[[0.2, 0.3], [0.7, 0.6]], [[0.5, 0.5]], [[0.1, 0.1], [0.5, 0.4], [0.8, 0.9]]])
+def test_exact_mic_few_points_torus(pts):
+    dom = Domain.torus()
+    pts = np.array(pts)
+    mic = exact_mic(pts, None, dom)
+    _check_against_linprog(dom, pts, None, mic)
+
+
+def test_exact_mic_empty_cell_known():
+    pts = np.array([[0.25, 0.25], [0.26, 0.26], [0.75, 0.75], [0.5, 0.5]])
+    w = np.array([0.05, 0.0, 0.05, 0.0])
+    for dom in (Domain.torus(), Domain.rect(1, 1)):
+        mic = exact_mic(pts, w, dom)
+        assert mic.empty[1] and mic.radii[1] < 0
+        assert np.array_equal(mic.centers[1], pts[1])
+        assert ref.chebyshev_ref(pts, w, dom, 1).radius < 0
+        assert not mic.empty[[0, 2]].any()
+
+
+def test_exact_mic_bad_input():
+    with pytest.raises(ValueError, match="points must have shape"):
+        exact_mic(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        exact_mic([[0.1, 0.2], [np.nan, 0.3]])
+    with pytest.raises(ValueError, match="weights must be n finite numbers"):
+        exact_mic([[0.1, 0.2], [0.5, 0.3]], [0.0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 25), seed=st.integers(0, 2**32 - 1), periodic=st.booleans())
+def test_min_distance_and_normalized_radius_brute_force(n, seed, periodic):
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    if periodic:
+        pts += rng.integers(-2, 3, (n, 2))      # unwrapped input
+    p0 = pts.copy()
+    d = ref.min_distance_ref(pts, dom)
+    assert abs(min_distance(pts, dom) - d) <= 1e-12
+    rmax = np.sqrt(dom.area / (2 * np.sqrt(3) * n))
+    assert abs(normalized_radius(pts, dom) - 0.5 * d / rmax) <= 1e-12
+    assert np.array_equal(pts, p0)
+
+
+def test_min_distance_across_the_seam():
+    assert min_distance([[0.01, 0.5], [0.99, 0.5]]) == pytest.approx(0.02, abs=1e-15)
+    assert min_distance([[0.01, 0.01], [0.99, 0.99]]) == pytest.approx(np.sqrt(2) * 0.02, abs=1e-15)
+    assert min_distance([[0.01, 0.5], [0.99, 0.5]], Domain.rect(1, 1)) == pytest.approx(0.98)
+    with pytest.raises(ValueError, match="need at least 2 points"):
+        min_distance([[0.5, 0.5]])
+
+
+def test_coincident_pairs():
+    pts = np.array([[0.25, 0.375], [1.25, -0.625], [0.5, 0.5], [0.5, 0.5], [0.5, 0.5 + 1e-9]])
+    assert coincident_pairs(pts).tolist() == [[0, 1], [2, 3]]
+    assert coincident_pairs(pts, Domain.rect(2, 2)).tolist() == [[2, 3]]
+    assert coincident_pairs(pts, tol=1e-8).tolist() == [[0, 1], [2, 3], [2, 4], [3, 4]]
+    assert coincident_pairs(np.random.default_rng(0).random((50, 2))).shape == (0, 2)
+    # seam: 0.0 and 1.0 are the same point on the torus
+    assert coincident_pairs([[0.0, 0.2], [1.0, 0.2]]).tolist() == [[0, 1]]
+
+
+def test_certify_known_disks():
+    dom = Domain.rect(4, 2)
+    C = np.array([[1.0, 1.0], [3.0, 1.0]])
+    assert certify_disks(C, [0.9, 0.9], dom).valid
+    assert certify_disks(C, [1.0, 1.0], dom).valid is False          # touching closed disks
+    assert not certify_disks(C, [1.0, 1.0 + 1e-9], dom).valid          # overlap by 1e-9
+    # pokes out of the rectangle by 1e-9
+    cert = certify_disks(C, [0.5, 1.0 + 1e-9], dom)
+    assert not cert.valid and not cert.inside and cert.disjoint
+    assert certify_disks(C, [0.5, 1.0], dom).inside                   # touching the edge is inside
+    # torus: overlap across the seam
+    t = Domain.torus()
+    assert certify_disks([[0.05, 0.5], [0.95, 0.5]], [0.049, 0.049], t).valid
+    assert not certify_disks([[0.05, 0.5], [0.95, 0.5]], [0.05, 0.05 + 1e-9], t).valid
+    assert not certify_disks(C, [-0.1, 0.5], dom).valid
+    assert not certify_disks(C, [np.nan, 0.5], dom).valid
+    assert certify_disks(np.zeros((0, 2)), np.zeros(0), dom).valid
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(1, 25), seed=st.integers(0, 2**32 - 1), periodic=st.booleans(),
+       size=st.sampled_from([0.02, 0.1, 0.3]))
+def test_certify_matches_brute_force(n, seed, periodic, size):
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(1.0, 1.5)
+    C = rng.random((n, 2)) * (dom.width, dom.height)
+    r = rng.random(n) * size
+    c0, r0 = C.copy(), r.copy()
+    cert = certify_disks(C, r, dom)
+    assert cert.valid == ref.certify_ref(C, r, dom)
+    assert np.array_equal(C, c0) and np.array_equal(r, r0)
+
+
+@SETTINGS
+@given(case=cells())
+def test_exact_mic_disks_certify(case):
+    """Each MIC lies in its own cell, cells do not overlap: disks shrunk a hair certify."""
+    dom, pts, w = case
+    mic = exact_mic(pts, w, dom)
+    keep = ~mic.empty
+    if keep.sum() == 0:
+        return
+    scale = max(dom.width, dom.height)
+    r = np.maximum(mic.radii[keep] - 1e-9 * scale, 0)
+    assert certify_disks(mic.centers[keep], r, dom).valid
