@@ -80,10 +80,11 @@ def _triples(m):
     return np.array(list(combinations(range(m), 3)), dtype=np.intp).reshape(-1, 3)
 
 
-def _solve_subsets(N, B, tol):
+def _solve_subsets(N, B, tol, lead=None):
     """Chebyshev centres of the half-plane sets ``q . N[c,k] <= B[c,k]``.
 
-    Enumerates every triple of constraints, solves for the point equidistant
+    Enumerates every triple of the first `lead` constraints (all by
+    default), solves for the point equidistant
     from the three lines, and keeps the triples whose solution satisfies all
     constraints of the cell and the LP optimality (KKT) condition: the
     multipliers solving ``sum l_k (N_k, 1) = (0, 0, 1)`` are non-negative.
@@ -95,7 +96,7 @@ def _solve_subsets(N, B, tol):
     nc, m = B.shape
     if m < 3:
         return np.zeros((nc, 2)), np.full(nc, -np.inf), np.zeros(nc, bool)
-    T = _triples(m)
+    T = _triples(m if lead is None else min(lead, m))
     a = N[:, T, 0]                                         # (nc, t, 3)
     b = N[:, T, 1]
     beta = B[:, T]
@@ -161,6 +162,16 @@ def _fill_dead(N, B):
     return N, B
 
 
+def _widen(N, B, width):
+    """Pad constraint arrays to `width` columns with unused (1e300) slots."""
+    extra = width - B.shape[1]
+    if extra <= 0:
+        return N, B
+    N = np.concatenate([N, np.broadcast_to(N[:, :1], (len(N), extra, 2))], 1)
+    B = np.concatenate([B, np.full((len(B), extra), 1e300)], 1)
+    return N, B
+
+
 @dataclass
 class MIC:
     """Certified maximal inscribed circles of power cells (see :func:`exact_mic`)."""
@@ -171,7 +182,7 @@ class MIC:
     stats: dict
 
 
-def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, subset=6):
+def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=12):
     """Exact (float64) maximal inscribed circle of every power cell.
 
     The MIC of cell i is the Chebyshev centre of the convex polygon
@@ -179,14 +190,17 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, sub
     rectangle on a bounded domain): the linear program
     ``max R s.t. n_k . c + R <= b_k`` over its bounding half-planes.
 
-    Each cell's LP is solved on a small subset of constraints (the `subset`
-    least slack ones at the start estimate), by enumerating vertices with the
-    optimality (KKT) test, and the solution is then checked against *every*
-    site that could cut its disk (a KD-tree query with a radius derived from
-    the power distance), so the result does not depend on the estimate.
-    A violated constraint joins the subset and the cell is solved again
-    (constraint generation), which ends because each round adds a
-    constraint.  Feasible and optimal on a subset means optimal on all.
+    Each cell's LP is first solved on its K nearest sites around the start
+    estimate (plus the rectangle's edges), by enumerating the vertices formed
+    by the least-slack constraints and keeping the one that is feasible for
+    all of them and passes the optimality (KKT) test.  The solution is then
+    certified against *every* site that could cut its disk: the power
+    distance bounds how far such a site can be, and when that ball lies
+    inside the ball the K sites came from, they are all already checked;
+    otherwise a KD-tree query finds them.  A violated constraint joins the
+    cell's set and the cell is solved again (constraint generation); this
+    ends because each round adds a constraint.  Feasible for all and optimal
+    for a subset means optimal: the result does not depend on the estimate.
 
     Parameters
     ----------
@@ -197,8 +211,8 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, sub
     domain : Domain
     estimate : tuple of arrays, optional
         ``(centers, radii)`` from the raster (radius < 0: no estimate).
-    subset : int
-        Initial constraint subset size.
+    k : int
+        Sites in each cell's first constraint set.
 
     Returns
     -------
@@ -243,79 +257,85 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, sub
     spacing = np.sqrt(domain.area / max(n, 1))
     margin = min(8 * spacing + np.sqrt(wmax), 2.0 * scale)
     tree, gpos, gid = _sites_tree(X, domain, margin)
-    K = int(min(len(gpos), 16))
-
-    # initial subsets: the `subset` least-slack constraints at the estimate
+    K = int(min(len(gpos), k))
     all_i = np.arange(n)
-    _, nb = tree.query(X + q0, k=K)
-    nb = nb.reshape(n, K)
-    Nn, Bb = _constraints(X, w, all_i, gpos, nb, gid, domain)
-    if not domain.periodic:
-        En, Eb = _edge_constraints(X, all_i, domain)
-        Nn, Bb = np.concatenate([Nn, En], 1), np.concatenate([Bb, Eb], 1)
-    slack = Bb - np.einsum("ckj,cj->ck", Nn, q0) - r_est[:, None]
-    order = np.argsort(slack, axis=1, kind="stable")
-    pool_N = np.take_along_axis(Nn, order[..., None], 1)
-    pool_B = np.take_along_axis(Bb, order, 1)
-    P = pool_B.shape[1]
-    m = min(subset, P)
-    cap = m + 12
-    S_N = np.repeat(pool_N[:, :1], cap, axis=1)
-    S_B = np.repeat(pool_B[:, :1], cap, axis=1)
-    S_N[:, :m], S_B[:, :m] = pool_N[:, :m], pool_B[:, :m]
-    cnt = np.full(n, m)            # constraints in each cell's subset
-    ptr = np.full(n, m)            # next unused pool column
+    stats = {"rounds": 0, "widened": 0, "grown": 0, "linprog": 0, "queried": 0}
 
+    def pool(cells, kk):
+        """Constraints from the kk sites nearest each cell's start, least slack first."""
+        dk, nb = tree.query(X[cells] + q0[cells], k=kk)
+        nb = nb.reshape(len(cells), kk)
+        N, B = _constraints(X, w, cells, gpos, nb, gid, domain)
+        if not domain.periodic:
+            En, Eb = _edge_constraints(X, cells, domain)
+            N, B = np.concatenate([N, En], 1), np.concatenate([B, Eb], 1)
+        sl = B - np.einsum("ckj,cj->ck", N, q0[cells]) - r_est[cells, None]
+        o = np.argsort(sl, axis=1, kind="stable")
+        N, B = _fill_dead(np.take_along_axis(N, o[..., None], 1), np.take_along_axis(B, o, 1))
+        reach = dk.reshape(len(cells), kk)[:, -1] if kk < tree.n else np.full(len(cells), np.inf)
+        return N, B, reach
+
+    # rows of S_N, S_B, reach follow `todo`
+    todo = all_i
+    S_N, S_B, reach = pool(todo, K)
     q = np.zeros((n, 2))
     R = np.full(n, -np.inf)
-    todo = all_i
-    stats = {"rounds": 0, "widened": 0, "grown": 0, "linprog": 0}
     widened = np.zeros(n, bool)
     while len(todo):
         stats["rounds"] += 1
-        width = int(cnt[todo].max())
-        Nt, Bt = _fill_dead(S_N[todo, :width].copy(), S_B[todo, :width].copy())
-        # columns past a cell's count are copies of its first constraint
-        pad = np.arange(width)[None, :] >= cnt[todo][:, None]
-        Nt[pad] = np.broadcast_to(Nt[:, :1], Nt.shape)[pad]
-        Bt[pad] = np.broadcast_to(Bt[:, :1], Bt.shape)[pad]
-        qs, Rs, ok = _solve_subsets(Nt, Bt, tol)
+        qs, Rs, ok = _solve_subsets(S_N, S_B, tol, lead=6)
+        for lead in (9, None):
+            # fewer cells each time: more of their constraints lead
+            sub = np.nonzero(~ok)[0]
+            if len(sub) and (lead is None or lead < S_B.shape[1]):
+                qs[sub], Rs[sub], ok[sub] = _solve_subsets(S_N[sub], S_B[sub], tol, lead=lead)
         q[todo], R[todo] = qs, Rs
-        fine = todo[ok]
-        vc, vN, vB = _verify(X, w, wmax, fine, q[fine], R[fine], tree, gpos, gid, domain, tol)
-        widened[vc] = True
-        # unbounded or degenerate subsets take the next pool constraints
-        bad = todo[~ok & (ptr[todo] < P)]
+        # the K sites came from a ball around the start; a cutter of the
+        # disk lies within `rad` of its centre, hence within rad + shift of
+        # the start: inside that ball, it has been checked already
+        rows = np.nonzero(ok)[0]
+        fine = todo[rows]
+        rad = _cutter_radius(q[fine], R[fine], w[fine], wmax)
+        shift = np.hypot(*(q[fine] - q0[fine]).T)
+        unsure = rows[rad + shift > reach[rows] * (1 - 1e-12)]
+        stats["queried"] += len(unsure)
+        vr, vN, vB = _verify(X, w, wmax, unsure, q[todo[unsure]], R[todo[unsure]], todo[unsure],
+                             tree, gpos, gid, domain, tol)
+        widened[todo[vr]] = True
+        bad = np.nonzero(~ok)[0]
         stats["grown"] += len(bad)
-        addc = [np.repeat(bad, 3), vc]
-        take = np.minimum(ptr[bad][:, None] + np.arange(3), P - 1).ravel()
-        addN = [pool_N[np.repeat(bad, 3), take], vN]
-        addB = [pool_B[np.repeat(bad, 3), take], vB]
-        ptr[bad] += 3
-        stuck = todo[~ok & (ptr[todo] >= P)]
-        addc, addN, addB = np.concatenate(addc), np.concatenate(addN), np.concatenate(addB)
-        if len(addc):
-            order_c = np.argsort(addc, kind="stable")
-            addc, addN, addB = addc[order_c], addN[order_c], addB[order_c]
-            first = np.searchsorted(addc, addc)
-            slot = cnt[addc] + (np.arange(len(addc)) - first)
-            need = int(slot.max()) + 1
-            if need > S_B.shape[1]:
-                grow = need + 8 - S_B.shape[1]
-                S_N = np.concatenate([S_N, np.repeat(S_N[:, :1], grow, 1)], 1)
-                S_B = np.concatenate([S_B, np.repeat(S_B[:, :1], grow, 1)], 1)
-            S_N[addc, slot], S_B[addc, slot] = addN, addB
-            np.maximum.at(cnt, addc, slot + 1)
-        nxt = np.union1d(np.unique(addc), stuck)
-        if stats["rounds"] >= 20 or len(stuck):
-            lp = nxt if stats["rounds"] >= 20 else stuck
-            stats["linprog"] += len(lp)
-            for c in lp:
+        if stats["rounds"] >= 12:
+            rest = todo[np.union1d(vr, bad)]
+            stats["linprog"] += len(rest)
+            for c in rest:
                 q[c], R[c] = _linprog_cell(X, w, c, tree, gpos, gid, domain)
-            nxt = np.setdiff1d(nxt, lp)
-            if stats["rounds"] >= 20:
-                break
-        todo = nxt.astype(np.intp)
+            break
+        # violated cells keep their constraints plus the violated ones,
+        # least slack at the current solution first, so that the new ones
+        # take part in the next vertex search
+        vrows = np.unique(vr)
+        nN, nB = S_N[vrows], S_B[vrows]
+        if len(vr):
+            rank = np.arange(len(vr)) - np.searchsorted(vr, vr)
+            slot = np.searchsorted(vrows, vr)
+            width = nB.shape[1]
+            nN, nB = _widen(nN, nB, width + int(rank.max()) + 1)
+            nN[slot, width + rank], nB[slot, width + rank] = vN, vB
+            cq, cR = q[todo[vrows]], R[todo[vrows]]
+            sl = nB - np.einsum("ckj,cj->ck", nN, cq) - cR[:, None]
+            o = np.argsort(sl, axis=1, kind="stable")
+            nN, nB = np.take_along_axis(nN, o[..., None], 1), np.take_along_axis(nB, o, 1)
+        nreach = np.full(len(vrows), -np.inf)   # never "covered" again: always query
+        # cells with no certified vertex (unbounded or long thin cell among
+        # the K sites) start again from twice as many sites
+        kk = int(min(tree.n, 2 * S_B.shape[1]))
+        bN, bB, breach = pool(todo[bad], kk)
+        todo = np.concatenate([todo[vrows], todo[bad]])
+        width = max(nB.shape[1], bB.shape[1])
+        nN, nB = _widen(nN, nB, width)
+        bN, bB = _widen(bN, bB, width)
+        S_N, S_B = np.concatenate([nN, bN]), np.concatenate([nB, bB])
+        reach = np.concatenate([nreach, breach])
     stats["widened"] = int(widened.sum())
     empty = R < 0
     centers = X + q
@@ -362,10 +382,11 @@ def _query_pairs(tree, centers, radius, k=16):
     return np.concatenate(rows_out), np.concatenate(idx_out)
 
 
-def _verify(X, w, wmax, cells, q, R, tree, gpos, gid, domain, tol, per_cell=3):
+def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, per_cell=3):
     """Violated constraints of each cell's (q, R): up to `per_cell` worst ones.
 
-    Returns flat arrays (cell, normal, beta), one row per violated constraint.
+    Returns flat arrays (tag, normal, beta), one row per violated
+    constraint, sorted by tag; `tags` label the cells in the output.
     """
     if not len(cells):
         return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros(0)
@@ -385,7 +406,7 @@ def _verify(X, w, wmax, cells, q, R, tree, gpos, gid, domain, tol, per_cell=3):
     rows, Nn, Bb = rows[order], Nn[order], Bb[order]
     rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
     keep = rank < per_cell
-    return cells[rows[keep]], Nn[keep], Bb[keep]
+    return np.asarray(tags)[rows[keep]], Nn[keep], Bb[keep]
 
 
 def _linprog_cell(X, w, c, tree, gpos, gid, domain):

@@ -23,7 +23,13 @@
  */
 #include "common.h"
 
-#define RING_BOUND_LABEL(r)  ((r) * bmin)
+/* Distance from p to the outside of the block of buckets within ring r-1
+ * of p's bucket: a lower bound on the distance to any site in ring >= r. */
+inline float ring_gap(float px, float py, int bx, int by, int r, float bw, float bh)
+{
+    return fmin(fmin(px - (bx - r + 1) * bw, (bx + r) * bw - px),
+                fmin(py - (by - r + 1) * bh, (by + r) * bh - py));
+}
 
 __kernel void power_labels(
     __global const float2 *site,        /* sites sorted by bucket */
@@ -44,16 +50,18 @@ __kernel void power_labels(
     if (ix >= nx || iy >= ny) return;
     const float px = (ix + 0.5f) * (W / nx), py = (iy + 0.5f) * (H / ny);
     const int bx = min((int)(px / bw), nbx - 1), by = min((int)(py / bh), nby - 1);
-    const float bmin = fmin(bw, bh);
     const int rmax = PERIODIC ? 1 << 20 : max(nbx, nby);
 
     /* pass 1: owner of p */
-    float best = INFINITY;
-    int best_k = -1;
+    float best = INFINITY, second = INFINITY;
+    int best_k = -1, second_k = -1;
     float bsx = 0.0f, bsy = 0.0f;           /* period shift of the best image */
+    float ssx = 0.0f, ssy = 0.0f;           /* ... and of the runner-up */
     for (int r = 0; r <= rmax; ++r) {
-        float lb = (r - 1) * bmin;
-        if (r > 0 && lb > 0.0f && lb * lb - wmax >= best) break;
+        if (r > 0) {
+            const float lb = ring_gap(px, py, bx, by, r, bw, bh);
+            if (lb > 0.0f && lb * lb - wmax >= best) break;
+        }
         for (int dy = -r; dy <= r; ++dy) {
             const int step = (dy == -r || dy == r) ? 1 : 2 * r;
             for (int dx = -r; dx <= r; dx += (step ? step : 1)) {
@@ -74,7 +82,10 @@ __kernel void power_labels(
                     const float2 s = site[k];
                     const float pw = len2(px - s.x - sx, py - s.y - sy) - weight[k];
                     if (pw < best || (pw == best && site_id[k] < site_id[best_k])) {
+                        second = best; second_k = best_k; ssx = bsx; ssy = bsy;
                         best = pw; best_k = k; bsx = sx; bsy = sy;
+                    } else if (pw < second) {
+                        second = pw; second_k = k; ssx = sx; ssy = sy;
                     }
                 }
             }
@@ -91,9 +102,21 @@ __kernel void power_labels(
 #if !PERIODIC
     D = fmin(fmin(px, W - px), fmin(py, H - py));
 #endif
+    if (second_k >= 0) {
+        /* the runner-up's line bounds D from the start, so the search below
+           can stop early; it is found again there, which is harmless */
+        const float xj = site[second_k].x + ssx, yj = site[second_k].y + ssy;
+        const float sep = sqrt(len2(xj - xi, yj - yi));
+        if (sep > 0.0f) {
+            const float dj = (second - pi_pow) / (2.0f * sep);
+            if (dj < D) { D = dj; D_id = site_id[second_k]; }
+        }
+    }
     for (int r = 0; r <= rmax; ++r) {
-        float lb = (r - 1) * bmin;
-        if (r > 0 && lb > 0.0f && lb > D + sqrt((D + ri) * (D + ri) + wmax)) break;
+        if (r > 0) {
+            const float lb = ring_gap(px, py, bx, by, r, bw, bh);
+            if (lb > 0.0f && lb > D + sqrt((D + ri) * (D + ri) + wmax)) break;
+        }
         for (int dy = -r; dy <= r; ++dy) {
             const int step = (dy == -r || dy == r) ? 1 : 2 * r;
             for (int dx = -r; dx <= r; dx += (step ? step : 1)) {
