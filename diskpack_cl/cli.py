@@ -42,6 +42,13 @@ def _positive_int(text):
     return value
 
 
+def _point_count(text):
+    value = _positive_int(text)
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"need at least 2 points, got {value}")
+    return value
+
+
 def _nonnegative_int(text):
     try:
         value = int(text)
@@ -179,7 +186,7 @@ def _add_poisson(subparsers):
         "poisson", help="make a Poisson disk set on the unit torus",
         description="Make a start set (dart throwing, uniform random or a file) on the unit "
                     "torus and relax it by disk packing until rho >= EPS (paper Algorithm 1).")
-    p.add_argument("-n", type=_positive_int, default=None, metavar="N",
+    p.add_argument("-n", type=_point_count, default=None, metavar="N",
                    help="number of points (default 1024; with --init FILE: the file's count)")
     p.add_argument("--init", default="dart", metavar="dart|random|FILE",
                    help="start set: dart throwing (default), uniform random, or a point file")

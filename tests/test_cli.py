@@ -230,6 +230,7 @@ def test_init_file_count_mismatch(fake_relax, tmp_path, capsys):
     ["poisson", "-o", "x.npz", "--eps", "1.5"],
     ["poisson", "-o", "x.npz", "--eps", "0"],
     ["poisson", "-o", "x.npz", "-n", "0"],
+    ["poisson", "-o", "x.npz", "-n", "1"],
     ["poisson", "-o", "x.npz", "--max-iter", "-1"],
     ["poisson", "-o", "x.npz", "--backend", "cuda"],
     ["poisson"],
