@@ -51,7 +51,9 @@ def atomic_write(path, mode="wb"):
     """Open a temporary file beside `path` and move it over `path` on success.
 
     Nothing is left behind when the body raises: the temporary file is removed
-    and an existing `path` is untouched.
+    and an existing `path` is untouched. A new file gets the permissions that
+    ``open(path, "w")`` would give it (``0o666`` less the umask); a replaced
+    file keeps its permissions.
 
     Examples
     --------
@@ -68,6 +70,13 @@ def atomic_write(path, mode="wb"):
         raise FileNotFoundError(f"output directory does not exist: {directory}")
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
     try:
+        # mkstemp creates 0600 files; give the result the mode a plain open() would
+        # (or keep the mode of the file being replaced)
+        try:
+            perms = path.stat().st_mode & 0o7777
+        except OSError:
+            perms = 0o666 & ~_umask()
+        os.chmod(tmp, perms)
         with os.fdopen(fd, mode) as fh:
             yield fh
             fh.flush()
@@ -77,6 +86,12 @@ def atomic_write(path, mode="wb"):
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def _umask():
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _suffix(path):

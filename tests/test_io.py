@@ -266,3 +266,16 @@ def test_write_points_failure_mid_write(tmp_path, monkeypatch):
         write_points(path, np.zeros((4, 2)))
     np.testing.assert_array_equal(read_points(path), np.ones((4, 2)))
     assert _leftovers(tmp_path) == ["a.npz"]
+
+
+def test_atomic_write_permissions(tmp_path):
+    old = os.umask(0o022)
+    try:
+        path = tmp_path / "a.txt"
+        write_points(path, np.zeros((2, 2)))
+        assert path.stat().st_mode & 0o777 == 0o644
+        os.chmod(path, 0o600)
+        write_points(path, np.ones((2, 2)))
+        assert path.stat().st_mode & 0o777 == 0o600
+    finally:
+        os.umask(old)
