@@ -76,7 +76,8 @@ def atomic_write(path, mode="wb"):
             perms = path.stat().st_mode & 0o7777
         except OSError:
             perms = 0o666 & ~_umask()
-        os.chmod(tmp, perms)
+        with contextlib.suppress(OSError):  # e.g. a file system without modes
+            os.chmod(tmp, perms)
         with os.fdopen(fd, mode) as fh:
             yield fh
             fh.flush()
