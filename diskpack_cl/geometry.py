@@ -241,6 +241,8 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     w = np.zeros(n) if weights is None else np.asarray(weights, np.float64).copy()
     if w.shape != (n,) or not np.all(np.isfinite(w)):
         raise ValueError("weights must be n finite numbers")
+    if n:
+        w -= w.min()   # the diagram ignores a common shift; bounds below want w >= 0
     wmax = w.max() if n else 0.0
     scale = max(domain.width, domain.height)
     tol = 1e-11 * scale
@@ -255,7 +257,49 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     if domain.periodic:
         q0 -= np.round(q0 / (domain.width, domain.height)) * (domain.width, domain.height)
     spacing = np.sqrt(domain.area / max(n, 1))
-    margin = min(8 * spacing + np.sqrt(wmax), 2.0 * scale)
+    margin = min(8 * spacing + np.sqrt(wmax), 2.0 * scale) if domain.periodic else 0.0
+    while True:
+        try:
+            q, R, stats = _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol)
+            break
+        except _MarginTooSmall as exc:
+            # a cell reaches past the periodic images in the tree: add more
+            margin = max(1.25 * exc.needed, 2 * margin)
+    stats["margin"] = margin
+    empty = R < 0
+    centers = X + q
+    centers[empty] = X[empty]
+    if domain.periodic:
+        centers = domain.wrap(centers)
+    if estimate is not None:
+        has = r_est > 0
+        stats["estimate_radius_error_max"] = float(np.max(np.abs(R[has] - r_est[has]), initial=0.0))
+        d = centers[has] - c_est[has]
+        if domain.periodic:
+            d -= np.round(d)
+        stats["estimate_center_error_max"] = float(np.max(np.hypot(d[:, 0], d[:, 1]), initial=0.0))
+    stats["empty"] = int(empty.sum())
+    return MIC(centers, R, empty, stats)
+
+
+class _MarginTooSmall(Exception):
+    def __init__(self, needed):
+        self.needed = float(needed)
+
+
+def _overhang(centers, radius, domain, margin):
+    """How far each ball pokes out of the region whose periodic images are in the tree."""
+    if not domain.periodic:
+        return np.zeros(len(centers))
+    size = np.array([domain.width, domain.height])
+    lo = -(centers - radius[:, None]) - margin
+    hi = centers + radius[:, None] - size - margin
+    return np.maximum(np.max(np.maximum(lo, hi), axis=1), 0.0)
+
+
+def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
+    """Constraint generation for every cell (see :func:`exact_mic`); returns (q, R, stats)."""
+    n = len(X)
     tree, gpos, gid = _sites_tree(X, domain, margin)
     K = int(min(len(gpos), k))
     all_i = np.arange(n)
@@ -273,6 +317,8 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         o = np.argsort(sl, axis=1, kind="stable")
         N, B = _fill_dead(np.take_along_axis(N, o[..., None], 1), np.take_along_axis(B, o, 1))
         reach = dk.reshape(len(cells), kk)[:, -1] if kk < tree.n else np.full(len(cells), np.inf)
+        # a ball poking out of the imaged region may miss images: not a cover
+        reach[_overhang(X[cells] + q0[cells], reach, domain, margin) > 0] = -np.inf
         return N, B, reach
 
     # rows of S_N, S_B, reach follow `todo`
@@ -284,10 +330,10 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     while len(todo):
         stats["rounds"] += 1
         qs, Rs, ok = _solve_subsets(S_N, S_B, tol, lead=6)
-        for lead in (9, None):
+        for lead in (9, 12):
             # fewer cells each time: more of their constraints lead
             sub = np.nonzero(~ok)[0]
-            if len(sub) and (lead is None or lead < S_B.shape[1]):
+            if len(sub) and lead < S_B.shape[1]:
                 qs[sub], Rs[sub], ok[sub] = _solve_subsets(S_N[sub], S_B[sub], tol, lead=lead)
         q[todo], R[todo] = qs, Rs
         # the K sites came from a ball around the start; a cutter of the
@@ -299,6 +345,11 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         shift = np.hypot(*(q[fine] - q0[fine]).T)
         unsure = rows[rad + shift > reach[rows] * (1 - 1e-12)]
         stats["queried"] += len(unsure)
+        if len(unsure) and domain.periodic:
+            cu = todo[unsure]
+            over = _overhang(X[cu] + q[cu], _cutter_radius(q[cu], R[cu], w[cu], wmax), domain, margin)
+            if over.max() > 0:
+                raise _MarginTooSmall(margin + over.max())
         vr, vN, vB = _verify(X, w, wmax, unsure, q[todo[unsure]], R[todo[unsure]], todo[unsure],
                              tree, gpos, gid, domain, tol)
         widened[todo[vr]] = True
@@ -308,7 +359,7 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
             rest = todo[np.union1d(vr, bad)]
             stats["linprog"] += len(rest)
             for c in rest:
-                q[c], R[c] = _linprog_cell(X, w, c, tree, gpos, gid, domain)
+                q[c], R[c] = _linprog_cell(X, w, c, tree, gpos, gid, domain, margin)
             break
         # violated cells keep their constraints plus the violated ones,
         # least slack at the current solution first, so that the new ones
@@ -328,7 +379,7 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         nreach = np.full(len(vrows), -np.inf)   # never "covered" again: always query
         # cells with no certified vertex (unbounded or long thin cell among
         # the K sites) start again from twice as many sites
-        kk = int(min(tree.n, 2 * S_B.shape[1]))
+        kk = int(min(tree.n, 2 * S_B.shape[1], 256))
         bN, bB, breach = pool(todo[bad], kk)
         todo = np.concatenate([todo[vrows], todo[bad]])
         width = max(nB.shape[1], bB.shape[1])
@@ -337,20 +388,7 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         S_N, S_B = np.concatenate([nN, bN]), np.concatenate([nB, bB])
         reach = np.concatenate([nreach, breach])
     stats["widened"] = int(widened.sum())
-    empty = R < 0
-    centers = X + q
-    centers[empty] = X[empty]
-    if domain.periodic:
-        centers = domain.wrap(centers)
-    if estimate is not None:
-        has = r_est > 0
-        stats["estimate_radius_error_max"] = float(np.max(np.abs(R[has] - r_est[has]), initial=0.0))
-        d = centers[has] - c_est[has]
-        if domain.periodic:
-            d -= np.round(d)
-        stats["estimate_center_error_max"] = float(np.max(np.hypot(d[:, 0], d[:, 1]), initial=0.0))
-    stats["empty"] = int(empty.sum())
-    return MIC(centers, R, empty, stats)
+    return q, R, stats
 
 
 def _cutter_radius(q, R, wi, wmax):
@@ -409,20 +447,21 @@ def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, per_cel
     return np.asarray(tags)[rows[keep]], Nn[keep], Bb[keep]
 
 
-def _linprog_cell(X, w, c, tree, gpos, gid, domain):
-    """Fallback: one cell's Chebyshev centre by scipy's LP over a wide neighbourhood."""
-    from scipy.optimize import linprog
-
-    k = min(tree.n, 64)
-    _, idx = tree.query(X[c], k=k)
-    N, B = _constraints(X, w, np.array([c]), gpos, np.atleast_2d(idx), gid, domain)
+def _linprog_cell(X, w, c, tree, gpos, gid, domain, margin):
+    """Fallback: one cell's Chebyshev centre by scipy's LP over every site in the tree."""
+    idx = np.arange(tree.n)[None, :]
+    N, B = _constraints(X, w, np.array([c]), gpos, idx, gid, domain)
     N, B = N[0], B[0]
     if not domain.periodic:
         En, Eb = _edge_constraints(X, np.array([c]), domain)
         N, B = np.concatenate([N, En[0]]), np.concatenate([B, Eb[0]])
     keep = np.isfinite(B)
-    res = chebyshev_center_linprog(N[keep], B[keep])
-    return res[0], res[1]
+    try:
+        return chebyshev_center_linprog(N[keep], B[keep])
+    except RuntimeError:
+        if domain.periodic:   # unbounded: the cell needs images from further away
+            raise _MarginTooSmall(max(2 * margin, max(domain.width, domain.height)))
+        raise
 
 
 def chebyshev_center_linprog(normals, beta):
