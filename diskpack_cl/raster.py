@@ -58,20 +58,34 @@ class RasterResult:
     timings: dict = field(default_factory=dict)
     _owner: object = None
 
+    _maps: dict = field(default_factory=dict)
+
+    def _fetch(self, name):
+        """Copy one of this result's device maps to the host (once)."""
+        import pyopencl as cl
+
+        entry = self._maps[name]
+        if isinstance(entry, tuple):
+            buf, dtype = entry
+            out = np.empty(self.shape, dtype)
+            cl.enqueue_copy(self._owner.queue, out, buf)
+            self._maps[name] = entry = out
+        return entry
+
     @property
     def labels(self):
         """(ny, nx) int32 owning site of each grid cell."""
-        return self._owner._fetch("label").reshape(self.shape)
+        return self._fetch("label")
 
     @property
     def dist(self):
         """(ny, nx) float32 distance from each grid-cell centre to its cell's boundary."""
-        return self._owner._fetch("dist").reshape(self.shape)
+        return self._fetch("dist")
 
     @property
     def neighbor(self):
         """(ny, nx) int32 site across the nearest boundary line (-1: domain edge)."""
-        return self._owner._fetch("nbr").reshape(self.shape)
+        return self._fetch("nbr")
 
     def adjacency(self):
         """Sorted unique pairs ``(i, j)``, i < j, of sites whose raster cells touch."""
@@ -124,16 +138,9 @@ class PowerRaster:
         self._k_labels = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic})["power_labels"]
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
-        npix = self.shape[0] * self.shape[1]
-        mf = cl.mem_flags
-        self._pix = {
-            "label": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32),
-            "dist": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.float32),
-            "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32),
-        }
         self._site_bufs = {}
         self._pts = np.zeros((0, 2))
-        self._cache = {}
+        self._last = None
 
     # -- buffers -----------------------------------------------------------
     def _site_buffer(self, name, host):
@@ -147,16 +154,6 @@ class PowerRaster:
         if host.nbytes:
             cl.enqueue_copy(self.queue, buf, host)
         return buf
-
-    def _fetch(self, name):
-        import pyopencl as cl
-
-        if name not in self._cache:
-            buf, dtype = self._pix[name]
-            out = np.empty(self.shape[0] * self.shape[1], dtype)
-            cl.enqueue_copy(self.queue, out, buf)
-            self._cache[name] = out
-        return self._cache[name]
 
     def _buckets(self, pts, w):
         dom = self.domain
@@ -215,23 +212,27 @@ class PowerRaster:
         b_wmax = self._site_buffer("wmax", wmax_b)
         ny, nx = self.shape
         dom = self.domain
-        self._cache = {}
+        npix = nx * ny
+        # fresh maps per call, so that an earlier result stays readable
+        mf = cl.mem_flags
+        maps = {"label": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32),
+                "dist": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.float32),
+                "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32)}
         self._pts = pts
         ev = self._k_labels(
             self.queue, (nx, ny), None, b_site, b_w, b_id, b_start, b_wmax,
             np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
             np.float32(dom.width), np.float32(dom.height), np.float32(wmax_b.max() if n else 0),
             np.int32(nx), np.int32(ny),
-            self._pix["label"][0], self._pix["dist"][0], self._pix["nbr"][0])
+            maps["label"][0], maps["dist"][0], maps["nbr"][0])
         if self.profile:
             ev.wait()
         t1 = time.perf_counter()
-        npix = nx * ny
         rbits = np.full(n, -1, np.int32)
         argpix = np.full(n, INT_MAX, np.int32)
         b_r = self._site_buffer("rbits", rbits)
         b_a = self._site_buffer("argpix", argpix)
-        lab, dist = self._pix["label"][0], self._pix["dist"][0]
+        lab, dist = maps["label"][0], maps["dist"][0]
         self._k_max(self.queue, (npix,), None, lab, dist, np.int32(npix), b_r)
         self._k_argmax(self.queue, (npix,), None, lab, dist, np.int32(npix), b_r, b_a)
         cl.enqueue_copy(self.queue, rbits, b_r)
@@ -245,8 +246,9 @@ class PowerRaster:
         centers[has, 0] = (ix + 0.5) * hx
         centers[has, 1] = (iy + 0.5) * hy
         t2 = time.perf_counter()
-        return RasterResult(centers, radii, self.shape, (hx, hy),
-                            {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self)
+        self._last = RasterResult(centers, radii, self.shape, (hx, hy),
+                                  {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps)
+        return self._last
 
     def centroids(self, density=None):
         """Density-weighted centroids of the cells of the last :meth:`compute`.
@@ -263,7 +265,9 @@ class PowerRaster:
         mass : (n,) float64
             Integral of the density over each cell (grid-cell area units).
         """
-        lab = self._fetch("label")
+        if self._last is None:
+            raise RuntimeError("centroids() needs a compute() first")
+        lab = self._last.labels.ravel()
         n = len(self._pts)
         ny, nx = self.shape
         hx, hy = self.domain.width / nx, self.domain.height / ny

@@ -14,7 +14,7 @@
  * boundary is the smallest distance to the bounding lines
  *   d_j(p) = ((|p-x_j|^2 - w_j) - (|p-x_i|^2 - w_i)) / (2 |x_j - x_i|),
  * and, in a rectangle, to its four edges.  A site j can only give the minimum
- * D if |p - x_j| <= D + sqrt((D + |p - x_i|)^2 + w_j), which bounds the
+ * D if |p - x_j| <= D + sqrt((D + |p - x_i|)^2 + w_j - w_i), which bounds the
  * second ring search.
  *
  * On a torus, ring offsets beyond the bucket grid wrap with a shift of one
@@ -115,7 +115,7 @@ __kernel void power_labels(
     for (int r = 0; r <= rmax; ++r) {
         if (r > 0) {
             const float lb = ring_gap(px, py, bx, by, r, bw, bh);
-            if (lb > 0.0f && lb > D + sqrt((D + ri) * (D + ri) + wmax)) break;
+            if (lb > 0.0f && lb > D + sqrt((D + ri) * (D + ri) + wmax - wi)) break;
         }
         for (int dy = -r; dy <= r; ++dy) {
             const int step = (dy == -r || dy == r) ? 1 : 2 * r;
@@ -132,7 +132,7 @@ __kernel void power_labels(
                 const int b = cy * nbx + cx;
                 const float x0 = cx * bw + sx, y0 = cy * bh + sy;
                 const float d = box_dist(px, py, x0, y0, x0 + bw, y0 + bh);
-                if (d > D + sqrt((D + ri) * (D + ri) + bucket_wmax[b])) continue;
+                if (d > D + sqrt((D + ri) * (D + ri) + bucket_wmax[b] - wi)) continue;
                 for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
                     const float xj = site[k].x + sx, yj = site[k].y + sy;
                     const float sep = sqrt(len2(xj - xi, yj - yi));
