@@ -1,0 +1,21 @@
+"""Poisson disk sampling and image stippling by disk packing.
+
+OpenCL kernels label a fine grid with the power diagram and estimate each
+cell's maximal inscribed circle; numpy/scipy refine every circle exactly in
+float64, so returned points and radii are certified.
+"""
+
+from .geometry import Domain, certify_disks, exact_mic, normalized_radius
+from .relax import RelaxResult, relax_poisson
+from .sampling import dart_throwing, random_points
+from .stipple import StippleResult, error_diffusion, stipple
+from .export import write_stipple
+from .image import load_gray, sample_image_path
+
+__all__ = [
+    "Domain", "certify_disks", "exact_mic", "normalized_radius",
+    "RelaxResult", "relax_poisson", "dart_throwing", "random_points",
+    "StippleResult", "error_diffusion", "stipple", "write_stipple",
+    "load_gray", "sample_image_path",
+]
+__version__ = "0.1.0"
