@@ -42,6 +42,7 @@ __kernel void power_labels(
     const float W, const float H,       /* domain size */
     const float wmax,                   /* largest weight overall */
     const int nx, const int ny,         /* raster size */
+    const int with_dist,                /* 0: labels only (Lloyd needs no distances) */
     __global int *label,                /* out: caller's index of the owning site */
     __global float *dist,               /* out: distance to the power cell boundary */
     __global int *nbr)                  /* out: site of the nearest boundary line, -1 = domain edge */
@@ -91,6 +92,10 @@ __kernel void power_labels(
             }
         }
     }
+
+    const int pix = iy * nx + ix;
+    label[pix] = site_id[best_k];
+    if (!with_dist) return;
 
     /* pass 2: distance to the nearest bounding line of the owner's cell */
     const float xi = site[best_k].x + bsx, yi = site[best_k].y + bsy;
@@ -143,8 +148,6 @@ __kernel void power_labels(
             }
         }
     }
-    const int pix = iy * nx + ix;
-    label[pix] = site_id[best_k];
     dist[pix] = fmax(D, 0.0f);
     nbr[pix] = D_id;
 }
