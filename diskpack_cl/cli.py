@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 
@@ -247,6 +248,439 @@ def _run_relax(args):
     check_points_path(args.output, for_writing=True)
     points = read_points(args.input, min_points=2)
     return _relax_and_write(points, args, extra_summary={"input": str(args.input)})
+
+
+def _positive_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
+    return value
+
+
+def _unit_half_open(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text}")
+    return value
+
+
+SAMPLE = "sample"
+
+
+def _image_path(text):
+    """The word ``sample`` names the bundled sample photograph; anything else is a path."""
+    if text == SAMPLE:
+        from diskpack_cl.image import sample_image_path
+
+        return sample_image_path()
+    return text
+
+
+def _add_stipple(subparsers):
+    from diskpack_cl.stipple import SCHEDULES
+
+    p = subparsers.add_parser(
+        "stipple", help="stipple an image with N dots (paper Algorithm 2)",
+        description="Stipple an image by unequal disk packing on power diagrams (paper "
+                    "Algorithm 2): an error-diffusion start of N points, then rounds of BETA "
+                    "disk-packing iterations (every point moves to the centre of the maximal "
+                    "inscribed circle of its power cell, weights (k r_i)^2 with "
+                    "r_i = max(gray, FLOOR)^(GAMMA/2)) separated by Lloyd iterations. The output "
+                    "disks are certified inside the image and pairwise disjoint (exact float64). "
+                    "Every output path is checked before the computation; outputs are written "
+                    "atomically after it, so a failed or interrupted run writes nothing.",
+        epilog="examples:\n"
+               "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
+               "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
+               "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("image", metavar="IMAGE",
+                   help="image file Pillow reads (PNG, JPEG, TIFF, ...; colour is converted to "
+                        "luminance), or the word 'sample' for the bundled 512x512 sample "
+                        "photograph (use ./sample for a file of that name)")
+    p.add_argument("-n", type=_positive_int, required=True, metavar="N", help="number of dots")
+    p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
+                   help="output file; repeat for several: .svg (pen plotters, Inkscape), .png "
+                        "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
+                        "(x,y,r in pixels)")
+    g = p.add_argument_group("stippling (the paper's parameters)")
+    g.add_argument("--gamma", type=_positive_float, default=3.0,
+                   help="gamma: contrast exponent, base radius r_i = gray^(gamma/2) (default 3.0)")
+    g.add_argument("--floor", type=_unit_half_open, default=0.1,
+                   help="gray-value floor of the radius mapping, r_i = max(gray, FLOOR)^(gamma/2), "
+                        "so that black regions keep a positive radius (default 0.1)")
+    g.add_argument("--schedule", choices=sorted(SCHEDULES), default="default",
+                   help="named schedule of disk-packing (pack) and Lloyd phases: "
+                        + "; ".join(f"{name} = " + ", ".join(f"{kind} {it}" for kind, it in phases)
+                                    for name, phases in sorted(SCHEDULES.items()))
+                        + " (default: default; paper is the paper's loop)")
+    g.add_argument("--beta", type=_nonnegative_int, default=None,
+                   help="beta: disk-packing iterations per round; with --lloyd and --rounds it "
+                        "replaces --schedule (missing ones: the paper's beta 40, lloyd 10, "
+                        "rounds 3; the last round is half as long)")
+    g.add_argument("--lloyd", type=_nonnegative_int, default=None, metavar="L",
+                   help="Lloyd iterations between rounds (paper: 10); with --method lloyd: the "
+                        "number of Lloyd iterations (default 50)")
+    g.add_argument("--rounds", type=_positive_int, default=None,
+                   help="number of disk-packing rounds (paper: 3)")
+    g.add_argument("--method", choices=("diskpack", "lloyd"), default="diskpack",
+                   help="diskpack (default): the paper's disk packing; lloyd: weighted Voronoi "
+                        "stippling (Secord 2002), the baseline, from the same start")
+    g.add_argument("--supersample", type=_positive_int, default=None, metavar="S",
+                   help="raster cells per image pixel side (default: automatic, about 16 cells "
+                        "per dot, at most 8)")
+    g.add_argument("--refine-every", type=_nonnegative_int, default=1, metavar="R",
+                   help="refine the raster MIC estimate exactly every R disk-packing iterations "
+                        "(default 1 = always; 0 = never); the output is always certified")
+    g.add_argument("--seed", type=int, default=0,
+                   help="seed of the error-diffusion start (default 0; same seed, same result)")
+    g.add_argument("--invert", action="store_true",
+                   help="stipple the light parts (light dots on a dark ground)")
+    g.add_argument("--allow-large", action="store_true",
+                   help="lift Pillow's decompression-bomb limit (about 89 Mpixel) for trusted "
+                        "large images")
+    _device_options(g)
+    o = p.add_argument_group("output")
+    o.add_argument("--width-mm", type=_positive_float, default=None, metavar="MM",
+                   help="SVG width in mm (with --height-mm: fit inside the box)")
+    o.add_argument("--height-mm", type=_positive_float, default=None, metavar="MM",
+                   help="SVG height in mm")
+    o.add_argument("--dpi", type=_positive_float, default=None,
+                   help="SVG size from the image's pixels at DPI (default 96 when no mm size)")
+    o.add_argument("--dot-mm", type=_positive_float, default=None, metavar="MM",
+                   help="fixed dot diameter in mm (the pen width) instead of the packing radii; "
+                        "the PNG preview shows the same dots")
+    o.add_argument("--radius-scale", type=_positive_float, default=1.0, metavar="F",
+                   help="factor on the certified packing radii in SVG and PNG (default 1.0)")
+    o.add_argument("--pen-path", choices=("auto", "greedy", "hilbert", "none"), default="auto",
+                   help="SVG dot order: greedy nearest neighbour, Hilbert curve, none, or auto "
+                        "(greedy up to 100000 dots, else Hilbert; default)")
+    o.add_argument("--png-scale", type=_positive_float, default=2.0, metavar="F",
+                   help="PNG pixels per image pixel (default 2.0)")
+    o.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress bar and no summary on stderr")
+    o.add_argument("--json", action="store_true",
+                   help="print one JSON line on stdout at the end: the result summary "
+                        "(n, k, radii, certificate, timings, params), each output's info and "
+                        "seconds")
+    p.set_defaults(run=_run_stipple)
+
+
+def _stipple_progress(args, total):
+    """Return (callback, close): a tqdm bar (iteration, phase kind, k) on a terminal."""
+    if args.quiet or not sys.stderr.isatty():
+        return None, lambda: None
+    from tqdm import tqdm
+
+    bar = tqdm(total=total or None, desc="stipple", unit="it", file=sys.stderr,
+               dynamic_ncols=True, leave=False)
+
+    def callback(entry):
+        post = f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}"
+        if entry.get("empty"):
+            post += f" empty={entry['empty']}"
+        bar.set_postfix_str(post, refresh=False)
+        bar.update(int(entry.get("iteration", bar.n)) + 1 - bar.n)
+
+    return callback, bar.close
+
+
+def _write_all(jobs):
+    """Run the writers in order; if one fails (or Ctrl-C), remove what this run wrote."""
+    done = []
+    try:
+        for path, write in jobs:
+            info = write()
+            done.append(path)
+            yield path, info
+    except BaseException:
+        import contextlib
+        import os
+
+        for path in done:
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+        raise
+
+
+def _run_stipple(args):
+    import os
+
+    from diskpack_cl.export import _mm_per_px, check_output_path, write_stipple
+    from diskpack_cl.image import load_gray
+    from diskpack_cl.stipple import make_schedule, stipple
+
+    t0 = time.perf_counter()
+    # everything that can be refused is refused before the computation
+    outputs = [str(o) for o in args.output]
+    seen = set()
+    for out in outputs:
+        check_output_path(out)
+        key = os.path.realpath(out)
+        if key in seen:
+            raise ValueError(f"output given twice: {out}")
+        seen.add(key)
+    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
+        raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
+    phases = make_schedule(args.schedule, beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
+                           method=args.method)
+    image = _image_path(args.image)
+    gray = load_gray(image, allow_large=args.allow_large)
+
+    callback, close = _stipple_progress(args, sum(it for _, it in phases))
+    try:
+        res = stipple(gray, args.n, gamma=args.gamma, floor=args.floor, schedule=args.schedule,
+                      beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
+                      supersample=args.supersample, seed=args.seed, device=args.device,
+                      method=args.method, invert=args.invert, refine_every=args.refine_every,
+                      callback=callback)
+    finally:
+        close()
+    if not getattr(res.certificate, "valid", False):
+        raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
+
+    mm_per_px = _mm_per_px(res.width, res.height, args.width_mm, args.height_mm, args.dpi)
+    svg_opts = dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
+                    dot_mm=args.dot_mm, radius_scale=args.radius_scale, pen_path=args.pen_path,
+                    invert=args.invert)
+    png_opts = dict(scale=args.png_scale, radius_scale=args.radius_scale, invert=args.invert)
+    if args.dot_mm is not None:  # preview the pen's dots
+        png_opts["dot_px"] = 0.5 * args.dot_mm / mm_per_px * args.png_scale
+    jobs = []
+    for out in outputs:
+        ext = check_output_path(out)
+        opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
+        jobs.append((out, lambda out=out, opts=opts: write_stipple(out, res, **opts)))
+    t_write = time.perf_counter()
+    written = []
+    for path, info in _write_all(jobs):
+        written.append({"path": path, "format": os.path.splitext(path)[1].lower()[1:], **info})
+    seconds_write = time.perf_counter() - t_write
+
+    summary = res.summary()
+    summary["image"] = str(image)
+    summary["outputs"] = written
+    summary["write_seconds"] = seconds_write
+    summary["seconds"] = time.perf_counter() - t0
+    if not args.quiet:
+        cert = res.certificate
+        travel = "".join(
+            f"; pen-up travel {w['travel_before_mm']:.0f} -> {w['travel_after_mm']:.0f} mm"
+            for w in written if "travel_after_mm" in w)
+        print(f"{PROG}: {res.n} dots on {res.width}x{res.height} px, k = {res.k:.4g}, "
+              f"radii {summary['min_radius']:.3g}..{summary['max_radius']:.3g} px, "
+              f"certified {'valid' if cert.valid else 'INVALID'} (min gap {cert.min_gap:.3g} px), "
+              f"{summary['iterations']} iterations in {summary['seconds']:.3g} s{travel}; wrote "
+              + ", ".join(outputs), file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary, default=_json_default), flush=True)
+    return 0
+
+
+def _json_default(obj):
+    import numpy as np
+
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)
+
+
+def _add_analyze(subparsers):
+    p = subparsers.add_parser(
+        "analyze", help="spectra and measures of point sets or of a stippling, as a figure",
+        description="Point sets on the unit torus (.npz, .npy, .csv, .txt, .xy): one figure "
+                    "with the points, the mean periodogram (averaged over all files, as "
+                    "realizations), the radial mean power and the anisotropy in dB, with n, "
+                    "rho and the mean nearest-neighbour rho. A stippling (.npz written by "
+                    "'diskpack stipple', with --image): the rendering beside the input, both "
+                    "blurred with the tone SSIM, the spacing histogram and the certificate "
+                    "(re-checked from the file). Figures need matplotlib: "
+                    "pip install \"diskpack_cl[plot]\".",
+        epilog="examples:\n"
+               "  diskpack analyze a.npz b.npz c.npz -o report.png --json\n"
+               "  diskpack analyze stipple.npz --image sample -o stipple_report.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("inputs", nargs="+", metavar="POINTS",
+                   help="point files (realizations of one process), or one stippling .npz")
+    p.add_argument("-o", "--output", default=None, metavar="REPORT",
+                   help="figure file (.png, .pdf or .svg); written atomically")
+    p.add_argument("--json", action="store_true",
+                   help="print the numbers as one JSON line on stdout")
+    p.add_argument("--image", default=None, metavar="IMAGE",
+                   help="for a stippling: the input image ('sample' for the bundled one)")
+    p.add_argument("--invert", action="store_true",
+                   help="for a stippling: the image was stippled with --invert (default: as "
+                        "recorded in the .npz)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="lift Pillow's decompression-bomb limit for --image")
+    p.add_argument("--sigma", type=_positive_float, default=3.0,
+                   help="for a stippling: Gaussian blur in pixels for tone and spacing "
+                        "(default 3)")
+    p.add_argument("--kmax", type=_positive_int, default=None,
+                   help="for point sets: periodogram frequency range (default: automatic)")
+    p.add_argument("--title", default=None, help="figure title")
+    p.set_defaults(run=_run_analyze)
+
+
+_PLOT_HINT = 'figures need matplotlib: pip install "diskpack_cl[plot]"'
+
+
+def _have_matplotlib():
+    import importlib.util
+
+    try:
+        return importlib.util.find_spec("matplotlib.figure") is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def _stipple_file(path):
+    """(points, radii, width, height, params) for a stippling .npz, else None."""
+    import numpy as np
+
+    if not str(path).lower().endswith(".npz"):
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if not {"points", "radii", "width", "height"} <= set(z.files):
+                return None
+            params = {}
+            if "params" in z.files:
+                try:
+                    params = json.loads(str(z["params"]))
+                except ValueError:
+                    params = {}
+            return (np.asarray(z["points"], np.float64), np.asarray(z["radii"], np.float64),
+                    int(z["width"]), int(z["height"]), params)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: no such file") from None
+    except (OSError, ValueError, EOFError) as exc:
+        raise ValueError(f"{path}: unreadable .npz file: {exc}") from None
+
+
+def _point_set_numbers(sets, kmax=None):
+    """The numbers of plots.point_set_report, without matplotlib."""
+    import math
+
+    import numpy as np
+
+    from diskpack_cl import analysis
+    from diskpack_cl.plots import _num, _nums
+
+    freqs, P = analysis.periodogram(sets, kmax=kmax)
+    centres, power = analysis.radial_power(P, freqs)
+    _, aniso = analysis.anisotropy(P, freqs)
+    rhos = [analysis.normalized_radius(s) for s in sets]
+    mean_rhos = [analysis.mean_normalized_radius(s) for s in sets]
+    psi6 = analysis.hexatic_order(sets[0]).mean if len(sets[0]) >= 3 else float("nan")
+    finite = np.isfinite(aniso)
+    peak = int(np.argmax(power))
+    return {
+        "n": int(len(sets[0])), "realizations": len(sets), "kmax": int(freqs[-1]),
+        "rho": _num(rhos[0]), "rho_min": _num(min(rhos)), "rho_mean": _num(np.mean(rhos)),
+        "mean_rho": _num(np.mean(mean_rhos)), "psi6_mean": _num(psi6),
+        "peak_frequency": _num(centres[peak]), "peak_power": _num(power[peak]),
+        "anisotropy_mean_db": _num(aniso[finite].mean()) if finite.any() else None,
+        "anisotropy_reference_db": _num(-10.0 * math.log10(len(sets))),
+        "radial_frequency": _nums(centres), "radial_power": _nums(power),
+        "anisotropy_db": _nums(aniso),
+    }
+
+
+def _stipple_numbers(points, radii, darkness, certificate, sigma):
+    """The numbers of plots.stipple_report, without matplotlib."""
+    import numpy as np
+
+    from diskpack_cl import analysis
+    from diskpack_cl.plots import _certificate_items, _num
+
+    numbers = {k: _num(v) for k, v in
+               analysis.stipple_measures(points, darkness, sigma=sigma).items()}
+    numbers["tone_radius"] = _num(analysis.tone_radius(len(points), darkness))
+    numbers.update(radius_min=_num(radii.min()), radius_median=_num(np.median(radii)),
+                   radius_max=_num(radii.max()))
+    numbers["certificate"] = _certificate_items(certificate)
+    return numbers
+
+
+def _run_analyze(args):
+    import numpy as np
+
+    from diskpack_cl.io import read_points
+
+    if args.output is None and not args.json:
+        raise ValueError("nothing to do: give -o REPORT.png for a figure and/or --json")
+    plot = args.output is not None
+    if plot:
+        from diskpack_cl.plots import _format
+
+        _format(args.output)
+        directory = os.path.dirname(args.output) or "."
+        if not os.path.isdir(directory):
+            raise FileNotFoundError(f"output directory does not exist: {directory}")
+        if not _have_matplotlib() and not args.json:
+            raise ValueError(f"{_PLOT_HINT} (the numbers print without it with --json)")
+    stipplings = [(path, _stipple_file(path)) for path in args.inputs]
+    kinds = {s is not None for _, s in stipplings}
+    if True in kinds:
+        if len(args.inputs) != 1:
+            raise ValueError("a stippling .npz (with radii, width, height) is analyzed alone; "
+                             "give one file")
+        from diskpack_cl.geometry import Domain, certify_disks
+        from diskpack_cl.image import load_gray
+
+        path, (points, radii, width, height, params) = stipplings[0]
+        if args.image is None:
+            raise ValueError(f"{path} is a stippling: give its input image with --image IMAGE "
+                             f"(or --image {SAMPLE})")
+        if points.ndim != 2 or points.shape[1:] != (2,) or radii.shape != (len(points),):
+            raise ValueError(f"{path}: points must be (n, 2) and radii (n,)")
+        invert = bool(params.get("invert", False)) or args.invert
+        gray = load_gray(_image_path(args.image), invert=invert, allow_large=args.allow_large)
+        if gray.shape != (height, width):
+            raise ValueError(f"the image is {gray.shape[1]}x{gray.shape[0]} px but {path} is a "
+                             f"stippling of a {width}x{height} px image")
+        darkness = 1.0 - gray
+        cert = certify_disks(points, radii, Domain.rect(width, height))
+        if plot and _have_matplotlib():
+            from diskpack_cl.plots import stipple_report
+
+            numbers = stipple_report(points, radii, darkness, args.output, certificate=cert,
+                                     sigma=args.sigma, title=args.title)
+        else:
+            numbers = _stipple_numbers(points, radii, darkness, cert, args.sigma)
+    else:
+        if args.image is not None:
+            raise ValueError("--image is for a stippling .npz; these are point sets")
+        sets = []
+        for path in args.inputs:
+            pts = read_points(path, min_points=2)
+            if np.any(pts < 0) or np.any(pts > 1):
+                raise ValueError(f"{path}: points must lie on the unit torus [0,1)^2 (a "
+                                 f"stippling in pixels is analyzed through its .npz with "
+                                 f"--image)")
+            sets.append(pts)
+        if plot and _have_matplotlib():
+            from diskpack_cl.plots import point_set_report
+
+            numbers = point_set_report(sets, args.output, title=args.title, kmax=args.kmax)
+        else:
+            numbers = _point_set_numbers(sets, kmax=args.kmax)
+    if args.json:
+        print(json.dumps(numbers, default=_json_default), flush=True)
+    if plot and not _have_matplotlib():
+        raise ValueError(f"{_PLOT_HINT}; no figure written")
+    if plot:
+        print(f"{PROG}: wrote {args.output}", file=sys.stderr)
+    return 0
 
 
 # ----------------------------------------------------------------------- main
