@@ -196,3 +196,181 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         stats["estimate_center_error_max_cells"] = stats["estimate_center_error_max"] / h
     stats["cells_widened_per_iteration"] = stats["cells_widened"] / max(it, 1) / n
     return RelaxResult(X, np.array(rho), it, reason, seconds, timings, used, devname, stats)
+
+
+@dataclass
+class RadiusResult:
+    """Outcome of :func:`max_points_for_radius`.
+
+    Attributes
+    ----------
+    points : (n, 2) float64
+        The relaxed point set with the most points found; its minimum
+        distance on the torus is at least ``2 * radius``.
+    n : int
+    radius : float
+        The requested Poisson disk radius (half the minimum distance).
+    achieved_radius : float
+        ``min_distance(points) / 2``.
+    rho : float
+        Normalized Poisson disk radius of `points`.
+    trials : list of dict
+        Every relaxation run, in order: ``n``, ``target_rho``, ``reached``,
+        ``rho`` (final), ``iterations``, ``stop_reason``, ``seconds``.
+    seconds : float
+        Wall time of the whole search.
+    """
+
+    points: np.ndarray
+    n: int
+    radius: float
+    achieved_radius: float
+    rho: float
+    trials: list
+    seconds: float
+
+
+def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, backend="auto",
+                          max_iter=300, patience=60, rho_start=0.8, rho_limit=0.95, grid=None,
+                          device=None, callback=None):
+    """The largest n whose relaxation reaches Poisson disk radius `radius` on the unit torus.
+
+    For n points the radius asks for the normalized radius
+    ``rho_t(n) = radius / sqrt(1 / (2 sqrt(3) n))``, which grows like
+    ``sqrt(n)``. One trial at n throws a start set, relaxes it with
+    :func:`relax_poisson` to ``eps = rho_t(n) * (1 + eps_margin)`` and
+    succeeds when ``min_distance / 2 >= radius``. The search starts at the n
+    where ``rho_t = rho_start``, steps down (halving n's excess) until a trial
+    succeeds, gallops upward with doubling steps until one fails, then
+    bisects between the last success and the first failure. n with
+    ``rho_t(n) >= rho_limit`` count as failures without a trial (relaxation
+    levels off near rho 0.92). Success is not strictly monotone in n (each
+    trial has its own random start), so the answer is the largest success
+    the search met, not a proof that no larger n works.
+
+    Parameters
+    ----------
+    radius : float
+        Poisson disk radius: half the minimum distance between points, in
+        (0, 0.25).
+    start : {"dart", "random"} or callable, optional
+        Start sets: dart throwing at relative radius 0.74, uniform random
+        points, or ``start(n, rng) -> (n, 2) array``.
+    eps_margin : float, optional
+        Relative margin on the target rho, so that rounding cannot leave the
+        result just below `radius`.
+    seed : int, optional
+        The trial at n uses ``numpy.random.default_rng([seed, n])``: the same
+        seed gives the same trials and result whatever the search path.
+    backend, grid, device :
+        Passed to :func:`relax_poisson`.
+    max_iter, patience : int, optional
+        Passed to :func:`relax_poisson` for every trial (a failing trial costs
+        up to `max_iter` iterations).
+    rho_start : float, optional
+        rho of the first trial's n.
+    rho_limit : float, optional
+        Trials whose target rho reaches this are not run.
+    callback : callable, optional
+        ``callback(trial)`` with each trial's dict.
+
+    Returns
+    -------
+    RadiusResult
+
+    Raises
+    ------
+    ValueError
+        Bad `radius`, `start`, `rho_start` or `rho_limit`.
+    RuntimeError
+        No n >= 2 reached the radius (it is too large for the torus).
+
+    Examples
+    --------
+    >>> res = max_points_for_radius(0.043, backend="exact")      # doctest: +SKIP
+    >>> res.n, bool(res.achieved_radius >= 0.043)                 # doctest: +SKIP
+    (113, True)
+    """
+    from .geometry import min_distance
+    from .sampling import dart_throwing, random_points
+
+    radius = float(radius)
+    if not (np.isfinite(radius) and 0.0 < radius < 0.25):
+        raise ValueError(f"radius must be in (0, 0.25), got {radius}")
+    if not (0.0 < rho_start < rho_limit <= 1.0):
+        raise ValueError(f"need 0 < rho_start < rho_limit <= 1, got {rho_start}, {rho_limit}")
+    if callable(start):
+        make = start
+    elif start == "dart":
+        def make(n, rng):
+            return dart_throwing(n, seed=rng)
+    elif start == "random":
+        def make(n, rng):
+            return random_points(n, seed=rng)
+    else:
+        raise ValueError(f"start must be 'dart', 'random' or a callable, got {start!r}")
+
+    def target(n):
+        return radius * np.sqrt(2.0 * np.sqrt(3.0) * n)
+
+    def n_at(rho):
+        return int(np.floor((rho / radius) ** 2 / (2.0 * np.sqrt(3.0))))
+
+    t_start = time.perf_counter()
+    trials = []
+    done = {}
+
+    def trial(n):
+        if n in done:
+            return done[n]
+        t = target(n)
+        if t >= rho_limit:
+            done[n] = (False, None)
+            return done[n]
+        pts = np.asarray(make(n, np.random.default_rng([int(seed), n])), dtype=np.float64)
+        t0 = time.perf_counter()
+        res = relax_poisson(pts, min(t * (1.0 + eps_margin), 1.0 - 1e-12), max_iter=max_iter,
+                            backend=backend, grid=grid, device=device, patience=patience)
+        ok = bool(min_distance(res.points) / 2.0 >= radius)
+        rec = {"n": int(n), "target_rho": float(t), "reached": ok, "rho": float(res.rho[-1]),
+               "iterations": int(res.iterations), "stop_reason": res.stop_reason,
+               "seconds": time.perf_counter() - t0}
+        trials.append(rec)
+        if callback is not None:
+            callback(rec)
+        done[n] = (ok, res.points if ok else None)
+        return done[n]
+
+    n_hi_cap = n_at(rho_limit) + 1            # first n never tried
+    n = max(2, n_at(rho_start))
+    if n >= n_hi_cap:
+        raise RuntimeError(f"radius {radius} leaves no n >= 2 with target rho below {rho_limit}")
+    # downward (10 % steps) until a success
+    while not trial(n)[0]:
+        if n <= 2:
+            raise RuntimeError(f"no point set with n >= 2 reached radius {radius}")
+        n = max(2, min(n - 1, int(n * 0.9)))
+    lo = n
+    # gallop upward until a failure
+    step = max(1, int(round(0.02 * lo)))
+    hi = None
+    while hi is None:
+        cand = lo + step
+        if cand >= n_hi_cap:
+            hi = n_hi_cap
+        elif trial(cand)[0]:
+            lo = cand
+            step *= 2
+        else:
+            hi = cand
+    # bisect between a success (lo) and a failure (hi)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if trial(mid)[0]:
+            lo = mid
+        else:
+            hi = mid
+    pts = done[lo][1]
+    d = min_distance(pts) / 2.0
+    return RadiusResult(pts, int(lo), radius, float(d), float(normalized_radius(pts)), trials,
+                        time.perf_counter() - t_start)

@@ -1,0 +1,45 @@
+"""max_points_for_radius: the most points relaxation brings to a Poisson disk radius (Fig. 7)."""
+
+import numpy as np
+import pytest
+
+from diskpack_cl.geometry import min_distance, normalized_radius
+from diskpack_cl.relax import max_points_for_radius
+from diskpack_cl.sampling import hexagonal_radius
+
+RADIUS = 0.8 * hexagonal_radius(100)  # rho 0.8 at n = 100, about 0.043
+
+
+@pytest.fixture(scope="module")
+def result():
+    return max_points_for_radius(RADIUS, backend="exact", seed=3)
+
+
+def test_reaches_the_radius_with_more_points(result):
+    # the relaxation levels off near rho 0.92, i.e. n ~ 100 * (0.92 / 0.8)^2 = 132
+    assert 100 < result.n <= 140
+    assert len(result.points) == result.n
+    assert min_distance(result.points) / 2.0 >= RADIUS
+    assert result.achieved_radius >= RADIUS
+    assert result.rho == pytest.approx(normalized_radius(result.points))
+
+
+def test_search_brackets_the_answer(result):
+    by_n = {t["n"]: t for t in result.trials}
+    assert by_n[result.n]["reached"]
+    # the search stops at a failure at n + 1 (or a target rho it does not try)
+    assert result.n + 1 not in by_n or not by_n[result.n + 1]["reached"]
+    assert all(t["reached"] == (t["rho"] >= t["target_rho"] * (1 - 1e-9)) for t in result.trials)
+
+
+def test_deterministic_by_seed(result):
+    again = max_points_for_radius(RADIUS, backend="exact", seed=3)
+    assert again.n == result.n
+    np.testing.assert_array_equal(again.points, result.points)
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError, match=r"radius must be in \(0, 0.25\), got 0.3"):
+        max_points_for_radius(0.3)
+    with pytest.raises(ValueError, match="start must be 'dart', 'random' or a callable"):
+        max_points_for_radius(0.04, start="grid")
