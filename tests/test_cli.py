@@ -1,3 +1,4 @@
+import importlib
 import io
 import json
 import os
@@ -262,7 +263,7 @@ def test_devices_without_opencl(monkeypatch, capsys):
 
 def test_subcommands_are_registered_from_add_functions():
     names = [n[5:] for n in vars(cli) if n.startswith("_add_")]
-    assert {"devices", "poisson", "relax"} <= set(names)
+    assert {"devices", "poisson", "relax", "stipple", "analyze"} <= set(names)
     for name in names:
         assert callable(getattr(cli, f"_run_{name}"))
 
@@ -276,6 +277,289 @@ def test_readme_commands_match_ci():
     head = "\n".join(readme.splitlines()[:25])
     assert test_cmd in head
     assert "diskpack poisson -n 1024 -o out/points.npz" in head
+    assert "diskpack stipple sample -n 20000 -o out/stipple.svg -o out/stipple.png" in head
     ci = (ROOT / ".ci" / "run").read_text()
     assert '.venv/bin/pip install -e ".[test]"' in ci and ".venv/bin/python -m pytest -q" in ci
     assert os.access(ROOT / ".ci" / "run", os.X_OK)
+
+
+
+# ------------------------------------------------------------------ stipple
+
+# the package re-exports the function under the module's name: patch the module
+STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
+STIPPLE_ARGS = ["-n", "150", "--beta", "3", "--lloyd", "2", "--rounds", "2"]  # 3+2+2 iterations
+
+
+def _gradient_png(path, size=48):
+    from PIL import Image
+
+    g = np.tile(np.linspace(0, 255, size), (size, 1)).astype(np.uint8)
+    Image.fromarray(g).save(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def stippled(ctx, tmp_path_factory):
+    """One real small stippling, written in all four formats with --json."""
+    d = tmp_path_factory.mktemp("stipple")
+    image = _gradient_png(d / "grad.png")
+    outs = {ext: d / f"out.{ext}" for ext in ("svg", "png", "npz", "csv")}
+    argv = ["stipple", str(image), *STIPPLE_ARGS, "--json", "--seed", "1"]
+    for path in outs.values():
+        argv += ["-o", str(path)]
+    out, err = io.StringIO(), io.StringIO()
+    old = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = out, err
+    try:
+        rc = cli.main(argv)
+    finally:
+        sys.stdout, sys.stderr = old
+    assert rc == 0, err.getvalue()
+    return types.SimpleNamespace(dir=d, image=image, outs=outs, summary=_json_line(out.getvalue()),
+                                 err=err.getvalue())
+
+
+def test_stipple_writes_every_format(stippled):
+    s, outs = stippled.summary, stippled.outs
+    assert sorted(os.listdir(stippled.dir)) == sorted(["grad.png"] + [p.name for p in outs.values()])
+    svg = outs["svg"].read_text()
+    assert svg.count("<circle ") == 150 and 'inkscape:groupmode="layer"' in svg
+    from PIL import Image
+
+    with Image.open(outs["png"]) as im:
+        assert im.size == (96, 96)  # --png-scale 2 by default
+    with np.load(outs["npz"]) as z:
+        assert {"points", "radii", "k", "width", "height"} <= set(z.files)
+        assert z["points"].shape == (150, 2) and int(z["width"]) == 48
+    lines = outs["csv"].read_text().splitlines()
+    assert lines[0] == "x,y,r" and len(lines) == 151
+    assert "150 dots on 48x48 px" in stippled.err and "certified valid" in stippled.err
+
+
+def test_stipple_json(stippled):
+    s = stippled.summary
+    assert {"n", "width", "height", "k", "min_radius", "max_radius", "iterations", "certificate",
+            "timings", "params", "outputs", "seconds", "image"} <= set(s)
+    assert s["n"] == 150 and s["iterations"] == 7 and s["certificate"]["valid"] is True
+    assert s["params"]["schedule"] == [["pack", 3], ["lloyd", 2], ["pack", 2]]
+    fmts = [o["format"] for o in s["outputs"]]
+    assert fmts == ["svg", "png", "npz", "csv"]
+    svg = s["outputs"][0]
+    assert svg["travel_after_mm"] <= svg["travel_before_mm"]
+    assert s["seconds"] >= s["timings"]["total"]
+
+
+def test_stipple_progress_bar_on_a_terminal(ctx, tmp_path, monkeypatch):
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    err = Tty()
+    monkeypatch.setattr(sys, "stderr", err)
+    monkeypatch.setenv("TQDM_MININTERVAL", "0")
+    image = _gradient_png(tmp_path / "g.png", 32)
+    rc = cli.main(["stipple", str(image), "-n", "40", "--beta", "2", "--lloyd", "1",
+                   "--rounds", "2", "-o", str(tmp_path / "o.npz")])
+    assert rc == 0, err.getvalue()
+    text = err.getvalue()
+    assert "stipple" in text and "pack k=" in text and "lloyd k=" in text
+
+
+@pytest.fixture
+def fake_stipple(monkeypatch):
+    """Record stipple()'s arguments, then fail as a user error would."""
+    calls = []
+
+    def stipple(image, n, **kwargs):
+        calls.append(dict(image=np.asarray(image), n=n, **kwargs))
+        raise ValueError("fake stipple stops here")
+
+    monkeypatch.setattr(STIPPLE_MODULE, "stipple", stipple)
+    return calls
+
+
+def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys):
+    rc = cli.main(["stipple", "sample", "-n", "77", "-o", str(tmp_path / "a.svg"), "--gamma", "2",
+                   "--floor", "0.2", "--schedule", "paper", "--supersample", "3", "--seed", "5",
+                   "--method", "lloyd", "--invert", "--refine-every", "2", "--device", "pocl"])
+    assert rc == 1 and "fake stipple stops here" in capsys.readouterr().err
+    (call,) = fake_stipple
+    assert call["image"].shape == (512, 512) and call["n"] == 77
+    assert {k: call[k] for k in ("gamma", "floor", "schedule", "supersample", "seed", "method",
+                                 "invert", "refine_every", "device")} == dict(
+        gamma=2.0, floor=0.2, schedule="paper", supersample=3, seed=5, method="lloyd",
+        invert=True, refine_every=2, device="pocl")
+    assert os.listdir(tmp_path) == []
+
+
+def test_stipple_schedule_choices_follow_the_library():
+    from diskpack_cl.stipple import SCHEDULES
+
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, cli.argparse._SubParsersAction))
+    action = next(a for a in sub.choices["stipple"]._actions if a.dest == "schedule")
+    assert set(action.choices) == set(SCHEDULES)
+
+
+def test_stipple_interrupt_writes_nothing(monkeypatch, tmp_path, capsys):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(STIPPLE_MODULE, "stipple", interrupted)
+    image = _gradient_png(tmp_path / "g.png", 16)
+    rc = cli.main(["stipple", str(image), "-n", "10", "-o", str(tmp_path / "o.svg")])
+    assert rc == 130 and "interrupted, nothing written" in capsys.readouterr().err
+    assert os.listdir(tmp_path) == ["g.png"]
+
+
+def test_stipple_failed_writer_removes_earlier_outputs(ctx, monkeypatch, tmp_path, capsys):
+    import diskpack_cl.export as export
+
+    def boom(path, result, **opts):
+        raise ValueError("disk full (fake)")
+
+    monkeypatch.setitem(export.WRITERS, ".csv", boom)
+    image = _gradient_png(tmp_path / "g.png", 24)
+    _bad(tmp_path, capsys, ["stipple", str(image), "-n", "30", "--beta", "1", "--lloyd", "0",
+                            "--rounds", "1", "-o", str(tmp_path / "a.svg"),
+                            "-o", str(tmp_path / "b.csv")], 1, "disk full (fake)")
+
+
+@pytest.mark.parametrize("case, message", [
+    ("missing image", "image file not found"),
+    ("not an image", "not an image Pillow can read"),
+    ("white image", "nothing to stipple"),
+    ("unknown extension", "unknown output extension '.gif'"),
+    ("missing output dir", "output directory does not exist"),
+    ("output twice", "output given twice"),
+    ("dpi and mm", "either by --width-mm/--height-mm or by --dpi"),
+    ("too many points", "too large"),
+])
+def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
+    from PIL import Image
+
+    if case not in ("white image", "too many points"):  # refused before stipple() runs
+        def not_called(*args, **kwargs):
+            raise AssertionError("stipple() ran although the input was bad")
+
+        monkeypatch.setattr(STIPPLE_MODULE, "stipple", not_called)
+    image = _gradient_png(tmp_path / "g.png", 16)
+    out = tmp_path / "o.svg"
+    extra = []
+    if case == "missing image":
+        image = tmp_path / "none.png"
+    elif case == "not an image":
+        image = tmp_path / "text.png"
+        image.write_text("hello")
+    elif case == "white image":
+        image = tmp_path / "white.png"
+        Image.new("L", (16, 16), 255).save(image)
+    elif case == "unknown extension":
+        out = tmp_path / "o.gif"
+    elif case == "missing output dir":
+        out = tmp_path / "no" / "o.svg"
+    elif case == "output twice":
+        extra = ["-o", str(out)]
+    elif case == "dpi and mm":
+        extra = ["--dpi", "300", "--width-mm", "100"]
+    if case == "too many points":
+        extra = ["--supersample", "1", "-n", "100"]  # 4 grid cells per point: at most 64
+    _bad(tmp_path, capsys, ["stipple", str(image), "-n", "10", "-o", str(out), *extra], 1, message)
+
+
+@pytest.mark.parametrize("argv", [
+    ["stipple", "g.png", "-n", "0", "-o", "o.svg"],
+    ["stipple", "g.png", "-n", "10", "-o", "o.svg", "--gamma", "0"],
+    ["stipple", "g.png", "-n", "10", "-o", "o.svg", "--floor", "0"],
+    ["stipple", "g.png", "-n", "10", "-o", "o.svg", "--schedule", "fast"],
+    ["stipple", "g.png", "-n", "10"],
+    ["stipple", "g.png", "-o", "o.svg"],
+    ["analyze"],
+])
+def test_stipple_usage_errors(tmp_path, capsys, monkeypatch, argv):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(argv) == 2
+    assert "usage: diskpack" in capsys.readouterr().err
+    assert os.listdir(tmp_path) == []
+
+
+# ------------------------------------------------------------------ analyze
+
+@pytest.fixture
+def point_files(tmp_path):
+    a, b = tmp_path / "a.npz", tmp_path / "b.csv"
+    write_points(a, dart_throwing(200, seed=1))
+    write_points(b, dart_throwing(200, seed=2))
+    return [str(a), str(b)]
+
+
+def test_analyze_point_sets_json(point_files, capsys):
+    assert cli.main(["analyze", *point_files, "--json"]) == 0
+    s = _json_line(capsys.readouterr().out)
+    assert s["n"] == 200 and s["realizations"] == 2
+    assert s["rho"] >= 0.7 and s["anisotropy_reference_db"] == pytest.approx(-3.0103, abs=1e-4)
+    assert len(s["radial_power"]) == len(s["radial_frequency"]) == len(s["anisotropy_db"])
+
+
+def test_analyze_point_sets_figure(point_files, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "report.png"
+    assert cli.main(["analyze", *point_files, "-o", str(out), "--json"]) == 0
+    s = _json_line(capsys.readouterr().out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the numbers without matplotlib are those of the figure
+    from diskpack_cl.plots import point_set_report  # noqa: F401
+
+    assert cli.main(["analyze", *point_files, "--json"]) == 0
+    assert _json_line(capsys.readouterr().out) == s
+
+
+def test_analyze_without_matplotlib(point_files, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
+    out = tmp_path / "report.png"
+    before = set(os.listdir(tmp_path))
+    assert cli.main(["analyze", *point_files, "-o", str(out), "--json"]) == 1
+    captured = capsys.readouterr()
+    assert _json_line(captured.out)["n"] == 200
+    assert 'pip install "diskpack_cl[plot]"' in captured.err
+    assert set(os.listdir(tmp_path)) == before
+    # without --json it fails before any work
+    assert cli.main(["analyze", *point_files, "-o", str(out)]) == 1
+    assert 'pip install "diskpack_cl[plot]"' in capsys.readouterr().err
+    assert set(os.listdir(tmp_path)) == before
+
+
+def test_analyze_stippling(stippled, tmp_path, capsys):
+    npz = str(stippled.outs["npz"])
+    assert cli.main(["analyze", npz, "--image", str(stippled.image), "--json"]) == 0
+    s = _json_line(capsys.readouterr().out)
+    assert s["n"] == 150 and 0 < s["tone_ssim"] <= 1 and s["certificate"]["valid"] is True
+    assert s["radius_max"] == pytest.approx(stippled.summary["max_radius"])
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "s.png"
+    assert cli.main(["analyze", npz, "--image", str(stippled.image), "-o", str(out)]) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("case, message", [
+    ("no image", "is a stippling: give its input image with --image"),
+    ("wrong image size", "is a stippling of a 48x48 px image"),
+    ("mixed", "is analyzed alone"),
+    ("pixel units", "must lie on the unit torus"),
+    ("no output", "nothing to do"),
+    ("figure extension", "unknown figure extension"),
+])
+def test_analyze_bad_inputs(stippled, point_files, tmp_path, capsys, case, message):
+    npz = str(stippled.outs["npz"])
+    out = ["-o", str(tmp_path / "r.png")]
+    argv = {
+        "no image": [npz, *out],
+        "wrong image size": [npz, "--image", str(_gradient_png(tmp_path / "g.png", 20)), "--json"],
+        "mixed": [npz, point_files[0], "--image", "sample", *out],
+        "pixel units": [str(stippled.outs["csv"]), *out],
+        "no output": point_files,
+        "figure extension": [*point_files, "-o", str(tmp_path / "r.gif")],
+    }[case]
+    _bad(tmp_path, capsys, ["analyze", *argv], 1, message)
