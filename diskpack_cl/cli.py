@@ -89,7 +89,7 @@ def _output_options(p):
 def _relax_options(p):
     p.add_argument("--eps", type=_unit_open, default=0.8,
                    help="stop when the normalized radius rho reaches EPS (default 0.8)")
-    p.add_argument("--max-iter", type=_nonnegative_int, default=1000, metavar="N",
+    p.add_argument("--max-iter", type=_nonnegative_int, default=None, metavar="N",
                    help="iteration cap (default 1000)")
     p.add_argument("--backend", choices=("auto", "opencl", "exact"), default="auto",
                    help="opencl: OpenCL raster estimate + exact refinement; exact: scipy only; "
@@ -101,13 +101,17 @@ def _relax_options(p):
 
 # --------------------------------------------------------------- shared runs
 
+def _max_iter(args):
+    return 1000 if args.max_iter is None else args.max_iter
+
+
 def _progress(args, label):
     """Return (callback, close) feeding a tqdm bar on a terminal, or no-ops."""
     if args.quiet or not sys.stderr.isatty():
         return None, lambda: None
     from tqdm import tqdm
 
-    bar = tqdm(total=args.max_iter or None, desc=label, unit="it", file=sys.stderr,
+    bar = tqdm(total=_max_iter(args) or None, desc=label, unit="it", file=sys.stderr,
                dynamic_ncols=True, leave=False)
 
     def callback(iteration, rho):
@@ -124,7 +128,7 @@ def _relax_and_write(points, args, *, extra_summary=None):
 
     callback, close = _progress(args, "relax")
     try:
-        res = relax_poisson(points, args.eps, max_iter=args.max_iter, backend=args.backend,
+        res = relax_poisson(points, args.eps, max_iter=_max_iter(args), backend=args.backend,
                             grid=args.grid, device=args.device, callback=callback)
     finally:
         close()
@@ -187,8 +191,14 @@ def _add_poisson(subparsers):
         "poisson", help="make a Poisson disk set on the unit torus",
         description="Make a start set (dart throwing, uniform random or a file) on the unit "
                     "torus and relax it by disk packing until rho >= EPS (paper Algorithm 1).")
-    p.add_argument("-n", type=_point_count, default=None, metavar="N",
-                   help="number of points (default 1024; with --init FILE: the file's count)")
+    count = p.add_mutually_exclusive_group()
+    count.add_argument("-n", type=_point_count, default=None, metavar="N",
+                       help="number of points (default 1024; with --init FILE: the file's count)")
+    count.add_argument("--radius", type=_radius, default=None, metavar="R",
+                       help="instead of -n: find the largest n whose relaxation reaches Poisson "
+                            "disk radius R (half the minimum distance, 0 < R < 0.25; the paper's "
+                            "Fig. 7) and write that set; --eps is not used, --max-iter caps each "
+                            "trial (default 300)")
     p.add_argument("--init", default="dart", metavar="dart|random|FILE",
                    help="start set: dart throwing (default), uniform random, or a point file")
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
@@ -199,6 +209,64 @@ def _add_poisson(subparsers):
     p.set_defaults(run=_run_poisson)
 
 
+def _radius(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 < value < 0.25:
+        raise argparse.ArgumentTypeError(f"must be in (0, 0.25), got {text}")
+    return value
+
+
+def _run_poisson_radius(args):
+    """``poisson --radius R``: the most points that relaxation brings to radius R."""
+    from diskpack_cl.io import write_points
+    from diskpack_cl.relax import max_points_for_radius
+
+    if args.init not in ("dart", "random"):
+        raise ValueError("--radius chooses n itself: use --init dart or random, not a file")
+    bar, callback = None, None
+    if not args.quiet and sys.stderr.isatty():
+        from tqdm import tqdm
+
+        bar = tqdm(desc="radius search", unit="trial", file=sys.stderr, dynamic_ncols=True,
+                   leave=False)
+
+        def callback(trial):
+            bar.set_postfix_str(f"n={trial['n']} {'reached' if trial['reached'] else 'missed'}",
+                                refresh=False)
+            bar.update(1)
+    try:
+        res = max_points_for_radius(args.radius, start=args.init,
+                                    seed=0 if args.seed is None else args.seed,
+                                    backend=args.backend, grid=args.grid, device=args.device,
+                                    max_iter=300 if args.max_iter is None else args.max_iter,
+                                    callback=callback)
+    except RuntimeError as exc:
+        raise ValueError(str(exc)) from None
+    finally:
+        if bar is not None:
+            bar.close()
+    extra = {}
+    if args.output.lower().endswith(".npz"):
+        extra = {"radius": res.radius, "rho": res.rho}
+    write_points(args.output, res.points, **extra)
+    summary = {
+        "n": int(res.n), "radius": float(res.radius),
+        "achieved_radius": float(res.achieved_radius), "rho": float(res.rho),
+        "trials": res.trials, "seconds": float(res.seconds), "init": args.init,
+        "output": str(args.output),
+    }
+    if not args.quiet:
+        print(f"{PROG}: {res.n} points reach radius {res.radius:g} (achieved "
+              f"{res.achieved_radius:.6g}, rho {res.rho:.4f}) after {len(res.trials)} trials "
+              f"({res.seconds:.3g} s); wrote {args.output}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary, default=_json_default), flush=True)
+    return 0
+
+
 def _run_poisson(args):
     import warnings
 
@@ -206,6 +274,8 @@ def _run_poisson(args):
     from diskpack_cl.sampling import DartThrowingWarning, dart_throwing, random_points
 
     check_points_path(args.output, for_writing=True)
+    if args.radius is not None:
+        return _run_poisson_radius(args)
     t0 = time.perf_counter()
     info = {"init": args.init}
     if args.init == "dart":

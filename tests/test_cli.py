@@ -563,3 +563,49 @@ def test_analyze_bad_inputs(stippled, point_files, tmp_path, capsys, case, messa
         "figure extension": [*point_files, "-o", str(tmp_path / "r.gif")],
     }[case]
     _bad(tmp_path, capsys, ["analyze", *argv], 1, message)
+
+
+# --------------------------------------------------------- poisson --radius
+
+def test_poisson_radius_passes_options(monkeypatch, tmp_path, capsys):
+    import diskpack_cl.relax
+
+    calls = []
+
+    def fake(radius, **kwargs):
+        calls.append(dict(radius=radius, **kwargs))
+        pts = dart_throwing(30, seed=0)
+        return diskpack_cl.relax.RadiusResult(pts, 30, radius, 0.0801, 0.9,
+                                              [{"n": 30, "reached": True}], 0.5)
+
+    monkeypatch.setattr(diskpack_cl.relax, "max_points_for_radius", fake)
+    out = tmp_path / "r.npz"
+    rc = cli.main(["poisson", "--radius", "0.08", "--init", "random", "--seed", "4", "--backend",
+                   "exact", "--max-iter", "50", "-o", str(out), "--json"])
+    assert rc == 0
+    (call,) = calls
+    assert (call["radius"], call["start"], call["seed"], call["backend"], call["max_iter"]) == \
+        (0.08, "random", 4, "exact", 50)
+    s = _json_line(capsys.readouterr().out)
+    assert s["n"] == 30 and s["radius"] == 0.08 and s["achieved_radius"] == 0.0801
+    assert read_points(out).shape == (30, 2)
+
+
+def test_poisson_radius_real(tmp_path, capsys):
+    out = tmp_path / "r.csv"
+    assert cli.main(["poisson", "--radius", "0.12", "--backend", "exact", "-o", str(out),
+                     "--json", "-q"]) == 0
+    s = _json_line(capsys.readouterr().out)
+    from diskpack_cl.geometry import min_distance
+
+    pts = read_points(out)
+    assert len(pts) == s["n"] >= 12 and min_distance(pts) / 2 >= 0.12
+
+
+@pytest.mark.parametrize("argv, code, message", [
+    (["--radius", "0.05", "-n", "10"], 2, "not allowed with argument --radius"),
+    (["--radius", "0.3"], 2, "must be in (0, 0.25)"),
+    (["--radius", "0.05", "--init", "x.npz"], 1, "use --init dart or random"),
+])
+def test_poisson_radius_errors(tmp_path, capsys, argv, code, message):
+    _bad(tmp_path, capsys, ["poisson", *argv, "-o", str(tmp_path / "o.npz")], code, message)
