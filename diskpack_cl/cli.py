@@ -423,11 +423,16 @@ def _add_stipple(subparsers):
                    help="SVG height in mm")
     o.add_argument("--dpi", type=_positive_float, default=None,
                    help="SVG size from the image's pixels at DPI (default 96 when no mm size)")
+    o.add_argument("--dots", choices=("tone", "packing"), default="tone",
+                   help="dot size in SVG and PNG: tone (default) = one size for all dots, "
+                        "chosen so that the total ink equals the image's total darkness; "
+                        "packing = each dot its certified packing disk (large where the image "
+                        "is light: it shows the packing, not the tone)")
     o.add_argument("--dot-mm", type=_positive_float, default=None, metavar="MM",
-                   help="fixed dot diameter in mm (the pen width) instead of the packing radii; "
-                        "the PNG preview shows the same dots")
+                   help="fixed dot diameter in mm (the pen width) instead of --dots; the PNG "
+                        "preview shows the same dots")
     o.add_argument("--radius-scale", type=_positive_float, default=1.0, metavar="F",
-                   help="factor on the certified packing radii in SVG and PNG (default 1.0)")
+                   help="factor on the dot radii of --dots in SVG and PNG (default 1.0)")
     o.add_argument("--pen-path", choices=("auto", "greedy", "hilbert", "none"), default="auto",
                    help="SVG dot order: greedy nearest neighbour, Hilbert curve, none, or auto "
                         "(greedy up to 100000 dots, else Hilbert; default)")
@@ -516,12 +521,18 @@ def _run_stipple(args):
         raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
 
     mm_per_px = _mm_per_px(res.width, res.height, args.width_mm, args.height_mm, args.dpi)
+    dot_mm = args.dot_mm
+    if dot_mm is None and args.dots == "tone":
+        from diskpack_cl.analysis import tone_radius
+
+        darkness = gray if args.invert else 1.0 - gray
+        dot_mm = 2.0 * tone_radius(res.n, darkness) * args.radius_scale * mm_per_px
     svg_opts = dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
-                    dot_mm=args.dot_mm, radius_scale=args.radius_scale, pen_path=args.pen_path,
+                    dot_mm=dot_mm, radius_scale=args.radius_scale, pen_path=args.pen_path,
                     invert=args.invert)
     png_opts = dict(scale=args.png_scale, radius_scale=args.radius_scale, invert=args.invert)
-    if args.dot_mm is not None:  # preview the pen's dots
-        png_opts["dot_px"] = 0.5 * args.dot_mm / mm_per_px * args.png_scale
+    if dot_mm is not None:  # preview the pen's dots
+        png_opts["dot_px"] = 0.5 * dot_mm / mm_per_px * args.png_scale
     jobs = []
     for out in outputs:
         ext = check_output_path(out)
@@ -535,6 +546,7 @@ def _run_stipple(args):
 
     summary = res.summary()
     summary["image"] = str(image)
+    summary["dot_mm"] = dot_mm  # None: the packing radii
     summary["outputs"] = written
     summary["write_seconds"] = seconds_write
     summary["seconds"] = time.perf_counter() - t0

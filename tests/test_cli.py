@@ -325,6 +325,11 @@ def test_stipple_writes_every_format(stippled):
     assert sorted(os.listdir(stippled.dir)) == sorted(["grad.png"] + [p.name for p in outs.values()])
     svg = outs["svg"].read_text()
     assert svg.count("<circle ") == 150 and 'inkscape:groupmode="layer"' in svg
+    import re
+
+    radii = {float(r) for r in re.findall(r' r="([0-9.]+)"', svg)}
+    assert len(radii) == 1  # --dots tone (default): one size, ink = darkness
+    assert 2 * radii.pop() == pytest.approx(stippled.summary["dot_mm"], abs=1e-4)
     from PIL import Image
 
     with Image.open(outs["png"]) as im:
@@ -348,6 +353,20 @@ def test_stipple_json(stippled):
     svg = s["outputs"][0]
     assert svg["travel_after_mm"] <= svg["travel_before_mm"]
     assert s["seconds"] >= s["timings"]["total"]
+
+
+def test_stipple_packing_dots(ctx, tmp_path, capsys):
+    import re
+
+    image = _gradient_png(tmp_path / "g.png", 32)
+    out = tmp_path / "o.svg"
+    assert cli.main(["stipple", str(image), "-n", "40", "--beta", "2", "--lloyd", "0",
+                     "--rounds", "1", "--dots", "packing", "--dpi", "25.4", "-o", str(out),
+                     "-o", str(tmp_path / "o.npz"), "--json", "-q"]) == 0
+    assert _json_line(capsys.readouterr().out)["dot_mm"] is None
+    svg_r = np.array([float(r) for r in re.findall(r' r="([0-9.]+)"', out.read_text())])
+    with np.load(tmp_path / "o.npz") as z:  # 25.4 dpi: 1 mm per pixel
+        np.testing.assert_allclose(np.sort(svg_r), np.sort(z["radii"]), atol=1e-4)
 
 
 def test_stipple_progress_bar_on_a_terminal(ctx, tmp_path, monkeypatch):
