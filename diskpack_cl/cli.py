@@ -802,6 +802,15 @@ def main(argv=None):
             NoOpenCLError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 1
+    except MemoryError:
+        print(f"{PROG}: error: out of memory, nothing written", file=sys.stderr)
+        return 1
+    except Exception as exc:
+        if type(exc).__module__.split(".")[0] != "pyopencl":
+            raise
+        print(f"{PROG}: error: OpenCL failed ({type(exc).__name__}: {exc}); try another "
+              f"--device (see 'diskpack devices'); nothing written", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -628,3 +628,15 @@ def test_poisson_radius_real(tmp_path, capsys):
 ])
 def test_poisson_radius_errors(tmp_path, capsys, argv, code, message):
     _bad(tmp_path, capsys, ["poisson", *argv, "-o", str(tmp_path / "o.npz")], code, message)
+
+
+def test_opencl_failure_is_an_error_message(monkeypatch, tmp_path, capsys):
+    pyopencl = pytest.importorskip("pyopencl")
+
+    def broken(*args, **kwargs):
+        raise pyopencl.LogicError("clEnqueueNDRangeKernel failed: INVALID_WORK_GROUP_SIZE")
+
+    monkeypatch.setattr(STIPPLE_MODULE, "stipple", broken)
+    image = _gradient_png(tmp_path / "g.png", 16)
+    _bad(tmp_path, capsys, ["stipple", str(image), "-n", "10", "-o", str(tmp_path / "o.svg")], 1,
+         "diskpack: error: OpenCL failed (LogicError")
