@@ -476,7 +476,6 @@ def _write_all(jobs):
             yield path, info
     except BaseException:
         import contextlib
-        import os
 
         for path in done:
             with contextlib.suppress(OSError):
@@ -485,8 +484,6 @@ def _write_all(jobs):
 
 
 def _run_stipple(args):
-    import os
-
     from diskpack_cl.export import _mm_per_px, check_output_path, write_stipple
     from diskpack_cl.image import load_gray
     from diskpack_cl.stipple import make_schedule, stipple
