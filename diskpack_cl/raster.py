@@ -22,6 +22,7 @@ from .geometry import Domain
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
+TILE = 8   # work-group side of power_labels (kernels/power_diagram.cl)
 
 
 def auto_grid(n, domain, cells_per_site=16):
@@ -135,7 +136,7 @@ class PowerRaster:
         self.queue = cl.CommandQueue(self.ctx)
         self.profile = profile
         periodic = int(domain.periodic)
-        self._k_labels = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic})["power_labels"]
+        self._k_labels = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": TILE})["power_labels"]
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._site_bufs = {}
@@ -223,8 +224,9 @@ class PowerRaster:
                 "dist": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.float32),
                 "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32)}
         self._pts = pts
+        gx, gy = -(-nx // TILE) * TILE, -(-ny // TILE) * TILE
         ev = self._k_labels(
-            self.queue, (nx, ny), None, b_site, b_w, b_id, b_start, b_wmax,
+            self.queue, (gx, gy), (TILE, TILE), b_site, b_w, b_id, b_start, b_wmax,
             np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
             np.float32(dom.width), np.float32(dom.height), np.float32(wmax_b.max() if n else 0),
             np.int32(nx), np.int32(ny), np.int32(bool(distance)),

@@ -2,36 +2,131 @@
  * boundary of its power cell.
  *
  * Sites are sorted into a uniform bucket grid (nbx x nby buckets of size
- * bw x bh, CSR layout in bucket_start).  Each work item is one grid cell; it
- * searches the buckets in square rings around its own bucket, skipping a
- * bucket when a lower bound of its power distance cannot beat the best so
- * far, and stops when the next ring cannot.  The label is therefore exact
- * for the grid-cell centre (up to float32 rounding), not a flood-fill
- * approximation.
+ * bw x bh, CSR layout in bucket_start).  A work-group is a tile of
+ * TILE x TILE grid cells.  One work item gathers, into local memory, every
+ * site that can matter anywhere in the tile; then each work item scans that
+ * short list for its own grid cell.  The scans have the same length for all
+ * work items, which lets PoCL vectorize them across the tile, and the
+ * bucket walk is paid once per tile instead of once per grid cell.
  *
- * The distance to the boundary is analytic: a power cell is the
- * intersection of half-planes, so the distance from an interior point to its
- * boundary is the smallest distance to the bounding lines
+ * Pass 1 (owner).  U is an upper bound of the least power distance over the
+ * tile: for any site j and any p in the tile, pow_j(p) <= max over the
+ * tile's corners of pow_j (power distance is convex).  A site can own a
+ * grid cell of the tile only if  boxdist(x_j, tile)^2 - w_j <= U.
+ *
+ * Pass 2 (distance).  A power cell is the intersection of half-planes, so
+ * the distance from an interior point p to its boundary is the smallest
+ * distance to the bounding lines
  *   d_j(p) = ((|p-x_j|^2 - w_j) - (|p-x_i|^2 - w_i)) / (2 |x_j - x_i|),
- * and, in a rectangle, to its four edges.  A site j can only give the minimum
- * D if |p - x_j| <= D + sqrt((D + |p - x_i|)^2 + w_j - w_i), which bounds the
- * second ring search.
+ * and, in a rectangle, to its four edges.  Site j can give the minimum D
+ * only if |p - x_j| <= D + sqrt((D + |p - x_i|)^2 + w_j - w_i).  The
+ * runner-up of pass 1 bounds D from above, which bounds the gather radius.
  *
- * On a torus, ring offsets beyond the bucket grid wrap with a shift of one
+ * Labels are exact for the grid-cell centres (up to float32 rounding), not a
+ * flood-fill approximation.  Ties go to the lowest site index, so the
+ * output does not depend on the gather order.  When more candidates than
+ * CAP exist, they are streamed through local memory in chunks.
+ *
+ * On a torus, bucket offsets beyond the grid wrap with a shift of one
  * period, so every periodic image of a site (the cell's own images
  * included) is a separate candidate.
  */
 #include "common.h"
 
-/* Distance from p to the outside of the block of buckets within ring r-1
- * of p's bucket: a lower bound on the distance to any site in ring >= r. */
-inline float ring_gap(float px, float py, int bx, int by, int r, float bw, float bh)
+#ifndef TILE
+#define TILE 8
+#endif
+#ifndef CAP
+#define CAP 256
+#endif
+
+#define GATHER_OWNER 0
+#define GATHER_DIST 1
+
+/* Distance between boxes [ax0,ax1]x[ay0,ay1] and [bx0,bx1]x[by0,by1]. */
+inline float boxbox(float ax0, float ay0, float ax1, float ay1,
+                    float bx0, float by0, float bx1, float by1)
 {
-    return fmin(fmin(px - (bx - r + 1) * bw, (bx + r) * bw - px),
-                fmin(py - (by - r + 1) * bh, (by + r) * bh - py));
+    const float dx = fmax(fmax(bx0 - ax1, ax0 - bx1), 0.0f);
+    const float dy = fmax(fmax(by0 - ay1, ay0 - by1), 0.0f);
+    return sqrt(dx * dx + dy * dy);
 }
 
-__kernel void power_labels(
+/* Walk the buckets in rings around the tile's bucket block and copy the
+ * sites that pass the test of `mode` into the local list, skipping the first
+ * `skip` that pass.  Returns how many pass in total (may exceed CAP).
+ *   GATHER_OWNER: boxdist^2 - w <= bound
+ *   GATHER_DIST:  boxdist <= bound + sqrt(bound2 + w)   (bound2 >= -w)
+ */
+inline int gather(int mode, float bound, float bound2, int skip,
+                  float x0, float y0, float x1, float y1,
+                  __global const float2 *site, __global const float *weight,
+                  __global const int *site_id, __global const int *bucket_start,
+                  __global const float *bucket_wmax,
+                  int nbx, int nby, float bw, float bh, float W, float H, float wmax,
+                  __local float2 *cpos, __local float *cw, __local int *cid)
+{
+    const int bx0 = clamp((int)floor(x0 / bw), -(1 << 20), 1 << 20);
+    const int by0 = clamp((int)floor(y0 / bh), -(1 << 20), 1 << 20);
+    const int bx1 = (int)floor(x1 / bw), by1 = (int)floor(y1 / bh);
+    const int rmax = PERIODIC ? (1 << 20) : max(nbx, nby) + 1;
+    int total = 0;
+    for (int r = 0; r <= rmax; ++r) {
+        if (r > 0) {
+            /* distance from the tile to buckets of ring >= r */
+            const float gap = fmin(fmin(x0 - (bx0 - r + 1) * bw, (bx1 + r) * bw - x1),
+                                   fmin(y0 - (by0 - r + 1) * bh, (by1 + r) * bh - y1));
+            if (gap > 0.0f) {
+                if (mode == GATHER_OWNER && gap * gap - wmax > bound) break;
+                if (mode == GATHER_DIST && gap > bound + sqrt(fmax(bound2 + wmax, 0.0f))) break;
+            }
+#if !PERIODIC
+            if (bx0 - r < 0 && by0 - r < 0 && bx1 + r >= nbx && by1 + r >= nby) break;
+#endif
+        }
+        for (int cy0 = by0 - r; cy0 <= by1 + r; ++cy0) {
+            const int edge_row = (r == 0 || cy0 == by0 - r || cy0 == by1 + r);
+            const int step = edge_row ? 1 : (bx1 - bx0 + 2 * r);
+            for (int cx0 = bx0 - r; cx0 <= bx1 + r; cx0 += (step > 0 ? step : 1)) {
+                int cx = cx0, cy = cy0;
+                float sx = 0.0f, sy = 0.0f;
+#if PERIODIC
+                const int qx = floordiv(cx, nbx), qy = floordiv(cy, nby);
+                sx = qx * W; sy = qy * H;
+                cx -= qx * nbx; cy -= qy * nby;
+#else
+                if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
+#endif
+                const int b = cy * nbx + cx;
+                const float ex0 = cx * bw + sx, ey0 = cy * bh + sy;
+                const float d = boxbox(x0, y0, x1, y1, ex0, ey0, ex0 + bw, ey0 + bh);
+                const float wb = bucket_wmax[b];
+                if (mode == GATHER_OWNER && d * d - wb > bound) continue;
+                if (mode == GATHER_DIST && d > bound + sqrt(fmax(bound2 + wb, 0.0f))) continue;
+                for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
+                    const float2 s = site[k];
+                    const float xs = s.x + sx, ys = s.y + sy;
+                    const float ds = box_dist(xs, ys, x0, y0, x1, y1);
+                    const float wk = weight[k];
+                    const int pass = (mode == GATHER_OWNER) ? (ds * ds - wk <= bound)
+                                                            : (ds <= bound + sqrt(fmax(bound2 + wk, 0.0f)));
+                    if (!pass) continue;
+                    const int slot = total - skip;
+                    if (slot >= 0 && slot < CAP) {
+                        cpos[slot] = (float2)(xs, ys);
+                        cw[slot] = wk;
+                        cid[slot] = site_id[k];
+                    }
+                    ++total;
+                }
+            }
+        }
+    }
+    return total;
+}
+
+__kernel __attribute__((reqd_work_group_size(TILE, TILE, 1)))
+void power_labels(
     __global const float2 *site,        /* sites sorted by bucket */
     __global const float *weight,       /* their weights (squared radii) */
     __global const int *site_id,        /* sorted position -> caller's index */
@@ -47,107 +142,160 @@ __kernel void power_labels(
     __global float *dist,               /* out: distance to the power cell boundary */
     __global int *nbr)                  /* out: site of the nearest boundary line, -1 = domain edge */
 {
-    const int ix = get_global_id(0), iy = get_global_id(1);
-    if (ix >= nx || iy >= ny) return;
-    const float px = (ix + 0.5f) * (W / nx), py = (iy + 0.5f) * (H / ny);
-    const int bx = min((int)(px / bw), nbx - 1), by = min((int)(py / bh), nby - 1);
-    const int rmax = PERIODIC ? 1 << 20 : max(nbx, nby);
+    __local float2 cpos[CAP];
+    __local float cw[CAP];
+    __local int cid[CAP];
+    __local float red[TILE * TILE];
+    __local float bound_l;
+    __local int count_l;
 
-    /* pass 1: owner of p */
-    float best = INFINITY, second = INFINITY;
-    int best_k = -1, second_k = -1;
-    float bsx = 0.0f, bsy = 0.0f;           /* period shift of the best image */
-    float ssx = 0.0f, ssy = 0.0f;           /* ... and of the runner-up */
-    for (int r = 0; r <= rmax; ++r) {
-        if (r > 0) {
-            const float lb = ring_gap(px, py, bx, by, r, bw, bh);
-            if (lb > 0.0f && lb * lb - wmax >= best) break;
-        }
-        for (int dy = -r; dy <= r; ++dy) {
-            const int step = (dy == -r || dy == r) ? 1 : 2 * r;
-            for (int dx = -r; dx <= r; dx += (step ? step : 1)) {
-                int cx = bx + dx, cy = by + dy;
-                float sx = 0.0f, sy = 0.0f;
+    const int lx = get_local_id(0), ly = get_local_id(1), lid = ly * TILE + lx;
+    const int ix = get_global_id(0), iy = get_global_id(1);
+    const int valid = ix < nx && iy < ny;
+    const float hx = W / nx, hy = H / ny;
+    /* out-of-range work items shadow a real grid cell so that every work
+       item runs the same loops (they write nothing) */
+    const float px = (min(ix, nx - 1) + 0.5f) * hx, py = (min(iy, ny - 1) + 0.5f) * hy;
+    /* the tile's grid-cell centres span this box */
+    const int gx0 = get_group_id(0) * TILE, gy0 = get_group_id(1) * TILE;
+    const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
+    const float x1 = (min(gx0 + TILE, nx) - 0.5f) * hx, y1 = (min(gy0 + TILE, ny) - 0.5f) * hy;
+    /* float rounding must never drop a needed site: pad the bounds */
+    const float pad = 1e-4f * (hx * hx + hy * hy);
+
+    /* bound U: the second best "worst corner" power distance among the
+       sites of the nearest rings.  Two sites have pow <= U everywhere in the
+       tile, so every grid cell finds its owner and a runner-up among the
+       sites with  boxdist^2 - w <= U, and the runner-up bounds pass 2. */
+    if (lid == 0) {
+        const int bx = clamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
+        const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
+        float U1 = INFINITY, U2 = INFINITY;
+        for (int r = 0; U2 == INFINITY || r <= 1; ++r) {
+            for (int dy = -r; dy <= r; ++dy) {
+                for (int dx = -r; dx <= r; ++dx) {
+                    if (max(abs(dx), abs(dy)) != r) continue;
+                    int cx = bx + dx, cy = by + dy;
+                    float sx = 0.0f, sy = 0.0f;
 #if PERIODIC
-                int qx = floordiv(cx, nbx), qy = floordiv(cy, nby);
-                sx = qx * W; sy = qy * H;
-                cx -= qx * nbx; cy -= qy * nby;
+                    const int qx = floordiv(cx, nbx), qy = floordiv(cy, nby);
+                    sx = qx * W; sy = qy * H;
+                    cx -= qx * nbx; cy -= qy * nby;
 #else
-                if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
+                    if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
 #endif
-                const int b = cy * nbx + cx;
-                const float x0 = cx * bw + sx, y0 = cy * bh + sy;
-                const float d = box_dist(px, py, x0, y0, x0 + bw, y0 + bh);
-                if (d * d - bucket_wmax[b] >= best) continue;
-                for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
-                    const float2 s = site[k];
-                    const float pw = len2(px - s.x - sx, py - s.y - sy) - weight[k];
-                    if (pw < best || (pw == best && site_id[k] < site_id[best_k])) {
-                        second = best; second_k = best_k; ssx = bsx; ssy = bsy;
-                        best = pw; best_k = k; bsx = sx; bsy = sy;
-                    } else if (pw < second) {
-                        second = pw; second_k = k; ssx = sx; ssy = sy;
+                    const int b = cy * nbx + cx;
+                    for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
+                        const float xs = site[k].x + sx, ys = site[k].y + sy;
+                        const float fx = fmax(fabs(x0 - xs), fabs(x1 - xs));
+                        const float fy = fmax(fabs(y0 - ys), fabs(y1 - ys));
+                        const float u = fx * fx + fy * fy - weight[k];
+                        if (u < U1) { U2 = U1; U1 = u; } else if (u < U2) { U2 = u; }
                     }
                 }
             }
+#if !PERIODIC
+            if (r > max(nbx, nby)) break;
+#endif
         }
+        bound_l = U2 + pad + 1e-5f * fabs(U2);
     }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    const float U = bound_l;
 
+    /* pass 1: owner (and runner-up) of p, streaming the candidates */
+    float best = INFINITY, second = INFINITY;
+    int best_id = INT_MAX, second_id = -1;
+    float2 best_x = (float2)(0.0f), second_x = (float2)(0.0f);
+    float best_w = 0.0f, second_w = 0.0f;
+    for (int chunk = 0; ; ++chunk) {
+        if (lid == 0)
+            count_l = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
+                             site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
+                             cpos, cw, cid);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        const int total = count_l;
+        const int m = min(total - chunk * CAP, CAP);
+        for (int c = 0; c < m; ++c) {
+            const float2 s = cpos[c];
+            const float pw = len2(px - s.x, py - s.y) - cw[c];
+            const int id = cid[c];
+            if (pw < best || (pw == best && id < best_id)) {
+                second = best; second_id = best_id; second_x = best_x; second_w = best_w;
+                best = pw; best_id = id; best_x = s; best_w = cw[c];
+            } else if (pw < second) {
+                second = pw; second_id = id; second_x = s; second_w = cw[c];
+            }
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (total <= (chunk + 1) * CAP) break;
+    }
     const int pix = iy * nx + ix;
-    label[pix] = site_id[best_k];
+    if (valid) label[pix] = best_id;
     if (!with_dist) return;
 
     /* pass 2: distance to the nearest bounding line of the owner's cell */
-    const float xi = site[best_k].x + bsx, yi = site[best_k].y + bsy;
-    const float wi = weight[best_k];
-    const float pi_pow = len2(px - xi, py - yi) - wi;
+    const float xi = best_x.x, yi = best_x.y, wi = best_w;
     const float ri = sqrt(len2(px - xi, py - yi));
-    float D = INFINITY;
-    int D_id = -1;
-#if !PERIODIC
-    D = fmin(fmin(px, W - px), fmin(py, H - py));
-#endif
-    if (second_k >= 0) {
-        /* the runner-up's line bounds D from the start, so the search below
-           can stop early; it is found again there, which is harmless */
-        const float xj = site[second_k].x + ssx, yj = site[second_k].y + ssy;
-        const float sep = sqrt(len2(xj - xi, yj - yi));
-        if (sep > 0.0f) {
-            const float dj = (second - pi_pow) / (2.0f * sep);
-            if (dj < D) { D = dj; D_id = site_id[second_k]; }
-        }
-    }
-    for (int r = 0; r <= rmax; ++r) {
-        if (r > 0) {
-            const float lb = ring_gap(px, py, bx, by, r, bw, bh);
-            if (lb > 0.0f && lb > D + sqrt((D + ri) * (D + ri) + wmax - wi)) break;
-        }
-        for (int dy = -r; dy <= r; ++dy) {
-            const int step = (dy == -r || dy == r) ? 1 : 2 * r;
-            for (int dx = -r; dx <= r; dx += (step ? step : 1)) {
-                int cx = bx + dx, cy = by + dy;
-                float sx = 0.0f, sy = 0.0f;
 #if PERIODIC
-                int qx = floordiv(cx, nbx), qy = floordiv(cy, nby);
-                sx = qx * W; sy = qy * H;
-                cx -= qx * nbx; cy -= qy * nby;
+    /* the owner's own images bound its cell to half a period around it */
+    float D = 0.5f * fmin(W, H);
+    int D_id = best_id;
 #else
-                if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
+    float D = fmin(fmin(px, W - px), fmin(py, H - py));
+    int D_id = -1;
 #endif
-                const int b = cy * nbx + cx;
-                const float x0 = cx * bw + sx, y0 = cy * bh + sy;
-                const float d = box_dist(px, py, x0, y0, x0 + bw, y0 + bh);
-                if (d > D + sqrt((D + ri) * (D + ri) + bucket_wmax[b] - wi)) continue;
-                for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
-                    const float xj = site[k].x + sx, yj = site[k].y + sy;
-                    const float sep = sqrt(len2(xj - xi, yj - yi));
-                    if (sep == 0.0f) continue;      /* the owner itself (or a duplicate) */
-                    const float dj = (len2(px - xj, py - yj) - weight[k] - pi_pow) / (2.0f * sep);
-                    if (dj < D) { D = dj; D_id = site_id[k]; }
-                }
-            }
+    if (second_id >= 0) {
+        const float sep = sqrt(len2(second_x.x - xi, second_x.y - yi));
+        if (sep > 0.0f) {
+            const float dj = (second - best) / (2.0f * sep);
+            if (dj < D) { D = dj; D_id = second_id; }
         }
     }
-    dist[pix] = fmax(D, 0.0f);
-    nbr[pix] = D_id;
+    /* gather radius for the whole tile: site j matters for p only within
+       D + sqrt((D + ri)^2 + w_j - w_i); take the tile's largest D + ri
+       and the smallest w_i, and add w_j per site in the gather */
+    red[lid] = D + ri;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) {
+        float a = 0.0f;
+        for (int t = 0; t < TILE * TILE; ++t) a = fmax(a, red[t]);
+        bound_l = a;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    const float A = bound_l;     /* max of D + ri, >= max D */
+    barrier(CLK_LOCAL_MEM_FENCE);
+    red[lid] = wi;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) {
+        float wlo = INFINITY;
+        for (int t = 0; t < TILE * TILE; ++t) wlo = fmin(wlo, red[t]);
+        bound_l = wlo;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    const float wlo = bound_l;
+    /* |p - x_j| <= A + sqrt(A^2 + w_j - wlo), and boxdist <= |p - x_j| */
+    const float g1 = A * (1.0f + 1e-5f) + sqrt(pad), g2 = A * A * (1.0f + 1e-4f) + pad - wlo;
+    for (int chunk = 0; ; ++chunk) {
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (lid == 0)
+            count_l = gather(GATHER_DIST, g1, g2, chunk * CAP, x0, y0, x1, y1, site, weight,
+                             site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
+                             cpos, cw, cid);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        const int total = count_l;
+        const int m = min(total - chunk * CAP, CAP);
+        for (int c = 0; c < m; ++c) {
+            const float2 s = cpos[c];
+            const float sep = sqrt(len2(s.x - xi, s.y - yi));
+            if (sep == 0.0f) continue;      /* the owner itself (or a duplicate) */
+            const float dj = (len2(px - s.x, py - s.y) - cw[c] - best) / (2.0f * sep);
+            if (dj < D || (dj == D && cid[c] < D_id)) { D = dj; D_id = cid[c]; }
+        }
+        if (total <= (chunk + 1) * CAP) break;
+    }
+    if (valid) {
+        dist[pix] = fmax(D, 0.0f);
+        nbr[pix] = D_id;
+    }
 }
