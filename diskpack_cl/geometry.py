@@ -83,47 +83,65 @@ def _triples(m):
 def _solve_subsets(N, B, tol, lead=None):
     """Chebyshev centres of the half-plane sets ``q . N[c,k] <= B[c,k]``.
 
-    Enumerates every triple of the first `lead` constraints (all by
-    default), solves for the point equidistant
-    from the three lines, and keeps the triples whose solution satisfies all
-    constraints of the cell and the LP optimality (KKT) condition: the
-    multipliers solving ``sum l_k (N_k, 1) = (0, 0, 1)`` are non-negative.
-    Such a triple is an optimal vertex of ``max R s.t. q.N_k + R <= B_k``.
+    The LP ``max R s.t. q.N_k + R <= B_k`` has an optimal vertex where three
+    constraints are tight.  Every triple of the first `lead` constraints
+    (all by default) gives a vertex and its multipliers, solving
+    ``sum l_k (N_k, 1) = (0, 0, 1)``.  A triple with l >= 0 is dual
+    feasible, so its R bounds the optimum from above (weak duality); the
+    least such R is the optimum exactly when that vertex also satisfies all
+    constraints, which is checked.  Cells where it does not (degenerate
+    ties) fall back to checking every dual-feasible triple.
 
     Returns (q, R, ok): ok is False where no triple certifies (the subset
     is unbounded or degenerate and needs more constraints).
     """
     nc, m = B.shape
-    if m < 3:
+    if m < 3 or nc == 0:
         return np.zeros((nc, 2)), np.full(nc, -np.inf), np.zeros(nc, bool)
     T = _triples(m if lead is None else min(lead, m))
     a = N[:, T, 0]                                         # (nc, t, 3)
     b = N[:, T, 1]
     beta = B[:, T]
-    # Cramer on rows (a_k, b_k, 1)
-    det = (a[..., 0] * (b[..., 1] - b[..., 2]) - a[..., 1] * (b[..., 0] - b[..., 2])
-           + a[..., 2] * (b[..., 0] - b[..., 1]))
+    # Cramer on rows (a_k, b_k, 1): cofactors of the last column give both
+    # R = M^{-1} beta (third row) and the multipliers l = M^{-T} e3
+    e0 = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    e1 = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    e2 = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    det = e0 + e1 + e2
     good = np.abs(det) > 1e-14
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / np.where(good, det, 1.0)
-        # cofactor matrix columns: primal z = M^{-1} beta, dual l = M^{-T} e3
-        c0 = b[..., 1] - b[..., 2]; c1 = b[..., 2] - b[..., 0]; c2 = b[..., 0] - b[..., 1]
-        d0 = a[..., 2] - a[..., 1]; d1 = a[..., 0] - a[..., 2]; d2 = a[..., 1] - a[..., 0]
-        e0 = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-        e1 = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-        e2 = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-        qx = (c0 * beta[..., 0] + c1 * beta[..., 1] + c2 * beta[..., 2]) * inv
-        qy = (d0 * beta[..., 0] + d1 * beta[..., 1] + d2 * beta[..., 2]) * inv
+        good &= (e0 * inv >= -1e-9) & (e1 * inv >= -1e-9) & (e2 * inv >= -1e-9)
         R = (e0 * beta[..., 0] + e1 * beta[..., 1] + e2 * beta[..., 2]) * inv
-        lam = np.stack([e0, e1, e2], -1) * inv[..., None]
-    good &= np.all(lam >= -1e-9, axis=-1)
-    slack = B[:, None, :] - qx[..., None] * N[:, None, :, 0] - qy[..., None] * N[:, None, :, 1] - R[..., None]
-    good &= np.all(slack >= -tol, axis=-1)
-    Rg = np.where(good, R, -np.inf)
-    best = np.argmax(Rg, axis=1)
     rows = np.arange(nc)
-    ok = good[rows, best]
-    return np.stack([qx[rows, best], qy[rows, best]], 1), R[rows, best], ok
+
+    def vertex(pick):
+        aa, bb, be, iv = a[rows, pick], b[rows, pick], beta[rows, pick], inv[rows, pick]
+        qx = ((bb[:, 1] - bb[:, 2]) * be[:, 0] + (bb[:, 2] - bb[:, 0]) * be[:, 1]
+              + (bb[:, 0] - bb[:, 1]) * be[:, 2]) * iv
+        qy = ((aa[:, 2] - aa[:, 1]) * be[:, 0] + (aa[:, 0] - aa[:, 2]) * be[:, 1]
+              + (aa[:, 1] - aa[:, 0]) * be[:, 2]) * iv
+        return np.stack([qx, qy], 1)
+
+    best = np.argmin(np.where(good, R, np.inf), axis=1)
+    q = vertex(best)
+    Rb = R[rows, best]
+    slack = B - np.einsum("ckj,cj->ck", N, q) - Rb[:, None]
+    ok = good[rows, best] & np.all(slack >= -tol, axis=1)
+    for c in np.nonzero(~ok & np.any(good, axis=1))[0]:
+        # degenerate ties among dual-feasible vertices: try each, least R first
+        for t in np.argsort(np.where(good[c], R[c], np.inf))[: int(good[c].sum())]:
+            qc = _vertex_one(a[c, t], b[c, t], beta[c, t], inv[c, t])
+            if np.all(B[c] - N[c] @ qc - R[c, t] >= -tol):
+                q[c], Rb[c], ok[c] = qc, R[c, t], True
+                break
+    return q, Rb, ok
+
+
+def _vertex_one(a, b, be, iv):
+    """Centre of the vertex of one constraint triple (see :func:`_solve_subsets`)."""
+    return np.array([((b[1] - b[2]) * be[0] + (b[2] - b[0]) * be[1] + (b[0] - b[1]) * be[2]) * iv,
+                     ((a[2] - a[1]) * be[0] + (a[0] - a[2]) * be[1] + (a[1] - a[0]) * be[2]) * iv])
 
 
 def _constraints(X, w, i, gpos, gidx, gid, domain):
@@ -335,6 +353,11 @@ def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
             sub = np.nonzero(~ok)[0]
             if len(sub) and lead < S_B.shape[1]:
                 qs[sub], Rs[sub], ok[sub] = _solve_subsets(S_N[sub], S_B[sub], tol, lead=lead)
+        for c in np.nonzero(~ok)[0]:
+            # the active constraints are not among the least slack at the
+            # start (a poor estimate): solve this cell's set by LP instead
+            stats["linprog"] += 1
+            qs[c], Rs[c], ok[c] = _lp_subset(S_N[c], S_B[c], tol)
         q[todo], R[todo] = qs, Rs
         # the K sites came from a ball around the start; a cutter of the
         # disk lies within `rad` of its centre, hence within rad + shift of
@@ -445,6 +468,28 @@ def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, per_cel
     rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
     keep = rank < per_cell
     return np.asarray(tags)[rows[keep]], Nn[keep], Bb[keep]
+
+
+def _lp_subset(N, B, tol):
+    """One cell's LP on its constraint set by linprog, polished to an exact vertex.
+
+    Returns (q, R, ok); ok is False when the set is unbounded.  The vertex
+    polish re-solves the three tightest constraints and keeps the result only
+    if it passes the same feasibility and KKT test as the vertex search.
+    """
+    keep = B < 1e299
+    try:
+        c, R = chebyshev_center_linprog(N[keep], B[keep])
+    except RuntimeError:
+        return np.zeros(2), -np.inf, False
+    sl = B[keep] - N[keep] @ c - R
+    o = np.argsort(sl)
+    cand = o[: min(8, len(o))]
+    Nc, Bc = N[keep][cand][None], B[keep][cand][None]
+    qv, Rv, okv = _solve_subsets(Nc, Bc, tol)
+    if okv[0] and np.all(B[keep] - N[keep] @ qv[0] - Rv[0] >= -tol):
+        return qv[0], Rv[0], True
+    return np.asarray(c), float(R), True
 
 
 def _linprog_cell(X, w, c, tree, gpos, gid, domain, margin):
