@@ -151,6 +151,9 @@ def _relax_and_write(points, args, *, extra_summary=None):
         "device": res.device,
         "stop_reason": res.stop_reason,
         "output": str(args.output),
+        # raster estimate error and how often the exact stage widened its set
+        "refinement": {k: (v if isinstance(v, (int, list, str)) else float(v))
+                       for k, v in res.stats.items()},
     }
     if extra_summary:
         summary.update(extra_summary)

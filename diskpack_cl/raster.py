@@ -142,6 +142,17 @@ class PowerRaster:
         self._site_bufs = {}
         self._pts = np.zeros((0, 2))
         self._last = None
+        self._warm()
+
+    def _warm(self):
+        """Run every kernel once on one grid cell, so that PoCL's lazy
+        compilation is not charged to the first real iteration."""
+        shape, self.shape = self.shape, (1, 1)
+        try:
+            self.compute(np.full((1, 2), 0.5 * self.domain.width))
+        finally:
+            self.shape = shape
+            self._last = None
 
     # -- buffers -----------------------------------------------------------
     def _site_buffer(self, name, host):
