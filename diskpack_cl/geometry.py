@@ -402,6 +402,8 @@ def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
         nreach = np.full(len(vrows), -np.inf)   # never "covered" again: always query
         # cells with no certified vertex (unbounded or long thin cell among
         # the K sites) start again from twice as many sites
+        if not len(vrows) and not len(bad):
+            break
         kk = int(min(tree.n, 2 * S_B.shape[1], 256))
         bN, bB, breach = pool(todo[bad], kk)
         todo = np.concatenate([todo[vrows], todo[bad]])
