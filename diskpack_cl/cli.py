@@ -206,7 +206,7 @@ def _add_poisson(subparsers):
                    help="start set: dart throwing (default), uniform random, or a point file")
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
                    help="relative radius of the dart-throwing start (default 0.74)")
-    p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh entropy)")
+    p.add_argument("--seed", type=int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
     _output_options(p)
     _relax_options(p)
     p.set_defaults(run=_run_poisson)
@@ -280,7 +280,12 @@ def _run_poisson(args):
     if args.radius is not None:
         return _run_poisson_radius(args)
     t0 = time.perf_counter()
-    info = {"init": args.init}
+    if args.seed is None:
+        import numpy as np
+
+        # a fresh seed, reported in the summary so the run can be repeated
+        args.seed = int(np.random.SeedSequence().entropy % 2**31)
+    info = {"init": args.init, "seed": args.seed}
     if args.init == "dart":
         n = 1024 if args.n is None else args.n
         with warnings.catch_warnings(record=True) as caught:
