@@ -348,10 +348,10 @@ def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
     while len(todo):
         stats["rounds"] += 1
         qs, Rs, ok = _solve_subsets(S_N, S_B, tol, lead=6)
-        for lead in (9, 12):
+        for prev, lead in ((6, 9), (9, 12)):
             # fewer cells each time: more of their constraints lead
             sub = np.nonzero(~ok)[0]
-            if len(sub) and lead < S_B.shape[1]:
+            if len(sub) and prev < S_B.shape[1]:
                 qs[sub], Rs[sub], ok[sub] = _solve_subsets(S_N[sub], S_B[sub], tol, lead=lead)
         for c in np.nonzero(~ok)[0]:
             # the active constraints are not among the least slack at the
