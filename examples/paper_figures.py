@@ -411,7 +411,7 @@ def fig5(out, quick):
               ("default schedule (final)", "default")]
     results = [(label, stipple(gray, n, schedule=sch, seed=0)) for label, sch in stages]
     r = analysis.tone_radius(n, dark)
-    fig = _figure(15.0, 4.3)
+    fig = _figure(15.0, 3.7)
     axes = fig.subplots(1, 5)
     _show(axes[0], gray, f"(a) input ({name})")
     _show(axes[1], _render(start, r, gray.shape), f"(a) error diffusion, n = {n}")
@@ -422,7 +422,7 @@ def fig5(out, quick):
         _show(ax, _render(res.points, r, gray.shape),
               f"({tag}) {label}\ntone SSIM {m['tone_ssim']:.3f}, spacing p01 {m['spacing_p01']:.2f}")
     fig.suptitle("Fig. 5: stippling process", fontsize=10)
-    nums["png_kb"] = _save(fig, out / "fig5_stippling_process.png", colors=32)
+    nums["png_kb"] = _save(fig, out / "fig5_stippling_process.png", colors=8)
     return nums
 
 
@@ -443,7 +443,7 @@ def fig8(out, quick):
     _show(axes[2], _render(res.points, r, gray.shape),
           f"(c) disk packing, default schedule\ntone SSIM {m1['tone_ssim']:.3f}, spacing p01 {m1['spacing_p01']:.2f}")
     fig.suptitle("Fig. 8: image stippling", fontsize=10)
-    kb = _save(fig, out / "fig8_stippling.png", colors=32)
+    kb = _save(fig, out / "fig8_stippling.png", colors=8)
     return {"image": name, "n": n, "error_diffusion": m0, "diskpack": m1, "png_kb": kb}
 
 
@@ -479,7 +479,7 @@ def fig9_10(out, quick):
         _show(axes[i, 0], gray[y0:y0 + size, x0:x0 + size], f"input close-up {i}")
     fig.suptitle("Figs. 9/10: disk packing against weighted Lloyd at the same n, from the same "
                  "error-diffusion start", fontsize=10)
-    nums["png_kb"] = _save(fig, out / "fig9_10_compare.png", colors=32)
+    nums["png_kb"] = _save(fig, out / "fig9_10_compare.png", colors=8)
     return nums
 
 

@@ -1,0 +1,42 @@
+"""Helpers of examples/paper_figures.py: the six-fold spot measure and the torus Lloyd loop."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from diskpack_cl.geometry import normalized_radius
+
+SCRIPT = Path(__file__).resolve().parents[1] / "examples" / "paper_figures.py"
+
+
+@pytest.fixture(scope="module")
+def pf():
+    pytest.importorskip("matplotlib")
+    spec = importlib.util.spec_from_file_location("paper_figures", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _hex(m=26, r=30):
+    iy, ix = np.mgrid[0:r, 0:m]
+    return np.column_stack([((ix + 0.5 * (iy % 2)) / m).ravel(), (iy / r).ravel()])
+
+
+def test_sixfold_separates_a_lattice_from_noise(pf):
+    pts = _hex()  # reciprocal lattice: six peaks at |k| = 30.0 ((0, 30), (26, +-15))
+    c6_hex, spot_hex = pf._sixfold(pts, f0=30.0, kmax=40)
+    c6_rand, _ = pf._sixfold(np.random.default_rng(0).random((len(pts), 2)), f0=30.0, kmax=40)
+    assert c6_hex > 0.5
+    assert c6_rand < 0.2
+    assert spot_hex > 20
+
+
+def test_lloyd_torus_spreads_points(pf, ctx):
+    x0 = np.random.default_rng(1).random((64, 2))
+    x = pf.lloyd_torus(x0, iterations=10, grid=128)
+    assert x.shape == x0.shape
+    assert np.all((x >= 0) & (x < 1))
+    assert normalized_radius(x) > normalized_radius(x0) + 0.2
