@@ -128,20 +128,25 @@ def _solve_subsets(N, B, tol, lead=None):
     Rb = R[rows, best]
     slack = B - np.einsum("ckj,cj->ck", N, q) - Rb[:, None]
     ok = good[rows, best] & np.all(slack >= -tol, axis=1)
-    for c in np.nonzero(~ok & np.any(good, axis=1))[0]:
-        # degenerate ties among dual-feasible vertices: try each, least R first
-        for t in np.argsort(np.where(good[c], R[c], np.inf))[: int(good[c].sum())]:
-            qc = _vertex_one(a[c, t], b[c, t], beta[c, t], inv[c, t])
-            if np.all(B[c] - N[c] @ qc - R[c, t] >= -tol):
-                q[c], Rb[c], ok[c] = qc, R[c, t], True
-                break
+    tie = np.nonzero(~ok & np.any(good, axis=1))[0]
+    if len(tie):
+        # degenerate ties among dual-feasible vertices: check them all
+        a_, b_, be, iv = a[tie], b[tie], beta[tie], inv[tie]
+        qx = ((b_[..., 1] - b_[..., 2]) * be[..., 0] + (b_[..., 2] - b_[..., 0]) * be[..., 1]
+              + (b_[..., 0] - b_[..., 1]) * be[..., 2]) * iv
+        qy = ((a_[..., 2] - a_[..., 1]) * be[..., 0] + (a_[..., 0] - a_[..., 2]) * be[..., 1]
+              + (a_[..., 1] - a_[..., 0]) * be[..., 2]) * iv
+        Nt, Bt = N[tie], B[tie]
+        sl = (Bt[:, None, :] - qx[..., None] * Nt[:, None, :, 0] - qy[..., None] * Nt[:, None, :, 1]
+              - R[tie][..., None])
+        fit = good[tie] & np.all(sl >= -tol, axis=-1)
+        pick = np.argmin(np.where(fit, R[tie], np.inf), axis=1)
+        r_ = np.arange(len(tie))
+        found = fit[r_, pick]
+        q[tie[found]] = np.stack([qx[r_, pick], qy[r_, pick]], 1)[found]
+        Rb[tie[found]] = R[tie][r_, pick][found]
+        ok[tie[found]] = True
     return q, Rb, ok
-
-
-def _vertex_one(a, b, be, iv):
-    """Centre of the vertex of one constraint triple (see :func:`_solve_subsets`)."""
-    return np.array([((b[1] - b[2]) * be[0] + (b[2] - b[0]) * be[1] + (b[0] - b[1]) * be[2]) * iv,
-                     ((a[2] - a[1]) * be[0] + (a[0] - a[2]) * be[1] + (a[1] - a[0]) * be[2]) * iv])
 
 
 def _constraints(X, w, i, gpos, gidx, gid, domain):
