@@ -43,6 +43,7 @@ __all__ = [
     "stipple",
     "error_diffusion",
     "base_radii",
+    "radius_field",
     "largest_valid_k",
     "make_schedule",
     "SCHEDULES",
@@ -58,6 +59,14 @@ SCHEDULES = {
     "pack": [("pack", 60)],
 }
 SCHEDULES["default"] = SCHEDULES["paper"]
+
+#: Option defaults that come with a named schedule (overridden by explicit
+#: keyword arguments of :func:`stipple`).
+SCHEDULE_OPTIONS = {
+    "paper": {"radii": "gray", "blend": 0.0},
+    "pack": {"radii": "gray", "blend": 0.0},
+    "default": {"radii": "gray", "blend": 0.0},
+}
 
 
 @dataclass
@@ -328,6 +337,58 @@ def base_radii(gray, points, *, gamma=3.0, floor=0.1):
     return np.maximum(g[row, col], floor) ** (0.5 * gamma)
 
 
+def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
+    """Base radius per pixel: ``r_i`` of a point is the value at its pixel.
+
+    Parameters
+    ----------
+    gray : (H, W) array_like
+        Gray image in [0, 1], 1 = white.
+    radii : {"gray", "density"}
+        ``"gray"``: the paper's ``max(I, floor) ** (gamma / 2)``.
+        ``"density"``: ``sqrt(floor / max(D, floor))`` with ``D`` the darkness
+        ``1 - I`` blurred with a Gaussian of ``sigma`` pixels; a packing of
+        disks with these radii has local point density ~ ``1 / r^2`` ~ ``D``,
+        the density Lloyd's centroids (and the tone measure) aim at, so
+        packing and Lloyd moves agree on the tone curve. ``gamma`` is unused.
+    gamma : float
+        Contrast exponent of the ``"gray"`` mapping.
+    floor : float
+        ``"gray"``: floor on the gray value; ``"density"``: floor on the
+        blurred darkness (largest/smallest radius ratio ``floor ** -0.5``).
+    sigma : float
+        Blur of the darkness for ``"density"`` (pixels; 0 = none).
+
+    Returns
+    -------
+    (H, W) float64, largest value 1 or less.
+
+    Examples
+    --------
+    >>> g = np.tile(np.linspace(0, 1, 16), (4, 1))
+    >>> f = radius_field(g, radii="density", floor=0.01, sigma=0)
+    >>> bool(f[0, 0] < f[0, 8] < f[0, 15])
+    True
+    """
+    g = np.asarray(gray, dtype=np.float64)
+    if radii == "gray":
+        return np.maximum(g, floor) ** (0.5 * gamma)
+    if radii == "density":
+        d = 1.0 - g
+        if sigma and sigma > 0:
+            from scipy import ndimage
+
+            d = ndimage.gaussian_filter(d, float(sigma), mode="reflect")
+        return np.sqrt(floor / np.maximum(d, floor))
+    raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
+
+
+def _field_at(field, points):
+    H, W = field.shape
+    row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
+    return field[row, col]
+
+
 def _radius_classes(r):
     """Indices of points grouped by radius octave."""
     lr = np.floor(np.log2(r / r.min())).astype(np.int64)
@@ -439,8 +500,9 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
     else:
         phases = [(str(kind), int(it)) for kind, it in schedule]
         for kind, it in phases:
-            if kind not in ("pack", "lloyd") or it < 0:
-                raise ValueError(f"bad schedule phase ({kind!r}, {it}): kind must be 'pack' or 'lloyd'")
+            if kind not in ("pack", "lloyd", "mix") or it < 0:
+                raise ValueError(
+                    f"bad schedule phase ({kind!r}, {it}): kind must be 'pack', 'mix' or 'lloyd'")
     if method == "lloyd":
         # the baseline: Lloyd only; `lloyd` sets its length, else 50
         phases = [("lloyd", 50 if lloyd is None else int(lloyd))]
@@ -483,6 +545,12 @@ def stipple(
     start=None,
     k0=1e-6,
     callback=None,
+    radii=None,
+    radius_sigma=2.0,
+    blend=None,
+    blend_cell="power",
+    k_quantile=0.0,
+    density_sigma=0.0,
 ):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
@@ -564,10 +632,24 @@ def stipple(
             f"{nx * ny // 4} points (4 grid cells per point); raise supersample"
         )
     phases = make_schedule(schedule, beta=beta, lloyd=lloyd, rounds=rounds, method=method)
+    opts = dict(SCHEDULE_OPTIONS.get(schedule, {})) if isinstance(schedule, str) else {}
+    radii = opts.get("radii", "gray") if radii is None else radii
+    blend = float(opts.get("blend", 0.0) if blend is None else blend)
+    if radii not in ("gray", "density"):
+        raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
+    if not 0.0 <= blend <= 1.0:
+        raise ValueError(f"blend must be in [0, 1], got {blend}")
+    if blend_cell not in ("power", "voronoi"):
+        raise ValueError(f"blend_cell must be 'power' or 'voronoi', got {blend_cell!r}")
+    if not 0.0 <= k_quantile < 1.0:
+        raise ValueError(f"k_quantile must be in [0, 1), got {k_quantile}")
+    rfield = radius_field(gray, radii=radii, gamma=gamma, floor=floor, sigma=radius_sigma)
     params = {
         "n": n, "gamma": float(gamma), "floor": float(floor), "supersample": s,
         "seed": seed, "method": method, "invert": bool(invert),
         "schedule": [list(p) for p in phases], "refine_every": int(refine_every),
+        "radii": radii, "radius_sigma": float(radius_sigma), "blend": blend,
+        "blend_cell": blend_cell, "k_quantile": float(k_quantile),
     }
 
     dom = Domain.rect(W, H)
@@ -584,7 +666,12 @@ def stipple(
     timings["start"] = time.perf_counter() - t0
 
     pr = PowerRaster(dom, shape=(ny, nx), device=device)
-    dens = _upsample(np.maximum(darkness, 1e-6), s)
+    dark_c = darkness
+    if density_sigma and density_sigma > 0:
+        from scipy import ndimage
+
+        dark_c = ndimage.gaussian_filter(darkness, float(density_sigma), mode="reflect")
+    dens = _upsample(np.maximum(dark_c, 1e-6), s)
     if not (np.isfinite(k0) and k0 > 0):
         raise ValueError(f"k0 must be > 0, got {k0}")
     k = float(k0)
@@ -597,8 +684,8 @@ def stipple(
         for _ in range(iters):
             ti = time.perf_counter()
             entry = {"kind": kind, "iteration": it_total}
-            if kind == "pack":
-                r = base_radii(gray, x, gamma=gamma, floor=floor)
+            if kind in ("pack", "mix"):
+                r = _field_at(rfield, x)
                 w = (k * r) ** 2
                 t1 = time.perf_counter()
                 est = pr.compute(x, w)
@@ -619,12 +706,22 @@ def stipple(
                 ok = ~empty & np.all(np.isfinite(centers), axis=1)
                 newx = x.copy()
                 newx[ok] = centers[ok]
-                # a centre on the border is valid for the MIC (radius 0) but
-                # useless for a disk: keep such points where they were
+                if kind == "mix" and blend > 0:
+                    t3 = time.perf_counter()
+                    if blend_cell == "voronoi":
+                        pr.compute(x, zeros)
+                    cen, mass = pr.centroids(dens)
+                    cen = np.asarray(cen)
+                    okc = ok & (np.asarray(mass) > 0) & np.all(np.isfinite(cen), axis=1)
+                    newx[okc] += blend * (cen[okc] - newx[okc])
+                    t4 = time.perf_counter()
+                    entry["centroids_s"] = t4 - t3
+                    stage["centroids"] += t4 - t3
                 entry["moved"] = float(np.mean(np.hypot(*(newx - x).T)))
                 x = newx
                 if np.any(ok):
-                    k = float(np.min(R[ok] / r[ok]))
+                    ratio = R[ok] / r[ok]
+                    k = float(np.quantile(ratio, k_quantile)) if k_quantile > 0 else float(np.min(ratio))
                 entry["empty"] = int(np.count_nonzero(~ok))
                 pack_count += 1
             else:
@@ -645,7 +742,7 @@ def stipple(
                 x = newx
                 entry["empty"] = int(np.count_nonzero(~ok))
                 # k for the next packing phase: largest valid for the new positions
-                r = base_radii(gray, x, gamma=gamma, floor=floor)
+                r = _field_at(rfield, x)
                 k = max(largest_valid_k(x, r, W, H), 1e-6)
             entry["k"] = float(k)
             entry["seconds"] = time.perf_counter() - ti
@@ -655,7 +752,7 @@ def stipple(
                 callback(entry)
 
     t0 = time.perf_counter()
-    r = base_radii(gray, x, gamma=gamma, floor=floor)
+    r = _field_at(rfield, x)
     k, radii, cert = _certified(x, r, W, H, dom)
     timings["certify"] = time.perf_counter() - t0
     timings.update(stage)

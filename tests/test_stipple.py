@@ -4,10 +4,13 @@ import numpy as np
 import pytest
 
 from diskpack_cl.stipple import (
+    SCHEDULE_OPTIONS,
     _fs_wavefront,
+    base_radii,
     error_diffusion,
     largest_valid_k,
     make_schedule,
+    radius_field,
     stipple,
 )
 
@@ -227,3 +230,79 @@ def test_stipple_white_image():
 def test_stipple_float_out_of_range():
     with pytest.raises(ValueError, match=r"must be in \[0, 1\]"):
         stipple(gradient() * 255.0, 10)
+
+
+# ---------------------------------------------------------------- radius mappings, mix update
+
+
+def test_radius_field_gray_is_base_radii():
+    g = gradient(8, 16)
+    pts = np.column_stack([np.arange(16) + 0.5, np.full(16, 3.5)])
+    f = radius_field(g, radii="gray", gamma=3.0, floor=0.1)
+    np.testing.assert_array_equal(f[3], base_radii(g, pts, gamma=3.0, floor=0.1))
+
+
+def test_radius_field_density():
+    g = gradient(8, 32)
+    f = radius_field(g, radii="density", floor=0.01, sigma=0)
+    d = np.maximum(1.0 - g, 0.01)
+    # r^2 proportional to 1 / darkness: a packing's density ~ 1/r^2 ~ darkness
+    np.testing.assert_allclose(f ** 2 * d, 0.01)
+    assert f.max() <= 1.0 and np.all(np.diff(f[0]) >= 0)
+    assert f.max() / f.min() <= 0.01 ** -0.5 * (1 + 1e-12)
+    blurred = radius_field(g, radii="density", floor=0.01, sigma=2.0)
+    assert blurred.shape == g.shape and np.all(np.isfinite(blurred))
+    with pytest.raises(ValueError, match="radii must be 'gray' or 'density'"):
+        radius_field(g, radii="area")
+
+
+def test_mix_step_is_the_documented_blend():
+    # one "mix" step moves each point to MIC + blend * (centroid - MIC); with
+    # the same start and k0 the power diagram is the same for every blend
+    g = gradient(32, 32)
+    kw = dict(seed=4, schedule=[("mix", 1)], radii="density", floor=0.01)
+    mic = stipple(g, 40, blend=0.0, **kw).points
+    cen = stipple(g, 40, blend=1.0, **kw).points
+    half = stipple(g, 40, blend=0.5, **kw).points
+    assert not np.allclose(mic, cen)
+    np.testing.assert_allclose(half, mic + 0.5 * (cen - mic), atol=1e-9)
+    # blend 0 is a plain disk-packing step
+    pack = stipple(g, 40, seed=4, schedule=[("pack", 1)], radii="density", floor=0.01).points
+    np.testing.assert_array_equal(mic, pack)
+
+
+def test_default_schedule_certified_and_deterministic():
+    g = gradient()
+    a = stipple(g, 150, seed=5)
+    b = stipple(g, 150, seed=5)
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.radii, b.radii)
+    assert a.certificate.valid and brute_force_valid(a.points, a.radii, 64, 64)
+    assert [list(p) for p in make_schedule("default")] == a.params["schedule"]
+    assert a.params["radii"] == SCHEDULE_OPTIONS["default"]["radii"]
+    # radii re-sampled from the mapping at the final positions
+    f = radius_field(g, radii=a.params["radii"], floor=a.params["floor"], sigma=a.params["radius_sigma"])
+    row, col = np.floor(a.points[:, 1]).astype(int), np.floor(a.points[:, 0]).astype(int)
+    np.testing.assert_array_equal(a.base_radii, f[row, col])
+
+
+def test_paper_schedule_keeps_the_paper_mapping():
+    res = stipple(gradient(), 60, seed=0, schedule="paper", beta=2, lloyd=1, rounds=2)
+    assert res.params["radii"] == "gray" and res.certificate.valid
+    assert [h["kind"] for h in res.history] == ["pack", "pack", "lloyd", "pack"]
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"radii": "area"}, "radii must be 'gray' or 'density'"),
+        ({"blend": 1.5}, r"blend must be in \[0, 1\]"),
+        ({"blend": -0.1}, r"blend must be in \[0, 1\]"),
+        ({"blend_cell": "delaunay"}, "blend_cell must be"),
+        ({"k_quantile": 1.0}, r"k_quantile must be in \[0, 1\)"),
+        ({"schedule": [("jump", 3)]}, "kind must be 'pack', 'mix' or 'lloyd'"),
+    ],
+)
+def test_stipple_bad_new_options(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        stipple(gradient(), 10, **kwargs)
