@@ -47,6 +47,7 @@ __all__ = [
     "largest_valid_k",
     "make_schedule",
     "SCHEDULES",
+    "SCHEDULE_OPTIONS",
 ]
 
 #: Named schedules: lists of (kind, iterations), kind "pack" or "lloyd".
@@ -58,14 +59,23 @@ SCHEDULES = {
     # Disk packing only (shows the paper's small holes, Fig. 5b).
     "pack": [("pack", 60)],
 }
-SCHEDULES["default"] = SCHEDULES["paper"]
+# Disk packing blended with Lloyd (see :func:`stipple`, ``"mix"`` phases):
+# 35 steps of MIC + 0.5 (centroid - MIC), then 12 of MIC + 0.4 (centroid - MIC),
+# with the density-consistent radii. Measured in docs/stipple_quality.md.
+SCHEDULES["default"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
 
-#: Option defaults that come with a named schedule (overridden by explicit
-#: keyword arguments of :func:`stipple`).
+#: Option defaults that come with a named schedule; explicit keyword arguments
+#: of :func:`stipple` override them. ``method="lloyd"`` uses ``"lloyd"``'s, and
+#: a schedule built from ``beta``/``lloyd``/``rounds`` uses ``"paper"``'s.
 SCHEDULE_OPTIONS = {
-    "paper": {"radii": "gray", "blend": 0.0},
-    "pack": {"radii": "gray", "blend": 0.0},
-    "default": {"radii": "gray", "blend": 0.0},
+    "paper": {"radii": "gray", "floor": 0.1, "blend": 0.0, "radius_sigma": 0.0,
+              "density_sigma": 0.0, "k_quantile": 0.0},
+    "lloyd": {"radii": "gray", "floor": 0.1, "blend": 0.0, "radius_sigma": 0.0,
+              "density_sigma": 0.0, "k_quantile": 0.0},
+    "pack": {"radii": "gray", "floor": 0.1, "blend": 0.0, "radius_sigma": 0.0,
+             "density_sigma": 0.0, "k_quantile": 0.0},
+    "default": {"radii": "density", "floor": 0.01, "blend": 0.5, "radius_sigma": 3.0,
+                "density_sigma": 0.5, "k_quantile": 0.15},
 }
 
 
@@ -498,15 +508,25 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
             raise ValueError(f"unknown schedule {schedule!r}; choose from {sorted(SCHEDULES)}")
         phases = list(SCHEDULES[schedule])
     else:
-        phases = [(str(kind), int(it)) for kind, it in schedule]
-        for kind, it in phases:
+        phases = []
+        for ph in schedule:
+            kind, it = str(ph[0]), int(ph[1])
             if kind not in ("pack", "lloyd", "mix") or it < 0:
                 raise ValueError(
                     f"bad schedule phase ({kind!r}, {it}): kind must be 'pack', 'mix' or 'lloyd'")
+            if len(ph) == 3 and kind == "mix":
+                a = float(ph[2])
+                if not 0.0 <= a <= 1.0:
+                    raise ValueError(f"blend must be in [0, 1], got {a}")
+                phases.append((kind, it, a))
+            elif len(ph) == 2:
+                phases.append((kind, it))
+            else:
+                raise ValueError(f"bad schedule phase {tuple(ph)!r}: (kind, iterations) or ('mix', iterations, blend)")
     if method == "lloyd":
         # the baseline: Lloyd only; `lloyd` sets its length, else 50
         phases = [("lloyd", 50 if lloyd is None else int(lloyd))]
-    return [(k, it) for k, it in phases if it > 0]
+    return [tuple(p) for p in phases if p[1] > 0]
 
 
 # --------------------------------------------------------------------------
@@ -531,7 +551,7 @@ def stipple(
     n,
     *,
     gamma=3.0,
-    floor=0.1,
+    floor=None,
     schedule="default",
     beta=None,
     lloyd=None,
@@ -546,11 +566,11 @@ def stipple(
     k0=1e-6,
     callback=None,
     radii=None,
-    radius_sigma=2.0,
+    radius_sigma=None,
     blend=None,
     blend_cell="power",
-    k_quantile=0.0,
-    density_sigma=0.0,
+    k_quantile=None,
+    density_sigma=None,
 ):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
@@ -617,8 +637,6 @@ def stipple(
     n = _check_n(n)
     if not (np.isfinite(gamma) and gamma > 0):
         raise ValueError(f"gamma must be > 0, got {gamma}")
-    if not (np.isfinite(floor) and 0 < floor <= 1):
-        raise ValueError(f"floor must be in (0, 1], got {floor}")
     darkness = 1.0 - gray
     if not darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
@@ -632,9 +650,23 @@ def stipple(
             f"{nx * ny // 4} points (4 grid cells per point); raise supersample"
         )
     phases = make_schedule(schedule, beta=beta, lloyd=lloyd, rounds=rounds, method=method)
-    opts = dict(SCHEDULE_OPTIONS.get(schedule, {})) if isinstance(schedule, str) else {}
-    radii = opts.get("radii", "gray") if radii is None else radii
-    blend = float(opts.get("blend", 0.0) if blend is None else blend)
+    opts = dict(SCHEDULE_OPTIONS["paper"])
+    if method == "lloyd":
+        opts = dict(SCHEDULE_OPTIONS["lloyd"])
+    elif beta is None and lloyd is None and rounds is None and isinstance(schedule, str):
+        opts.update(SCHEDULE_OPTIONS.get(schedule, {}))
+    radii = opts["radii"] if radii is None else radii
+    blend = float(opts["blend"] if blend is None else blend)
+    floor = float(opts["floor"] if floor is None else floor)
+    radius_sigma = float(opts["radius_sigma"] if radius_sigma is None else radius_sigma)
+    density_sigma = float(opts["density_sigma"] if density_sigma is None else density_sigma)
+    k_quantile = float(opts["k_quantile"] if k_quantile is None else k_quantile)
+    if not (np.isfinite(floor) and 0 < floor <= 1):
+        raise ValueError(f"floor must be in (0, 1], got {floor}")
+    if not (np.isfinite(radius_sigma) and radius_sigma >= 0):
+        raise ValueError(f"radius_sigma must be >= 0, got {radius_sigma}")
+    if not (np.isfinite(density_sigma) and density_sigma >= 0):
+        raise ValueError(f"density_sigma must be >= 0, got {density_sigma}")
     if radii not in ("gray", "density"):
         raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
     if not 0.0 <= blend <= 1.0:
@@ -650,6 +682,7 @@ def stipple(
         "schedule": [list(p) for p in phases], "refine_every": int(refine_every),
         "radii": radii, "radius_sigma": float(radius_sigma), "blend": blend,
         "blend_cell": blend_cell, "k_quantile": float(k_quantile),
+        "density_sigma": float(density_sigma),
     }
 
     dom = Domain.rect(W, H)
@@ -667,7 +700,7 @@ def stipple(
 
     pr = PowerRaster(dom, shape=(ny, nx), device=device)
     dark_c = darkness
-    if density_sigma and density_sigma > 0:
+    if density_sigma > 0:
         from scipy import ndimage
 
         dark_c = ndimage.gaussian_filter(darkness, float(density_sigma), mode="reflect")
@@ -680,7 +713,9 @@ def stipple(
     it_total = 0
     pack_count = 0
     zeros = np.zeros(n)
-    for kind, iters in phases:
+    for phase in phases:
+        kind, iters = phase[0], phase[1]
+        alpha = float(phase[2]) if len(phase) == 3 else blend
         for _ in range(iters):
             ti = time.perf_counter()
             entry = {"kind": kind, "iteration": it_total}
@@ -706,14 +741,14 @@ def stipple(
                 ok = ~empty & np.all(np.isfinite(centers), axis=1)
                 newx = x.copy()
                 newx[ok] = centers[ok]
-                if kind == "mix" and blend > 0:
+                if kind == "mix" and alpha > 0:
                     t3 = time.perf_counter()
                     if blend_cell == "voronoi":
-                        pr.compute(x, zeros)
+                        pr.compute(x, zeros, distance=False)
                     cen, mass = pr.centroids(dens)
                     cen = np.asarray(cen)
                     okc = ok & (np.asarray(mass) > 0) & np.all(np.isfinite(cen), axis=1)
-                    newx[okc] += blend * (cen[okc] - newx[okc])
+                    newx[okc] += alpha * (cen[okc] - newx[okc])
                     t4 = time.perf_counter()
                     entry["centroids_s"] = t4 - t3
                     stage["centroids"] += t4 - t3
@@ -726,7 +761,7 @@ def stipple(
                 pack_count += 1
             else:
                 t1 = time.perf_counter()
-                pr.compute(x, zeros)
+                pr.compute(x, zeros, distance=False)  # labels only: centroids need no distance
                 t2 = time.perf_counter()
                 cen, mass = pr.centroids(dens)
                 t3 = time.perf_counter()
