@@ -16,15 +16,34 @@ The loop (:func:`stipple`):
    constraints), points moved to the MIC centres, ``k = min_i R_i / r_i``.
 3. Lloyd iteration: density-weighted centroids (density = darkness) of the
    Voronoi cells on the same raster (Secord 2002).
+3'. Mix iteration (the default schedule): a disk-packing step whose move is
+   blended with the density-weighted centroid of the *same power cell*:
+   ``x <- m + blend * (c - m)``, ``m`` the MIC centre, ``c`` the centroid.
+   ``blend = 0`` is a disk-packing step.
 4. Final: radii re-sampled at the final positions and ``k`` set to the
    largest value for which all disks ``k r_i`` lie inside the image and are
    pairwise disjoint; the result is certified by
    :func:`diskpack_cl.geometry.certify_disks`.
 
-The ``floor`` on the gray value keeps black regions workable: with
-``floor = 0`` a black pixel would give a zero radius and the power cell of a
-zero-weight point among heavy neighbours is often empty. With the default
-``floor`` the largest/smallest radius ratio is ``floor ** (-gamma/2)``.
+Radius mappings (:func:`radius_field`): ``"gray"`` is the paper's
+``max(I, floor) ** (gamma/2)``; the ``floor`` on the gray value keeps black
+regions workable (with ``floor = 0`` a black pixel would give a zero radius and
+the power cell of a zero-weight point among heavy neighbours is often empty),
+and the largest/smallest radius ratio is ``floor ** (-gamma/2)``.
+``"density"`` (the default schedule's) is ``r ~ max(D, floor) ** -0.5`` with
+``D`` the darkness blurred by ``radius_sigma`` pixels: a packing has local
+point density ~ ``1 / r^2`` ~ ``D``, the density Lloyd's centroids aim at, so
+packing and centroid moves no longer pull the tone curve apart (with gray
+radii and gamma 3 a packing's density goes like ``I^-3``, not ``1 - I``).
+
+The default schedule and why (measured in ``docs/stipple_quality.md``): 35
+mix iterations with blend 0.5 then 12 with blend 0.4, density radii (floor
+0.01, ``radius_sigma`` 3, the blur of the tone and spacing measures), centroid
+density blurred by 0.5 px, and ``k`` from the 15% quantile of ``R_i / r_i``
+instead of the minimum. On the three test photographs at n = 20000 it beats
+50 Lloyd iterations in tone SSIM and in spacing P01, with a lower mean
+|psi6|. Options that come with a named schedule are in
+:data:`SCHEDULE_OPTIONS`; explicit keyword arguments override them.
 
 Empty power cells (possible with unequal weights) keep their point where it
 is; they are counted in the history (``"empty"``), never produce NaN and
@@ -50,7 +69,8 @@ __all__ = [
     "SCHEDULE_OPTIONS",
 ]
 
-#: Named schedules: lists of (kind, iterations), kind "pack" or "lloyd".
+#: Named schedules: lists of (kind, iterations) or ("mix", iterations, blend),
+#: kind "pack", "lloyd" or "mix".
 SCHEDULES = {
     # The paper's loop (section 5, Fig. 5): 40 disk-packing, 10 Lloyd, 40, 10, 20.
     "paper": [("pack", 40), ("lloyd", 10), ("pack", 40), ("lloyd", 10), ("pack", 20)],
@@ -477,10 +497,12 @@ def _certified(points, r, width, height, domain):
 
 
 def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, method="diskpack"):
-    """The list of (kind, iterations) phases to run.
+    """The list of phases to run: ``(kind, iterations)`` or ``("mix", iterations, blend)``.
 
     ``schedule`` is a name in :data:`SCHEDULES` or a list of
-    ``("pack" | "lloyd", iterations)``. When any of ``beta`` (disk-packing
+    ``("pack" | "lloyd" | "mix", iterations)`` and ``("mix", iterations,
+    blend)`` (a ``"mix"`` phase without its own blend uses :func:`stipple`'s
+    ``blend``); phases with 0 iterations are dropped. When any of ``beta`` (disk-packing
     iterations per round), ``lloyd`` (Lloyd iterations between rounds) or
     ``rounds`` is given, the schedule is built from them the paper's way:
     ``rounds`` packing phases of ``beta`` iterations separated by ``lloyd``
@@ -488,6 +510,13 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
     40, 10, 20 is beta 40, lloyd 10, rounds 3). Missing ones come from the
     paper (40, 10, 3). ``method="lloyd"`` gives ``[("lloyd", total)]`` with
     the same total number of iterations (50 by default).
+
+    Examples
+    --------
+    >>> make_schedule("default")
+    [('mix', 35, 0.5), ('mix', 12, 0.4)]
+    >>> make_schedule([("mix", 3, 0.2), ("lloyd", 0), ("pack", 2)])
+    [('mix', 3, 0.2), ('pack', 2)]
     """
     if method not in ("diskpack", "lloyd"):
         raise ValueError(f"method must be 'diskpack' or 'lloyd', got {method!r}")
@@ -588,9 +617,15 @@ def stipple(
         Gray-value floor in the radius mapping, ``max(I_i, floor)``, so that
         black regions keep a positive radius (default 0.1: radius ratio
         ``0.1^(-1.5)`` ~ 32 between white and black).
-    schedule : str or list of (kind, iterations), optional
-        ``"default"``, ``"paper"`` (40 pack, 10 Lloyd, 40, 10, 20), ``"pack"``,
-        ``"lloyd"`` or an explicit list; see :func:`make_schedule`.
+    schedule : str or list of phases, optional
+        ``"default"`` (35 mix at blend 0.5, 12 mix at blend 0.4, with the
+        options in ``SCHEDULE_OPTIONS["default"]``), ``"paper"`` (40 pack, 10
+        Lloyd, 40, 10, 20 pack; gray radii), ``"pack"``, ``"lloyd"`` or an
+        explicit list of ``(kind, iterations)`` with kind ``"pack"``,
+        ``"lloyd"`` or ``"mix"``, or ``("mix", iterations, blend)``; see
+        :func:`make_schedule`. A named schedule brings its option defaults
+        (:data:`SCHEDULE_OPTIONS`); an explicit list, or ``beta``/``lloyd``/
+        ``rounds``, uses the paper's.
     beta, lloyd, rounds : int, optional
         Build the schedule from disk-packing iterations per round, Lloyd
         iterations between rounds, and the number of rounds.
@@ -616,6 +651,28 @@ def stipple(
         Initial scale factor (the paper: 1e-6, so that no disks overlap).
     callback : callable, optional
         Called with each history entry (a dict) after every iteration.
+    radii : {"gray", "density"}, optional
+        Radius mapping, see :func:`radius_field` (schedule default: ``"gray"``
+        for the paper's, ``"density"`` for ``"default"``).
+    radius_sigma : float, optional
+        Blur (pixels) of the darkness in the ``"density"`` mapping
+        (``"default"``: 3).
+    blend : float in [0, 1], optional
+        Move of a ``"mix"`` phase without its own blend:
+        ``x <- m + blend * (c - m)`` (``m`` MIC centre, ``c`` centroid);
+        ``"default"``: 0.5.
+    blend_cell : {"power", "voronoi"}, optional
+        Cells whose centroids a mix step blends towards: the power cells of
+        the same raster (default, no extra work) or the Voronoi cells (one
+        more labelling per step; measured worse).
+    k_quantile : float in [0, 1), optional
+        ``k`` after a disk-packing or mix step is this quantile of
+        ``R_i / r_i`` (0: the minimum, the paper's rule; ``"default"``: 0.15).
+        Only the weights of the next iteration see it; the returned radii
+        always use the largest valid ``k``.
+    density_sigma : float, optional
+        Blur (pixels) of the darkness used as the centroid density of Lloyd
+        and mix steps (paper: 0; ``"default"``: 0.5).
 
     Returns
     -------
@@ -625,7 +682,7 @@ def stipple(
     ------
     ValueError
         n < 1, n too large for the grid, gamma <= 0, a white image, bad
-        schedule, bad start.
+        schedule, bad start, an option out of its range.
     """
     from diskpack_cl.geometry import Domain, exact_mic
     from diskpack_cl.image import to_gray

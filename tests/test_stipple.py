@@ -306,3 +306,38 @@ def test_paper_schedule_keeps_the_paper_mapping():
 def test_stipple_bad_new_options(kwargs, match):
     with pytest.raises(ValueError, match=match):
         stipple(gradient(), 10, **kwargs)
+
+
+def test_make_schedule_mix_phases():
+    assert make_schedule([("mix", 3, 0.2), ("lloyd", 0), ("pack", 2), ("mix", 1)]) == [
+        ("mix", 3, 0.2), ("pack", 2), ("mix", 1)]
+    with pytest.raises(ValueError, match=r"blend must be in \[0, 1\]"):
+        make_schedule([("mix", 3, 1.2)])
+    with pytest.raises(ValueError, match="bad schedule phase"):
+        make_schedule([("lloyd", 3, 0.5)])
+
+
+def test_schedule_options_resolution():
+    g = gradient(32, 32)
+    # Lloyd baseline and explicit lists use the paper's options
+    lo = stipple(g, 30, seed=0, method="lloyd", lloyd=2)
+    assert lo.params["density_sigma"] == 0.0 and lo.params["radii"] == "gray"
+    ex = stipple(g, 30, seed=0, schedule=[("mix", 2, 0.5)])
+    assert ex.params["radii"] == "gray" and ex.params["k_quantile"] == 0.0
+    # a named schedule's options, one overridden by a keyword
+    d = stipple(g, 30, seed=0, schedule="default", k_quantile=0.0)
+    for key, v in SCHEDULE_OPTIONS["default"].items():
+        assert d.params[key] == (0.0 if key == "k_quantile" else v)
+
+
+def test_k_quantile_changes_weights_not_certificate():
+    # k from a quantile of R_i / r_i is >= the minimum: heavier weights in the
+    # next iteration, so the trajectory differs; the output is still certified
+    g = gradient(32, 32)
+    kw = dict(seed=1, schedule=[("mix", 4, 0.5)], radii="density", floor=0.01)
+    a = stipple(g, 60, k_quantile=0.0, **kw)
+    b = stipple(g, 60, k_quantile=0.5, **kw)
+    assert all(hb["k"] >= ha["k"] for ha, hb in zip(a.history[:1], b.history[:1]))
+    assert not np.array_equal(a.points, b.points)
+    for r in (a, b):
+        assert r.certificate.valid and brute_force_valid(r.points, r.radii, 32, 32)
