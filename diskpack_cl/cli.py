@@ -360,6 +360,25 @@ def _image_path(text):
     return text
 
 
+def _phase_text(phase):
+    kind, it = phase[0], phase[1]
+    return f"{kind} {it}" + (f" (blend {phase[2]})" if len(phase) > 2 else "")
+
+
+def _unit_closed(text):
+    v = float(text)
+    if not 0.0 <= v <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be in [0, 1], got {text}")
+    return v
+
+
+def _unit_half_open_zero(text):
+    v = float(text)
+    if not 0.0 <= v < 1.0:
+        raise argparse.ArgumentTypeError(f"must be in [0, 1), got {text}")
+    return v
+
+
 def _add_stipple(subparsers):
     from diskpack_cl.stipple import SCHEDULES
 
@@ -390,12 +409,23 @@ def _add_stipple(subparsers):
     g = p.add_argument_group("stippling (the paper's parameters)")
     g.add_argument("--gamma", type=_positive_float, default=3.0,
                    help="gamma: contrast exponent, base radius r_i = gray^(gamma/2) (default 3.0)")
-    g.add_argument("--floor", type=_unit_half_open, default=0.1,
-                   help="gray-value floor of the radius mapping, r_i = max(gray, FLOOR)^(gamma/2), "
-                        "so that black regions keep a positive radius (default 0.1)")
+    g.add_argument("--floor", type=_unit_half_open, default=None,
+                   help="floor of the radius mapping, so that black (gray) or white (density) "
+                        "regions keep a finite radius (default: the schedule's, 0.1 for paper, "
+                        "0.01 for default)")
+    g.add_argument("--radii", choices=("gray", "density"), default=None,
+                   help="radius mapping: gray = the paper's r_i = max(gray, FLOOR)^(gamma/2); "
+                        "density = r_i ~ darkness^(-1/2), the density Lloyd aims at "
+                        "(default: the schedule's, density for default)")
+    g.add_argument("--blend", type=_unit_closed, default=None,
+                   help="mix phases move to MIC + BLEND * (centroid - MIC) (default: the "
+                        "schedule's)")
+    g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
+                   help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
+                        "minimum; the output always uses the largest certified k)")
     g.add_argument("--schedule", choices=sorted(SCHEDULES), default="default",
                    help="named schedule of disk-packing (pack) and Lloyd phases: "
-                        + "; ".join(f"{name} = " + ", ".join(f"{kind} {it}" for kind, it in phases)
+                        + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
                                     for name, phases in sorted(SCHEDULES.items()))
                         + " (default: default; paper is the paper's loop)")
     g.add_argument("--beta", type=_nonnegative_int, default=None,
@@ -513,12 +543,13 @@ def _run_stipple(args):
     image = _image_path(args.image)
     gray = load_gray(image, allow_large=args.allow_large)
 
-    callback, close = _stipple_progress(args, sum(it for _, it in phases))
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in phases))
     try:
         res = stipple(gray, args.n, gamma=args.gamma, floor=args.floor, schedule=args.schedule,
                       beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
                       supersample=args.supersample, seed=args.seed, device=args.device,
                       method=args.method, invert=args.invert, refine_every=args.refine_every,
+                      radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
                       callback=callback)
     finally:
         close()
