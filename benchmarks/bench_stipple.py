@@ -4,6 +4,9 @@ For n in --n (default 5k, 20k, 50k) on the 512x512 sample photograph and a
 2048x2048 upscale of it, runs a few disk-packing and Lloyd iterations and
 prints the median seconds per iteration and per stage (raster labels + MIC
 estimate, exact MIC refinement, centroids), plus the error-diffusion start.
+Methods: ``diskpack`` (paper disk-packing steps), ``mix`` (the default
+schedule's step: disk packing blended with power-cell centroids, with the
+default's options) and ``lloyd``.
 
     python benchmarks/bench_stipple.py [--n 5000 20000 50000] [--sizes 512 2048]
         [--iters 5] [--device pocl] [--json out.json]
@@ -19,7 +22,7 @@ import time
 import numpy as np
 
 from diskpack_cl.image import load_gray, sample_image_path
-from diskpack_cl.stipple import error_diffusion, stipple
+from diskpack_cl.stipple import SCHEDULE_OPTIONS, error_diffusion, stipple
 
 
 def image(size):
@@ -54,8 +57,13 @@ def main(argv=None):
             t = time.perf_counter()
             error_diffusion(g, n, seed=0)
             t_start = time.perf_counter() - t
-            for method, sched in (("diskpack", [("pack", a.iters + 1)]), ("lloyd", None)):
-                kw = dict(schedule=sched) if sched else dict(method="lloyd", lloyd=a.iters + 1)
+            for method, sched in (("diskpack", [("pack", a.iters + 1)]),
+                                  ("mix", [("mix", a.iters + 1)]), ("lloyd", None)):
+                if method == "mix":
+                    # the default schedule's step: packing + power-cell centroids, its options
+                    kw = dict(SCHEDULE_OPTIONS["default"], schedule=sched)
+                else:
+                    kw = dict(schedule=sched) if sched else dict(method="lloyd", lloyd=a.iters + 1)
                 res = stipple(g, n, seed=0, device=a.device, **kw)
                 hist = res.history[1:]  # the first iteration includes kernel builds
                 row = {"size": size, "n": n, "method": method, "start_s": t_start,
