@@ -48,17 +48,19 @@ __all__ += ["MIC", "exact_mic", "chebyshev_center_linprog", "normalized_radius",
             "min_distance", "Certificate", "certify_disks", "coincident_pairs"]
 
 
-def _sites_tree(points, domain, margin):
+def _sites_tree(points, domain, margin, lift=None):
     """KD-tree over the points and, on a torus, their images within `margin`.
 
     Returns (tree, positions, original index); the first n entries are the
-    points themselves, so entry i is "site i, unshifted".
+    points themselves, so entry i is "site i, unshifted".  With `lift` (one
+    height per point) the tree is over (x, y, lift): see :func:`_cutter_radius`.
     """
     from scipy.spatial import cKDTree
 
     n = len(points)
     if not domain.periodic:
-        return cKDTree(points), points, np.arange(n)
+        pts = points if lift is None else np.column_stack([points, lift])
+        return cKDTree(pts), points, np.arange(n)
     size = np.array([domain.width, domain.height])
     reach = int(np.ceil(margin / min(size)))
     pos, gid = [points], [np.arange(n)]
@@ -71,7 +73,9 @@ def _sites_tree(points, domain, margin):
             pos.append(q[keep])
             gid.append(np.nonzero(keep)[0])
     pos = np.concatenate(pos)
-    return cKDTree(pos), pos, np.concatenate(gid)
+    gid = np.concatenate(gid)
+    pts = pos if lift is None else np.column_stack([pos, lift[gid]])
+    return cKDTree(pts), pos, gid
 
 
 def _triples(m):
@@ -323,14 +327,19 @@ def _overhang(centers, radius, domain, margin):
 def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
     """Constraint generation for every cell (see :func:`exact_mic`); returns (q, R, stats)."""
     n = len(X)
-    tree, gpos, gid = _sites_tree(X, domain, margin)
+    # Unequal weights: a tree over (x, y, sqrt(2 (wmax - w))) finds, with
+    # one radius per cell, the sites that can cut a disk whatever their
+    # weight (see _cutter_radius); equal weights keep the plain plane.
+    lift = np.sqrt(2.0 * (wmax - w)) if wmax > 0 else None
+    tree, gpos, gid = _sites_tree(X, domain, margin, lift)
+    at = (lambda c: c) if lift is None else (lambda c: np.column_stack([c, np.zeros(len(c))]))
     K = int(min(len(gpos), k))
     all_i = np.arange(n)
     stats = {"rounds": 0, "widened": 0, "grown": 0, "linprog": 0, "queried": 0}
 
     def pool(cells, kk):
         """Constraints from the kk sites nearest each cell's start, least slack first."""
-        dk, nb = tree.query(X[cells] + q0[cells], k=kk)
+        dk, nb = tree.query(at(X[cells] + q0[cells]), k=kk)
         nb = nb.reshape(len(cells), kk)
         N, B = _constraints(X, w, cells, gpos, nb, gid, domain)
         if not domain.periodic:
@@ -369,17 +378,18 @@ def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
         # the start: inside that ball, it has been checked already
         rows = np.nonzero(ok)[0]
         fine = todo[rows]
-        rad = _cutter_radius(q[fine], R[fine], w[fine], wmax)
+        rad = _cutter_radius(q[fine], R[fine], w[fine], wmax, lift is not None)
         shift = np.hypot(*(q[fine] - q0[fine]).T)
         unsure = rows[rad + shift > reach[rows] * (1 - 1e-12)]
         stats["queried"] += len(unsure)
         if len(unsure) and domain.periodic:
             cu = todo[unsure]
-            over = _overhang(X[cu] + q[cu], _cutter_radius(q[cu], R[cu], w[cu], wmax), domain, margin)
+            over = _overhang(X[cu] + q[cu], _cutter_radius(q[cu], R[cu], w[cu], wmax, lift is not None),
+                             domain, margin)
             if over.max() > 0:
                 raise _MarginTooSmall(margin + over.max())
         vr, vN, vB = _verify(X, w, wmax, unsure, q[todo[unsure]], R[todo[unsure]], todo[unsure],
-                             tree, gpos, gid, domain, tol)
+                             tree, gpos, gid, domain, tol, at, lift is not None)
         widened[todo[vr]] = True
         bad = np.nonzero(~ok)[0]
         stats["grown"] += len(bad)
@@ -421,10 +431,21 @@ def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
     return q, R, stats
 
 
-def _cutter_radius(q, R, wi, wmax):
-    """Radius around the centre beyond which no site can violate (q, R)."""
+def _cutter_radius(q, R, wi, wmax, lifted=False):
+    """Radius around the centre beyond which no site can violate (q, R).
+
+    Site j cuts the disk (c, R) of cell i only if, for some p in the disk,
+    pow_j(p) <= pow_i(p); with |c - x_i| = |q| that needs
+    ``(|c - x_j| - R)^2 <= (|q| + R)^2 - w_i + w_j``.  In the plane, bounding
+    w_j by wmax gives a distance.  Lifted, each site sits at height
+    ``sqrt(2 (wmax - w_j))`` and, since ``|c-x_j|^2 <= 2 (|c-x_j| - R)^2 + 2 R^2``,
+    every cutter lies within ``sqrt(2 ((|q| + R)^2 - w_i + R^2 + wmax))`` of
+    (c, 0): light sites near, heavy ones far, one radius per cell.
+    """
     Rp = np.maximum(R, 0.0)
     qn = np.hypot(q[:, 0], q[:, 1])
+    if lifted:
+        return np.sqrt(np.maximum(2.0 * ((qn + Rp) ** 2 - wi + Rp ** 2 + wmax), 0.0))
     return Rp + np.sqrt(np.maximum((qn + Rp) ** 2 - wi + wmax, 0.0))
 
 
@@ -450,7 +471,8 @@ def _query_pairs(tree, centers, radius, k=16):
     return np.concatenate(rows_out), np.concatenate(idx_out)
 
 
-def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, per_cell=3):
+def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, at=lambda c: c,
+            lifted=False, per_cell=3):
     """Violated constraints of each cell's (q, R): up to `per_cell` worst ones.
 
     Returns flat arrays (tag, normal, beta), one row per violated
@@ -458,8 +480,8 @@ def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, per_cel
     """
     if not len(cells):
         return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros(0)
-    rad = _cutter_radius(q, R, w[cells], wmax)
-    rows, idx = _query_pairs(tree, X[cells] + q, rad)
+    rad = _cutter_radius(q, R, w[cells], wmax, lifted)
+    rows, idx = _query_pairs(tree, at(X[cells] + q), rad)
     Nn, Bb = _constraints(X, w, cells[rows], gpos, idx[:, None], gid, domain)
     Nn, Bb = Nn[:, 0], Bb[:, 0]
     if not domain.periodic:
