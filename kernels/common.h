@@ -25,4 +25,21 @@ inline float box_dist(float px, float py, float x0, float y0, float x1, float y1
 /* Floor division for bucket indices that may leave the grid on a torus. */
 inline int floordiv(int a, int b) { return (a >= 0) ? a / b : -((-a + b - 1) / b); }
 
+/* Bucket (cx, cy) of the unbounded bucket lattice: on a torus, wrap it onto
+ * the grid and give the period shift (sx, sy) of its sites; on a rectangle,
+ * return 0 when it lies outside the grid. */
+inline int locate_bucket(int *cx, int *cy, float *sx, float *sy,
+                         int nbx, int nby, float W, float H)
+{
+#if PERIODIC
+    const int qx = floordiv(*cx, nbx), qy = floordiv(*cy, nby);
+    *sx = qx * W; *sy = qy * H;
+    *cx -= qx * nbx; *cy -= qy * nby;
+    return 1;
+#else
+    *sx = 0.0f; *sy = 0.0f;
+    return *cx >= 0 && *cy >= 0 && *cx < nbx && *cy < nby;
+#endif
+}
+
 #endif

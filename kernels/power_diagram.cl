@@ -89,14 +89,8 @@ inline int gather(int mode, float bound, float bound2, int skip,
             const int step = edge_row ? 1 : (bx1 - bx0 + 2 * r);
             for (int cx0 = bx0 - r; cx0 <= bx1 + r; cx0 += (step > 0 ? step : 1)) {
                 int cx = cx0, cy = cy0;
-                float sx = 0.0f, sy = 0.0f;
-#if PERIODIC
-                const int qx = floordiv(cx, nbx), qy = floordiv(cy, nby);
-                sx = qx * W; sy = qy * H;
-                cx -= qx * nbx; cy -= qy * nby;
-#else
-                if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
-#endif
+                float sx, sy;
+                if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
                 const int b = cy * nbx + cx;
                 const float ex0 = cx * bw + sx, ey0 = cy * bh + sy;
                 const float d = boxbox(x0, y0, x1, y1, ex0, ey0, ex0 + bw, ey0 + bh);
@@ -176,14 +170,8 @@ void power_labels(
                 for (int dx = -r; dx <= r; ++dx) {
                     if (max(abs(dx), abs(dy)) != r) continue;
                     int cx = bx + dx, cy = by + dy;
-                    float sx = 0.0f, sy = 0.0f;
-#if PERIODIC
-                    const int qx = floordiv(cx, nbx), qy = floordiv(cy, nby);
-                    sx = qx * W; sy = qy * H;
-                    cx -= qx * nbx; cy -= qy * nby;
-#else
-                    if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
-#endif
+                    float sx, sy;
+                    if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
                     const int b = cy * nbx + cx;
                     for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
                         const float xs = site[k].x + sx, ys = site[k].y + sy;
