@@ -106,13 +106,8 @@ def test_poisson_opencl_backend(ctx, tmp_path, capsys):
     assert s["backend"] == "opencl" and s["iterations"] <= 3
 
 
-def test_devices(capsys):
-    from diskpack_cl._device import NoOpenCLError, list_devices
-
-    try:
-        list_devices()
-    except NoOpenCLError:
-        pytest.skip("no OpenCL platform")
+def test_devices(ctx, capsys):
+    # ctx: skipped without OpenCL, a failure when CI requires it
     assert cli.main(["devices"]) == 0
     out = capsys.readouterr().out
     assert "using:" in out and "0:0" in out

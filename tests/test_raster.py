@@ -20,16 +20,6 @@ TIE = 1e-5
 DIST = 1e-4
 
 
-@pytest.fixture(scope="module")
-def ctx():
-    from diskpack_cl._device import NoOpenCLError, get_context
-
-    try:
-        return get_context()
-    except NoOpenCLError as exc:
-        pytest.skip(str(exc))
-
-
 def _raster(ctx, domain, shape, pts, w=None):
     from diskpack_cl.raster import PowerRaster
 
