@@ -229,7 +229,7 @@ def _run_poisson_radius(args):
 
     if args.init not in ("dart", "random"):
         raise ValueError("--radius chooses n itself: use --init dart or random, not a file")
-    bar, callback = None, None
+    bar = callback = None
     if not args.quiet and sys.stderr.isatty():
         from tqdm import tqdm
 

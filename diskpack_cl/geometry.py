@@ -559,7 +559,7 @@ def min_distance(points, domain=Domain.torus()):
 
     Examples
     --------
-    >>> float(min_distance([[0.05, 0.5], [0.95, 0.5]]))
+    >>> round(min_distance([[0.05, 0.5], [0.95, 0.5]]), 12)
     0.1
     """
     from scipy.spatial import cKDTree
@@ -585,7 +585,7 @@ def normalized_radius(points, domain=Domain.torus()):
     Examples
     --------
     >>> pts = np.random.default_rng(0).random((256, 2))
-    >>> 0 < normalized_radius(pts) < 1
+    >>> bool(0 < normalized_radius(pts) < 1)
     True
     """
     n = len(points)

@@ -126,8 +126,6 @@ def load_gray(path, *, invert=False, allow_large=False):
 
 
 def _pil_to_gray(im, *, invert=False, name="image"):
-    from PIL import Image
-
     if im.width == 0 or im.height == 0:
         raise ValueError(f"image has zero size ({im.width}x{im.height}): {name}")
     mode = im.mode

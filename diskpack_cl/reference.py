@@ -19,7 +19,6 @@ from collections import namedtuple
 
 import numpy as np
 
-from .geometry import Domain
 
 __all__ = ["grid_centers", "images", "power_labels_ref", "boundary_distance_ref",
            "edt_distance_ref", "mic_estimate_ref", "chebyshev_ref", "lloyd_centroids_ref",
