@@ -33,40 +33,35 @@ PROG = "diskpack"
 
 # ----------------------------------------------------------------- arguments
 
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+def _checked(convert, test, want):
+    """An argparse type: convert the text, then require ``test(value)``."""
+    what = "an integer" if convert is int else "a number"
+
+    def parse(text):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not {what}: {text!r}") from None
+        if not test(value):
+            raise argparse.ArgumentTypeError(f"must be {want}, got {text}")
+        return value
+
+    return parse
+
+
+_positive_int = _checked(int, lambda v: v >= 1, "at least 1")
+_nonnegative_int = _checked(int, lambda v: v >= 0, "at least 0")
+_unit_open = _checked(float, lambda v: 0.0 < v < 1.0, "in (0, 1)")
+_unit_half_open = _checked(float, lambda v: 0.0 < v <= 1.0, "in (0, 1]")
+_unit_closed = _checked(float, lambda v: 0.0 <= v <= 1.0, "in [0, 1]")
+_unit_half_open_zero = _checked(float, lambda v: 0.0 <= v < 1.0, "in [0, 1)")
+_positive_float = _checked(float, lambda v: 0.0 < v < float("inf"), "a finite number > 0")
 
 
 def _point_count(text):
     value = _positive_int(text)
     if value < 2:
         raise argparse.ArgumentTypeError(f"need at least 2 points, got {value}")
-    return value
-
-
-def _nonnegative_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be at least 0, got {value}")
-    return value
-
-
-def _unit_open(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 < value < 1.0:
-        raise argparse.ArgumentTypeError(f"must be in (0, 1), got {text}")
     return value
 
 
@@ -212,14 +207,7 @@ def _add_poisson(subparsers):
     p.set_defaults(run=_run_poisson)
 
 
-def _radius(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 < value < 0.25:
-        raise argparse.ArgumentTypeError(f"must be in (0, 0.25), got {text}")
-    return value
+_radius = _checked(float, lambda v: 0.0 < v < 0.25, "in (0, 0.25)")
 
 
 def _run_poisson_radius(args):
@@ -328,26 +316,6 @@ def _run_relax(args):
     return _relax_and_write(points, args, extra_summary={"input": str(args.input)})
 
 
-def _positive_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
-    return value
-
-
-def _unit_half_open(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 < value <= 1.0:
-        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text}")
-    return value
-
-
 SAMPLE = "sample"
 
 
@@ -363,20 +331,6 @@ def _image_path(text):
 def _phase_text(phase):
     kind, it = phase[0], phase[1]
     return f"{kind} {it}" + (f" (blend {phase[2]})" if len(phase) > 2 else "")
-
-
-def _unit_closed(text):
-    v = float(text)
-    if not 0.0 <= v <= 1.0:
-        raise argparse.ArgumentTypeError(f"must be in [0, 1], got {text}")
-    return v
-
-
-def _unit_half_open_zero(text):
-    v = float(text)
-    if not 0.0 <= v < 1.0:
-        raise argparse.ArgumentTypeError(f"must be in [0, 1), got {text}")
-    return v
 
 
 def _add_stipple(subparsers):
