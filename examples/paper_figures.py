@@ -422,7 +422,7 @@ def fig5(out, quick):
         _show(ax, _render(res.points, r, gray.shape),
               f"({tag}) {label}\ntone SSIM {m['tone_ssim']:.3f}, spacing p01 {m['spacing_p01']:.2f}")
     fig.suptitle("Fig. 5: stippling process", fontsize=10)
-    nums["png_kb"] = _save(fig, out / "fig5_stippling_process.png", colors=8)
+    nums["png_kb"] = _save(fig, out / "fig5_stippling_process.png", colors=16)
     return nums
 
 
@@ -443,7 +443,7 @@ def fig8(out, quick):
     _show(axes[2], _render(res.points, r, gray.shape),
           f"(c) disk packing, default schedule\ntone SSIM {m1['tone_ssim']:.3f}, spacing p01 {m1['spacing_p01']:.2f}")
     fig.suptitle("Fig. 8: image stippling", fontsize=10)
-    kb = _save(fig, out / "fig8_stippling.png", colors=8)
+    kb = _save(fig, out / "fig8_stippling.png", colors=16)
     return {"image": name, "n": n, "error_diffusion": m0, "diskpack": m1, "png_kb": kb}
 
 
@@ -460,7 +460,7 @@ def fig9_10(out, quick):
     crops = [(200, 60, 96), (330, 380, 96)]  # face / coat and lawn / tripod
     sets = [("error diffusion", start, None), ("weighted Lloyd (Secord)", ll.points, ll),
             ("disk packing (ours)", dp.points, dp)]
-    fig = _figure(14.0, 4.0 + 3.5 * len(crops))
+    fig = _figure(12.0, 3.4 + 3.0 * len(crops))
     axes = fig.subplots(1 + len(crops), 4, height_ratios=[1.2] + [1.0] * len(crops))
     _show(axes[0, 0], gray, f"input ({name})", crop_box=crops[0])
     axes[0, 0].add_patch(Rectangle(crops[1][:2], crops[1][2], crops[1][2], fill=False,
@@ -479,7 +479,7 @@ def fig9_10(out, quick):
         _show(axes[i, 0], gray[y0:y0 + size, x0:x0 + size], f"input close-up {i}")
     fig.suptitle("Figs. 9/10: disk packing against weighted Lloyd at the same n, from the same "
                  "error-diffusion start", fontsize=10)
-    nums["png_kb"] = _save(fig, out / "fig9_10_compare.png", colors=8)
+    nums["png_kb"] = _save(fig, out / "fig9_10_compare.png", colors=16)
     return nums
 
 
@@ -509,9 +509,11 @@ def main(argv=None):
         numbers[name] = _num(nums)
         print(json.dumps(_num({k: v for k, v in nums.items() if k != "trials"}), indent=1), flush=True)
         print(f"{name}: {nums['seconds']:.1f} s", flush=True)
-    numbers["total_seconds"] = time.perf_counter() - t_all
+    total = time.perf_counter() - t_all
+    if not args.only:
+        numbers["total_seconds"] = total
     path.write_text(json.dumps(_num(numbers), indent=1) + "\n")
-    print(f"total {numbers['total_seconds']:.1f} s; numbers in {path}")
+    print(f"total {total:.1f} s; numbers in {path}")
     return 0
 
 
