@@ -6,7 +6,7 @@ float64, so returned points and radii are certified.
 """
 
 from .geometry import Domain, certify_disks, exact_mic, normalized_radius
-from .relax import RelaxResult, relax_poisson
+from .relax import RadiusResult, RelaxResult, max_points_for_radius, relax_poisson
 from .sampling import dart_throwing, random_points
 from .stipple import StippleResult, error_diffusion, stipple
 from .export import write_stipple
@@ -14,7 +14,7 @@ from .image import load_gray, sample_image_path
 
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
-    "RelaxResult", "relax_poisson", "dart_throwing", "random_points",
+    "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleResult", "error_diffusion", "stipple", "write_stipple",
     "load_gray", "sample_image_path",
 ]

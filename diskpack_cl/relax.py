@@ -17,7 +17,7 @@ import numpy as np
 
 from .geometry import Domain, coincident_pairs, exact_mic, normalized_radius
 
-__all__ = ["relax_poisson", "RelaxResult", "BACKENDS"]
+__all__ = ["relax_poisson", "RelaxResult", "BACKENDS", "max_points_for_radius", "RadiusResult"]
 
 BACKENDS = ("opencl", "exact", "auto")
 
