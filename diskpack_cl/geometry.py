@@ -199,6 +199,19 @@ def _widen(N, B, width):
     return N, B
 
 
+#: Vertex search widths: every triple of the first ``_LEADS[0]`` least-slack
+#: constraints, then, for the cells none of those certify, of the first
+#: ``_LEADS[1]``, then ``_LEADS[2]`` (fewer cells each time).
+_LEADS = (6, 9, 12)
+#: Constraint-generation rounds; cells still open after them go to linprog.
+_MAX_ROUNDS = 12
+#: Most sites in a regrown constraint set (a cell with no certified vertex
+#: starts again from twice as many nearest sites, up to this many).
+_MAX_POOL = 256
+#: Relative slack on "the cutter ball lies inside the ball the set came from".
+_COVER_RTOL = 1e-12
+
+
 @dataclass
 class MIC:
     """Certified maximal inscribed circles of power cells (see :func:`exact_mic`)."""
@@ -209,7 +222,7 @@ class MIC:
     stats: dict
 
 
-def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=12):
+def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=12, cells=None):
     """Exact (float64) maximal inscribed circle of every power cell.
 
     The MIC of cell i is the Chebyshev centre of the convex polygon
@@ -237,9 +250,15 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         Power weights (squared radii); None for the Voronoi diagram.
     domain : Domain
     estimate : tuple of arrays, optional
-        ``(centers, radii)`` from the raster (radius < 0: no estimate).
+        ``(centers, radii)`` from the raster, one row per site (also with
+        `cells`); radius < 0: no estimate.
     k : int
         Sites in each cell's first constraint set.
+    cells : (m,) array_like of int, optional
+        Solve only these cells (every site still constrains them).  The
+        result then has one row per entry of `cells`, in their order; a
+        cell's result is its certified optimum, equal to the full solve's
+        up to rounding (degenerate cells may pick another optimal centre).
 
     Returns
     -------
@@ -247,7 +266,13 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         ``centers`` (n, 2), ``radii`` (n,) (negative: the power cell is
         empty; ``centers`` is then the site itself), ``empty`` mask, and
         ``stats``: rounds, cells widened, linprog fallbacks, and the largest
-        estimate errors.
+        estimate errors.  With `cells`: m rows instead of n.
+
+    Raises
+    ------
+    ValueError
+        Points not (n, 2) finite, weights not n finite numbers, cells not
+        integer indices of sites.
 
     Examples
     --------
@@ -256,7 +281,47 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     >>> mic = exact_mic(pts)
     >>> bool(np.all(mic.radii > 0))
     True
+
+    Three cells only, as a fallback for the cells a raster could not settle:
+
+    >>> part = exact_mic(pts, cells=[4, 0, 7])
+    >>> bool(np.allclose(part.radii, mic.radii[[4, 0, 7]], rtol=0, atol=1e-12))
+    True
     """
+    X, w = _checked_sites(points, weights, domain)
+    n = len(X)
+    todo = _checked_cells(cells, n)
+    c_est, r_est = _start_estimate(X, estimate)
+    q0 = c_est - X
+    if domain.periodic:
+        q0 -= np.round(q0 / (domain.width, domain.height)) * (domain.width, domain.height)
+    scale = max(domain.width, domain.height)
+    wmax = w.max() if n else 0.0
+    spacing = np.sqrt(domain.area / max(n, 1))
+    margin = min(8 * spacing + np.sqrt(wmax), 2.0 * scale) if domain.periodic else 0.0
+    while True:
+        try:
+            problem = _CellProblem.build(X, w, q0, r_est, domain, margin, tol=1e-11 * scale)
+            q, R, stats = _solve_cells(problem, todo, k)
+            break
+        except _MarginTooSmall as exc:
+            # a cell reaches past the periodic images in the tree: add more
+            margin = max(1.25 * exc.needed, 2 * margin)
+    stats["margin"] = margin
+    X, q, R, c_est, r_est = X[todo], q[todo], R[todo], c_est[todo], r_est[todo]
+    empty = R < 0
+    centers = X + q
+    centers[empty] = X[empty]
+    if domain.periodic:
+        centers = domain.wrap(centers)
+    if estimate is not None:
+        stats.update(_estimate_errors(centers, R, c_est, r_est, domain))
+    stats["empty"] = int(empty.sum())
+    return MIC(centers, R, empty, stats)
+
+
+def _checked_sites(points, weights, domain):
+    """Points (wrapped on a torus) and weights shifted to min 0, as float64 copies."""
     X = np.array(points, dtype=np.float64)
     n = len(X)
     if X.ndim != 2 or X.shape[1] != 2:
@@ -270,46 +335,47 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
         raise ValueError("weights must be n finite numbers")
     if n:
         w -= w.min()   # the diagram ignores a common shift; bounds below want w >= 0
-    wmax = w.max() if n else 0.0
-    scale = max(domain.width, domain.height)
-    tol = 1e-11 * scale
+    return X, w
+
+
+def _checked_cells(cells, n):
+    """The cell indices to solve: all n, or `cells` checked to be indices of sites."""
+    if cells is None:
+        return np.arange(n)
+    c = np.asarray(cells)
+    if c.ndim != 1 or not (c.size == 0 or np.issubdtype(c.dtype, np.integer)):
+        raise ValueError(f"cells must be a 1-D array of site indices, got shape {c.shape} "
+                         f"and dtype {c.dtype}")
+    if c.size and (c.min() < 0 or c.max() >= n):
+        raise ValueError(f"cells must be site indices in [0, {n}), got {c.min()} .. {c.max()}")
+    return c.astype(np.intp)
+
+
+def _start_estimate(X, estimate):
+    """Start centres and radii per site: the estimate where it has one, else the site, 0."""
     c_est = X.copy()
-    r_est = np.zeros(n)
+    r_est = np.zeros(len(X))
     if estimate is not None:
         ec, er = (np.asarray(a, np.float64) for a in estimate)
         has = er >= 0
         c_est[has] = ec[has]
         r_est[has] = er[has]
-    q0 = c_est - X
+    return c_est, r_est
+
+
+def _estimate_errors(centers, R, c_est, r_est, domain):
+    """Largest radius and centre errors of the estimate, over cells that had one."""
+    has = r_est > 0
+    d = centers[has] - c_est[has]
     if domain.periodic:
-        q0 -= np.round(q0 / (domain.width, domain.height)) * (domain.width, domain.height)
-    spacing = np.sqrt(domain.area / max(n, 1))
-    margin = min(8 * spacing + np.sqrt(wmax), 2.0 * scale) if domain.periodic else 0.0
-    while True:
-        try:
-            q, R, stats = _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol)
-            break
-        except _MarginTooSmall as exc:
-            # a cell reaches past the periodic images in the tree: add more
-            margin = max(1.25 * exc.needed, 2 * margin)
-    stats["margin"] = margin
-    empty = R < 0
-    centers = X + q
-    centers[empty] = X[empty]
-    if domain.periodic:
-        centers = domain.wrap(centers)
-    if estimate is not None:
-        has = r_est > 0
-        stats["estimate_radius_error_max"] = float(np.max(np.abs(R[has] - r_est[has]), initial=0.0))
-        d = centers[has] - c_est[has]
-        if domain.periodic:
-            d -= np.round(d)
-        stats["estimate_center_error_max"] = float(np.max(np.hypot(d[:, 0], d[:, 1]), initial=0.0))
-    stats["empty"] = int(empty.sum())
-    return MIC(centers, R, empty, stats)
+        d -= np.round(d)
+    return {"estimate_radius_error_max": float(np.max(np.abs(R[has] - r_est[has]), initial=0.0)),
+            "estimate_center_error_max": float(np.max(np.hypot(d[:, 0], d[:, 1]), initial=0.0))}
 
 
 class _MarginTooSmall(Exception):
+    """A cell reaches past the periodic images in the tree; `needed` is the margin it wants."""
+
     def __init__(self, needed):
         self.needed = float(needed)
 
@@ -324,111 +390,207 @@ def _overhang(centers, radius, domain, margin):
     return np.maximum(np.max(np.maximum(lo, hi), axis=1), 0.0)
 
 
-def _solve_cells(X, w, wmax, q0, r_est, domain, margin, k, tol):
-    """Constraint generation for every cell (see :func:`exact_mic`); returns (q, R, stats)."""
-    n = len(X)
-    # Unequal weights: a tree over (x, y, sqrt(2 (wmax - w))) finds, with
-    # one radius per cell, the sites that can cut a disk whatever their
-    # weight (see _cutter_radius); equal weights keep the plain plane.
-    lift = np.sqrt(2.0 * (wmax - w)) if wmax > 0 else None
-    tree, gpos, gid = _sites_tree(X, domain, margin, lift)
-    at = (lambda c: c) if lift is None else (lambda c: np.column_stack([c, np.zeros(len(c))]))
-    K = int(min(len(gpos), k))
-    all_i = np.arange(n)
-    stats = {"rounds": 0, "widened": 0, "grown": 0, "linprog": 0, "queried": 0}
+@dataclass
+class _CellProblem:
+    """Everything the cells are solved against: sites, weights, tree, starts.
 
-    def pool(cells, kk):
-        """Constraints from the kk sites nearest each cell's start, least slack first."""
-        dk, nb = tree.query(at(X[cells] + q0[cells]), k=kk)
-        nb = nb.reshape(len(cells), kk)
-        N, B = _constraints(X, w, cells, gpos, nb, gid, domain)
-        if not domain.periodic:
-            En, Eb = _edge_constraints(X, cells, domain)
+    ``tree`` holds the sites and, on a torus, their images within `margin`
+    (``gpos`` positions, ``gid`` site of each entry).  With unequal weights
+    the tree is over ``(x, y, lift)``, ``lift = sqrt(2 (wmax - w))``: one
+    radius per cell then finds every site that can cut a disk, whatever its
+    weight (see :func:`_cutter_radius`).  ``q0`` (start centre relative to
+    the site) and ``r_est`` (start radius) are per site.
+    """
+
+    X: np.ndarray
+    w: np.ndarray
+    wmax: float
+    q0: np.ndarray
+    r_est: np.ndarray
+    domain: Domain
+    margin: float
+    tol: float
+    tree: object
+    gpos: np.ndarray
+    gid: np.ndarray
+    lift: np.ndarray | None
+
+    @classmethod
+    def build(cls, X, w, q0, r_est, domain, margin, tol):
+        wmax = w.max() if len(w) else 0.0
+        lift = np.sqrt(2.0 * (wmax - w)) if wmax > 0 else None
+        tree, gpos, gid = _sites_tree(X, domain, margin, lift)
+        return cls(X, w, wmax, q0, r_est, domain, margin, tol, tree, gpos, gid, lift)
+
+    @property
+    def lifted(self):
+        return self.lift is not None
+
+    def at(self, c):
+        """Tree coordinates of plane points (height 0 when lifted)."""
+        return c if self.lift is None else np.column_stack([c, np.zeros(len(c))])
+
+    def constraints(self, cells, idx):
+        """Half-planes of `cells` from tree entries `idx` (one row per cell), with the edges."""
+        N, B = _constraints(self.X, self.w, cells, self.gpos, idx, self.gid, self.domain)
+        if not self.domain.periodic:
+            En, Eb = _edge_constraints(self.X, cells, self.domain)
             N, B = np.concatenate([N, En], 1), np.concatenate([B, Eb], 1)
-        sl = B - np.einsum("ckj,cj->ck", N, q0[cells]) - r_est[cells, None]
-        o = np.argsort(sl, axis=1, kind="stable")
-        N, B = _fill_dead(np.take_along_axis(N, o[..., None], 1), np.take_along_axis(B, o, 1))
-        reach = dk.reshape(len(cells), kk)[:, -1] if kk < tree.n else np.full(len(cells), np.inf)
-        # a ball poking out of the imaged region may miss images: not a cover
-        reach[_overhang(X[cells] + q0[cells], reach, domain, margin) > 0] = -np.inf
-        return N, B, reach
+        return N, B
 
-    # rows of S_N, S_B, reach follow `todo`
-    todo = all_i
-    S_N, S_B, reach = pool(todo, K)
+    def cutter_radius(self, cells, q, R):
+        return _cutter_radius(q, R, self.w[cells], self.wmax, self.lifted)
+
+
+@dataclass
+class _ConstraintSet:
+    """Constraint sets of some cells: row r holds cell ``cells[r]``'s half-planes.
+
+    ``q . N[r, j] <= B[r, j]`` with q relative to the site; unused slots are
+    copies of the first constraint (:func:`_fill_dead`) or ``B = 1e300``
+    padding (:func:`_widen`).  ``reach[r]``: every site within this distance
+    of the cell's start is in its set (-inf: unknown, always query).
+    """
+
+    cells: np.ndarray
+    N: np.ndarray
+    B: np.ndarray
+    reach: np.ndarray
+
+    @property
+    def width(self):
+        return self.B.shape[1]
+
+    def padded(self, width):
+        """The same sets with `width` columns (more unused slots)."""
+        N, B = _widen(self.N, self.B, width)
+        return _ConstraintSet(self.cells, N, B, self.reach)
+
+    def concat(self, other):
+        """Rows of both sets, padded to a common width."""
+        width = max(self.width, other.width)
+        a, b = self.padded(width), other.padded(width)
+        return _ConstraintSet(np.concatenate([a.cells, b.cells]), np.concatenate([a.N, b.N]),
+                              np.concatenate([a.B, b.B]), np.concatenate([a.reach, b.reach]))
+
+
+def _solve_cells(P, cells, k):
+    """Constraint generation for `cells` (see :func:`exact_mic`).
+
+    Returns ``(q, R, stats)`` with one row per site (rows outside `cells`:
+    q = 0, R = -inf): the MIC centre relative to the site and its radius.
+    """
+    n = len(P.X)
+    stats = {"rounds": 0, "widened": 0, "grown": 0, "linprog": 0, "queried": 0}
+    S = _nearest_sets(P, cells, int(min(len(P.gpos), k)))
     q = np.zeros((n, 2))
     R = np.full(n, -np.inf)
     widened = np.zeros(n, bool)
-    while len(todo):
+    while len(S.cells):
         stats["rounds"] += 1
-        qs, Rs, ok = _solve_subsets(S_N, S_B, tol, lead=6)
-        for prev, lead in ((6, 9), (9, 12)):
-            # fewer cells each time: more of their constraints lead
-            sub = np.nonzero(~ok)[0]
-            if len(sub) and prev < S_B.shape[1]:
-                qs[sub], Rs[sub], ok[sub] = _solve_subsets(S_N[sub], S_B[sub], tol, lead=lead)
-        for c in np.nonzero(~ok)[0]:
-            # the active constraints are not among the least slack at the
-            # start (a poor estimate): solve this cell's set by LP instead
-            stats["linprog"] += 1
-            qs[c], Rs[c], ok[c] = _lp_subset(S_N[c], S_B[c], tol)
-        q[todo], R[todo] = qs, Rs
-        # the K sites came from a ball around the start; a cutter of the
-        # disk lies within `rad` of its centre, hence within rad + shift of
-        # the start: inside that ball, it has been checked already
-        rows = np.nonzero(ok)[0]
-        fine = todo[rows]
-        rad = _cutter_radius(q[fine], R[fine], w[fine], wmax, lift is not None)
-        shift = np.hypot(*(q[fine] - q0[fine]).T)
-        unsure = rows[rad + shift > reach[rows] * (1 - 1e-12)]
-        stats["queried"] += len(unsure)
-        if len(unsure) and domain.periodic:
-            cu = todo[unsure]
-            over = _overhang(X[cu] + q[cu], _cutter_radius(q[cu], R[cu], w[cu], wmax, lift is not None),
-                             domain, margin)
-            if over.max() > 0:
-                raise _MarginTooSmall(margin + over.max())
-        vr, vN, vB = _verify(X, w, wmax, unsure, q[todo[unsure]], R[todo[unsure]], todo[unsure],
-                             tree, gpos, gid, domain, tol, at, lift is not None)
-        widened[todo[vr]] = True
+        q[S.cells], R[S.cells], ok = _vertex_search(S, P.tol, stats)
+        vr, vN, vB = _violations(P, S, q, R, ok, stats)
+        widened[S.cells[vr]] = True
         bad = np.nonzero(~ok)[0]
         stats["grown"] += len(bad)
-        if stats["rounds"] >= 12:
-            rest = todo[np.union1d(vr, bad)]
+        if stats["rounds"] >= _MAX_ROUNDS:
+            rest = S.cells[np.union1d(vr, bad)]
             stats["linprog"] += len(rest)
             for c in rest:
-                q[c], R[c] = _linprog_cell(X, w, c, tree, gpos, gid, domain, margin)
+                q[c], R[c] = _linprog_cell(P, c)
             break
-        # violated cells keep their constraints plus the violated ones,
-        # least slack at the current solution first, so that the new ones
-        # take part in the next vertex search
-        vrows = np.unique(vr)
-        nN, nB = S_N[vrows], S_B[vrows]
-        if len(vr):
-            rank = np.arange(len(vr)) - np.searchsorted(vr, vr)
-            slot = np.searchsorted(vrows, vr)
-            width = nB.shape[1]
-            nN, nB = _widen(nN, nB, width + int(rank.max()) + 1)
-            nN[slot, width + rank], nB[slot, width + rank] = vN, vB
-            cq, cR = q[todo[vrows]], R[todo[vrows]]
-            sl = nB - np.einsum("ckj,cj->ck", nN, cq) - cR[:, None]
-            o = np.argsort(sl, axis=1, kind="stable")
-            nN, nB = np.take_along_axis(nN, o[..., None], 1), np.take_along_axis(nB, o, 1)
-        nreach = np.full(len(vrows), -np.inf)   # never "covered" again: always query
-        # cells with no certified vertex (unbounded or long thin cell among
-        # the K sites) start again from twice as many sites
-        if not len(vrows) and not len(bad):
+        if not len(vr) and not len(bad):
             break
-        kk = int(min(tree.n, 2 * S_B.shape[1], 256))
-        bN, bB, breach = pool(todo[bad], kk)
-        todo = np.concatenate([todo[vrows], todo[bad]])
-        width = max(nB.shape[1], bB.shape[1])
-        nN, nB = _widen(nN, nB, width)
-        bN, bB = _widen(bN, bB, width)
-        S_N, S_B = np.concatenate([nN, bN]), np.concatenate([nB, bB])
-        reach = np.concatenate([nreach, breach])
+        S = _with_violations(S, vr, vN, vB, q, R).concat(_regrown_sets(P, S, bad))
     stats["widened"] = int(widened.sum())
     return q, R, stats
+
+
+def _nearest_sets(P, cells, size):
+    """Constraints from the `size` sites nearest each cell's start, least slack first."""
+    start = P.X[cells] + P.q0[cells]
+    dk, nb = P.tree.query(P.at(start), k=size)
+    nb = nb.reshape(len(cells), size)
+    N, B = P.constraints(cells, nb)
+    sl = B - np.einsum("ckj,cj->ck", N, P.q0[cells]) - P.r_est[cells, None]
+    o = np.argsort(sl, axis=1, kind="stable")
+    N, B = _fill_dead(np.take_along_axis(N, o[..., None], 1), np.take_along_axis(B, o, 1))
+    if size < P.tree.n:
+        reach = dk.reshape(len(cells), size)[:, -1]
+    else:
+        reach = np.full(len(cells), np.inf)
+    # a ball poking out of the imaged region may miss images: not a cover
+    reach[_overhang(start, reach, P.domain, P.margin) > 0] = -np.inf
+    return _ConstraintSet(cells, N, B, reach)
+
+
+def _vertex_search(S, tol, stats):
+    """Each row's optimum on its set: vertex search over widening leads, then linprog.
+
+    Returns (q, R, ok) per row; ok is False where the set does not bound a
+    certified vertex (unbounded or long thin cell among its sites).
+    """
+    qs, Rs, ok = _solve_subsets(S.N, S.B, tol, lead=_LEADS[0])
+    for prev, lead in zip(_LEADS, _LEADS[1:]):
+        # fewer cells each time: more of their constraints lead
+        sub = np.nonzero(~ok)[0]
+        if len(sub) and prev < S.width:
+            qs[sub], Rs[sub], ok[sub] = _solve_subsets(S.N[sub], S.B[sub], tol, lead=lead)
+    for c in np.nonzero(~ok)[0]:
+        # the active constraints are not among the least slack at the
+        # start (a poor estimate): solve this cell's set by LP instead
+        stats["linprog"] += 1
+        qs[c], Rs[c], ok[c] = _lp_subset(S.N[c], S.B[c], tol)
+    return qs, Rs, ok
+
+
+def _violations(P, S, q, R, ok, stats):
+    """Violated constraints of the solved rows, as (row, normal, beta), sorted by row.
+
+    The set's sites came from a ball around the start; a cutter of the disk
+    lies within the cutter radius of its centre, hence within that plus the
+    shift from the start: inside the ball, it has been checked already.
+    Only rows whose cutter ball leaves it are queried.
+    """
+    rows = np.nonzero(ok)[0]
+    fine = S.cells[rows]
+    rad = P.cutter_radius(fine, q[fine], R[fine])
+    shift = np.hypot(*(q[fine] - P.q0[fine]).T)
+    unsure = rows[rad + shift > S.reach[rows] * (1 - _COVER_RTOL)]
+    stats["queried"] += len(unsure)
+    cu = S.cells[unsure]
+    if len(unsure) and P.domain.periodic:
+        over = _overhang(P.X[cu] + q[cu], P.cutter_radius(cu, q[cu], R[cu]), P.domain, P.margin)
+        if over.max() > 0:
+            raise _MarginTooSmall(P.margin + over.max())
+    return _verify(P, unsure, q[cu], R[cu], cu)
+
+
+def _with_violations(S, vr, vN, vB, q, R):
+    """The rows with violations, their new constraints added, least slack at (q, R) first.
+
+    The new constraints then take part in the next vertex search; these
+    rows are never "covered" again (reach -inf: always query).
+    """
+    vrows = np.unique(vr)
+    N, B = S.N[vrows], S.B[vrows]
+    if len(vr):
+        rank = np.arange(len(vr)) - np.searchsorted(vr, vr)
+        slot = np.searchsorted(vrows, vr)
+        width = B.shape[1]
+        N, B = _widen(N, B, width + int(rank.max()) + 1)
+        N[slot, width + rank], B[slot, width + rank] = vN, vB
+        cells = S.cells[vrows]
+        sl = B - np.einsum("ckj,cj->ck", N, q[cells]) - R[cells][:, None]
+        o = np.argsort(sl, axis=1, kind="stable")
+        N, B = np.take_along_axis(N, o[..., None], 1), np.take_along_axis(B, o, 1)
+    return _ConstraintSet(S.cells[vrows], N, B, np.full(len(vrows), -np.inf))
+
+
+def _regrown_sets(P, S, bad):
+    """Rows with no certified vertex start again from twice as many nearest sites."""
+    size = int(min(P.tree.n, 2 * S.width, _MAX_POOL))
+    return _nearest_sets(P, S.cells[bad], size)
 
 
 def _cutter_radius(q, R, wi, wmax, lifted=False):
@@ -471,31 +633,34 @@ def _query_pairs(tree, centers, radius, k=16):
     return np.concatenate(rows_out), np.concatenate(idx_out)
 
 
-def _verify(X, w, wmax, tags, q, R, cells, tree, gpos, gid, domain, tol, at=lambda c: c,
-            lifted=False, per_cell=3):
-    """Violated constraints of each cell's (q, R): up to `per_cell` worst ones.
+#: Violated constraints a cell gets per round (the worst ones).
+_VIOLATIONS_PER_ROUND = 3
+
+
+def _verify(P, tags, q, R, cells):
+    """Violated constraints of each cell's (q, R): the worst few per cell.
 
     Returns flat arrays (tag, normal, beta), one row per violated
     constraint, sorted by tag; `tags` label the cells in the output.
     """
     if not len(cells):
         return np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros(0)
-    rad = _cutter_radius(q, R, w[cells], wmax, lifted)
-    rows, idx = _query_pairs(tree, at(X[cells] + q), rad)
-    Nn, Bb = _constraints(X, w, cells[rows], gpos, idx[:, None], gid, domain)
+    rad = P.cutter_radius(cells, q, R)
+    rows, idx = _query_pairs(P.tree, P.at(P.X[cells] + q), rad)
+    Nn, Bb = _constraints(P.X, P.w, cells[rows], P.gpos, idx[:, None], P.gid, P.domain)
     Nn, Bb = Nn[:, 0], Bb[:, 0]
-    if not domain.periodic:
-        En, Eb = _edge_constraints(X, cells, domain)
+    if not P.domain.periodic:
+        En, Eb = _edge_constraints(P.X, cells, P.domain)
         rows = np.concatenate([rows, np.repeat(np.arange(len(cells)), 4)])
         Nn = np.concatenate([Nn, En.reshape(-1, 2)])
         Bb = np.concatenate([Bb, Eb.ravel()])
     slack = Bb - np.einsum("kj,kj->k", Nn, q[rows]) - R[rows]
-    v = slack < -tol
+    v = slack < -P.tol
     rows, Nn, Bb, slack = rows[v], Nn[v], Bb[v], slack[v]
     order = np.lexsort((slack, rows))
     rows, Nn, Bb = rows[order], Nn[order], Bb[order]
     rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
-    keep = rank < per_cell
+    keep = rank < _VIOLATIONS_PER_ROUND
     return np.asarray(tags)[rows[keep]], Nn[keep], Bb[keep]
 
 
@@ -521,20 +686,16 @@ def _lp_subset(N, B, tol):
     return np.asarray(c), float(R), True
 
 
-def _linprog_cell(X, w, c, tree, gpos, gid, domain, margin):
+def _linprog_cell(P, c):
     """Fallback: one cell's Chebyshev centre by scipy's LP over every site in the tree."""
-    idx = np.arange(tree.n)[None, :]
-    N, B = _constraints(X, w, np.array([c]), gpos, idx, gid, domain)
+    N, B = P.constraints(np.array([c]), np.arange(P.tree.n)[None, :])
     N, B = N[0], B[0]
-    if not domain.periodic:
-        En, Eb = _edge_constraints(X, np.array([c]), domain)
-        N, B = np.concatenate([N, En[0]]), np.concatenate([B, Eb[0]])
     keep = np.isfinite(B)
     try:
         return chebyshev_center_linprog(N[keep], B[keep])
     except RuntimeError:
-        if domain.periodic:   # unbounded: the cell needs images from further away
-            raise _MarginTooSmall(max(2 * margin, max(domain.width, domain.height)))
+        if P.domain.periodic:   # unbounded: the cell needs images from further away
+            raise _MarginTooSmall(max(2 * P.margin, max(P.domain.width, P.domain.height)))
         raise
 
 

@@ -176,6 +176,53 @@ def test_exact_mic_bad_input():
         exact_mic([[0.1, 0.2], [0.5, 0.3]], [0.0])
 
 
+
+@SETTINGS
+@given(case=cells(), seed=st.integers(0, 2**32 - 1), with_estimate=st.booleans())
+def test_exact_mic_cells_matches_the_full_solve(case, seed, with_estimate):
+    """Solving a subset of cells gives those cells' rows of the full solve, in the asked order."""
+    dom, pts, w = case
+    rng = np.random.default_rng(seed)
+    n = len(pts)
+    est = None
+    if with_estimate:
+        est = (rng.random((n, 2)) * (dom.width, dom.height), rng.random(n) * 0.2 - 0.05)
+    full = exact_mic(pts, w, dom, estimate=est)
+    sub = rng.permutation(n)[: rng.integers(1, n + 1)]
+    part = exact_mic(pts, w, dom, estimate=est, cells=sub)
+    assert part.centers.shape == (len(sub), 2) and part.radii.shape == part.empty.shape == (len(sub),)
+    if not dom.periodic:   # no periodic margin to grow: every cell's solve is the full solve's
+        assert np.array_equal(part.radii, full.radii[sub])
+        assert np.array_equal(part.centers, full.centers[sub])
+    scale = max(dom.width, dom.height)
+    assert np.all(np.abs(part.radii - full.radii[sub]) <= RTOL * scale)
+    assert np.array_equal(part.empty, full.empty[sub])
+    assert part.stats["empty"] == int(full.empty[sub].sum())
+
+
+def test_exact_mic_cells_few_and_none():
+    pts = np.random.default_rng(3).random((400, 2))
+    w = (0.02 * np.random.default_rng(4).random(400)) ** 2
+    full = exact_mic(pts, w)
+    one = exact_mic(pts, w, cells=np.array([17]))
+    assert np.abs(one.radii[0] - full.radii[17]) <= 1e-12
+    assert one.stats["rounds"] >= 1
+    none = exact_mic(pts, w, cells=np.zeros(0, np.intp))
+    assert none.centers.shape == (0, 2) and none.radii.shape == (0,)
+    assert none.stats["rounds"] == 0
+
+
+def test_exact_mic_cells_bad_input():
+    pts = [[0.1, 0.2], [0.5, 0.3], [0.7, 0.9]]
+    with pytest.raises(ValueError, match=r"cells must be a 1-D array of site indices, got shape \(1, 2\)"):
+        exact_mic(pts, cells=[[0, 1]])
+    with pytest.raises(ValueError, match="dtype float64"):
+        exact_mic(pts, cells=[0.0, 1.0])
+    with pytest.raises(ValueError, match=r"cells must be site indices in \[0, 3\), got 0 .. 3"):
+        exact_mic(pts, cells=[0, 3])
+    with pytest.raises(ValueError, match=r"got -1 .. 1"):
+        exact_mic(pts, cells=[1, -1])
+
 @settings(max_examples=40, deadline=None)
 @given(n=st.integers(2, 25), seed=st.integers(0, 2**32 - 1), periodic=st.booleans())
 def test_min_distance_and_normalized_radius_brute_force(n, seed, periodic):
