@@ -1,26 +1,67 @@
-"""Stippling quality: tone SSIM, spacing P01, |psi6| on the three test photographs.
+"""Stippling quality over the validation set: tone SSIM (sigma 3 and 1.5), P01, |psi6|.
 
-Compares configurations of :func:`diskpack_cl.stipple.stipple` (the paper's
-schedule, the Lloyd baseline, others) from the same error-diffusion start and
-seed, and checks that every output is certified.
+Runs configurations of :func:`diskpack_cl.stipple.stipple` (the default, the
+Lloyd baseline, the paper's schedule, ablations) from the same error-diffusion
+start and seed on the validation photographs (``tests/data/`` and
+``tests/data/validation/``, split into a tuning and a held-out part, see
+``tests/data/validation/README.md``), checks that every output is certified,
+and prints one row per run and a summary over seeds with the issue-11
+condition (tone at least Lloyd's, P01 >= 0.85, |psi6| below Lloyd's).
 
-    python benchmarks/stipple_quality.py [-n 20000] [--images astronaut coffee camera]
-        [--configs lloyd paper ...] [--json out.json]
+    python benchmarks/stipple_quality.py [--set heldout] [-n 5000 20000 50000]
+        [--seeds 0 1 2] [--configs default lloyd] [--images coins text ...]
+        [--jsonl rows.jsonl] [--markdown]
+    python benchmarks/stipple_quality.py --summary rows.jsonl [--markdown]
+
+A configuration is a name of :data:`CONFIGS`, optionally with keyword
+arguments of ``stipple`` after a colon, separated by ``;`` (values are Python
+literals): ``default:radius_sigma=1.5;blend=0.6``.  With ``--jsonl`` every
+row is appended to the file as it is measured (an interrupted run keeps its
+rows, and ``--skip-done`` does not measure them again); ``--summary`` prints
+the summary of such files without running anything.
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import sys
 import time
 from pathlib import Path
 
-from diskpack_cl.analysis import stipple_measures
+import numpy as np
+
+from diskpack_cl.analysis import stipple_measures, tone_ssim
 from diskpack_cl.image import load_gray
 from diskpack_cl.stipple import stipple
 
-DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
+ROOT = Path(__file__).resolve().parents[1] / "tests" / "data"
+
+#: The validation set: name -> (file, part). See tests/data/validation/README.md.
+IMAGES = {
+    "astronaut": ("astronaut.png", "tuning"),
+    "camera": ("camera.png", "tuning"),
+    "coffee": ("coffee.png", "tuning"),
+    "chelsea": ("validation/chelsea.png", "tuning"),
+    "brick": ("validation/brick.png", "tuning"),
+    "hubble_left": ("validation/hubble_left.png", "tuning"),
+    "retina_left": ("validation/retina_left.png", "tuning"),
+    "coins": ("validation/coins.png", "heldout"),
+    "clock": ("validation/clock.png", "heldout"),
+    "cell": ("validation/cell.png", "heldout"),
+    "grass": ("validation/grass.png", "heldout"),
+    "gravel": ("validation/gravel.png", "heldout"),
+    "text": ("validation/text.png", "heldout"),
+    "hubble_right": ("validation/hubble_right.png", "heldout"),
+    "retina_right": ("validation/retina_right.png", "heldout"),
+}
+SETS = {
+    "test": ["astronaut", "coffee", "camera"],
+    "tuning": [k for k, v in IMAGES.items() if v[1] == "tuning"],
+    "heldout": [k for k, v in IMAGES.items() if v[1] == "heldout"],
+    "all": list(IMAGES),
+}
 
 CONFIGS = {
     # the error-diffusion start, no iteration (no certificate computed)
@@ -31,7 +72,7 @@ CONFIGS = {
     "paper": dict(schedule="paper"),
     # disk packing only, 60 iterations (gray radii)
     "pack": dict(schedule="pack"),
-    # the default: 35 mix@0.5 + 12 mix@0.4, density radii (see stipple.SCHEDULE_OPTIONS)
+    # the default (see stipple.SCHEDULE_OPTIONS["default"])
     "default": dict(schedule="default"),
     # ablations of the default (one change each)
     "default-gray": dict(schedule="default", radii="gray", floor=0.1),
@@ -41,53 +82,237 @@ CONFIGS = {
     "mix-voronoi": dict(schedule="default", blend_cell="voronoi"),
 }
 
+#: Reference configuration of the issue-11 condition.
+REFERENCE = "lloyd"
+P01_TARGET = 0.85
 
-def run(image, n, name, seed=0, **extra):
-    gray = load_gray(DATA / f"{image}.png")
+
+def parse_config(spec):
+    """``"name:key=value;key=value"`` -> (name, stipple keyword overrides).
+
+    Examples
+    --------
+    >>> parse_config("default:radius_sigma=1.5;blend=0.6")
+    ('default', {'radius_sigma': 1.5, 'blend': 0.6})
+    """
+    name, _, rest = spec.partition(":")
+    if name not in CONFIGS:
+        raise ValueError(f"unknown configuration {name!r}; choose from {sorted(CONFIGS)}")
+    extra = {}
+    for item in filter(None, (s.strip() for s in rest.split(";"))):
+        key, eq, value = item.partition("=")
+        if not eq:
+            raise ValueError(f"bad override {item!r} in {spec!r}: key=value")
+        extra[key.strip()] = ast.literal_eval(value.strip())
+    return name, extra
+
+
+def load(image):
+    """Gray image of a validation photograph (a name of :data:`IMAGES`) or of a file."""
+    path = ROOT / IMAGES[image][0] if image in IMAGES else Path(image)
+    return load_gray(path)
+
+
+def stipple_kwargs(name, extra):
+    """Keyword arguments of ``stipple`` for configuration ``name`` with ``extra`` overrides."""
     kw = dict(CONFIGS[name])
     kw.update(extra)
     override = kw.pop("schedule_override", None)
     if override is not None:
-        # the default's options with another phase list
+        # the named schedule's options with another phase list
         from diskpack_cl.stipple import SCHEDULE_OPTIONS
 
         opts = dict(SCHEDULE_OPTIONS[kw.pop("schedule")])
-        opts.update({k: v for k, v in kw.items()})
+        opts.update(kw)
         kw = dict(opts, schedule=override)
+    return kw
+
+
+def run(image, n, spec, seed=0):
+    """Stipple ``image`` with ``n`` dots under configuration ``spec`` and measure it.
+
+    Returns
+    -------
+    dict
+        ``image``, ``part``, ``config`` (the spec), ``n``, ``seed``,
+        ``tone`` (SSIM at sigma 3), ``tone15`` (sigma 1.5), ``p01``, ``psi6``,
+        ``certified`` (None for the start), ``iterations``, ``seconds``
+        (stippling wall time) and ``measure_seconds``.
+    """
+    name, extra = parse_config(spec)
+    gray = load(image)
+    kw = stipple_kwargs(name, extra)
     t = time.perf_counter()
     if kw.get("schedule") == []:
         from diskpack_cl.stipple import error_diffusion
 
         pts = error_diffusion(gray, n, seed=seed)
-        valid, secs = None, time.perf_counter() - t
+        valid, iters = None, 0
     else:
         res = stipple(gray, n, seed=seed, **kw)
-        pts, valid, secs = res.points, bool(res.certificate.valid), time.perf_counter() - t
-    m = stipple_measures(pts, 1.0 - gray)
-    return {"image": image, "config": name, "n": n, "seconds": round(secs, 2),
-            "tone_ssim": round(m["tone_ssim"], 4), "spacing_p01": round(m["spacing_p01"], 4),
-            "psi6": round(m["psi6_mean"], 4), "certified": valid}
+        pts, valid, iters = res.points, bool(res.certificate.valid), len(res.history)
+    secs = time.perf_counter() - t
+    dark = 1.0 - gray
+    m = stipple_measures(pts, dark)
+    tone15 = tone_ssim(pts, dark, sigma=1.5)
+    return {"image": image, "part": IMAGES.get(image, ("", "file"))[1], "config": spec,
+            "n": int(n), "seed": int(seed), "tone": round(m["tone_ssim"], 4),
+            "tone15": round(tone15, 4), "p01": round(m["spacing_p01"], 4),
+            "psi6": round(m["psi6_mean"], 4), "certified": valid, "iterations": iters,
+            "seconds": round(secs, 2), "measure_seconds": round(time.perf_counter() - t - secs, 2)}
+
+
+def summarize(rows, reference=REFERENCE):
+    """Mean over seeds per (image, n, config), and the issue-11 condition.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`run`.
+    reference : str
+        Configuration whose tone and |psi6| a configuration must beat.
+
+    Returns
+    -------
+    list of dict
+        One per (image, n, config), in first-seen order: the means of
+        ``tone``, ``tone15``, ``p01``, ``psi6``, ``iterations``, ``seconds``,
+        ``seeds`` (how many), ``certified`` (all seeds), and, where the
+        reference was run for the same image and n, ``meets``: tone >= the
+        reference's, P01 >= 0.85 and |psi6| < the reference's (means over the
+        seeds). Seeds missing from either side are left out of the comparison.
+
+    Examples
+    --------
+    >>> r = [dict(image="a", n=5, config=c, seed=0, tone=t, tone15=t, p01=p, psi6=s,
+    ...           certified=True, iterations=1, seconds=1.0)
+    ...      for c, t, p, s in [("lloyd", .9, .7, .55), ("default", .91, .86, .54)]]
+    >>> [s["meets"] for s in summarize(r)]
+    [None, True]
+    """
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["image"], r["n"], r["config"]), {})[r["seed"]] = r
+    out = []
+    for (image, n, config), by_seed in groups.items():
+        ref = groups.get((image, n, reference)) if config != reference else None
+        seeds = sorted(by_seed) if ref is None else sorted(set(by_seed) & set(ref))
+        if not seeds:
+            seeds = sorted(by_seed)
+            ref = None
+
+        def mean(key, src, seeds=seeds):
+            return float(np.mean([src[s][key] for s in seeds]))
+
+        s = {"image": image, "part": by_seed[seeds[0]].get("part", ""), "n": n, "config": config,
+             "seeds": len(seeds)}
+        for key in ("tone", "tone15", "p01", "psi6", "iterations", "seconds"):
+            s[key] = mean(key, by_seed)
+        cert = [by_seed[x]["certified"] for x in seeds]
+        s["certified"] = None if any(c is None for c in cert) else all(cert)
+        s["meets"] = None
+        if ref is not None:
+            s["d_tone"] = s["tone"] - mean("tone", ref)
+            s["d_tone15"] = s["tone15"] - mean("tone15", ref)
+            s["d_psi6"] = s["psi6"] - mean("psi6", ref)
+            s["meets"] = bool(s["d_tone"] >= 0 and s["p01"] >= P01_TARGET and s["d_psi6"] < 0)
+        out.append(s)
+    return out
+
+
+def print_row(r):
+    print(f"{r['image']:12s} {r['n']:6d} {r['seed']:4d} {r['config']:28s} {r['tone']:7.4f} "
+          f"{r['tone15']:7.4f} {r['p01']:7.4f} {r['psi6']:7.4f} {r['seconds']:7.1f} "
+          f"{r['iterations']:4d} {r['certified']}", flush=True)
+
+
+def print_summary(summary, markdown=False):
+    """Print :func:`summarize` as plain text or as a Markdown table."""
+    def d(s, key):
+        return f"{s[key]:+.4f}" if key in s else ""
+
+    if markdown:
+        print("| image | part | n | config | seeds | tone (sigma 3) | tone (sigma 1.5) | P01 | \\|psi6\\| "
+              "| tone - Lloyd | psi6 - Lloyd | meets | iterations |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+        for s in summary:
+            meets = {None: "", True: "yes", False: "no"}[s["meets"]]
+            print(f"| {s['image']} | {s['part']} | {s['n']} | {s['config']} | {s['seeds']} | "
+                  f"{s['tone']:.4f} | {s['tone15']:.4f} | {s['p01']:.4f} | {s['psi6']:.4f} | "
+                  f"{d(s, 'd_tone')} | {d(s, 'd_psi6')} | {meets} | {s['iterations']:.0f} |")
+    else:
+        print(f"{'image':12s} {'n':>6s} {'config':28s} {'seeds':>5s} {'tone':>7s} {'tone15':>7s} "
+              f"{'P01':>7s} {'psi6':>7s} {'dtone':>8s} {'dtone15':>8s} {'dpsi6':>8s} meets")
+        for s in summary:
+            print(f"{s['image']:12s} {s['n']:6d} {s['config']:28s} {s['seeds']:5d} {s['tone']:7.4f} "
+                  f"{s['tone15']:7.4f} {s['p01']:7.4f} {s['psi6']:7.4f} {d(s, 'd_tone'):>8s} "
+                  f"{d(s, 'd_tone15'):>8s} {d(s, 'd_psi6'):>8s} {s['meets']}")
+    judged = [s for s in summary if s["meets"] is not None]
+    by_config = {}
+    for s in judged:
+        by_config.setdefault(s["config"], []).append(s)
+    for config, ss in by_config.items():
+        fails = [f"{s['image']}@{s['n']}" for s in ss if not s["meets"]]
+        print(f"{config}: meets the condition on {len(ss) - len(fails)} of {len(ss)} (image, n)"
+              + (f"; not on {', '.join(fails)}" if fails else ""))
+
+
+def read_rows(paths):
+    rows = []
+    for p in paths:
+        for line in Path(p).read_text().splitlines():
+            if line.strip():
+                rows.append(json.loads(line))
+    return rows
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("-n", type=int, default=20000)
-    ap.add_argument("--images", nargs="+", default=["astronaut", "coffee", "camera"])
-    ap.add_argument("--configs", nargs="+", default=["start", "lloyd", "paper", "default"],
-                    choices=sorted(CONFIGS), help="configurations (rows), default: %(default)s")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--json")
+    ap.add_argument("-n", type=int, nargs="+", default=[5000, 20000, 50000])
+    ap.add_argument("--set", choices=sorted(SETS), default="heldout",
+                    help="images: %(choices)s (default: %(default)s); --images overrides")
+    ap.add_argument("--images", nargs="+", help=f"names of {sorted(IMAGES)} or image files")
+    ap.add_argument("--configs", nargs="+", default=["default", "lloyd"],
+                    help=f"configurations (name[:key=value;...], names: {sorted(CONFIGS)}); "
+                         "default: %(default)s")
+    ap.add_argument("--seeds", "--seed", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--jsonl", help="append every row to this file as it is measured")
+    ap.add_argument("--skip-done", action="store_true",
+                    help="with --jsonl: do not measure again the rows the file already holds")
+    ap.add_argument("--json", help="write all rows of this run to this file at the end")
+    ap.add_argument("--summary", nargs="+", metavar="JSONL", help="summarize these files; run nothing")
+    ap.add_argument("--reference", default=REFERENCE, help="configuration of the condition (default: lloyd)")
+    ap.add_argument("--markdown", action="store_true", help="summary as a Markdown table")
     a = ap.parse_args(argv)
+    if a.summary:
+        print_summary(summarize(read_rows(a.summary), a.reference), a.markdown)
+        return 0
+    for spec in a.configs:
+        parse_config(spec)  # fail before any work
+    images = a.images or SETS[a.set]
+    done = set()
+    if a.jsonl and a.skip_done and Path(a.jsonl).exists():
+        done = {(r["image"], r["n"], r["config"], r["seed"]) for r in read_rows([a.jsonl])}
     rows = []
-    print(f"{'image':10s} {'config':18s} {'tone':>7s} {'P01':>7s} {'psi6':>7s} {'sec':>7s} cert")
-    for im in a.images:
-        for c in a.configs:
-            r = run(im, a.n, c, seed=a.seed)
-            rows.append(r)
-            print(f"{im:10s} {c:18s} {r['tone_ssim']:7.4f} {r['spacing_p01']:7.4f} "
-                  f"{r['psi6']:7.4f} {r['seconds']:7.1f} {r['certified']}", flush=True)
+    print(f"{'image':12s} {'n':>6s} {'seed':>4s} {'config':28s} {'tone':>7s} {'tone15':>7s} "
+          f"{'P01':>7s} {'psi6':>7s} {'sec':>7s} {'it':>4s} cert")
+    for n in a.n:
+        for im in images:
+            for seed in a.seeds:
+                for spec in a.configs:
+                    if (im, n, spec, seed) in done:
+                        continue
+                    r = run(im, n, spec, seed=seed)
+                    rows.append(r)
+                    print_row(r)
+                    if a.jsonl:
+                        with open(a.jsonl, "a") as f:
+                            f.write(json.dumps(r) + "\n")
     if a.json:
         Path(a.json).write_text(json.dumps(rows, indent=1))
+    all_rows = read_rows([a.jsonl]) if a.jsonl else rows
+    print()
+    print_summary(summarize(all_rows, a.reference), a.markdown)
     return 0
 
 
