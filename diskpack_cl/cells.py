@@ -1,0 +1,360 @@
+"""Per-cell stage: the maximal inscribed circle of every power cell on the device.
+
+``kernels/cell_mic.cl`` gives each site one work item that gathers its
+neighbours from a bucket grid, solves its cell's Chebyshev-centre linear
+program in float64 by the dual simplex method, proves the answer against
+every site that could cut the disk, and reports the three active
+constraints.  The host then re-solves every cell from those constraints in
+float64 (vectorized numpy), checks dual feasibility and the near-tight
+constraints, and sends the few cells the device could not prove, or that
+fail the check, to :func:`diskpack_cl.geometry.exact_mic`.  The results are
+the same MICs as ``exact_mic`` computes for all cells, at a fraction of its
+cost.
+
+Devices without ``cl_khr_fp64`` cannot run this kernel; :func:`has_fp64`
+tells, and the engines fall back to the raster estimate refined by
+``exact_mic``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._device import describe, get_context
+from ._kernels import build_program
+from .geometry import Domain, _solve_subsets, exact_mic
+
+__all__ = ["CellMIC", "CellResult", "has_fp64", "FLAGS"]
+
+MAXC = 64        # constraint list capacity per work item
+MAXNEAR = 8      # near-tight constraints reported besides the basis
+NO_CODE = -9     # empty slot of the near-tight list
+CHUNK = 1 << 17  # work items per enqueue: each wait lets Ctrl-C through
+
+#: Flag bits of the kernel (``kernels/cell_mic.cl``): why a cell was not proven.
+FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
+         "rounds": 32, "shift": 64, "nn": 128}
+_NN = FLAGS["nn"]
+
+_EDGE_NORMALS = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
+
+
+def has_fp64(ctx):
+    """True when the context's device supports double precision (``cl_khr_fp64``)."""
+    return "cl_khr_fp64" in ctx.devices[0].extensions
+
+
+@dataclass
+class CellResult:
+    """Output of :meth:`CellMIC.solve`.
+
+    Attributes
+    ----------
+    centers : (n, 2) float64
+        MIC centres (wrapped into the torus when periodic; the site itself
+        where the cell is empty).
+    radii : (n,) float64
+        MIC radii; negative where the power cell is empty.
+    empty : (n,) bool
+    nn : (n,) float64
+        Distance from each site to its nearest other site (periodic on a
+        torus), exact.
+    stats : dict
+        ``flagged`` (cells the device could not prove), ``rejected`` (cells
+        the host check refused), ``fallback`` (cells solved by
+        ``exact_mic``), flag counts by reason.
+    timings : dict
+        Seconds: ``buckets``, ``device`` (upload, kernel, readback),
+        ``refine`` (host re-solve and check), ``fallback``; with profiling,
+        ``kernel`` (device time of the kernel alone).
+    """
+
+    centers: np.ndarray
+    radii: np.ndarray
+    empty: np.ndarray
+    nn: np.ndarray
+    stats: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def min_distance(self):
+        """Smallest distance between two sites."""
+        return float(self.nn.min())
+
+
+class CellMIC:
+    """OpenCL processing object for the exact MICs of all power cells.
+
+    Parameters
+    ----------
+    domain : Domain
+        Unit torus or image rectangle.
+    device : str or pyopencl.Context, optional
+        See :func:`diskpack_cl.get_context`.
+    profile : bool, optional
+        Profile the kernel with OpenCL events (``timings["kernel"]``).
+    sites_per_bucket : float, optional
+        Mean occupancy of the bucket grid that the gather walks.
+
+    Raises
+    ------
+    NoOpenCLError
+        No OpenCL device.
+    RuntimeError
+        The device has no float64 support.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from diskpack_cl.geometry import Domain, exact_mic
+    >>> pts = np.random.default_rng(0).random((500, 2))
+    >>> res = CellMIC(Domain.torus()).solve(pts)
+    >>> bool(np.allclose(res.radii, exact_mic(pts).radii, rtol=0, atol=1e-12))
+    True
+    """
+
+    def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=1.0):
+        import pyopencl as cl
+
+        self.domain = domain
+        self.ctx = get_context(device)
+        if not has_fp64(self.ctx):
+            raise RuntimeError(f"{describe(self.ctx)} has no float64 support (cl_khr_fp64)")
+        self.device_name = describe(self.ctx)
+        props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
+        self.queue = cl.CommandQueue(self.ctx, properties=props)
+        self.profile = profile
+        self.sites_per_bucket = float(sites_per_bucket)
+        defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
+        self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
+        self._bufs = {}
+        self._order = None
+
+    # -- buffers -----------------------------------------------------------
+    def _buffer(self, name, nbytes):
+        import pyopencl as cl
+
+        buf = self._bufs.get(name)
+        if buf is None or buf.size < max(nbytes, 8):
+            buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 8))
+            self._bufs[name] = buf
+        return buf
+
+    def _upload(self, name, host):
+        import pyopencl as cl
+
+        buf = self._buffer(name, host.nbytes)
+        cl.enqueue_copy(self.queue, buf, host, is_blocking=False)
+        return buf
+
+    def _grid(self, n):
+        dom = self.domain
+        side = np.sqrt(dom.area * self.sites_per_bucket / max(n, 1))
+        nbx = max(1, int(np.ceil(dom.width / side)))
+        nby = max(1, int(np.ceil(dom.height / side)))
+        return nbx, nby, dom.width / nbx, dom.height / nby
+
+    def _buckets(self, pts, w):
+        """Sites sorted by bucket; the last order is reused, so re-sorting a
+        slowly moving set costs about a linear pass (timsort on sorted runs)."""
+        n = len(pts)
+        nbx, nby, bw, bh = self._grid(n)
+        bx = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
+        by = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
+        bid = by * nbx + bx
+        prev = self._order if self._order is not None and len(self._order) == n else np.arange(n)
+        order = prev[np.argsort(bid[prev], kind="stable")]
+        self._order = order
+        counts = np.bincount(bid, minlength=nbx * nby)
+        start = np.zeros(nbx * nby + 1, np.int32)
+        np.cumsum(counts, out=start[1:])
+        bwmax = np.zeros(nbx * nby)
+        nonempty = counts > 0
+        bwmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+        return order, start, bwmax, (nbx, nby, bw, bh)
+
+    # -- work --------------------------------------------------------------
+    def solve(self, points, weights=None):
+        """MIC of every power cell, certified as by :func:`exact_mic`.
+
+        Parameters
+        ----------
+        points : (n, 2) array_like
+            Sites (wrapped into the torus when periodic; inside the
+            rectangle otherwise).
+        weights : (n,) array_like, optional
+            Power weights (squared radii); None for the Voronoi diagram.
+
+        Returns
+        -------
+        CellResult
+        """
+        X = np.array(points, dtype=np.float64)
+        n = len(X)
+        if X.ndim != 2 or X.shape[1] != 2 or n < 2:
+            raise ValueError(f"points must have shape (n, 2) with n >= 2, got {X.shape}")
+        if not np.all(np.isfinite(X)):
+            raise ValueError("points contain NaN or infinite coordinates")
+        if self.domain.periodic:
+            X = self.domain.wrap(X)
+        w = np.zeros(n) if weights is None else np.asarray(weights, np.float64).copy()
+        if w.shape != (n,) or not np.all(np.isfinite(w)):
+            raise ValueError("weights must be n finite numbers")
+        w -= w.min()   # as exact_mic: the diagram ignores a common shift
+        timings = {}
+        t0 = time.perf_counter()
+        order, start, bwmax, grid = self._buckets(X, w)
+        t1 = time.perf_counter()
+        timings["buckets"] = t1 - t0
+        out = self._run(X, w, order, start, bwmax, grid, timings)
+        t2 = time.perf_counter()
+        timings["device"] = t2 - t1
+        return self._finish(X, w, out, timings, t2)
+
+    def _run(self, X, w, order, start, bwmax, grid, timings):
+        import pyopencl as cl
+
+        n = len(X)
+        nbx, nby, bw, bh = grid
+        dom = self.domain
+        scale = max(dom.width, dom.height)
+        b_site = self._upload("site", np.ascontiguousarray(X[order]))
+        b_w = self._upload("weight", np.ascontiguousarray(w[order]))
+        b_id = self._upload("id", order.astype(np.int32))
+        b_start = self._upload("start", start)
+        b_wmax = self._upload("bwmax", bwmax)
+        outs = {"center": np.empty((n, 2)), "radius": np.empty(n), "active": np.empty((n, 4), np.int32),
+                "near": np.empty((n, MAXNEAR), np.int32), "nn": np.empty(n)}
+        bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
+        near_tol = 1e-7 * np.sqrt(dom.area / n)
+        events = []
+        for off in range(0, n, CHUNK):
+            size = min(CHUNK, n - off)
+            events.append(self._kernel(
+                self.queue, (size,), None, b_site, b_w, b_id, b_start, b_wmax,
+                np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
+                np.float64(dom.width), np.float64(dom.height), np.float64(w.max()),
+                np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),
+                bufs["center"], bufs["radius"], bufs["active"], bufs["near"], bufs["nn"]))
+        for ev in events:
+            ev.wait()   # one chunk at a time: a pending signal is handled in between
+        if self.profile:
+            timings["kernel"] = sum((ev.profile.end - ev.profile.start) * 1e-9 for ev in events)
+        for k, v in outs.items():
+            cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
+        self.queue.finish()
+        return outs
+
+    def _finish(self, X, w, out, timings, t_start):
+        n = len(X)
+        flags = out["active"][:, 3]
+        proven = (flags & ~_NN) == 0
+        q, R, ok = refine_active(X, w, self.domain, out["active"][:, :3], out["near"])
+        # the device and the host solved the same 3 x 3 system
+        scale = max(self.domain.width, self.domain.height)
+        agree = np.abs(R - out["radius"]) <= 1e-9 * scale
+        good = proven & ok & agree
+        t1 = time.perf_counter()
+        timings["refine"] = t1 - t_start
+        bad = np.nonzero(~good)[0]
+        if len(bad):
+            mic = exact_mic(X, w, self.domain, cells=bad)
+            q[bad] = mic.centers - X[bad]
+            R[bad] = mic.radii
+        timings["fallback"] = time.perf_counter() - t1
+        empty = R < 0
+        centers = X + q
+        centers[empty] = X[empty]
+        if self.domain.periodic:
+            centers = self.domain.wrap(centers)
+        nn = out["nn"].copy()
+        if np.any(flags & _NN):
+            nn = _nearest(X, self.domain)
+        stats = {"flagged": int(np.count_nonzero(~proven)), "rejected": int(np.count_nonzero(proven & ~(ok & agree))),
+                 "fallback": int(len(bad)), "empty": int(empty.sum())}
+        stats.update({name: int(np.count_nonzero(flags & bit)) for name, bit in FLAGS.items()})
+        return CellResult(centers, R, empty, nn, stats, timings)
+
+
+def _code_constraints(X, w, cells, codes, domain):
+    """Half-planes ``q . n <= beta`` of `cells` from the kernel's constraint codes.
+
+    codes >= 0 name site ``code // 9`` shifted by ``(code % 9 // 3 - 1,
+    code % 3 - 1)`` periods; -1..-4 the left, right, top and bottom edges;
+    anything else is an unused slot (beta = 1e300, normal of the first).
+    """
+    cells = np.broadcast_to(cells[:, None], codes.shape)
+    xi = X[cells]
+    site = codes >= 0
+    j = np.where(site, codes // 9, 0)
+    r = np.where(site, codes % 9, 4)
+    shift = np.stack([r // 3 - 1, r % 3 - 1], -1) * (domain.width, domain.height)
+    a = X[j] + shift - xi
+    L = np.hypot(a[..., 0], a[..., 1])
+    Ls = np.where(site & (L > 0), L, 1.0)
+    N = a / Ls[..., None]
+    B = (L * L - w[j] + w[cells]) / (2 * Ls)
+    edge = (codes <= -1) & (codes >= -4)
+    e = np.where(edge, -codes - 1, 0)
+    N[edge] = _EDGE_NORMALS[e[edge]]
+    lim = np.stack([xi[..., 0], domain.width - xi[..., 0], xi[..., 1], domain.height - xi[..., 1]], -1)
+    B[edge] = np.take_along_axis(lim, e[..., None], -1)[..., 0][edge]
+    unused = ~(site | edge)
+    B[unused] = 1e300
+    N[unused] = np.broadcast_to(N[..., :1, :], N.shape)[unused]
+    return N, B
+
+
+def refine_active(X, w, domain, active, near):
+    """Re-solve each cell from its three active constraints in float64 and check it.
+
+    Parameters
+    ----------
+    X : (n, 2) float64
+        Sites.
+    w : (n,) float64
+        Weights, shifted so that the smallest is 0 (as the kernel had them).
+    domain : Domain
+    active : (n, 3) int
+        Constraint codes of each cell's optimal basis (see
+        :func:`_code_constraints`).
+    near : (n, m) int
+        Other near-tight constraint codes (``NO_CODE`` for none).
+
+    Returns
+    -------
+    q : (n, 2) float64
+        MIC centre relative to the site.
+    R : (n,) float64
+        MIC radius.
+    ok : (n,) bool
+        The basis is dual feasible (so R bounds the optimum from above, weak
+        duality) and the vertex satisfies every near-tight constraint; with
+        the device's proof that no other site comes near, the vertex is the
+        optimum.
+    """
+    n = len(X)
+    cells = np.arange(n)
+    N, B = _code_constraints(X, w, cells, active, domain)
+    bad_code = ~((active >= 0) | ((active <= -1) & (active >= -4)))
+    q, R, ok = _solve_subsets(N, B, 1e-11 * max(domain.width, domain.height))
+    ok &= ~np.any(bad_code, axis=1)
+    rows, cols = np.nonzero(near != NO_CODE)
+    if len(rows):
+        Nn, Bn = _code_constraints(X, w, rows, near[rows, cols][:, None], domain)
+        slack = Bn[:, 0] - np.einsum("kj,kj->k", Nn[:, 0], q[rows]) - R[rows]
+        tol = 1e-11 * max(domain.width, domain.height)
+        np.logical_and.at(ok, rows, slack >= -tol)
+    return q, R, ok
+
+
+def _nearest(X, domain):
+    """Distance from every point to its nearest other point (cKDTree)."""
+    from scipy.spatial import cKDTree
+
+    box = (domain.width, domain.height) if domain.periodic else None
+    d, _ = cKDTree(X, boxsize=box).query(X, k=2)
+    return d[:, 1]

@@ -1,0 +1,320 @@
+/* Maximal inscribed circle of every power cell, one work item per site, float64.
+ *
+ * The MIC of cell i is the Chebyshev centre of its power cell: the linear
+ * program  max R  s.t.  n_k . q + R <= beta_k  over the half-planes that
+ * bound the cell (q = centre - x_i).  Site j at offset a = x_j + shift - x_i,
+ * L = |a|, gives n = a / L and beta = (L^2 - w_j + w_i) / (2 L); on a
+ * rectangle the four edges add q.x >= -x_i, q.x <= W - x_i, ...
+ *
+ * Each work item
+ *   1. gathers the sites of the bucket rings around its own bucket until it
+ *      holds at least KMIN of them (or RMAX rings), into a private list, and
+ *      more rings while the cell is unbounded by them;
+ *   2. solves the LP on the list by the dual simplex method, starting from
+ *      three artificial half-planes that bound a large triangle (dual
+ *      feasible by construction) and pivoting in the most violated
+ *      constraint each step;
+ *   3. proves the answer for *all* sites: a site can only violate the
+ *      solution if it lies within the cutter radius of the centre (derived
+ *      from the power distance; per-bucket weight maxima prune the scan).
+ *      When that ball lies inside the gathered rings, nothing is left to
+ *      check; otherwise the buckets it touches are scanned, and violated or
+ *      near-tight sites join the list and the solve continues (warm start);
+ *   4. writes the centre, the radius, the three basic (active) constraints,
+ *      the other near-tight ones, the nearest-neighbour distance of the site
+ *      and a flag word, non-zero where it could not prove its answer.
+ *
+ * Constraint codes: 9 * j + 3 * (sx + 1) + (sy + 1) for site j shifted by
+ * (sx, sy) periods (|sx|, |sy| <= 1); -1..-4 for the left, right, top and
+ * bottom edges; artificial constraints never leave the kernel unflagged.
+ *
+ * Build-time switches: PERIODIC (see common.h), MAXC (list capacity),
+ * MAXNEAR (near-tight constraints reported besides the basis).
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#include "common.h"
+
+#ifndef MAXC
+#error "define MAXC (constraint list capacity)"
+#endif
+#ifndef MAXNEAR
+#error "define MAXNEAR (near-tight constraints reported per cell)"
+#endif
+
+#define KMIN 14          /* sites gathered before the first solve */
+#define RMAX 6           /* most bucket rings gathered up front */
+#define RMAX_UNBOUNDED 12 /* most rings gathered while the cell is unbounded */
+#define MAX_PIVOTS 96
+#define MAX_ROUNDS 8
+#define MAX_SCAN 48      /* widest verification scan, in buckets per side */
+#define GATHER_CAP (MAXC - 16)  /* list room kept for the sites step 3 adds */
+
+/* flag bits, mirrored in diskpack_cl/cells.py */
+#define F_LIST_FULL   1
+#define F_PIVOTS      2
+#define F_UNBOUNDED   4
+#define F_SCAN_WIDE   8
+#define F_NEAR_FULL  16
+#define F_ROUNDS     32
+#define F_SHIFT      64
+#define F_NN        128
+
+typedef struct {
+    double nx[MAXC], ny[MAXC], be[MAXC];
+    int code[MAXC];
+    int m;
+} clist;
+
+/* Inverse of the 3x3 matrix with rows (nx_k, ny_k, 1); returns 0 if singular. */
+static int inv3(const double *ax, const double *ay, double *inv)
+{
+    const double c0 = ay[1] - ay[2], c1 = ay[2] - ay[0], c2 = ay[0] - ay[1];
+    const double det = ax[0] * c0 + ax[1] * c1 + ax[2] * c2;
+    if (fabs(det) < 1e-14) return 0;
+    const double id = 1.0 / det;
+    /* columns of the inverse follow the rows of the matrix */
+    inv[0] = c0 * id;                          inv[1] = c1 * id;                          inv[2] = c2 * id;
+    inv[3] = (ax[2] - ax[1]) * id;             inv[4] = (ax[0] - ax[2]) * id;             inv[5] = (ax[1] - ax[0]) * id;
+    inv[6] = (ax[1] * ay[2] - ax[2] * ay[1]) * id;
+    inv[7] = (ax[2] * ay[0] - ax[0] * ay[2]) * id;
+    inv[8] = (ax[0] * ay[1] - ax[1] * ay[0]) * id;
+    return 1;
+}
+
+/* Dual simplex on the list from basis b[3]; z = (qx, qy, R). Returns flag bits. */
+static int dual_simplex(const clist *L, int *b, double *z, double tol)
+{
+    double inv[9], ax[3], ay[3], be[3];
+    for (int it = 0; it < MAX_PIVOTS; ++it) {
+        for (int k = 0; k < 3; ++k) { ax[k] = L->nx[b[k]]; ay[k] = L->ny[b[k]]; be[k] = L->be[b[k]]; }
+        if (!inv3(ax, ay, inv)) return F_PIVOTS;
+        z[0] = inv[0] * be[0] + inv[1] * be[1] + inv[2] * be[2];
+        z[1] = inv[3] * be[0] + inv[4] * be[1] + inv[5] * be[2];
+        z[2] = inv[6] * be[0] + inv[7] * be[1] + inv[8] * be[2];
+        /* entering: the most violated constraint (lowest index on ties) */
+        int e = -1;
+        double worst = -tol;
+        for (int k = 0; k < L->m; ++k) {
+            const double s = L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
+            if (s < worst) { worst = s; e = k; }
+        }
+        if (e < 0) return 0;
+        /* ratio test: dual multipliers l = third row of inv, direction u = a_e^T inv */
+        int out = -1;
+        double best = INFINITY;
+        for (int k = 0; k < 3; ++k) {
+            const double u = L->nx[e] * inv[k] + L->ny[e] * inv[3 + k] + inv[6 + k];
+            if (u > 1e-12) {
+                const double r = fmax(inv[6 + k], 0.0) / u;
+                if (r < best) { best = r; out = k; }
+            }
+        }
+        if (out < 0) return F_PIVOTS;
+        b[out] = e;
+    }
+    return F_PIVOTS;
+}
+
+/* Add site (xj + shift) as a constraint of cell i, unless it is the site itself. */
+static int push_site(clist *L, double ax, double ay, double wj, double wi, int code)
+{
+    const double len2 = ax * ax + ay * ay;
+    if (len2 == 0.0) return 0;                 /* coincident: no bisector */
+    if (L->m >= MAXC) return F_LIST_FULL;
+    const double len = sqrt(len2);
+    L->nx[L->m] = ax / len;
+    L->ny[L->m] = ay / len;
+    L->be[L->m] = (len2 - wj + wi) / (2.0 * len);
+    L->code[L->m] = code;
+    L->m++;
+    return 0;
+}
+
+static int site_code(int j, int qx, int qy, int *flag)
+{
+    if (qx < -1 || qx > 1 || qy < -1 || qy > 1) *flag |= F_SHIFT;
+    return 9 * j + 3 * (clamp(qx, -1, 1) + 1) + (clamp(qy, -1, 1) + 1);
+}
+
+/* Does the basis still hold one of the artificial half-planes? */
+static int is_artificial(const clist *L, const int *b)
+{
+    return L->code[b[0]] <= -5 || L->code[b[1]] <= -5 || L->code[b[2]] <= -5;
+}
+
+/* Add the sites of the buckets at Chebyshev distance `ring` from the home
+ * bucket (hx, hy) to the list, and track the nearest one. */
+static void gather_ring(__global const double2 *site, __global const double *weight,
+                        __global const int *sid, __global const int *bstart,
+                        int s, double2 xi, double wi, int hx, int hy, int ring,
+                        int nbx, int nby, double W, double H,
+                        clist *L, double *nn2, int *partial, int *flag)
+{
+    for (int dy = -ring; dy <= ring; ++dy) {
+        for (int dx = -ring; dx <= ring; ++dx) {
+            if (max(abs(dx), abs(dy)) != ring) continue;
+            int cx = hx + dx, cy = hy + dy;
+            int qx = 0, qy = 0;
+#if PERIODIC
+            qx = floordiv(cx, nbx); qy = floordiv(cy, nby);
+            cx -= qx * nbx; cy -= qy * nby;
+#else
+            if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
+#endif
+            const int b = cy * nbx + cx;
+            for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
+                if (t == s && qx == 0 && qy == 0) continue;
+                const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
+                *nn2 = fmin(*nn2, ax * ax + ay * ay);
+                if (L->m < GATHER_CAP)
+                    push_site(L, ax, ay, weight[t], wi, site_code(sid[t], qx, qy, flag));
+                else
+                    *partial = 1;
+            }
+        }
+    }
+}
+
+__kernel void cell_mic(
+    __global const double2 *site,    /* sites sorted by bucket */
+    __global const double *weight,   /* their weights, shifted so that min = 0 */
+    __global const int *sid,         /* original index of each sorted site */
+    __global const int *bstart,      /* bucket b holds sorted sites bstart[b] .. bstart[b+1]-1 */
+    __global const double *bwmax,    /* largest weight in each bucket */
+    const int n,                     /* number of sites */
+    const int nbx, const int nby,    /* bucket grid */
+    const double bw, const double bh,/* bucket size */
+    const double W, const double H,  /* domain size */
+    const double wmax,               /* largest weight */
+    const double tol,                /* feasibility tolerance (length units) */
+    const double near_tol,               /* slack below which a constraint is near-tight */
+    const int offset,                /* first sorted site of this enqueue */
+    __global double2 *center,        /* out, by original index: MIC centre */
+    __global double *radius,         /* out: MIC radius (negative: empty power cell) */
+    __global int4 *active,           /* out: three basic constraint codes, flag word */
+    __global int *near_code,         /* out: MAXNEAR more near-tight codes, -9 = none */
+    __global double *nn_dist)        /* out: distance to the nearest other site */
+{
+    const int s = offset + get_global_id(0);
+    if (s >= n) return;
+    const double2 xi = site[s];
+    const double wi = weight[s];
+    const int i = sid[s];
+    const int hx = clamp((int)(xi.x / bw), 0, nbx - 1), hy = clamp((int)(xi.y / bh), 0, nby - 1);
+    int flag = 0;
+    clist L;
+    L.m = 0;
+
+    /* 3 artificial half-planes: a triangle of inradius D around the site */
+    const double D = 4.0 * (W + H);
+    L.nx[0] = 0.0;                 L.ny[0] = 1.0;  L.be[0] = D; L.code[0] = -5;
+    L.nx[1] = -0.8660254037844386; L.ny[1] = -0.5; L.be[1] = D; L.code[1] = -6;
+    L.nx[2] = 0.8660254037844386;  L.ny[2] = -0.5; L.be[2] = D; L.code[2] = -7;
+    L.m = 3;
+#if !PERIODIC
+    L.nx[3] = -1.0; L.ny[3] = 0.0;  L.be[3] = xi.x;     L.code[3] = -1;
+    L.nx[4] = 1.0;  L.ny[4] = 0.0;  L.be[4] = W - xi.x; L.code[4] = -2;
+    L.nx[5] = 0.0;  L.ny[5] = -1.0; L.be[5] = xi.y;     L.code[5] = -3;
+    L.nx[6] = 0.0;  L.ny[6] = 1.0;  L.be[6] = H - xi.y; L.code[6] = -4;
+    L.m = 7;
+#endif
+    const int fixed = L.m;
+
+    /* 1. gather rings of buckets around the home bucket, and more while the
+     *    cell is still unbounded by what was gathered */
+    double nn2 = INFINITY;
+    int ring = 0, partial = 0;
+    for (;; ++ring) {
+        gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ring, nbx, nby, W, H,
+                    &L, &nn2, &partial, &flag);
+        if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
+    }
+    int b[3] = {0, 1, 2};
+    double z[3];
+    flag |= dual_simplex(&L, b, z, tol);
+    while (is_artificial(&L, b) && ring < RMAX_UNBOUNDED && !partial && !(flag & F_PIVOTS)) {
+        gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
+                    &L, &nn2, &partial, &flag);
+        flag |= dual_simplex(&L, b, z, tol);
+    }
+    /* every site within G of x_i is in the list, unless a dense bucket filled
+     * it first: then nothing is taken for granted and step 3 scans */
+    const double Gnn = ring * fmin(bw, bh);
+    const double G = partial ? 0.0 : Gnn;
+
+
+    /* 3. prove it against every site that could cut the disk */
+    int round = 0;
+    for (; round < MAX_ROUNDS && !(flag & (F_PIVOTS | F_LIST_FULL)); ++round) {
+        /* slack < near_tol  <=>  (d_j - Rp)^2 < (|q| + Rp)^2 + w_j - w_i, Rp = R + near_tol */
+        const double Rp = fmax(z[2], 0.0) + near_tol;
+        const double qn = sqrt(z[0] * z[0] + z[1] * z[1]);
+        const double reach2 = (qn + Rp) * (qn + Rp) - wi;
+        const double rad = Rp + sqrt(fmax(reach2 + wmax, 0.0));
+        if (qn + rad <= G) break;
+        const double cxp = xi.x + z[0], cyp = xi.y + z[1];
+        const int x0 = (int)floor((cxp - rad) / bw), x1 = (int)floor((cxp + rad) / bw);
+        const int y0 = (int)floor((cyp - rad) / bh), y1 = (int)floor((cyp + rad) / bh);
+        if (x1 - x0 > MAX_SCAN || y1 - y0 > MAX_SCAN) { flag |= F_SCAN_WIDE; break; }
+        int added = 0;
+        for (int by = y0; by <= y1; ++by) {
+            for (int bx = x0; bx <= x1; ++bx) {
+                int cx = bx, cy = by;
+                int qx = 0, qy = 0;
+#if PERIODIC
+                qx = floordiv(cx, nbx); qy = floordiv(cy, nby);
+                cx -= qx * nbx; cy -= qy * nby;
+#else
+                if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
+#endif
+                const int bb = cy * nbx + cx;
+                /* distance from the centre to this bucket (with its shift) */
+                const double ox = bx * bw, oy = by * bh;
+                const double ddx = fmax(fmax(ox - cxp, cxp - ox - bw), 0.0);
+                const double ddy = fmax(fmax(oy - cyp, cyp - oy - bh), 0.0);
+                const double bd = sqrt(ddx * ddx + ddy * ddy);
+                if (bd > Rp + sqrt(fmax(reach2 + bwmax[bb], 0.0))) continue;
+                for (int t = bstart[bb]; t < bstart[bb + 1]; ++t) {
+                    if (t == s && qx == 0 && qy == 0) continue;
+                    const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
+                    const double len2 = ax * ax + ay * ay;
+                    if (len2 == 0.0) continue;
+                    const double len = sqrt(len2);
+                    const double be = (len2 - weight[t] + wi) / (2.0 * len);
+                    const double sl = be - (ax * z[0] + ay * z[1]) / len - z[2];
+                    if (sl >= near_tol) continue;
+                    const int code = site_code(sid[t], qx, qy, &flag);
+                    int known = 0;
+                    for (int k = fixed; k < L.m; ++k) known |= (L.code[k] == code);
+                    if (known) continue;
+                    flag |= push_site(&L, ax, ay, weight[t], wi, code);
+                    added += (sl < -tol);
+                }
+            }
+        }
+        if (!added) break;
+        flag |= dual_simplex(&L, b, z, tol);
+    }
+    if (round == MAX_ROUNDS) flag |= F_ROUNDS;
+    if (is_artificial(&L, b)) flag |= F_UNBOUNDED;
+
+    /* nearest neighbour: exact once a site inside the gathered rings was seen */
+    if (!(nn2 <= Gnn * Gnn)) flag |= F_NN;
+
+    /* 4. outputs */
+    int nnear = 0;
+    for (int k = 3; k < L.m; ++k) {
+        if (k == b[0] || k == b[1] || k == b[2]) continue;
+        const double sl = L.be[k] - L.nx[k] * z[0] - L.ny[k] * z[1] - z[2];
+        if (sl < near_tol) {
+            if (nnear < MAXNEAR) near_code[(size_t)i * MAXNEAR + nnear] = L.code[k];
+            nnear++;
+        }
+    }
+    if (nnear > MAXNEAR) flag |= F_NEAR_FULL;
+    for (int k = nnear; k < MAXNEAR; ++k) near_code[(size_t)i * MAXNEAR + k] = -9;
+    center[i] = (double2)(xi.x + z[0], xi.y + z[1]);
+    radius[i] = z[2];
+    active[i] = (int4)(L.code[b[0]], L.code[b[1]], L.code[b[2]], flag);
+    nn_dist[i] = sqrt(nn2);
+}
