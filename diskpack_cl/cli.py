@@ -458,25 +458,16 @@ def _stipple_progress(args, total):
     return callback, bar.close
 
 
-def _write_all(jobs):
-    """Run the writers in order; if one fails (or Ctrl-C), remove what this run wrote."""
-    done = []
-    try:
-        for path, write in jobs:
-            info = write()
-            done.append(path)
-            yield path, info
-    except BaseException:
-        import contextlib
-
-        for path in done:
-            with contextlib.suppress(OSError):
-                os.unlink(path)
-        raise
+def _write_options(args):
+    """The options of :func:`diskpack_cl.batch.write_stipple_outputs` from the arguments."""
+    return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
+                dots=args.dots, dot_mm=args.dot_mm, radius_scale=args.radius_scale,
+                pen_path=args.pen_path, png_scale=args.png_scale, invert=args.invert)
 
 
 def _run_stipple(args):
-    from diskpack_cl.export import _mm_per_px, check_output_path, write_stipple
+    from diskpack_cl.batch import write_stipple_outputs
+    from diskpack_cl.export import check_output_path
     from diskpack_cl.image import load_gray
     from diskpack_cl.stipple import make_schedule, stipple
 
@@ -510,28 +501,8 @@ def _run_stipple(args):
     if not getattr(res.certificate, "valid", False):
         raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
 
-    mm_per_px = _mm_per_px(res.width, res.height, args.width_mm, args.height_mm, args.dpi)
-    dot_mm = args.dot_mm
-    if dot_mm is None and args.dots == "tone":
-        from diskpack_cl.analysis import tone_radius
-
-        darkness = gray if args.invert else 1.0 - gray
-        dot_mm = 2.0 * tone_radius(res.n, darkness) * args.radius_scale * mm_per_px
-    svg_opts = dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
-                    dot_mm=dot_mm, radius_scale=args.radius_scale, pen_path=args.pen_path,
-                    invert=args.invert)
-    png_opts = dict(scale=args.png_scale, radius_scale=args.radius_scale, invert=args.invert)
-    if dot_mm is not None:  # preview the pen's dots
-        png_opts["dot_px"] = 0.5 * dot_mm / mm_per_px * args.png_scale
-    jobs = []
-    for out in outputs:
-        ext = check_output_path(out)
-        opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
-        jobs.append((out, lambda out=out, opts=opts: write_stipple(out, res, **opts)))
     t_write = time.perf_counter()
-    written = []
-    for path, info in _write_all(jobs):
-        written.append({"path": path, "format": os.path.splitext(path)[1].lower()[1:], **info})
+    dot_mm, written = write_stipple_outputs(res, gray, outputs, **_write_options(args))
     seconds_write = time.perf_counter() - t_write
 
     summary = res.summary()

@@ -21,6 +21,7 @@ from diskpack_cl.io import atomic_write
 __all__ = [
     "WRITERS",
     "check_output_path",
+    "mm_per_px",
     "pen_path_order",
     "path_travel",
     "write_stipple",
@@ -179,7 +180,19 @@ def _arrays(result):
     return p, r, float(result.width), float(result.height)
 
 
-def _mm_per_px(width, height, width_mm, height_mm, dpi):
+def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
+    """Millimetres per image pixel for a physical size, as :func:`write_svg` uses it.
+
+    ``width_mm`` and/or ``height_mm`` (both: fit inside the box, keeping the
+    aspect ratio), else ``dpi`` (default 96).
+
+    Examples
+    --------
+    >>> mm_per_px(512, 256, width_mm=200, height_mm=200)
+    0.390625
+    >>> mm_per_px(512, 512, dpi=25.4)
+    1.0
+    """
     if width_mm is not None or height_mm is not None:
         if dpi is not None:
             raise ValueError("give the physical size either by width_mm/height_mm or by dpi, not both")
@@ -248,7 +261,7 @@ def write_svg(
         ``travel_after_mm`` (pen-up travel from the origin).
     """
     p, r, W, H = _arrays(result)
-    s = _mm_per_px(W, H, width_mm, height_mm, dpi)
+    s = mm_per_px(W, H, width_mm, height_mm, dpi)
     if dot_mm is not None:
         if not dot_mm > 0:
             raise ValueError(f"dot_mm must be > 0, got {dot_mm}")

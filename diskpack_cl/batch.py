@@ -1,0 +1,966 @@
+"""Batch jobs: folders of images and many point sets, resumable, in parallel, on Dask.
+
+A batch is a list of :class:`Item` (one input image, point file or seed, its
+parameters and its output paths, rendered from templates). :func:`run_batch`
+runs the items in this process, in ``jobs`` spawned worker processes, or on a
+``dask.distributed`` cluster, and yields one record (a JSON-ready dict) per
+item as it finishes. Each item writes its outputs atomically; then the
+coordinating process appends one line to the manifest (``manifest.jsonl``).
+A rerun skips the items whose manifest line matches and whose outputs exist.
+
+:func:`stipple_many`, :func:`poisson_many` and :func:`relax_many` plan and run
+the three kinds of batch. This module uses only the public API of the
+package, so it follows the engine as it changes.
+
+Examples
+--------
+>>> import tempfile, os
+>>> folder = tempfile.mkdtemp()
+>>> records = list(poisson_many(3, 64, outputs=[os.path.join(folder, "{i:02d}.npz")],
+...                             seed=7, backend="exact"))
+>>> [r["status"] for r in records], sorted(os.listdir(folder))
+(['ok', 'ok', 'ok'], ['00.npz', '01.npz', '02.npz', 'manifest.jsonl'])
+>>> [r["status"] for r in poisson_many(3, 64, outputs=[os.path.join(folder, "{i:02d}.npz")],
+...                                    seed=7, backend="exact")]
+['skipped', 'skipped', 'skipped']
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import string
+import sys
+import tempfile
+import time
+import warnings
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+__all__ = [
+    "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "POCL_THREAD_VARS", "DASK_HINT",
+    "Item", "Manifest", "expand_inputs", "render_template", "check_outputs",
+    "derive_seeds", "default_manifest", "default_jobs", "dots_for_image",
+    "write_stipple_outputs", "run_item", "run_batch",
+    "plan_stipple", "plan_poisson", "plan_relax",
+    "stipple_many", "poisson_many", "relax_many",
+]
+
+TEMPLATE_FIELDS = ("stem", "name", "parent", "n", "seed", "i")
+"""Fields of an output template: ``{stem}`` (input file name without its
+extension), ``{name}`` (with it), ``{parent}`` (the input's folder name),
+``{n}`` (points or dots), ``{seed}`` and ``{i}`` (the item's index, from 0).
+Format specs work as in :meth:`str.format`: ``{i:04d}``."""
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".gif")
+"""Extensions that a folder given as input contributes (case-insensitive)."""
+
+POCL_THREAD_VARS = ("POCL_MAX_PTHREAD_COUNT", "POCL_CPU_MAX_CU_NUM")
+"""PoCL's CPU thread count: ``POCL_MAX_PTHREAD_COUNT`` up to PoCL 3 (the
+pip build: its device then reports that many compute units),
+``POCL_CPU_MAX_CU_NUM`` in later releases. Both are set for each worker."""
+
+DASK_HINT = 'the Dask path needs the dask extra: pip install "diskpack_cl[dask]"'
+
+MANIFEST_NAME = "manifest.jsonl"
+
+
+# ------------------------------------------------------------------- items
+
+@dataclass(frozen=True)
+class Item:
+    """One unit of a batch.
+
+    Attributes
+    ----------
+    kind : {"stipple", "poisson", "relax"}
+    i : int
+        Index in the batch (the ``{i}`` of the templates).
+    input : str or None
+        Input file (an image, or a point file for ``relax``); None for ``poisson``.
+    seed : int or None
+        Seed of the item (``stipple``: the error-diffusion jitter; ``poisson``:
+        the start set, so ``diskpack poisson --seed SEED`` recreates it alone).
+    params : dict
+        Parameters of the computation (JSON values).
+    write : dict
+        Options of the writers (stipple: SVG/PNG options).
+    outputs : tuple of str
+        Output paths.
+    error : str or None
+        Set when planning already failed (the item is recorded as failed
+        without running).
+    """
+
+    kind: str
+    i: int
+    input: str | None
+    seed: int | None
+    params: dict
+    outputs: tuple
+    write: dict = field(default_factory=dict)
+    error: str | None = None
+
+    def identity(self):
+        """The fields a manifest line must match for the item to be skipped.
+
+        The input's size and modification time stand for its content.
+
+        Examples
+        --------
+        >>> Item("poisson", 0, None, 7, {"n": 64}, ("a.npz",)).identity()["outputs"]
+        ['a.npz']
+        """
+        ident = {"kind": self.kind, "i": self.i, "input": self.input, "seed": self.seed,
+                 "params": self.params, "write": self.write, "outputs": list(self.outputs)}
+        if self.input is not None:
+            try:
+                st = os.stat(self.input)
+                ident["input_size"], ident["input_mtime_ns"] = st.st_size, st.st_mtime_ns
+            except OSError:
+                ident["input_size"] = ident["input_mtime_ns"] = None
+        return json.loads(json.dumps(ident))
+
+
+def expand_inputs(inputs, *, recursive=False):
+    """Input paths with every folder replaced by its images, sorted.
+
+    Files are kept as given (a missing one fails as an item, not the batch).
+
+    Raises
+    ------
+    ValueError
+        A folder holds no image (with an extension of :data:`IMAGE_SUFFIXES`).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp(); os.mkdir(os.path.join(d, "sub"))
+    >>> for name in ("b.png", "a.JPG", "notes.txt", "sub/c.png"):
+    ...     open(os.path.join(d, name), "w").close()
+    >>> [os.path.relpath(p, d) for p in expand_inputs([d])]
+    ['a.JPG', 'b.png']
+    >>> [os.path.relpath(p, d) for p in expand_inputs([d], recursive=True)]
+    ['a.JPG', 'b.png', 'sub/c.png']
+    """
+    paths = []
+    for given in inputs:
+        given = os.fspath(given)
+        if not os.path.isdir(given):
+            paths.append(given)
+            continue
+        found = Path(given).rglob("*") if recursive else Path(given).iterdir()
+        images = sorted(str(p) for p in found
+                        if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file()
+                        and not any(part.startswith(".") for part in p.relative_to(given).parts))
+        if not images:
+            raise ValueError(f"no images in folder {given} (extensions "
+                             f"{', '.join(IMAGE_SUFFIXES)}"
+                             + ("" if recursive else "; --recursive for subfolders") + ")")
+        paths.extend(images)
+    return paths
+
+
+def render_template(template, *, input=None, n=None, seed=None, i=0):
+    """Fill an output template with an item's fields (see :data:`TEMPLATE_FIELDS`).
+
+    Raises
+    ------
+    ValueError
+        An unknown field, or a field the item does not have (``{stem}``
+        without an input file, ``{n}`` before the count is known).
+
+    Examples
+    --------
+    >>> render_template("out/{parent}/{stem}_{n}.svg", input="photos/cat.jpg", n=20000)
+    'out/photos/cat_20000.svg'
+    >>> render_template("sets/{i:04d}.npz", i=7)
+    'sets/0007.npz'
+    """
+    p = Path(input) if input is not None else None
+    values = {"stem": p.stem if p else None, "name": p.name if p else None,
+              "parent": (p.resolve().parent.name if p else None), "n": n, "seed": seed, "i": i}
+    fields = {}
+    for _, name, _, _ in string.Formatter().parse(template):
+        if name is None:
+            continue
+        if name not in values:
+            raise ValueError(f"unknown field {{{name}}} in output template {template!r}; "
+                             f"use {', '.join('{' + f + '}' for f in TEMPLATE_FIELDS)}")
+        if values[name] is None:
+            what = "an input file" if name in ("stem", "name", "parent") else "a value here"
+            raise ValueError(f"output template {template!r}: {{{name}}} needs {what}")
+        fields[name] = values[name]
+    try:
+        return template.format(**fields)
+    except (ValueError, IndexError) as exc:
+        raise ValueError(f"output template {template!r}: {exc}") from None
+
+
+def check_outputs(items, check_path):
+    """Refuse, before any work, outputs that two items (or one item twice) would write.
+
+    ``check_path(path)`` checks each path (extension, folder); missing
+    folders of the rendered paths are created first.
+
+    Raises
+    ------
+    ValueError
+        The message names both inputs and the shared output.
+
+    Examples
+    --------
+    >>> a = Item("stipple", 0, "x/cat.jpg", 0, {}, ("out/cat.svg",))
+    >>> b = Item("stipple", 1, "y/cat.jpg", 0, {}, ("out/cat.svg",))
+    >>> check_outputs([a, b], lambda p: None)
+    Traceback (most recent call last):
+    ...
+    ValueError: the output templates map x/cat.jpg and y/cat.jpg to out/cat.svg; add {parent} or {i} to tell them apart
+    """
+    owner = {}
+    for item in items:
+        for out in item.outputs:
+            key = os.path.normpath(os.path.abspath(out))
+            if key in owner:
+                other = owner[key]
+                if other is item:
+                    raise ValueError(f"output given twice: {out}")
+                names = [str(x.input if x.input is not None else f"item {x.i}")
+                         for x in (other, item)]
+                raise ValueError(f"the output templates map {names[0]} and {names[1]} to "
+                                 f"{out}; add {{parent}} or {{i}} to tell them apart")
+            owner[key] = item
+    for item in items:
+        for out in item.outputs:
+            folder = os.path.dirname(out)
+            if folder:
+                os.makedirs(folder, exist_ok=True)
+            check_path(out)
+
+
+def default_manifest(templates):
+    """``manifest.jsonl`` in the folder of the first output template.
+
+    A folder part with template fields is cut at the first of them.
+
+    Examples
+    --------
+    >>> default_manifest(["out/{parent}/{stem}.svg"])
+    'out/manifest.jsonl'
+    >>> default_manifest(["{stem}.png"])
+    'manifest.jsonl'
+    """
+    parts = []
+    for part in Path(os.path.dirname(templates[0])).parts:
+        if "{" in part:
+            break
+        parts.append(part)
+    return os.path.join(*parts, MANIFEST_NAME)
+
+
+def derive_seeds(seed, count):
+    """``count`` independent seeds from one, through ``numpy.random.SeedSequence.spawn``.
+
+    Each is a plain integer: the item with seed ``s`` is recreated alone by
+    the same command with ``--seed s`` (and no ``--count``).
+
+    Examples
+    --------
+    >>> derive_seeds(7, 3) == derive_seeds(7, 3)
+    True
+    >>> len(set(derive_seeds(7, 100)))
+    100
+    """
+    import numpy as np
+
+    return [int(child.generate_state(1, dtype=np.uint32)[0] >> 1)
+            for child in np.random.SeedSequence(seed).spawn(count)]
+
+
+def default_jobs(devices=None):
+    """Worker processes when ``jobs`` is not given: one per listed device, else one per core.
+
+    On the 2-core development VM two workers (one PoCL thread each) stippled
+    faster than one worker with two threads (see the README, "Batch jobs").
+
+    Examples
+    --------
+    >>> default_jobs(["0:0", "0:1", "1:0"])
+    3
+    """
+    if devices:
+        return len(devices)
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+               else os.cpu_count() or 1)
+
+
+def dots_for_image(width, height, *, n=None, density=None, dots_per_cm2=None,
+                   width_mm=None, height_mm=None, dpi=None):
+    """The number of dots: ``n``, or ``density`` per megapixel, or per cm^2 of the print.
+
+    ``dots_per_cm2`` needs the physical size (``width_mm``/``height_mm`` or
+    ``dpi``, as for the SVG).
+
+    Examples
+    --------
+    >>> dots_for_image(1000, 500, density=20000)
+    10000
+    >>> dots_for_image(1000, 500, dots_per_cm2=100, width_mm=100)
+    5000
+    """
+    if n is not None:
+        return int(n)
+    if density is not None:
+        count = density * width * height / 1e6
+    else:
+        from diskpack_cl.export import mm_per_px
+
+        if width_mm is None and height_mm is None and dpi is None:
+            raise ValueError("--dots-per-cm2 needs the print size: --width-mm, --height-mm "
+                             "or --dpi")
+        cm = mm_per_px(width, height, width_mm, height_mm, dpi) / 10.0
+        count = dots_per_cm2 * (width * cm) * (height * cm)
+    return max(1, int(round(count)))
+
+
+# ----------------------------------------------------------------- manifest
+
+class Manifest:
+    """An append-only JSON-lines record of finished items.
+
+    Each line is written with one ``os.write`` on an ``O_APPEND`` descriptor
+    and synced, so a killed run leaves only whole lines (a line torn by a
+    power cut is ignored when read).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> m = Manifest(os.path.join(tempfile.mkdtemp(), "manifest.jsonl"))
+    >>> m.append({"outputs": ["a.npz"], "status": "ok"})
+    >>> m.records()
+    [{'outputs': ['a.npz'], 'status': 'ok'}]
+    """
+
+    def __init__(self, path):
+        self.path = os.fspath(path)
+
+    def records(self):
+        """Every whole line of the manifest, oldest first."""
+        try:
+            with open(self.path, "rb") as fh:
+                lines = fh.read().split(b"\n")
+        except FileNotFoundError:
+            return []
+        out = []
+        for line in lines:
+            with contextlib.suppress(ValueError):
+                record = json.loads(line)
+                if isinstance(record, dict):
+                    out.append(record)
+        return out
+
+    def finished(self):
+        """The latest record per output set: ``{tuple(outputs): record}``."""
+        return {tuple(r.get("outputs") or ()): r for r in self.records()}
+
+    def append(self, record):
+        """Append one record as one line, atomically with respect to other lines."""
+        data = (json.dumps(record, default=_json_default) + "\n").encode()
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+        try:
+            os.write(fd, data)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _json_default(obj):
+    import numpy as np
+
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)
+
+
+def _is_done(item, record):
+    if record is None or record.get("status") != "ok":
+        return False
+    ident = item.identity()
+    if any(record.get(k) != v for k, v in ident.items()):
+        return False
+    return all(os.path.exists(p) for p in item.outputs)
+
+
+# ----------------------------------------------------------------- one item
+
+def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=None, dpi=None,
+                          dots="tone", dot_mm=None, radius_scale=1.0, pen_path="auto",
+                          png_scale=2.0, invert=False):
+    """Write a stippling to every path of ``outputs``, as ``diskpack stipple`` does.
+
+    With ``dots="tone"`` (and no ``dot_mm``) every dot gets one size, chosen
+    so that the total ink equals the image's darkness; ``dots="packing"``
+    draws the certified disks. If a write fails (or the run is
+    interrupted), the outputs written so far are removed again.
+
+    Parameters
+    ----------
+    result : StippleResult
+    gray : (H, W) array
+        The gray image that was stippled (before ``invert``).
+    outputs : list of str
+        ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
+
+    Returns
+    -------
+    dot_mm : float or None
+        The drawn dot diameter (None: the packing radii).
+    written : list of dict
+        ``path``, ``format`` and the writer's info, per output.
+
+    Examples
+    --------
+    >>> import tempfile, os, numpy as np
+    >>> from diskpack_cl import stipple
+    >>> gray = np.linspace(0, 1, 32 * 32).reshape(32, 32)
+    >>> res = stipple(gray, 30, schedule=[("pack", 2)])
+    >>> out = os.path.join(tempfile.mkdtemp(), "s.svg")
+    >>> dot_mm, written = write_stipple_outputs(res, gray, [out])
+    >>> written[0]["format"], round(dot_mm, 3) > 0
+    ('svg', True)
+    """
+    from diskpack_cl.export import check_output_path, mm_per_px, write_stipple
+
+    scale = mm_per_px(result.width, result.height, width_mm, height_mm, dpi)
+    if dot_mm is None and dots == "tone":
+        from diskpack_cl.analysis import tone_radius
+
+        darkness = gray if invert else 1.0 - gray
+        dot_mm = 2.0 * tone_radius(result.n, darkness) * radius_scale * scale
+    svg_opts = dict(width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
+                    radius_scale=radius_scale, pen_path=pen_path, invert=invert)
+    png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert)
+    if dot_mm is not None:  # preview the pen's dots
+        png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
+    written = []
+    try:
+        for out in outputs:
+            ext = check_output_path(out)
+            opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
+            info = write_stipple(out, result, **opts)
+            written.append({"path": out, "format": ext[1:], **info})
+    except BaseException:
+        for w in written:
+            with contextlib.suppress(OSError):
+                os.unlink(w["path"])
+        raise
+    return dot_mm, written
+
+
+def _stipple_item(item, device, progress):
+    from diskpack_cl import load_gray, stipple
+
+    params = dict(item.params)
+    allow_large = params.pop("allow_large", False)
+    count = {k: params.pop(k, None) for k in ("n", "density", "dots_per_cm2")}
+    gray = load_gray(item.input, allow_large=allow_large)
+    size = {k: item.write.get(k) for k in ("width_mm", "height_mm", "dpi")}
+    n = dots_for_image(gray.shape[1], gray.shape[0], **count, **size)
+    callback = None
+    if progress is not None:
+        def callback(entry):
+            progress(int(entry.get("iteration", 0)) + 1,
+                     f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
+    res = stipple(gray, n, seed=item.seed, device=device, callback=callback, **params)
+    if not getattr(res.certificate, "valid", False):
+        raise ValueError(f"the result failed its certificate ({res.certificate})")
+    t = time.perf_counter()
+    dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), **item.write)
+    summary = res.summary()
+    summary.pop("params", None)
+    summary.update(dot_mm=dot_mm, files=written, write_seconds=time.perf_counter() - t)
+    return summary
+
+
+def _relax_points(points, item, device, progress):
+    """Relax, write every output; the summary of the relaxation."""
+    from diskpack_cl.io import write_points
+    from diskpack_cl.relax import relax_poisson
+
+    p = item.params
+    callback = None if progress is None else (lambda it, rho: progress(it, f"rho={rho:.4f}"))
+    res = relax_poisson(points, p["eps"], max_iter=p["max_iter"], backend=p["backend"],
+                        grid=p["grid"], device=device, callback=callback)
+    for out in item.outputs:
+        extra = {"rho": res.rho, "eps": p["eps"]} if out.lower().endswith(".npz") else {}
+        write_points(out, res.points, **extra)
+    return {"n": int(len(res.points)), "iterations": int(res.iterations),
+            "rho_start": float(res.rho[0]), "rho_final": float(res.rho[-1]),
+            "stop_reason": res.stop_reason, "backend": res.backend, "device": res.device,
+            "relax_seconds": float(res.seconds),
+            "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
+
+
+def _poisson_item(item, device, progress):
+    from diskpack_cl.sampling import dart_throwing, random_points
+
+    p = item.params
+    info = {}
+    if p["init"] == "dart":
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            points, dart = dart_throwing(p["n"], rel_radius=p["dart_radius"], seed=item.seed,
+                                         full_output=True)
+        info["dart_rel_radius"] = dart["rel_radius"]
+        if caught:
+            info["warnings"] = [str(w.message) for w in caught]
+    else:
+        points = random_points(p["n"], seed=item.seed)
+    return {**_relax_points(points, item, device, progress), **info}
+
+
+def _relax_item(item, device, progress):
+    from diskpack_cl.io import read_points
+
+    return _relax_points(read_points(item.input, min_points=2), item, device, progress)
+
+
+_KINDS = {"stipple": _stipple_item, "poisson": _poisson_item, "relax": _relax_item}
+
+
+def _peak_rss_mib():
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not POSIX
+        return None
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return round(rss / (1 << 20 if sys.platform == "darwin" else 1 << 10), 1)
+
+
+def run_item(item, *, device=None, collect=False, progress=None):
+    """Run one item and return its record; a failure is recorded, not raised.
+
+    Parameters
+    ----------
+    item : Item
+    device : str, optional
+        OpenCL device (default: ``DISKPACK_DEVICE``, then the usual choice).
+    collect : bool
+        Write the outputs in a temporary folder and return their bytes under
+        ``"data"`` (``{path: bytes}``) for the caller to write (Dask
+        ``--collect``), instead of writing them in place.
+    progress : callable, optional
+        ``progress(iteration, text)`` after each iteration.
+
+    Returns
+    -------
+    dict
+        The item's identity plus ``status`` (``"ok"`` or ``"failed"``),
+        ``error``, ``summary``, ``certificate``, ``seconds``, ``worker``
+        (host and process id) and ``peak_rss_mib`` of the process so far.
+
+    Examples
+    --------
+    >>> rec = run_item(Item("relax", 0, "missing.npz", None, {}, ("out.npz",)))
+    >>> rec["status"], rec["error"]
+    ('failed', 'missing.npz: no such file')
+    """
+    import platform
+
+    t0 = time.perf_counter()
+    record = item.identity()
+    record.update(status="failed", error=item.error)
+    if item.error is None:
+        try:
+            with tempfile.TemporaryDirectory(prefix="diskpack-collect-") if collect \
+                    else contextlib.nullcontext() as tmp:
+                run = item
+                if collect:
+                    run = replace(item, outputs=tuple(
+                        os.path.join(tmp, f"{k}-{os.path.basename(p)}")
+                        for k, p in enumerate(item.outputs)))
+                summary = _KINDS[item.kind](run, device, progress)
+                if collect:
+                    record["data"] = {}
+                    for out, tmp_out in zip(item.outputs, run.outputs):
+                        with open(tmp_out, "rb") as fh:
+                            record["data"][out] = fh.read()
+                    for f in summary.get("files", ()):
+                        f["path"] = item.outputs[run.outputs.index(f["path"])]
+            record.update(status="ok", summary=summary,
+                          certificate=summary.pop("certificate", None))
+        except Exception as exc:  # recorded, the batch goes on
+            record["error"] = _error_text(item, exc)
+    record.update(seconds=time.perf_counter() - t0, finished=time.time(),
+                  worker=f"{platform.node()}:{os.getpid()}", peak_rss_mib=_peak_rss_mib())
+    return record
+
+
+def _error_text(item, exc):
+    text = str(exc) or type(exc).__name__
+    if not isinstance(exc, (ValueError, FileNotFoundError, OSError)):
+        text = f"{type(exc).__name__}: {text}"
+    if item.input is not None and item.input not in text:
+        text = f"{item.input}: {text}"
+    return text
+
+
+# ---------------------------------------------------------------- executors
+
+def _ignore_interrupts_and_exit_on_term():
+    """Worker signals: Ctrl-C is the coordinator's; SIGTERM ends cleanly (no .part files)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+
+
+def _init_worker(slots, devices, threads):
+    slot = slots.get()
+    if threads:
+        for var in POCL_THREAD_VARS:
+            os.environ.setdefault(var, str(threads))
+    if devices:
+        os.environ["DISKPACK_DEVICE"] = devices[slot % len(devices)]
+    _ignore_interrupts_and_exit_on_term()
+
+
+def _run_in_worker(item, collect):
+    return run_item(item, collect=collect)
+
+
+def _failed(item, error):
+    return {**item.identity(), "status": "failed", "error": error, "finished": time.time()}
+
+
+def _local_pool(todo, jobs, devices, collect):
+    """Yield records from ``jobs`` spawned worker processes (spawn: OpenCL does not survive fork)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    ctx = multiprocessing.get_context("spawn")
+    slots = ctx.Queue()
+    for k in range(jobs):
+        slots.put(k)
+    threads = max(1, default_jobs() // jobs)
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
+                               initargs=(slots, devices, threads))
+    try:
+        futures = {pool.submit(_run_in_worker, item, collect): item for item in todo}
+        for fut in as_completed(futures):
+            try:
+                yield fut.result()
+            except BrokenProcessPool as exc:
+                yield _failed(futures[fut], f"worker process died: {exc}")
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+        _stop_workers(pool)
+        pool.shutdown(wait=True)
+
+
+def _stop_workers(pool):
+    """Send SIGTERM to the pool's workers (they remove their partial files and exit)."""
+    stop = getattr(pool, "terminate_workers", None)  # Python >= 3.14
+    if stop is not None:
+        stop()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
+
+
+def _dask_client(client):
+    try:
+        import distributed
+    except ImportError:
+        raise ImportError(DASK_HINT) from None
+    if isinstance(client, distributed.Client):
+        return client, False
+    return distributed.Client(client), True
+
+
+def _dask(todo, client, device, collect):
+    """Yield records from the items sent to a ``dask.distributed`` cluster."""
+    from distributed import as_completed
+
+    client, own = _dask_client(client)
+    futures = {}
+    try:
+        for item in todo:
+            fut = client.submit(run_item, item, device=device, collect=collect, pure=False,
+                                key=f"diskpack-{item.kind}-{item.i}-{os.getpid()}-{time.time_ns()}")
+            futures[fut] = item
+        for fut in as_completed(futures):
+            try:
+                yield fut.result()
+            except Exception as exc:  # the worker died or the cluster lost the task
+                yield _failed(futures[fut], f"Dask task failed: {type(exc).__name__}: {exc}")
+    finally:
+        client.cancel(list(futures))
+        if own:
+            client.close()
+
+
+def _write_collected(record):
+    """Write the bytes a worker returned (``collect``), atomically; the record updated."""
+    from diskpack_cl.io import atomic_write
+
+    data = record.pop("data", None)
+    if not data:
+        return record
+    done = []
+    try:
+        for path, blob in data.items():
+            with atomic_write(path, "wb") as fh:
+                fh.write(blob)
+            done.append(path)
+    except OSError as exc:
+        for path in done:
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+        record.update(status="failed", error=f"writing {path}: {exc}")
+    return record
+
+
+def run_batch(items, *, manifest=None, overwrite=False, jobs=1, devices=None, client=None,
+              collect=False, progress=None):
+    """Run items and yield one record per item, as each finishes.
+
+    Items whose manifest line matches (same input size and time, parameters,
+    seed and outputs, status ok) and whose outputs exist are yielded with
+    status ``"skipped"`` and get no new line. Every other item runs and its
+    record is appended to the manifest, by this process only.
+
+    Parameters
+    ----------
+    items : list of Item
+    manifest : str, optional
+        Manifest path; None: no manifest (nothing is skipped).
+    overwrite : bool
+        Redo every item.
+    jobs : int
+        1: run in this process; more: that many spawned worker processes,
+        each with its own OpenCL context, PoCL capped at ``cores // jobs``
+        threads (:data:`POCL_THREAD_VARS`), and with ``devices`` one device
+        per worker (through ``DISKPACK_DEVICE``).
+    devices : list of str, optional
+        OpenCL devices (``jobs == 1`` or Dask: the first is used).
+    client : distributed.Client or str, optional
+        Send the items to this Dask cluster (a client or a scheduler
+        address) instead; ``jobs`` is then not used.
+    collect : bool
+        With Dask: workers return the outputs' bytes and this process writes
+        them (for workers without the shared output folder).
+    progress : callable, optional
+        ``progress(item, iteration, text)`` during an item, in this process
+        only (``jobs == 1`` without Dask).
+
+    Yields
+    ------
+    dict
+        The record (see :func:`run_item`); ``"skipped"`` ones hold the
+        identity and the earlier record's ``summary``.
+    """
+    man = Manifest(manifest) if manifest is not None else None
+    finished = {} if (man is None or overwrite) else man.finished()
+    todo = []
+    for item in items:
+        old = finished.get(tuple(item.outputs))
+        if _is_done(item, old):
+            yield {**old, "status": "skipped"}
+        else:
+            todo.append(item)
+    if client is not None:
+        source = _dask(todo, client, devices[0] if devices else None, collect)
+    elif jobs > 1 and len(todo) > 1:
+        source = _local_pool(todo, min(jobs, len(todo)), devices, collect)
+    else:
+        source = (run_item(item, device=devices[0] if devices else None, collect=collect,
+                           progress=None if progress is None
+                           else (lambda it, text, item=item: progress(item, it, text)))
+                  for item in todo)
+    with contextlib.closing(source):
+        for record in source:
+            record = _write_collected(record)
+            if man is not None:
+                man.append(record)
+            yield record
+
+
+# -------------------------------------------------------------------- plans
+
+def _paths_check(kind):
+    if kind == "stipple":
+        from diskpack_cl.export import check_output_path
+
+        return check_output_path
+    from diskpack_cl.io import check_points_path
+
+    return lambda path: check_points_path(path, for_writing=True)
+
+
+def _image_dots(path, count, write):
+    """The dot count of an image for the ``{n}`` field: read from its header."""
+    if count.get("n") is not None:
+        return count["n"]
+    from PIL import Image
+
+    with Image.open(path) as im:
+        width, height = im.size
+    size = {k: write.get(k) for k in ("width_mm", "height_mm", "dpi")}
+    return dots_for_image(width, height, **count, **size)
+
+
+def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, seed=0,
+                 recursive=False, allow_large=False, write=None, **options):
+    """Items for stippling every image of ``inputs`` (files or folders).
+
+    Parameters
+    ----------
+    inputs : list of str
+        Image files and folders (their images, see :func:`expand_inputs`).
+    outputs : list of str
+        Output templates (:data:`TEMPLATE_FIELDS`).
+    n, density, dots_per_cm2 : optional
+        Exactly one: dots per image, per megapixel, or per cm^2 of the print
+        (with ``width_mm``/``height_mm``/``dpi`` in ``write``).
+    seed : int
+        The error-diffusion seed of every image.
+    write : dict, optional
+        Options of :func:`write_stipple_outputs`.
+    **options
+        Keyword arguments of :func:`diskpack_cl.stipple` (``gamma``,
+        ``schedule``, ...).
+
+    Raises
+    ------
+    ValueError
+        No or several dot counts, a bad template, or two items sharing an output.
+    """
+    if sum(v is not None for v in (n, density, dots_per_cm2)) != 1:
+        raise ValueError("give exactly one of n, density (dots per megapixel) and dots_per_cm2")
+    count = {"n": n, "density": density, "dots_per_cm2": dots_per_cm2}
+    write = dict(write or {})
+    params = {**{k: v for k, v in count.items() if v is not None}, **options}
+    if allow_large:
+        params["allow_large"] = True
+    uses_n = any("{n" in t for t in outputs)
+    items = []
+    for i, path in enumerate(expand_inputs(inputs, recursive=recursive)):
+        error = None
+        dots = n
+        if uses_n and n is None:
+            try:
+                dots = _image_dots(path, count, write)
+            except Exception as exc:  # the item fails, the batch goes on
+                error = f"{path}: cannot read the image size for {{n}}: {exc}"
+        rendered = [render_template(t, input=path, n=dots if dots is not None else 0,
+                                    seed=seed, i=i) for t in outputs]
+        items.append(Item("stipple", i, path, seed, json.loads(json.dumps(params)),
+                          tuple(rendered), write, error))
+    check_outputs(items, _paths_check("stipple"))
+    return items
+
+
+def _relax_params(eps, max_iter, backend, grid):
+    return {"eps": eps, "max_iter": max_iter, "backend": backend, "grid": grid}
+
+
+def plan_poisson(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74, eps=0.8,
+                 max_iter=1000, backend="auto", grid=None):
+    """Items for ``count`` Poisson disk sets with seeds derived from ``seed``.
+
+    Set ``i`` has seed ``derive_seeds(seed, count)[i]``; ``seed=None`` takes
+    a fresh one. ``init`` is ``"dart"`` or ``"random"``.
+    """
+    if init not in ("dart", "random"):
+        raise ValueError(f"init must be 'dart' or 'random' for many sets, got {init!r}")
+    if seed is None:
+        import numpy as np
+
+        seed = int(np.random.SeedSequence().entropy % 2**31)
+    params = {"n": n, "init": init, **_relax_params(eps, max_iter, backend, grid)}
+    if init == "dart":
+        params["dart_radius"] = dart_radius
+    items = [Item("poisson", i, None, s, {**params, "base_seed": seed},
+                  tuple(render_template(t, n=n, seed=s, i=i) for t in outputs))
+             for i, s in enumerate(derive_seeds(seed, count))]
+    check_outputs(items, _paths_check("poisson"))
+    return items
+
+
+def plan_relax(inputs, outputs, *, eps=0.8, max_iter=1000, backend="auto", grid=None):
+    """Items for relaxing every point file of ``inputs``."""
+    params = _relax_params(eps, max_iter, backend, grid)
+    items = [Item("relax", i, os.fspath(path), None, params,
+                  tuple(render_template(t, input=path, i=i) for t in outputs))
+             for i, path in enumerate(inputs)]
+    check_outputs(items, _paths_check("relax"))
+    return items
+
+
+def _run_plan(items, outputs, manifest, **run):
+    if manifest is None:
+        manifest = default_manifest(list(outputs))
+    return run_batch(items, manifest=manifest or None, **run)
+
+
+def stipple_many(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, seed=0,
+                 recursive=False, allow_large=False, write=None, manifest=None,
+                 overwrite=False, jobs=1, devices=None, client=None, collect=False,
+                 progress=None, **options):
+    """Stipple many images; yield one record per image as it finishes.
+
+    Plans with :func:`plan_stipple` (every template and output is checked
+    before any work) and runs with :func:`run_batch`. ``manifest`` defaults
+    to ``manifest.jsonl`` beside the first output template (``False``: none).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> from diskpack_cl import sample_image_path
+    >>> out = tempfile.mkdtemp()
+    >>> recs = stipple_many([sample_image_path()], [os.path.join(out, "{stem}_{n}.npz")],
+    ...                     density=400, schedule=[("pack", 1)])
+    >>> [(r["status"], os.path.basename(r["outputs"][0])) for r in recs]
+    [('ok', 'astronaut_105.npz')]
+    """
+    items = plan_stipple(inputs, outputs, n=n, density=density, dots_per_cm2=dots_per_cm2,
+                         seed=seed, recursive=recursive, allow_large=allow_large,
+                         write=write, **options)
+    return _run_plan(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
+                     devices=devices, client=client, collect=collect, progress=progress)
+
+
+def poisson_many(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74, eps=0.8,
+                 max_iter=1000, backend="auto", grid=None, manifest=None, overwrite=False,
+                 jobs=1, devices=None, client=None, collect=False, progress=None):
+    """Make ``count`` independent Poisson disk sets; yield records as they finish.
+
+    Seeds come from ``numpy.random.SeedSequence(seed).spawn(count)``; each
+    record's ``seed`` recreates its set alone. Without ``seed``, a rerun
+    takes the seed of the run recorded in the manifest (else a fresh one). See :func:`plan_poisson` and
+    :func:`run_batch`; the module's example shows a run and its resume.
+    """
+    if manifest is None:
+        manifest = default_manifest(list(outputs))
+    if seed is None and manifest and not overwrite:  # resume: the earlier run's seed
+        seed = next((r["params"]["base_seed"] for r in reversed(Manifest(manifest).records())
+                     if r.get("kind") == "poisson" and "base_seed" in r.get("params", {})),
+                    None)
+    items = plan_poisson(count, n, outputs, seed=seed, init=init, dart_radius=dart_radius,
+                         eps=eps, max_iter=max_iter, backend=backend, grid=grid)
+    return _run_plan(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
+                     devices=devices, client=client, collect=collect, progress=progress)
+
+
+def relax_many(inputs, outputs, *, eps=0.8, max_iter=1000, backend="auto", grid=None,
+               manifest=None, overwrite=False, jobs=1, devices=None, client=None,
+               collect=False, progress=None):
+    """Relax many point files; yield records as they finish (see :func:`plan_relax`)."""
+    items = plan_relax(inputs, outputs, eps=eps, max_iter=max_iter, backend=backend, grid=grid)
+    return _run_plan(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
+                     devices=devices, client=client, collect=collect, progress=progress)
