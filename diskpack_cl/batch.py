@@ -41,7 +41,7 @@ from pathlib import Path
 
 __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "POCL_THREAD_VARS", "DASK_HINT",
-    "Item", "Manifest", "expand_inputs", "render_template", "check_outputs",
+    "Batch", "Item", "Manifest", "expand_inputs", "render_template", "check_outputs",
     "derive_seeds", "default_manifest", "default_jobs", "dots_for_image",
     "write_stipple_outputs", "run_item", "run_batch",
     "plan_stipple", "plan_poisson", "plan_relax",
@@ -561,7 +561,8 @@ def run_item(item, *, device=None, collect=False, progress=None):
     dict
         The item's identity plus ``status`` (``"ok"`` or ``"failed"``),
         ``error``, ``summary``, ``certificate``, ``seconds``, ``worker``
-        (host and process id) and ``peak_rss_mib`` of the process so far.
+        (host and process id), ``peak_rss_mib`` of the process so far and
+        ``worker_env`` (the PoCL thread cap and ``DISKPACK_DEVICE``, if set).
 
     Examples
     --------
@@ -596,7 +597,9 @@ def run_item(item, *, device=None, collect=False, progress=None):
         except Exception as exc:  # recorded, the batch goes on
             record["error"] = _error_text(item, exc)
     record.update(seconds=time.perf_counter() - t0, finished=time.time(),
-                  worker=f"{platform.node()}:{os.getpid()}", peak_rss_mib=_peak_rss_mib())
+                  worker=f"{platform.node()}:{os.getpid()}", peak_rss_mib=_peak_rss_mib(),
+                  worker_env={k: os.environ[k] for k in (*POCL_THREAD_VARS, "DISKPACK_DEVICE")
+                              if k in os.environ})
     return record
 
 
@@ -628,7 +631,10 @@ def _init_worker(slots, devices, threads):
 
 
 def _run_in_worker(item, collect):
-    return run_item(item, collect=collect)
+    try:
+        return run_item(item, collect=collect)
+    except SystemExit:  # SIGTERM: the partial files are removed on the way here
+        os._exit(143)
 
 
 def _failed(item, error):
@@ -902,21 +908,44 @@ def plan_relax(inputs, outputs, *, eps=0.8, max_iter=1000, backend="auto", grid=
     return items
 
 
-def _run_plan(items, outputs, manifest, **run):
-    if manifest is None:
-        manifest = default_manifest(list(outputs))
-    return run_batch(items, manifest=manifest or None, **run)
+class Batch:
+    """Planned items; iterating runs them and yields their records as they finish.
+
+    Attributes
+    ----------
+    items : list of Item
+    manifest : str or None
+    progress : callable or None
+        ``progress(item, iteration, text)``, see :func:`run_batch`.
+    """
+
+    def __init__(self, items, outputs, manifest, **run):
+        self.items = items
+        self.manifest = (default_manifest(list(outputs)) if manifest is None
+                         else manifest or None)
+        self.progress = run.pop("progress", None)
+        self._run = run
+
+    def __len__(self):
+        return len(self.items)
+
+    def __iter__(self):
+        return run_batch(self.items, manifest=self.manifest, progress=self.progress,
+                         **self._run)
 
 
 def stipple_many(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, seed=0,
                  recursive=False, allow_large=False, write=None, manifest=None,
                  overwrite=False, jobs=1, devices=None, client=None, collect=False,
                  progress=None, **options):
-    """Stipple many images; yield one record per image as it finishes.
+    """Stipple many images: a :class:`Batch` that yields one record per image as it finishes.
 
-    Plans with :func:`plan_stipple` (every template and output is checked
-    before any work) and runs with :func:`run_batch`. ``manifest`` defaults
-    to ``manifest.jsonl`` beside the first output template (``False``: none).
+    Plans with :func:`plan_stipple` now (every template and output is
+    checked before any work) and runs with :func:`run_batch` when iterated.
+    ``manifest`` defaults to ``manifest.jsonl`` in the folder of the first
+    output template (``False``: none). ``jobs``, ``devices``, ``client``
+    (a ``distributed.Client`` or a scheduler address), ``collect`` and
+    ``progress`` are those of :func:`run_batch`.
 
     Examples
     --------
@@ -931,7 +960,7 @@ def stipple_many(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
     items = plan_stipple(inputs, outputs, n=n, density=density, dots_per_cm2=dots_per_cm2,
                          seed=seed, recursive=recursive, allow_large=allow_large,
                          write=write, **options)
-    return _run_plan(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
+    return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 
 
@@ -953,7 +982,7 @@ def poisson_many(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74,
                     None)
     items = plan_poisson(count, n, outputs, seed=seed, init=init, dart_radius=dart_radius,
                          eps=eps, max_iter=max_iter, backend=backend, grid=grid)
-    return _run_plan(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
+    return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 
 
@@ -962,5 +991,5 @@ def relax_many(inputs, outputs, *, eps=0.8, max_iter=1000, backend="auto", grid=
                collect=False, progress=None):
     """Relax many point files; yield records as they finish (see :func:`plan_relax`)."""
     items = plan_relax(inputs, outputs, eps=eps, max_iter=max_iter, backend=backend, grid=grid)
-    return _run_plan(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
+    return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)

@@ -94,6 +94,29 @@ def _relax_options(p):
     _device_options(p)
 
 
+def _batch_options(p):
+    g = p.add_argument_group(
+        "batch (several inputs, a folder, --count, an output template, or any of these)",
+        "Output templates: {stem} {name} {parent} (of the input), {n}, {seed}, {i} (item "
+        "index, e.g. {i:04d}). Each item writes its outputs atomically, then one line of the "
+        "manifest; a rerun of the same command skips the items done.")
+    g.add_argument("--jobs", "-j", type=_positive_int, default=None, metavar="N",
+                   help="worker processes (spawned; PoCL threads per worker capped to "
+                        "cores/N; default: one per --device listed, else one per core)")
+    g.add_argument("--manifest", default=None, metavar="PATH",
+                   help="manifest file (default: manifest.jsonl in the folder of the first -o)")
+    g.add_argument("--overwrite", action="store_true",
+                   help="redo every item, also those the manifest records as done")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="send the items to this dask.distributed scheduler (default: "
+                        "DASK_SCHEDULER_ADDRESS when set); needs pip install "
+                        "\"diskpack_cl[dask]\"")
+    g.add_argument("--collect", action="store_true",
+                   help="with --scheduler: workers return the outputs' bytes and this "
+                        "command writes them (no shared output folder needed)")
+    return g
+
+
 # --------------------------------------------------------------- shared runs
 
 def _max_iter(args):
@@ -204,6 +227,11 @@ def _add_poisson(subparsers):
     p.add_argument("--seed", type=int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
     _output_options(p)
     _relax_options(p)
+    g = _batch_options(p)
+    g.add_argument("--count", type=_positive_int, default=None, metavar="K",
+                   help="make K independent sets, seeds derived from --seed "
+                        "(numpy SeedSequence.spawn; each set's seed is in the manifest and "
+                        "recreates it alone), e.g. -o sets/{i:04d}.npz")
     p.set_defaults(run=_run_poisson)
 
 
@@ -264,6 +292,8 @@ def _run_poisson(args):
     from diskpack_cl.io import check_points_path, read_points
     from diskpack_cl.sampling import DartThrowingWarning, dart_throwing, random_points
 
+    if _batch_mode(args, [], [args.output]):
+        return _run_poisson_batch(args)
     check_points_path(args.output, for_writing=True)
     if args.radius is not None:
         return _run_poisson_radius(args)
@@ -302,18 +332,23 @@ def _add_relax(subparsers):
         "relax", help="relax a point file on the unit torus",
         description="Relax a point set on the unit torus by disk packing until rho >= EPS. "
                     "Points outside [0,1)^2 are wrapped onto the torus.")
-    p.add_argument("input", metavar="IN", help="point file (.npz, .npy, .csv, .txt, .xy)")
+    p.add_argument("inputs", nargs="+", metavar="IN",
+                   help="point file (.npz, .npy, .csv, .txt, .xy); several make a batch "
+                        "(-o a template such as out/{stem}.npz)")
     _output_options(p)
     _relax_options(p)
+    _batch_options(p)
     p.set_defaults(run=_run_relax)
 
 
 def _run_relax(args):
     from diskpack_cl.io import check_points_path, read_points
 
+    if _batch_mode(args, args.inputs, [args.output]):
+        return _run_relax_batch(args)
     check_points_path(args.output, for_writing=True)
-    points = read_points(args.input, min_points=2)
-    return _relax_and_write(points, args, extra_summary={"input": str(args.input)})
+    points = read_points(args.inputs[0], min_points=2)
+    return _relax_and_write(points, args, extra_summary={"input": str(args.inputs[0])})
 
 
 SAMPLE = "sample"
@@ -351,11 +386,19 @@ def _add_stipple(subparsers):
                "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
                "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("image", metavar="IMAGE",
+    p.add_argument("images", nargs="+", metavar="IMAGE",
                    help="image file Pillow reads (PNG, JPEG, TIFF, ...; colour is converted to "
                         "luminance), or the word 'sample' for the bundled 512x512 sample "
-                        "photograph (use ./sample for a file of that name)")
-    p.add_argument("-n", type=_positive_int, required=True, metavar="N", help="number of dots")
+                        "photograph (use ./sample for a file of that name); several files or "
+                        "folders make a batch")
+    count = p.add_mutually_exclusive_group(required=True)
+    count.add_argument("-n", type=_positive_int, default=None, metavar="N",
+                       help="number of dots")
+    count.add_argument("--density", type=_positive_float, default=None, metavar="D",
+                       help="instead of -n: D dots per megapixel of each image")
+    count.add_argument("--dots-per-cm2", type=_positive_float, default=None, metavar="D",
+                       help="instead of -n: D dots per cm^2 of the print (needs --width-mm, "
+                            "--height-mm or --dpi)")
     p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
                    help="output file; repeat for several: .svg (pen plotters, Inkscape), .png "
                         "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
@@ -436,6 +479,9 @@ def _add_stipple(subparsers):
                    help="print one JSON line on stdout at the end: the result summary "
                         "(n, k, radii, certificate, timings, params), each output's info and "
                         "seconds")
+    _batch_options(p).add_argument("--recursive", "-r", action="store_true",
+                                   help="a folder given as IMAGE contributes the images of "
+                                        "its subfolders too")
     p.set_defaults(run=_run_stipple)
 
 
@@ -465,12 +511,22 @@ def _write_options(args):
                 pen_path=args.pen_path, png_scale=args.png_scale, invert=args.invert)
 
 
+def _stipple_options(args):
+    """The keyword arguments of :func:`diskpack_cl.stipple` from the arguments."""
+    return dict(gamma=args.gamma, floor=args.floor, schedule=args.schedule, beta=args.beta,
+                lloyd=args.lloyd, rounds=args.rounds, supersample=args.supersample,
+                method=args.method, invert=args.invert, refine_every=args.refine_every,
+                radii=args.radii, blend=args.blend, k_quantile=args.k_quantile)
+
+
 def _run_stipple(args):
-    from diskpack_cl.batch import write_stipple_outputs
+    from diskpack_cl.batch import dots_for_image, write_stipple_outputs
     from diskpack_cl.export import check_output_path
     from diskpack_cl.image import load_gray
     from diskpack_cl.stipple import make_schedule, stipple
 
+    if _batch_mode(args, args.images, args.output):
+        return _run_stipple_batch(args)
     t0 = time.perf_counter()
     # everything that can be refused is refused before the computation
     outputs = [str(o) for o in args.output]
@@ -485,17 +541,16 @@ def _run_stipple(args):
         raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
     phases = make_schedule(args.schedule, beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
                            method=args.method)
-    image = _image_path(args.image)
+    image = _image_path(args.images[0])
     gray = load_gray(image, allow_large=args.allow_large)
+    n = dots_for_image(gray.shape[1], gray.shape[0], n=args.n, density=args.density,
+                       dots_per_cm2=args.dots_per_cm2, width_mm=args.width_mm,
+                       height_mm=args.height_mm, dpi=args.dpi)
 
     callback, close = _stipple_progress(args, sum(ph[1] for ph in phases))
     try:
-        res = stipple(gray, args.n, gamma=args.gamma, floor=args.floor, schedule=args.schedule,
-                      beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
-                      supersample=args.supersample, seed=args.seed, device=args.device,
-                      method=args.method, invert=args.invert, refine_every=args.refine_every,
-                      radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
-                      callback=callback)
+        res = stipple(gray, n, seed=args.seed, device=args.device, callback=callback,
+                      **_stipple_options(args))
     finally:
         close()
     if not getattr(res.certificate, "valid", False):
@@ -724,6 +779,151 @@ def _run_analyze(args):
     if plot:
         print(f"{PROG}: wrote {args.output}", file=sys.stderr)
     return 0
+
+
+# -------------------------------------------------------------------- batches
+
+def _batch_mode(args, inputs, outputs):
+    """Whether the command is a batch (else it runs exactly as for one input)."""
+    return (len(inputs) > 1 or any(os.path.isdir(x) for x in inputs)
+            or any("{" in str(o) for o in outputs) or "," in (args.device or "")
+            or any(getattr(args, k, None) for k in ("jobs", "manifest", "overwrite",
+                                                     "scheduler", "collect", "count")))
+
+
+def _batch_run(args):
+    """Keyword arguments of the batch functions for where and how items run."""
+    devices = [d.strip() for d in args.device.split(",") if d.strip()] if args.device else None
+    scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+    if args.collect and scheduler is None:
+        raise ValueError("--collect is for a Dask cluster: give --scheduler ADDRESS too")
+    if scheduler is not None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            from diskpack_cl.batch import DASK_HINT
+
+            raise ValueError(f"--scheduler: {DASK_HINT}") from None
+    from diskpack_cl.batch import default_jobs
+
+    return dict(manifest=args.manifest, overwrite=args.overwrite, devices=devices,
+                jobs=args.jobs or default_jobs(devices), client=scheduler,
+                collect=args.collect)
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP during a batch."""
+
+
+def _raise_terminated(signum, frame):
+    raise _Terminated(signum)
+
+
+def _report_batch(args, batch):
+    """Run a planned batch with a progress bar / log lines / JSON; the exit status."""
+    import signal
+
+    total = len(batch)
+    bar = None
+    if not args.quiet and sys.stderr.isatty():
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, desc=args.command, unit="item", file=sys.stderr,
+                   dynamic_ncols=True)
+    counts = {"ok": 0, "failed": 0, "skipped": 0}
+    failures = []
+    t0 = time.perf_counter()
+    handlers = {}
+    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
+            handlers[sig] = signal.signal(sig, _raise_terminated)
+
+    def on_iteration(item, iteration, text):
+        bar.set_postfix_str(f"{os.path.basename(item.input or item.outputs[0])} "
+                            f"it {iteration} {text}")
+
+    if bar is not None:
+        batch.progress = on_iteration
+    try:
+        for rec in batch:
+            counts[rec["status"]] += 1
+            name = rec.get("input") or rec["outputs"][0]
+            if rec["status"] == "failed":
+                failures.append({"input": name, "error": rec.get("error")})
+            if args.json:
+                print(json.dumps(rec, default=_json_default), flush=True)
+            if bar is not None:
+                bar.set_postfix(ok=counts["ok"], failed=counts["failed"],
+                                skipped=counts["skipped"], refresh=False)
+                bar.update(1)
+            elif not args.quiet:
+                done = sum(counts.values())
+                took = f" ({rec['seconds']:.3g} s)" if rec["status"] != "skipped" else ""
+                error = f": {rec['error']}" if rec["status"] == "failed" else ""
+                print(f"{PROG}: [{done}/{total}] {rec['status']} {name}{took}{error}",
+                      file=sys.stderr, flush=True)
+    except KeyboardInterrupt as exc:
+        if bar is not None:
+            bar.close()
+        done = sum(counts.values())
+        print(f"{PROG}: error: interrupted after {done} of {total} items; the finished ones "
+              f"are in {batch.manifest}: rerun the same command to resume", file=sys.stderr)
+        return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
+    finally:
+        for sig, old in handlers.items():
+            signal.signal(sig, old)
+    if bar is not None:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    ran = counts["ok"] + counts["failed"]
+    summary = {"summary": True, "items": total, **counts, "seconds": seconds,
+               "items_per_minute": 60.0 * ran / seconds if ran and seconds > 0 else None,
+               "manifest": batch.manifest, "failures": failures}
+    if args.json:
+        print(json.dumps(summary), flush=True)
+    if not args.quiet:
+        print(f"{PROG}: {counts['ok']} done, {counts['failed']} failed, {counts['skipped']} "
+              f"skipped (already done) of {total} in {seconds:.3g} s; manifest "
+              f"{batch.manifest}", file=sys.stderr)
+        for f in failures:
+            print(f"{PROG}: failed: {f['error']}", file=sys.stderr)
+    return 1 if failures else 0
+
+
+def _run_stipple_batch(args):
+    from diskpack_cl.batch import stipple_many
+    from diskpack_cl.stipple import make_schedule
+
+    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
+        raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
+    make_schedule(args.schedule, beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
+                  method=args.method)
+    batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
+                         n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
+                         seed=args.seed, recursive=args.recursive,
+                         allow_large=args.allow_large, write=_write_options(args),
+                         **_batch_run(args), **_stipple_options(args))
+    return _report_batch(args, batch)
+
+
+def _run_poisson_batch(args):
+    from diskpack_cl.batch import poisson_many
+
+    if args.radius is not None:
+        raise ValueError("--radius makes one set; it does not combine with --count or a batch")
+    batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
+                         seed=args.seed, init=args.init, dart_radius=args.dart_radius,
+                         eps=args.eps, max_iter=_max_iter(args), backend=args.backend,
+                         grid=args.grid, **_batch_run(args))
+    return _report_batch(args, batch)
+
+
+def _run_relax_batch(args):
+    from diskpack_cl.batch import relax_many
+
+    batch = relax_many(args.inputs, [args.output], eps=args.eps, max_iter=_max_iter(args),
+                       backend=args.backend, grid=args.grid, **_batch_run(args))
+    return _report_batch(args, batch)
 
 
 # ----------------------------------------------------------------------- main

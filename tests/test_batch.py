@@ -1,0 +1,309 @@
+"""Batch jobs: templates, manifest and resume, worker processes, Dask, bad inputs.
+
+Everything runs for real: spawned worker processes, a child process killed
+with SIGTERM, and a ``distributed.LocalCluster`` with two process workers.
+Images are tiny and schedules short, so the module runs in about a minute on
+two cores.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from diskpack_cl import batch
+from diskpack_cl.batch import (
+    Item, Manifest, derive_seeds, expand_inputs, plan_stipple, poisson_many,
+    render_template, stipple_many,
+)
+from diskpack_cl.cli import main
+
+DATA = Path(__file__).parent / "data"
+QUICK = dict(schedule=[("pack", 2)])  # a short schedule: the batch layer is under test
+QUICK_CLI = ["--beta", "2", "--lloyd", "0", "--rounds", "1"]
+
+
+def _photos(folder, size=(40, 40)):
+    """The three test photographs, shrunk, as PNG files in ``folder``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name in ("astronaut", "camera", "coffee"):
+        p = folder / f"{name}.png"
+        Image.open(DATA / f"{name}.png").convert("L").resize(size).save(p)
+        paths.append(str(p))
+    return paths
+
+
+def _cli(argv, capsys):
+    rc = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def _files(folder):
+    return {p.name: p.read_bytes() for p in sorted(Path(folder).iterdir())
+            if p.name != "manifest.jsonl"}
+
+
+def _manifest_lines(path):
+    raw = Path(path).read_bytes()
+    assert raw.endswith(b"\n")
+    return [json.loads(line) for line in raw.decode().splitlines()]
+
+
+# ----------------------------------------------------------- templates, plans
+
+def test_render_template_fields():
+    assert render_template("o/{parent}/{stem}-{n}-{seed}.svg", input="a/b/cat.jpg", n=5,
+                           seed=3) == "o/b/cat-5-3.svg"
+    assert render_template("{name}.npz", input="x/cat.jpg") == "cat.jpg.npz"
+    assert render_template("sets/{i:04d}.npz", i=12) == "sets/0012.npz"
+    with pytest.raises(ValueError, match=r"unknown field \{size\}.*\{stem\}"):
+        render_template("{size}.svg", input="a.png")
+    with pytest.raises(ValueError, match=r"\{stem\} needs an input file"):
+        render_template("{stem}.npz", i=0)
+
+
+def test_expand_inputs_empty_folder(tmp_path):
+    with pytest.raises(ValueError, match="no images in folder .*--recursive"):
+        expand_inputs([tmp_path])
+
+
+def test_derived_seeds_are_spawned_children():
+    seeds = derive_seeds(7, 5)
+    assert seeds == derive_seeds(7, 5) and len(set(seeds)) == 5
+    assert derive_seeds(8, 5) != seeds
+    assert derive_seeds(7, 6)[:5] == seeds  # a longer batch keeps the first sets
+
+
+def test_stem_collision_refused_before_any_work(tmp_path, capsys):
+    a, b = tmp_path / "a", tmp_path / "b"
+    _photos(a)
+    _photos(b)
+    out = tmp_path / "out"
+    rc, _, err = _cli(["stipple", a, b, "-n", 50, "-o", f"{out}/{{stem}}.svg", *QUICK_CLI],
+                      capsys)
+    assert rc == 1
+    assert "map " in err and "astronaut.png" in err and "{parent}" in err
+    assert not out.exists() or not any(out.iterdir())
+    with pytest.raises(ValueError, match="output given twice"):
+        plan_stipple([str(a / "camera.png")], [f"{out}/x.svg", f"{out}/x.svg"], n=10)
+
+
+def test_density_sets_n_per_image(tmp_path):
+    small, large = _photos(tmp_path / "s", (40, 40))[0], _photos(tmp_path / "l", (80, 40))[0]
+    items = plan_stipple([small, large], [str(tmp_path / "o" / "{parent}_{n}.npz")],
+                         density=50000)
+    assert [os.path.basename(it.outputs[0]) for it in items] == ["s_80.npz", "l_160.npz"]
+    recs = list(stipple_many([small, large], [str(tmp_path / "o" / "{parent}_{n}.npz")],
+                             density=50000, **QUICK))
+    assert sorted(r["summary"]["n"] for r in recs) == [80, 160]
+
+
+# ------------------------------------------------------------- bad inputs
+
+def test_bad_inputs_are_recorded_and_the_rest_completes(ctx, tmp_path, capsys):
+    photos = tmp_path / "in"
+    good = _photos(photos)
+    (photos / "broken.png").write_bytes(b"not an image at all")
+    Image.fromarray(np.full((30, 30), 255, np.uint8)).save(photos / "white.png")
+    missing = photos / "gone.png"
+    out = tmp_path / "out"
+    rc, _, err = _cli(["stipple", photos, missing, "-n", 60, "-o", f"{out}/{{stem}}.npz",
+                       "--jobs", 1, *QUICK_CLI], capsys)
+    assert rc == 1
+    assert "not an image Pillow can read" in err and "broken.png" in err
+    assert "white.png: nothing to stipple" in err
+    assert "image file not found" in err and "gone.png" in err
+    assert "3 done, 3 failed" in err
+    assert sorted(_files(out)) == sorted(Path(g).stem + ".npz" for g in good)
+    lines = _manifest_lines(out / "manifest.jsonl")
+    assert sorted(r["status"] for r in lines) == ["failed"] * 3 + ["ok"] * 3
+    assert all(r["error"] for r in lines if r["status"] == "failed")
+
+
+# ----------------------------------------------------------------- resume
+
+def test_rerun_skips_done_and_redoes_changed(tmp_path, capsys):
+    src = tmp_path / "src"
+    src.mkdir()
+    rng = np.random.default_rng(0)
+    for k in range(3):
+        np.save(src / f"p{k}.npy", rng.random((100, 2)))
+    inputs = sorted(str(p) for p in src.iterdir())
+    argv = ["relax", *inputs, "-o", f"{tmp_path}/out/{{stem}}.npz", "--backend", "exact",
+            "--jobs", 1, "--json", "-q"]
+    rc, out, _ = _cli(argv, capsys)
+    assert rc == 0 and json.loads(out.splitlines()[-1])["ok"] == 3
+    rc, out, _ = _cli(argv, capsys)
+    assert json.loads(out.splitlines()[-1])["skipped"] == 3
+    np.save(src / "p1.npy", rng.random((100, 2)))  # a changed input is redone
+    os.utime(src / "p1.npy", ns=(time.time_ns() + 10**9,) * 2)
+    rc, out, _ = _cli(argv, capsys)
+    summary = json.loads(out.splitlines()[-1])
+    assert (summary["ok"], summary["skipped"]) == (1, 2)
+    rc, out, _ = _cli(argv[:-2] + ["--eps", "0.79", "--json", "-q"], capsys)  # new parameter
+    assert json.loads(out.splitlines()[-1])["ok"] == 3
+    os.unlink(tmp_path / "out" / "p0.npz")  # a missing output is redone
+    rc, out, _ = _cli(argv[:-2] + ["--eps", "0.79", "--json", "-q"], capsys)
+    assert json.loads(out.splitlines()[-1])["ok"] == 1
+    rc, out, _ = _cli(argv + ["--overwrite"], capsys)
+    assert json.loads(out.splitlines()[-1])["ok"] == 3
+    assert len(_manifest_lines(tmp_path / "out" / "manifest.jsonl")) == 3 + 1 + 3 + 1 + 3
+
+
+def _kill_part_way(argv, manifest, after_lines, timeout=120):
+    """Start the CLI as a child, SIGTERM it once the manifest has ``after_lines`` lines."""
+    proc = subprocess.Popen([sys.executable, "-m", "diskpack_cl.cli", *map(str, argv)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and proc.poll() is None:
+        if manifest.exists() and manifest.read_bytes().count(b"\n") >= after_lines:
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, "the batch ended before it could be killed"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    return proc.returncode, err.decode()
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_sigterm_part_way_then_resume(tmp_path, jobs):
+    out = tmp_path / "sets"
+    manifest = out / "manifest.jsonl"
+    count = 24
+    argv = ["poisson", "--count", count, "-n", 3000, "--seed", 5, "--backend", "exact",
+            "-o", f"{out}/{{i:03d}}.npz", "--jobs", jobs]
+    rc, err = _kill_part_way(argv, manifest, after_lines=3)
+    assert rc == 143, err
+    assert "interrupted after" in err and "rerun the same command" in err
+    first = _manifest_lines(manifest)  # every line whole
+    assert 3 <= len(first) < count
+    leftovers = [p.name for p in out.iterdir() if p.name.endswith(".part")]
+    assert not leftovers
+    for p in out.glob("*.npz"):  # whatever exists is complete
+        assert np.load(p)["points"].shape == (3000, 2)
+    rc = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", *map(str, argv), "-q"]).returncode
+    assert rc == 0
+    lines = _manifest_lines(manifest)
+    ok = [r["outputs"][0] for r in lines if r["status"] == "ok"]
+    assert len(ok) == len(set(ok)) == count  # every item done exactly once
+    assert len(lines) == count
+    seeds = derive_seeds(5, count)
+    assert [r["seed"] for r in sorted(lines, key=lambda r: r["i"])] == seeds
+
+
+def test_one_set_recreated_alone(tmp_path, capsys):
+    recs = list(poisson_many(3, 200, [str(tmp_path / "{i}.npz")], seed=11, backend="exact",
+                             jobs=1))
+    rec = next(r for r in recs if r["i"] == 2)
+    rc, _, _ = _cli(["poisson", "-n", 200, "--seed", rec["seed"], "--backend", "exact",
+                     "-o", tmp_path / "alone.npz", "-q"], capsys)
+    assert rc == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "alone.npz")["points"],
+                                  np.load(tmp_path / "2.npz")["points"])
+
+
+def test_manifest_ignores_a_torn_line(tmp_path):
+    path = tmp_path / "m.jsonl"
+    m = Manifest(path)
+    m.append({"outputs": ["a"], "status": "ok"})
+    with open(path, "ab") as fh:
+        fh.write(b'{"outputs": ["b"], "sta')  # a power cut mid-line
+    assert m.finished() == {("a",): {"outputs": ["a"], "status": "ok"}}
+
+
+def test_one_input_writes_no_manifest(ctx, tmp_path, capsys):
+    img = _photos(tmp_path / "in")[0]
+    rc, _, _ = _cli(["stipple", img, "-n", 40, "-o", tmp_path / "one.npz", *QUICK_CLI, "-q"],
+                    capsys)
+    assert rc == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in", "one.npz"]
+
+
+# ------------------------------------------------------- worker processes
+
+def test_jobs_two_gives_the_files_of_jobs_one(ctx, tmp_path):
+    photos = _photos(tmp_path / "in")
+    one = list(stipple_many(photos, [str(tmp_path / "j1" / "{stem}.svg"),
+                                     str(tmp_path / "j1" / "{stem}.npz")], n=80, jobs=1,
+                            **QUICK))
+    two = list(stipple_many(photos, [str(tmp_path / "j2" / "{stem}.svg"),
+                                     str(tmp_path / "j2" / "{stem}.npz")], n=80, jobs=2,
+                            devices=["cpu", "cpu"], **QUICK))
+    assert [r["status"] for r in one + two] == ["ok"] * 6
+    assert _files(tmp_path / "j1") == _files(tmp_path / "j2")
+    workers = {r["worker"] for r in two}
+    assert len(workers) == 2 and os.getpid() not in {int(w.split(":")[1]) for w in workers}
+    cores = batch.default_jobs()
+    for r in two:  # PoCL capped per worker, one device each
+        assert r["worker_env"]["POCL_MAX_PTHREAD_COUNT"] == str(max(1, cores // 2))
+        assert r["worker_env"]["DISKPACK_DEVICE"] == "cpu"
+
+
+# ------------------------------------------------------------------- Dask
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as lc, \
+            distributed.Client(lc) as client:
+        yield lc, client
+
+
+def test_dask_matches_jobs_one(ctx, tmp_path, cluster):
+    lc, client = cluster
+    photos = _photos(tmp_path / "in")
+    outs = lambda d: [str(tmp_path / d / "{stem}.svg"), str(tmp_path / d / "{stem}.npz")]
+    local = list(stipple_many(photos, outs("local"), n=80, jobs=1, **QUICK))
+    shared = list(stipple_many(photos, outs("dask"), n=80, client=client, **QUICK))
+    collected = list(stipple_many(photos, outs("collect"), n=80, client=client, collect=True,
+                                  **QUICK))
+    assert [r["status"] for r in local + shared + collected] == ["ok"] * 9
+    assert _files(tmp_path / "local") == _files(tmp_path / "dask") \
+        == _files(tmp_path / "collect")
+    worker_pids = {w.pid for w in lc.workers.values()}
+    for d, recs in (("dask", shared), ("collect", collected)):
+        lines = _manifest_lines(tmp_path / d / "manifest.jsonl")  # written by the client
+        assert sorted(r["input"] for r in lines) == sorted(photos)
+        assert {int(r["worker"].split(":")[1]) for r in lines} <= worker_pids
+        assert all("data" not in r for r in lines)
+
+
+def test_dask_poisson_and_cli_scheduler(tmp_path, cluster, capsys):
+    lc, _ = cluster
+    argv = ["poisson", "--count", 4, "-n", 256, "--seed", 3, "--backend", "exact", "--json",
+            "-q"]
+    rc, out, _ = _cli(argv + ["-o", f"{tmp_path}/d/{{i}}.npz", "--scheduler",
+                              lc.scheduler_address], capsys)
+    assert rc == 0 and json.loads(out.splitlines()[-1])["ok"] == 4
+    rc, out, _ = _cli(argv + ["-o", f"{tmp_path}/l/{{i}}.npz", "--jobs", 1], capsys)
+    assert rc == 0
+    assert _files(tmp_path / "d") == _files(tmp_path / "l")
+
+
+def test_scheduler_without_dask_names_the_extra(tmp_path):
+    code = ("import sys; sys.modules['distributed'] = None\n"
+            "from diskpack_cl.cli import main\n"
+            f"sys.exit(main(['poisson', '--count', '2', '-o', r'{tmp_path}/{{i}}.npz', "
+            "'--scheduler', 'tcp://127.0.0.1:1']))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 1
+    assert 'pip install "diskpack_cl[dask]"' in proc.stderr
+
+
+def test_item_identity_follows_the_input(tmp_path):
+    p = tmp_path / "a.npy"
+    np.save(p, np.zeros((3, 2)))
+    item = Item("relax", 0, str(p), None, {"eps": 0.8}, (str(tmp_path / "o.npz"),))
+    before = item.identity()
+    os.utime(p, ns=(1, 1))
+    assert item.identity() != before
