@@ -13,7 +13,9 @@ import time
 
 import numpy as np
 
-from diskpack_cl.geometry import Domain, exact_mic, normalized_radius
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import exact_mic
+from diskpack_cl.measures import normalized_radius
 from diskpack_cl.raster import PowerRaster, auto_grid
 from diskpack_cl.sampling import dart_throwing
 

@@ -5,7 +5,9 @@ cell's maximal inscribed circle; numpy/scipy refine every circle exactly in
 float64, so returned points and radii are certified.
 """
 
-from .geometry import Domain, certify_disks, exact_mic, normalized_radius
+from .domain import Domain
+from .geometry import certify_disks, exact_mic
+from .measures import normalized_radius
 from .relax import RadiusResult, RelaxResult, max_points_for_radius, relax_poisson
 from .sampling import dart_throwing, random_points
 from .stipple import StippleResult, error_diffusion, stipple

@@ -34,9 +34,11 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy import ndimage
-from scipy.spatial import Delaunay, QhullError, cKDTree
+from scipy.spatial import Delaunay, QhullError
 
-from .geometry import Domain, normalized_radius  # rho: exact on the unit torus, owned by geometry
+from . import measures
+from .domain import Domain
+from .measures import hexagonal_radius, normalized_radius
 
 __all__ = [
     "HEXAGONAL_SPACING",
@@ -309,29 +311,22 @@ def anisotropy(P, freqs):
 # distances
 
 
-def _r_max(n):
-    """Radius of the disks of a hexagonal packing of n points in unit area."""
-    return math.sqrt(1.0 / (2.0 * math.sqrt(3.0) * n))
+#: The plane (no wrap); nearest-neighbour distances do not use its size.
+_PLANE = Domain(math.inf, math.inf, False)
 
 
-def _box(periodic):
-    """None (bounded plane) or the (W, H) of a torus, from ``periodic``."""
+def _domain(periodic):
+    """The domain ``periodic`` names: a Domain, True (unit torus), (W, H) (torus) or False (plane)."""
     if isinstance(periodic, Domain):
-        return np.array([periodic.width, periodic.height]) if periodic.periodic else None
+        return periodic
     if periodic is True:
-        return np.array([1.0, 1.0])
+        return Domain.torus()
     if periodic is False or periodic is None:
-        return None
+        return _PLANE
     box = np.asarray(periodic, dtype=np.float64)
     if box.shape != (2,) or not np.all(box > 0):
         raise ValueError(f"periodic must be True, False or a domain size (W, H) > 0, got {periodic!r}")
-    return box
-
-
-def _wrap(points, box):
-    q = np.mod(points, box)
-    q[q >= box] = 0.0  # mod of -tiny can round to exactly the box size
-    return q
+    return Domain(float(box[0]), float(box[1]), True)
 
 
 def nearest_neighbor_distances(points, periodic=True):
@@ -357,17 +352,7 @@ def nearest_neighbor_distances(points, periodic=True):
     >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]], periodic=False)
     array([0.9, 0.9])
     """
-    p = _as_points(points)
-    if len(p) < 2:
-        raise ValueError("need at least 2 points")
-    box = _box(periodic)
-    if box is not None:
-        p = _wrap(p, box)
-        tree = cKDTree(p, boxsize=box)
-    else:
-        tree = cKDTree(p)
-    dist, _ = tree.query(p, k=2)
-    return dist[:, 1]
+    return measures.nearest_neighbor_distances(_as_points(points), _domain(periodic))
 
 
 def mean_normalized_radius(points):
@@ -390,7 +375,7 @@ def mean_normalized_radius(points):
     True
     """
     p = _as_points(points)
-    return float(nearest_neighbor_distances(p, periodic=True).mean() / 2.0 / _r_max(len(p)))
+    return float(nearest_neighbor_distances(p, periodic=True).mean() / 2.0 / hexagonal_radius(len(p)))
 
 
 # ---------------------------------------------------------------------------
@@ -404,7 +389,7 @@ class HexaticOrder(NamedTuple):
     mean: float
 
 
-def _torus_delaunay(p, box):
+def _torus_delaunay(p, domain):
     """Delaunay of p plus ghost copies near the edges, grown until certified.
 
     Returns (all_points, tri); vertices ``0 .. n-1`` are the original points.
@@ -413,18 +398,11 @@ def _torus_delaunay(p, box):
     copy, i.e. it is a triangle of the periodic Delaunay triangulation.
     """
     n = len(p)
+    box = domain.size
     margin = 3.0 * math.sqrt(box[0] * box[1] / n)  # about three spacings
     while True:
         m = np.minimum(margin, box)
-        ghosts = [p]
-        for sx in (-1, 0, 1):
-            for sy in (-1, 0, 1):
-                if sx == 0 and sy == 0:
-                    continue
-                q = p + box * np.array([sx, sy])
-                sel = np.all((q >= -m) & (q <= box + m), axis=1)
-                ghosts.append(q[sel])
-        allp = np.concatenate(ghosts)
+        allp, _ = domain.images(p, m)
         tri = Delaunay(allp)
         simp = tri.simplices[(tri.simplices < n).any(axis=1)]
         centre, r = _circumcircles(allp[simp[:, 0]], allp[simp[:, 1]], allp[simp[:, 2]])
@@ -496,11 +474,11 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
     if n < 3:
         raise ValueError("need at least 3 points")
     if periodic:
-        box = np.array([float(width), float(height)])
-        if not np.all(box > 0):
+        if not (width > 0 and height > 0):
             raise ValueError(f"width and height must be positive, got {width} x {height}")
-        p = _wrap(p, box)
-        allp, tri = _torus_delaunay(p, box)
+        dom = Domain(float(width), float(height), True)
+        p = dom.wrap(p)
+        allp, tri = _torus_delaunay(p, dom)
     else:
         allp = p
         try:

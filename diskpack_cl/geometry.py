@@ -1,4 +1,4 @@
-"""Exact float64 geometry: domains, certified maximal inscribed circles of power cells."""
+"""Exact float64 geometry: certified maximal inscribed circles of power cells, disk certificates."""
 
 from __future__ import annotations
 
@@ -6,46 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Domain"]
+from .domain import Domain
+from .measures import kdtree
+from .measures import coincident_pairs, min_distance, normalized_radius  # noqa: F401  (moved; old imports)
 
-
-@dataclass(frozen=True)
-class Domain:
-    """The plane region the points live in.
-
-    ``Domain.torus()`` is the unit torus [0,1)^2 (periodic); ``Domain.rect(W, H)``
-    is the closed rectangle [0,W] x [0,H], used for images in pixel units.
-    """
-
-    width: float = 1.0
-    height: float = 1.0
-    periodic: bool = True
-
-    @classmethod
-    def torus(cls):
-        return cls(1.0, 1.0, True)
-
-    @classmethod
-    def rect(cls, width, height):
-        if not (width > 0 and height > 0):
-            raise ValueError(f"domain size must be positive, got {width} x {height}")
-        return cls(float(width), float(height), False)
-
-    @property
-    def area(self):
-        return self.width * self.height
-
-    def wrap(self, points):
-        """Wrap points into [0,W) x [0,H) (periodic domains only)."""
-        p = np.asarray(points, dtype=np.float64)
-        size = np.array([self.width, self.height])
-        q = np.mod(p, size)
-        q[q >= size] = 0.0  # mod of -tiny can round to exactly `size`
-        return q
-
-
-__all__ += ["MIC", "exact_mic", "chebyshev_center_linprog", "normalized_radius",
-            "min_distance", "Certificate", "certify_disks", "coincident_pairs"]
+__all__ = ["MIC", "exact_mic", "chebyshev_center_linprog", "Certificate", "certify_disks"]
 
 
 def _sites_tree(points, domain, margin, lift=None):
@@ -57,23 +22,7 @@ def _sites_tree(points, domain, margin, lift=None):
     """
     from scipy.spatial import cKDTree
 
-    n = len(points)
-    if not domain.periodic:
-        pts = points if lift is None else np.column_stack([points, lift])
-        return cKDTree(pts), points, np.arange(n)
-    size = np.array([domain.width, domain.height])
-    reach = int(np.ceil(margin / min(size)))
-    pos, gid = [points], [np.arange(n)]
-    for sx in range(-reach, reach + 1):
-        for sy in range(-reach, reach + 1):
-            if sx == 0 and sy == 0:
-                continue
-            q = points + size * (sx, sy)
-            keep = np.all((q >= -margin) & (q <= size + margin), axis=1)
-            pos.append(q[keep])
-            gid.append(np.nonzero(keep)[0])
-    pos = np.concatenate(pos)
-    gid = np.concatenate(gid)
+    pos, gid = domain.images(points, margin)
     pts = pos if lift is None else np.column_stack([pos, lift[gid]])
     return cKDTree(pts), pos, gid
 
@@ -715,54 +664,6 @@ def chebyshev_center_linprog(normals, beta):
     return res.x[:2], res.x[2]
 
 
-def min_distance(points, domain=Domain.torus()):
-    """Smallest pairwise distance (periodic on a torus), exact.
-
-    Examples
-    --------
-    >>> round(min_distance([[0.05, 0.5], [0.95, 0.5]]), 12)
-    0.1
-    """
-    from scipy.spatial import cKDTree
-
-    X = np.asarray(points, np.float64)
-    if len(X) < 2:
-        raise ValueError("need at least 2 points")
-    if domain.periodic:
-        X = domain.wrap(X)
-        tree = cKDTree(X, boxsize=(domain.width, domain.height))
-    else:
-        tree = cKDTree(X)
-    d, _ = tree.query(X, k=2)
-    return float(d[:, 1].min())
-
-
-def normalized_radius(points, domain=Domain.torus()):
-    """Normalized Poisson disk radius rho = (d_min / 2) / r_max on the unit torus.
-
-    ``r_max = sqrt(A / (2 sqrt(3) n))`` is the disk radius of the densest
-    (hexagonal) packing of n points in area A (Lagae and Dutre 2008).
-
-    Examples
-    --------
-    >>> pts = np.random.default_rng(0).random((256, 2))
-    >>> bool(0 < normalized_radius(pts) < 1)
-    True
-    """
-    n = len(points)
-    rmax = np.sqrt(domain.area / (2 * np.sqrt(3) * n))
-    return 0.5 * min_distance(points, domain) / rmax
-
-
-def coincident_pairs(points, domain=Domain.torus(), tol=0.0):
-    """Index pairs (i, j) of points closer than `tol` (identical when tol = 0)."""
-    from scipy.spatial import cKDTree
-
-    X = np.asarray(points, np.float64)
-    tree = cKDTree(domain.wrap(X), boxsize=(domain.width, domain.height)) if domain.periodic else cKDTree(X)
-    return np.array(sorted(tree.query_pairs(max(tol, 0.0), output_type="set")), dtype=np.intp).reshape(-1, 2)
-
-
 @dataclass
 class Certificate:
     """Exact float64 check that disks lie in the domain and are pairwise disjoint."""
@@ -791,24 +692,20 @@ def certify_disks(centers, radii, domain):
     >>> cert.valid
     True
     """
-    from scipy.spatial import cKDTree
-
     C = np.asarray(centers, np.float64)
     r = np.asarray(radii, np.float64)
     if len(C) == 0:
         return Certificate(True, np.inf, 0, True, True)
     if not (np.all(np.isfinite(C)) and np.all(np.isfinite(r)) and np.all(r >= 0)):
         return Certificate(False, -np.inf, 0, False, False)
+    C, tree = kdtree(C, domain)
     if domain.periodic:
-        C = domain.wrap(C)
-        tree = cKDTree(C, boxsize=(domain.width, domain.height))
         edge_gap = np.inf
         inside = True
     else:
         edge = np.minimum.reduce([C[:, 0], domain.width - C[:, 0], C[:, 1], domain.height - C[:, 1]])
         edge_gap = float(np.min(edge - r))
         inside = edge_gap >= 0
-        tree = cKDTree(C)
     rmax = float(r.max())
     i, j = _query_pairs(tree, C, r + rmax)
     keep = j > i

@@ -7,7 +7,7 @@ periodic (minimum image on the unit torus).
 
 Radii follow the paper's normalisation: for ``n`` points the hexagonal packing
 radius is ``r_max = sqrt(1 / (2 sqrt(3) n))`` and the normalized Poisson disk
-radius of a set is ``rho = (d_min / 2) / r_max``.
+radius of a set is ``rho = (d_min / 2) / r_max`` (both in :mod:`diskpack_cl.measures`).
 """
 
 from __future__ import annotations
@@ -16,30 +16,18 @@ import warnings
 
 import numpy as np
 
+from .measures import hexagonal_radius, normalized_radius
+
 __all__ = [
     "DartThrowingWarning",
     "bridson",
     "dart_throwing",
-    "hexagonal_radius",
     "random_points",
 ]
 
 
 class DartThrowingWarning(UserWarning):
     """Dart throwing could not place n points at the requested radius and shrank it."""
-
-
-def hexagonal_radius(n):
-    """Disk radius of the densest (hexagonal) packing of `n` disks on the unit torus.
-
-    Examples
-    --------
-    >>> round(hexagonal_radius(1024), 6)
-    0.01679
-    """
-    if n < 1:
-        raise ValueError(f"n must be at least 1, got {n}")
-    return float(np.sqrt(1.0 / (2.0 * np.sqrt(3.0) * n)))
 
 
 def _rng(seed):
@@ -52,17 +40,6 @@ def _check_n(n, minimum=1):
     if n < minimum:
         raise ValueError(f"n must be at least {minimum}, got {n}")
     return int(n)
-
-
-def _torus_rho(points):
-    """Normalized Poisson disk radius with a periodic cKDTree (independent helper)."""
-    from scipy.spatial import cKDTree
-
-    n = len(points)
-    if n < 2:
-        return float("nan")
-    dist, _ = cKDTree(points, boxsize=1.0).query(points, k=2)
-    return float(dist[:, 1].min() / 2.0 / hexagonal_radius(n))
 
 
 def random_points(n, seed=None):
@@ -288,7 +265,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     if not full_output:
         return pts
     info = {"rel_radius_requested": float(rel_radius), "rel_radius": rel, "radius": r,
-            "shrinks": shrinks, "darts": darts_total, "rho": _torus_rho(pts)}
+            "shrinks": shrinks, "darts": darts_total, "rho": normalized_radius(pts) if len(pts) >= 2 else float("nan")}
     return pts, info
 
 

@@ -27,11 +27,12 @@ from pathlib import Path
 import numpy as np
 
 from diskpack_cl import analysis
-from diskpack_cl.geometry import Domain, min_distance, normalized_radius
+from diskpack_cl.domain import Domain
+from diskpack_cl.measures import hexagonal_radius, min_distance, normalized_radius
 from diskpack_cl.image import load_gray
 from diskpack_cl.raster import PowerRaster
 from diskpack_cl.relax import max_points_for_radius, relax_poisson
-from diskpack_cl.sampling import bridson, dart_throwing, hexagonal_radius, random_points
+from diskpack_cl.sampling import bridson, dart_throwing, random_points
 from diskpack_cl.stipple import error_diffusion, stipple
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"

@@ -10,7 +10,7 @@ from scipy import ndimage
 from scipy.spatial import Delaunay
 
 from diskpack_cl import analysis as A
-from diskpack_cl.geometry import Domain
+from diskpack_cl.domain import Domain
 
 def hex_lattice(m, r, shift=(0.0, 0.0)):
     """r rows of m points on the unit torus, odd rows offset by half a spacing (r even)."""

@@ -92,7 +92,7 @@ def test_relax_exact_csv(tmp_path, capsys):
     assert s["n"] == 100 and s["input"] == str(src)
     pts = read_points(out)
     assert ((pts >= 0) & (pts < 1)).all()
-    from diskpack_cl.geometry import normalized_radius
+    from diskpack_cl.measures import normalized_radius
 
     assert normalized_radius(pts) == pytest.approx(s["rho_final"], rel=1e-9)
 
@@ -608,7 +608,7 @@ def test_poisson_radius_real(tmp_path, capsys):
     assert cli.main(["poisson", "--radius", "0.12", "--backend", "exact", "-o", str(out),
                      "--json", "-q"]) == 0
     s = _json_line(capsys.readouterr().out)
-    from diskpack_cl.geometry import min_distance
+    from diskpack_cl.measures import min_distance
 
     pts = read_points(out)
     assert len(pts) == s["n"] >= 12 and min_distance(pts) / 2 >= 0.12

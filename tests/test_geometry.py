@@ -6,8 +6,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl import reference as ref
-from diskpack_cl.geometry import (Domain, certify_disks, coincident_pairs, exact_mic, min_distance,
-                                  normalized_radius)
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import certify_disks, exact_mic
 
 SETTINGS = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 RTOL = 1e-9
@@ -118,7 +118,8 @@ def test_exact_mic_weight_shift_invariance(case, shift):
 _CLUSTERED = """
 import numpy as np
 from diskpack_cl import reference as ref
-from diskpack_cl.geometry import Domain, exact_mic
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import exact_mic
 rng = np.random.default_rng(2)
 dom = Domain.torus()
 pts = rng.random((300, 2)) * 0.15
@@ -222,40 +223,6 @@ def test_exact_mic_cells_bad_input():
         exact_mic(pts, cells=[0, 3])
     with pytest.raises(ValueError, match=r"got -1 .. 1"):
         exact_mic(pts, cells=[1, -1])
-
-@settings(max_examples=40, deadline=None)
-@given(n=st.integers(2, 25), seed=st.integers(0, 2**32 - 1), periodic=st.booleans())
-def test_min_distance_and_normalized_radius_brute_force(n, seed, periodic):
-    rng = np.random.default_rng(seed)
-    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
-    pts = rng.random((n, 2)) * (dom.width, dom.height)
-    if periodic:
-        pts += rng.integers(-2, 3, (n, 2))      # unwrapped input
-    p0 = pts.copy()
-    d = ref.min_distance_ref(pts, dom)
-    assert abs(min_distance(pts, dom) - d) <= 1e-12
-    rmax = np.sqrt(dom.area / (2 * np.sqrt(3) * n))
-    assert abs(normalized_radius(pts, dom) - 0.5 * d / rmax) <= 1e-12
-    assert np.array_equal(pts, p0)
-
-
-def test_min_distance_across_the_seam():
-    assert min_distance([[0.01, 0.5], [0.99, 0.5]]) == pytest.approx(0.02, abs=1e-15)
-    assert min_distance([[0.01, 0.01], [0.99, 0.99]]) == pytest.approx(np.sqrt(2) * 0.02, abs=1e-15)
-    assert min_distance([[0.01, 0.5], [0.99, 0.5]], Domain.rect(1, 1)) == pytest.approx(0.98)
-    with pytest.raises(ValueError, match="need at least 2 points"):
-        min_distance([[0.5, 0.5]])
-
-
-def test_coincident_pairs():
-    pts = np.array([[0.25, 0.375], [1.25, -0.625], [0.5, 0.5], [0.5, 0.5], [0.5, 0.5 + 1e-9]])
-    assert coincident_pairs(pts).tolist() == [[0, 1], [2, 3]]
-    assert coincident_pairs(pts, Domain.rect(2, 2)).tolist() == [[2, 3]]
-    assert coincident_pairs(pts, tol=1e-8).tolist() == [[0, 1], [2, 3], [2, 4], [3, 4]]
-    assert coincident_pairs(np.random.default_rng(0).random((50, 2))).shape == (0, 2)
-    # seam: 0.0 and 1.0 are the same point on the torus
-    assert coincident_pairs([[0.0, 0.2], [1.0, 0.2]]).tolist() == [[0, 1]]
-
 
 def test_certify_known_disks():
     dom = Domain.rect(4, 2)

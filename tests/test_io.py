@@ -6,7 +6,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from diskpack_cl.geometry import Domain
+from diskpack_cl.domain import Domain
 from diskpack_cl.io import (POINT_FORMATS, atomic_write, check_points_path, read_points,
                             validate_points, write_points)
 

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diskpack_cl.geometry import normalized_radius
+from diskpack_cl.measures import normalized_radius
 
 SCRIPT = Path(__file__).resolve().parents[1] / "examples" / "paper_figures.py"
 

@@ -3,9 +3,8 @@
 import numpy as np
 import pytest
 
-from diskpack_cl.geometry import min_distance, normalized_radius
+from diskpack_cl.measures import hexagonal_radius, min_distance, normalized_radius
 from diskpack_cl.relax import max_points_for_radius
-from diskpack_cl.sampling import hexagonal_radius
 
 RADIUS = 0.8 * hexagonal_radius(100)  # rho 0.8 at n = 100, about 0.043
 

@@ -6,7 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl import reference as ref
-from diskpack_cl.geometry import Domain
+from diskpack_cl.domain import Domain
 
 pytest.importorskip("pyopencl")
 

@@ -5,7 +5,7 @@ import pytest
 
 from diskpack_cl import _device
 from diskpack_cl import reference as ref
-from diskpack_cl.geometry import Domain
+from diskpack_cl.domain import Domain
 from diskpack_cl.relax import relax_poisson
 
 

@@ -3,8 +3,8 @@ import warnings
 import numpy as np
 import pytest
 
-from diskpack_cl.sampling import (DartThrowingWarning, bridson, dart_throwing,
-                                  hexagonal_radius, random_points)
+from diskpack_cl.measures import hexagonal_radius
+from diskpack_cl.sampling import DartThrowingWarning, bridson, dart_throwing, random_points
 
 
 def _min_torus_distance(p):
@@ -18,15 +18,6 @@ def _min_torus_distance(p):
 
 def _rho(p):
     return _min_torus_distance(p) / 2 / hexagonal_radius(len(p))
-
-
-def test_hexagonal_radius():
-    assert hexagonal_radius(1) == pytest.approx((2 * np.sqrt(3)) ** -0.5)
-    # n disks of that radius cover pi / (2 sqrt 3) of the area: the hexagonal density
-    n = 1000
-    assert n * np.pi * hexagonal_radius(n) ** 2 == pytest.approx(np.pi / (2 * np.sqrt(3)))
-    with pytest.raises(ValueError, match="n must be at least 1"):
-        hexagonal_radius(0)
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 17, 300])

@@ -1,0 +1,110 @@
+"""Point-set measures, written once: packing radius, distances, rho, coincident pairs.
+
+Sampling (rho of a start set), relaxation (rho per iteration, the duplicate
+check), analysis (nearest-neighbour spacing) and geometry all use these.
+Distances are periodic (minimum image) on a torus and plain on a rectangle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .domain import Domain
+
+__all__ = ["HEXAGONAL_CELL", "hexagonal_radius", "nearest_neighbor_distances", "min_distance",
+           "normalized_radius", "coincident_pairs", "kdtree"]
+
+#: Area per point of the densest (hexagonal) packing of unit disks, ``2 sqrt(3)``:
+#: n disks of radius r pack at best into area ``2 sqrt(3) n r^2``.
+HEXAGONAL_CELL = 2.0 * np.sqrt(3.0)
+
+
+def hexagonal_radius(n, area=1.0):
+    """Disk radius of the densest (hexagonal) packing of `n` disks in `area`.
+
+    ``r_max = sqrt(area / (2 sqrt(3) n))`` (Lagae and Dutre 2008), the unit
+    of the normalized Poisson disk radius.
+
+    Examples
+    --------
+    >>> round(hexagonal_radius(1024), 6)
+    0.01679
+    """
+    if n < 1:
+        raise ValueError(f"n must be at least 1, got {n}")
+    return float(np.sqrt(area / (HEXAGONAL_CELL * n)))
+
+
+def kdtree(points, domain):
+    """``(X, tree)``: the points as float64 (wrapped on a torus) and a cKDTree over them.
+
+    On a torus the tree is periodic (``boxsize``), so its distances are
+    minimum-image distances.
+
+    Examples
+    --------
+    >>> X, tree = kdtree([[1.05, 0.5], [0.95, 0.5]], Domain.torus())
+    >>> round(float(tree.query(X[0], k=2)[0][1]), 12)
+    0.1
+    """
+    from scipy.spatial import cKDTree
+
+    X = np.asarray(points, np.float64)
+    if domain.periodic:
+        X = domain.wrap(X)
+        return X, cKDTree(X, boxsize=(domain.width, domain.height))
+    return X, cKDTree(X)
+
+
+def nearest_neighbor_distances(points, domain=Domain.torus()):
+    """Distance from each point to its nearest other point (n >= 2).
+
+    Examples
+    --------
+    >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]]).round(12).tolist()
+    [0.1, 0.1]
+    """
+    X, tree = kdtree(points, domain)
+    if len(X) < 2:
+        raise ValueError("need at least 2 points")
+    d, _ = tree.query(X, k=2)
+    return d[:, 1]
+
+
+def min_distance(points, domain=Domain.torus()):
+    """Smallest pairwise distance (periodic on a torus), exact.
+
+    Examples
+    --------
+    >>> round(min_distance([[0.05, 0.5], [0.95, 0.5]]), 12)
+    0.1
+    """
+    return float(nearest_neighbor_distances(points, domain).min())
+
+
+def normalized_radius(points, domain=Domain.torus()):
+    """Normalized Poisson disk radius ``rho = (d_min / 2) / r_max``.
+
+    ``r_max`` is :func:`hexagonal_radius` of n points in the domain's area
+    (Lagae and Dutre 2008): 1 for a hexagonal packing.
+
+    Examples
+    --------
+    >>> pts = np.random.default_rng(0).random((256, 2))
+    >>> bool(0 < normalized_radius(pts) < 1)
+    True
+    """
+    return 0.5 * min_distance(points, domain) / hexagonal_radius(len(points), domain.area)
+
+
+def coincident_pairs(points, domain=Domain.torus(), tol=0.0):
+    """Index pairs (i, j), i < j, of points closer than `tol` (identical when tol = 0).
+
+    Examples
+    --------
+    >>> coincident_pairs([[0.0, 0.2], [1.0, 0.2], [0.5, 0.5]]).tolist()
+    [[0, 1]]
+    """
+    _, tree = kdtree(points, domain)
+    pairs = tree.query_pairs(max(tol, 0.0), output_type="set")
+    return np.array(sorted(pairs), dtype=np.intp).reshape(-1, 2)

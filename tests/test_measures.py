@@ -1,0 +1,89 @@
+"""Point-set measures and the domain: packing radius, distances, rho, coincident pairs, images."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from diskpack_cl import reference as ref
+from diskpack_cl.domain import Domain
+from diskpack_cl.measures import (coincident_pairs, hexagonal_radius, min_distance,
+                                  nearest_neighbor_distances, normalized_radius)
+
+
+def test_hexagonal_radius():
+    assert hexagonal_radius(1) == pytest.approx((2 * np.sqrt(3)) ** -0.5)
+    # n disks of that radius cover pi / (2 sqrt 3) of the area: the hexagonal density
+    n = 1000
+    assert n * np.pi * hexagonal_radius(n) ** 2 == pytest.approx(np.pi / (2 * np.sqrt(3)))
+    with pytest.raises(ValueError, match="n must be at least 1"):
+        hexagonal_radius(0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 25), seed=st.integers(0, 2**32 - 1), periodic=st.booleans())
+def test_min_distance_and_normalized_radius_brute_force(n, seed, periodic):
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    if periodic:
+        pts += rng.integers(-2, 3, (n, 2))      # unwrapped input
+    p0 = pts.copy()
+    d = ref.min_distance_ref(pts, dom)
+    assert abs(min_distance(pts, dom) - d) <= 1e-12
+    rmax = np.sqrt(dom.area / (2 * np.sqrt(3) * n))
+    assert abs(normalized_radius(pts, dom) - 0.5 * d / rmax) <= 1e-12
+    assert np.array_equal(pts, p0)
+
+
+def test_min_distance_across_the_seam():
+    assert min_distance([[0.01, 0.5], [0.99, 0.5]]) == pytest.approx(0.02, abs=1e-15)
+    assert min_distance([[0.01, 0.01], [0.99, 0.99]]) == pytest.approx(np.sqrt(2) * 0.02, abs=1e-15)
+    assert min_distance([[0.01, 0.5], [0.99, 0.5]], Domain.rect(1, 1)) == pytest.approx(0.98)
+    with pytest.raises(ValueError, match="need at least 2 points"):
+        min_distance([[0.5, 0.5]])
+
+
+def test_coincident_pairs():
+    pts = np.array([[0.25, 0.375], [1.25, -0.625], [0.5, 0.5], [0.5, 0.5], [0.5, 0.5 + 1e-9]])
+    assert coincident_pairs(pts).tolist() == [[0, 1], [2, 3]]
+    assert coincident_pairs(pts, Domain.rect(2, 2)).tolist() == [[2, 3]]
+    assert coincident_pairs(pts, tol=1e-8).tolist() == [[0, 1], [2, 3], [2, 4], [3, 4]]
+    assert coincident_pairs(np.random.default_rng(0).random((50, 2))).shape == (0, 2)
+    # seam: 0.0 and 1.0 are the same point on the torus
+    assert coincident_pairs([[0.0, 0.2], [1.0, 0.2]]).tolist() == [[0, 1]]
+
+
+def test_nearest_neighbor_distances_plane_and_torus():
+    pts = [[0.05, 0.5], [0.95, 0.5], [0.5, 0.5]]
+    assert nearest_neighbor_distances(pts).tolist() == pytest.approx([0.1, 0.1, 0.45])
+    assert nearest_neighbor_distances(pts, Domain.rect(1, 1)).tolist() == pytest.approx([0.45, 0.45, 0.45])
+    with pytest.raises(ValueError, match="need at least 2 points"):
+        nearest_neighbor_distances([[0.5, 0.5]])
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), margin=st.sampled_from([0.05, 0.3, 1.0, 2.5]),
+       size=st.sampled_from([(1.0, 1.0), (3.0, 0.5)]))
+def test_domain_images_are_exactly_the_shifts_within_the_margin(seed, margin, size):
+    dom = Domain(size[0], size[1], True)
+    pts = np.random.default_rng(seed).random((20, 2)) * size
+    pos, site = dom.images(pts, margin)
+    assert np.array_equal(pos[:20], pts) and np.array_equal(site[:20], np.arange(20))
+    assert np.all((pos >= -margin) & (pos <= np.array(size) + margin))
+    k = np.round((pos - pts[site]) / size)          # every row is a whole-period shift
+    assert np.allclose(pos, pts[site] + k * size, rtol=0, atol=1e-12)
+    # brute force: all shifts up to 8 periods that land within the margin
+    want = sum(int(np.all((p + np.array(size) * (sx, sy) >= -margin)
+                          & (p + np.array(size) * (sx, sy) <= np.array(size) + margin)))
+               for p in pts for sx in range(-8, 9) for sy in range(-8, 9))
+    assert len(pos) == want
+    assert len({(s, *np.round(p, 9)) for s, p in zip(site, pos)}) == len(pos)   # no repeats
+
+
+def test_domain_images_rectangle_and_rect_check():
+    pts = np.array([[0.5, 0.5]])
+    pos, site = Domain.rect(1, 1).images(pts, 0.5)
+    assert pos.tolist() == [[0.5, 0.5]] and site.tolist() == [0]
+    with pytest.raises(ValueError, match="domain size must be positive, got 0 x 1"):
+        Domain.rect(0, 1)
