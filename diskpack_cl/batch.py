@@ -42,7 +42,7 @@ from pathlib import Path
 __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "POCL_THREAD_VARS", "DASK_HINT",
     "Batch", "Item", "Manifest", "expand_inputs", "render_template", "check_outputs",
-    "derive_seeds", "default_manifest", "default_jobs", "dots_for_image",
+    "derive_seeds", "default_manifest", "json_default", "default_jobs", "dots_for_image",
     "write_stipple_outputs", "run_item", "run_batch",
     "plan_stipple", "plan_poisson", "plan_relax",
     "stipple_many", "poisson_many", "relax_many",
@@ -367,7 +367,7 @@ class Manifest:
 
     def append(self, record):
         """Append one record as one line, atomically with respect to other lines."""
-        data = (json.dumps(record, default=_json_default) + "\n").encode()
+        data = (json.dumps(record, default=json_default) + "\n").encode()
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         try:
             os.write(fd, data)
@@ -376,7 +376,15 @@ class Manifest:
             os.close(fd)
 
 
-def _json_default(obj):
+def json_default(obj):
+    """``json.dumps(..., default=json_default)``: numpy scalars and arrays as numbers and lists.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> json.dumps({"k": np.float32(0.5), "a": np.arange(2)}, default=json_default)
+    '{"k": 0.5, "a": [0, 1]}'
+    """
     import numpy as np
 
     if isinstance(obj, np.generic):

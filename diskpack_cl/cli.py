@@ -26,6 +26,8 @@ import os
 import sys
 import time
 
+from diskpack_cl.batch import json_default
+
 __all__ = ["main"]
 
 PROG = "diskpack"
@@ -282,7 +284,7 @@ def _run_poisson_radius(args):
               f"{res.achieved_radius:.6g}, rho {res.rho:.4f}) after {len(res.trials)} trials "
               f"({res.seconds:.3g} s); wrote {args.output}", file=sys.stderr)
     if args.json:
-        print(json.dumps(summary, default=_json_default), flush=True)
+        print(json.dumps(summary, default=json_default), flush=True)
     return 0
 
 
@@ -577,18 +579,8 @@ def _run_stipple(args):
               f"{summary['iterations']} iterations in {summary['seconds']:.3g} s{travel}; wrote "
               + ", ".join(outputs), file=sys.stderr)
     if args.json:
-        print(json.dumps(summary, default=_json_default), flush=True)
+        print(json.dumps(summary, default=json_default), flush=True)
     return 0
-
-
-def _json_default(obj):
-    import numpy as np
-
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    return str(obj)
 
 
 def _add_analyze(subparsers):
@@ -773,7 +765,7 @@ def _run_analyze(args):
         else:
             numbers = _point_set_numbers(sets, kmax=args.kmax)
     if args.json:
-        print(json.dumps(numbers, default=_json_default), flush=True)
+        print(json.dumps(numbers, default=json_default), flush=True)
     if plot and not _have_matplotlib():
         raise ValueError(f"{_PLOT_HINT}; no figure written")
     if plot:
@@ -851,7 +843,7 @@ def _report_batch(args, batch):
             if rec["status"] == "failed":
                 failures.append({"input": name, "error": rec.get("error")})
             if args.json:
-                print(json.dumps(rec, default=_json_default), flush=True)
+                print(json.dumps(rec, default=json_default), flush=True)
             if bar is not None:
                 bar.set_postfix(ok=counts["ok"], failed=counts["failed"],
                                 skipped=counts["skipped"], refresh=False)
