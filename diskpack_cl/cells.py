@@ -25,7 +25,8 @@ import numpy as np
 
 from ._device import describe, get_context
 from ._kernels import build_program
-from .geometry import Domain, _solve_subsets, exact_mic
+from .domain import Domain
+from .geometry import _solve_subsets, exact_mic
 
 __all__ = ["CellMIC", "CellResult", "has_fp64", "FLAGS"]
 
@@ -131,6 +132,15 @@ class CellMIC:
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
         self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
         self._bufs = {}
+        self._order = None
+        self._warm()
+
+    def _warm(self):
+        """Run the kernel once on a few sites, so that PoCL's lazy compilation
+        is not charged to the first real call."""
+        dom = self.domain
+        pts = (np.random.default_rng(0).random((16, 2)) * (dom.width, dom.height))
+        self.solve(pts)
         self._order = None
 
     # -- buffers -----------------------------------------------------------
@@ -284,28 +294,32 @@ def _code_constraints(X, w, cells, codes, domain):
 
     codes >= 0 name site ``code // 9`` shifted by ``(code % 9 // 3 - 1,
     code % 3 - 1)`` periods; -1..-4 the left, right, top and bottom edges;
-    anything else is an unused slot (beta = 1e300, normal of the first).
+    anything else is an unused slot (beta = 1e300).  Returns arrays of
+    shape ``codes.shape + (2,)`` and ``codes.shape``.
     """
-    cells = np.broadcast_to(cells[:, None], codes.shape)
-    xi = X[cells]
-    site = codes >= 0
-    j = np.where(site, codes // 9, 0)
-    r = np.where(site, codes % 9, 4)
-    shift = np.stack([r // 3 - 1, r % 3 - 1], -1) * (domain.width, domain.height)
-    a = X[j] + shift - xi
-    L = np.hypot(a[..., 0], a[..., 1])
-    Ls = np.where(site & (L > 0), L, 1.0)
-    N = a / Ls[..., None]
-    B = (L * L - w[j] + w[cells]) / (2 * Ls)
-    edge = (codes <= -1) & (codes >= -4)
-    e = np.where(edge, -codes - 1, 0)
-    N[edge] = _EDGE_NORMALS[e[edge]]
-    lim = np.stack([xi[..., 0], domain.width - xi[..., 0], xi[..., 1], domain.height - xi[..., 1]], -1)
-    B[edge] = np.take_along_axis(lim, e[..., None], -1)[..., 0][edge]
-    unused = ~(site | edge)
-    B[unused] = 1e300
-    N[unused] = np.broadcast_to(N[..., :1, :], N.shape)[unused]
-    return N, B
+    c = codes.ravel()
+    i = np.repeat(cells, codes.shape[1])
+    N = np.zeros((len(c), 2))
+    N[:, 0] = 1.0
+    B = np.full(len(c), 1e300)
+    site = np.nonzero(c >= 0)[0]
+    j, r = np.divmod(c[site], 9)
+    ii = i[site]
+    a = X[j]    # shifted, then relative: the rounding of exact_mic's constraints
+    a[:, 0] += (r // 3 - 1) * domain.width
+    a[:, 1] += (r % 3 - 1) * domain.height
+    a -= X[ii]
+    L = np.hypot(a[:, 0], a[:, 1])
+    N[site] = a / L[:, None]
+    B[site] = (L * L - w[j] + w[ii]) / (2 * L)
+    if not domain.periodic:
+        edge = np.nonzero((c <= -1) & (c >= -4))[0]
+        e = -c[edge] - 1
+        xi = X[i[edge]]
+        lim = np.stack([xi[:, 0], domain.width - xi[:, 0], xi[:, 1], domain.height - xi[:, 1]], 1)
+        N[edge] = _EDGE_NORMALS[e]
+        B[edge] = lim[np.arange(len(edge)), e]
+    return N.reshape(codes.shape + (2,)), B.reshape(codes.shape)
 
 
 def refine_active(X, w, domain, active, near):

@@ -15,11 +15,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .geometry import Domain, coincident_pairs, exact_mic, normalized_radius
+from .domain import Domain
+from .engine import BACKENDS, make_engine
+from .geometry import exact_mic
+from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
 __all__ = ["relax_poisson", "RelaxResult", "BACKENDS", "max_points_for_radius", "RadiusResult"]
-
-BACKENDS = ("opencl", "exact", "auto")
 
 
 @dataclass
@@ -39,12 +40,16 @@ class RelaxResult:
     seconds : float
         Wall time of the iterations.
     timings : dict
-        Seconds per stage, summed over iterations: ``raster_labels``,
-        ``mic_estimate``, ``exact_refine``, ``rho``.
+        Seconds per stage, summed over iterations; the stages are the
+        engine's (:mod:`diskpack_cl.engine`): ``buckets``, ``device``,
+        ``refine``, ``fallback`` for the per-cell kernel; ``raster_labels``,
+        ``mic_estimate``, ``exact`` for the raster route; ``exact`` for scipy.
     backend, device : str
     stats : dict
-        Raster estimate errors and how often the exact stage widened its
-        constraint set.
+        ``engine`` (``cells``, ``raster`` or ``exact``), ``fallback`` (why
+        ``auto`` chose exact, if it did), and the engine's counts summed over
+        iterations (cells the device could not prove and their fallback; for
+        the exact solver, widened and linprog cells).
     """
 
     points: np.ndarray
@@ -80,29 +85,8 @@ def _check_points(points):
     return X
 
 
-def _engine(backend, n, grid, device):
-    """Return (raster or None, backend name, device description)."""
-    from ._device import NoOpenCLError
-
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if backend == "exact":
-        return None, "exact", "cpu (scipy)"
-    from .raster import PowerRaster, auto_grid
-
-    dom = Domain.torus()
-    shape = auto_grid(n, dom) if grid is None else (int(grid), int(grid))
-    try:
-        pr = PowerRaster(dom, shape, device=device)
-    except NoOpenCLError:
-        if backend == "auto":
-            return None, "exact", "cpu (scipy)"
-        raise
-    return pr, "opencl", pr.device_name
-
-
 def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, device=None,
-                  callback=None, patience=100):
+                  callback=None, patience=100, route="auto", verify=False, profile=False):
     """Relax a point set on the unit torus by disk packing until rho >= eps.
 
     Parameters
@@ -114,19 +98,28 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     max_iter : int
         Iteration cap.
     backend : {"auto", "opencl", "exact"}
-        ``opencl``: raster MIC estimates in OpenCL, refined exactly;
-        ``exact``: scipy only (the exact stage starts from the sites);
-        ``auto``: opencl when a device exists, else exact.  Both give the
-        same iterates (to rounding): the exact stage certifies its result
-        whatever its start.
+        ``opencl``: MICs on the OpenCL device, checked in float64 on the
+        host; ``exact``: scipy only; ``auto``: opencl when a device exists,
+        else exact.  All give the same iterates (to rounding): every MIC is
+        a certified LP optimum.  See :mod:`diskpack_cl.engine`.
     grid : int, optional
-        Raster size (grid x grid); default about 64 grid cells per point.
-    device : str, optional
-        OpenCL device (see :func:`diskpack_cl._device.get_context`).
+        Raster size (grid x grid) of the raster route; default about 16
+        grid cells per point.
+    device : str or pyopencl.Context, optional
+        OpenCL device (see :func:`diskpack_cl.get_context`).
     callback : callable, optional
         ``callback(iteration, rho)`` after each iteration.
     patience : int
         Stop as ``"stalled"`` when rho has not grown for this many iterations.
+    route : {"auto", "cells", "raster"}
+        OpenCL route: the float64 per-cell kernel (default where the device
+        has float64) or the float32 raster estimate refined on the host.
+    verify : bool
+        Check every iteration against an independent computation: the MIC
+        radii against :func:`diskpack_cl.geometry.exact_mic` (to 1e-9) and
+        rho against a scipy KD-tree; raises RuntimeError on a mismatch.
+    profile : bool
+        Profile the OpenCL kernels (``timings["kernel"]``).
 
     Returns
     -------
@@ -147,39 +140,26 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         raise ValueError(f"max_iter must be >= 0, got {max_iter}")
     n = len(X)
     dom = Domain.torus()
-    raster, used, devname = _engine(backend, n, grid, device)
-    timings = {"raster_labels": 0.0, "mic_estimate": 0.0, "exact_refine": 0.0, "rho": 0.0}
-    stats = {"cells_widened": 0, "cells_grown": 0, "linprog_fallbacks": 0, "exact_rounds_max": 0,
-             "estimate_radius_error_max": 0.0, "estimate_center_error_max": 0.0}
-    if raster is not None:
-        stats["grid"] = list(raster.shape)
-    rho = [normalized_radius(X)]
+    shape = None if grid is None else (int(grid), int(grid))
+    engine = make_engine(dom, n, backend, device=device, grid=shape, route=route, profile=profile)
+    timings, stats = {}, {"engine": engine.name}
+    if engine.fallback:
+        stats["fallback"] = engine.fallback
+    t_start = time.perf_counter()
+    # an engine that gives nearest-neighbour distances gives rho with the MICs
+    step = _mic(engine, X, timings, stats) if engine.gives_nn else None
+    rho = [_rho(X, step, verify)]
     best_at = 0
     reason = "eps" if rho[0] >= eps else "max_iter"
-    t_start = time.perf_counter()
     it = 0
     while rho[-1] < eps and it < max_iter:
         it += 1
-        estimate = None
-        if raster is not None:
-            est = raster.compute(X)
-            for k, v in est.timings.items():
-                timings[k] += v
-            estimate = (est.centers, est.radii)
-        t0 = time.perf_counter()
-        mic = exact_mic(X, None, dom, estimate=estimate)
-        t1 = time.perf_counter()
-        timings["exact_refine"] += t1 - t0
-        X = mic.centers
-        rho.append(normalized_radius(X))
-        timings["rho"] += time.perf_counter() - t1
-        s = mic.stats
-        stats["cells_widened"] += s["widened"]
-        stats["cells_grown"] += s["grown"]
-        stats["linprog_fallbacks"] += s["linprog"]
-        stats["exact_rounds_max"] = max(stats["exact_rounds_max"], s["rounds"])
-        for key in ("estimate_radius_error_max", "estimate_center_error_max"):
-            stats[key] = max(stats[key], s.get(key, 0.0))
+        step = step or _mic(engine, X, timings, stats)
+        if verify:
+            _verify_step(X, step)
+        X = step.centers
+        step = _mic(engine, X, timings, stats) if engine.gives_nn else None
+        rho.append(_rho(X, step, verify))
         if callback is not None:
             callback(it, rho[-1])
         if rho[-1] > rho[best_at] + 1e-12:
@@ -190,12 +170,46 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
             reason = "stalled"
             break
     seconds = time.perf_counter() - t_start
-    if raster is not None:
-        h = 1.0 / raster.shape[1]
-        stats["estimate_radius_error_max_cells"] = stats["estimate_radius_error_max"] / h
-        stats["estimate_center_error_max_cells"] = stats["estimate_center_error_max"] / h
-    stats["cells_widened_per_iteration"] = stats["cells_widened"] / max(it, 1) / n
-    return RelaxResult(X, np.array(rho), it, reason, seconds, timings, used, devname, stats)
+    _certify_rho(X, rho[-1])
+    return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
+                       "exact" if engine.name == "exact" else "opencl", engine.device, stats)
+
+
+def _mic(engine, X, timings, stats):
+    """One engine call, its stage seconds and counts added up."""
+    step = engine.mic(X)
+    for k, v in step.timings.items():
+        timings[k] = timings.get(k, 0.0) + v
+    for k, v in step.stats.items():
+        stats[k] = stats.get(k, 0) + v
+    return step
+
+
+def _rho(X, step, verify):
+    """rho of X: from the engine's nearest-neighbour distances, or a KD-tree."""
+    if step is None or step.nn is None:
+        return normalized_radius(X)
+    rho = 0.5 * float(step.nn.min()) / hexagonal_radius(len(X))
+    if verify:
+        _certify_rho(X, rho)
+    return rho
+
+
+def _certify_rho(X, rho):
+    """The independent check of rho: scipy's KD-tree on the torus."""
+    exact = normalized_radius(X)
+    if not abs(exact - rho) <= 1e-12:
+        raise RuntimeError(f"rho {rho!r} from the engine disagrees with the KD-tree's {exact!r}")
+
+
+def _verify_step(X, step):
+    """Raise when an engine's MICs are not the exact ones (exact_mic, 1e-9)."""
+    ref = exact_mic(X)
+    bad = np.abs(step.radii - ref.radii) > 1e-9
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise RuntimeError(f"{int(bad.sum())} MIC radii differ from exact_mic's (cell {i}: "
+                           f"{step.radii[i]!r} against {ref.radii[i]!r})")
 
 
 @dataclass
@@ -291,7 +305,6 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
     >>> res.n, bool(res.achieved_radius >= 0.043)
     (129, True)
     """
-    from .geometry import min_distance
     from .sampling import dart_throwing, random_points
 
     radius = float(radius)
@@ -311,10 +324,10 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
         raise ValueError(f"start must be 'dart', 'random' or a callable, got {start!r}")
 
     def target(n):
-        return radius * np.sqrt(2.0 * np.sqrt(3.0) * n)
+        return radius * np.sqrt(HEXAGONAL_CELL * n)
 
     def n_at(rho):
-        return int(np.floor((rho / radius) ** 2 / (2.0 * np.sqrt(3.0))))
+        return int(np.floor((rho / radius) ** 2 / HEXAGONAL_CELL))
 
     t_start = time.perf_counter()
     trials = []

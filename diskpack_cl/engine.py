@@ -1,0 +1,191 @@
+"""Engines: who computes the maximal inscribed circles (MICs) of a power diagram.
+
+Both algorithms ask their engine one question per disk-packing step:
+``engine.mic(points, weights)``, the certified MIC of every power cell.
+
+=========  ==============================================================
+engine     how
+=========  ==============================================================
+``cells``  OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
+           re-solved and checked on the host; the default on devices with
+           ``cl_khr_fp64``
+``raster`` OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
+           refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
+           devices without float64
+``exact``  :func:`diskpack_cl.geometry.exact_mic` alone (numpy/scipy, no OpenCL)
+=========  ==============================================================
+
+All three return the same MICs (to rounding, and exactly the same vertex
+where the MIC is unique): every answer is an LP optimum certified in float64.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .geometry import exact_mic
+
+__all__ = ["BACKENDS", "ROUTES", "MICStep", "make_engine", "ExactEngine", "RasterEngine", "CellEngine"]
+
+BACKENDS = ("opencl", "exact", "auto")
+ROUTES = ("auto", "cells", "raster")
+
+
+@dataclass
+class MICStep:
+    """One answer of an engine.
+
+    Attributes
+    ----------
+    centers : (n, 2) float64
+    radii : (n,) float64
+        Negative where the power cell is empty (``centers`` is the site there).
+    empty : (n,) bool
+    nn : (n,) float64 or None
+        Distance from each site to its nearest other site, when the engine
+        computed it on the way (the ``cells`` engine does).
+    stats : dict
+        Counts, summed by the caller over iterations.
+    timings : dict
+        Seconds per stage.
+    """
+
+    centers: np.ndarray
+    radii: np.ndarray
+    empty: np.ndarray
+    nn: np.ndarray | None = None
+    stats: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+
+class ExactEngine:
+    """MICs by :func:`diskpack_cl.geometry.exact_mic` (numpy/scipy only).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from diskpack_cl.domain import Domain
+    >>> step = ExactEngine(Domain.torus()).mic(np.random.default_rng(0).random((64, 2)))
+    >>> step.radii.shape
+    (64,)
+    """
+
+    name = "exact"
+    device = "cpu (scipy)"
+    gives_nn = False
+
+    def __init__(self, domain):
+        self.domain = domain
+
+    def mic(self, points, weights=None):
+        t0 = time.perf_counter()
+        m = exact_mic(points, weights, self.domain)
+        stats = {k: m.stats[k] for k in ("widened", "grown", "linprog")}
+        return MICStep(m.centers, m.radii, m.empty, None, stats, {"exact": time.perf_counter() - t0})
+
+
+class RasterEngine:
+    """MICs from the OpenCL raster estimate, refined by ``exact_mic``.
+
+    The route for devices without float64: the raster's argmax of the
+    distance to the cell boundary starts the exact solver.
+    """
+
+    name = "raster"
+    gives_nn = False
+
+    def __init__(self, domain, n, *, device=None, grid=None, profile=False):
+        from .raster import PowerRaster, auto_grid
+
+        shape = auto_grid(n, domain) if grid is None else grid
+        self.domain = domain
+        self.raster = PowerRaster(domain, shape, device=device)
+        self.device = self.raster.device_name
+
+    def mic(self, points, weights=None):
+        est = self.raster.compute(points, weights)
+        t0 = time.perf_counter()
+        m = exact_mic(points, weights, self.domain, estimate=(est.centers, est.radii))
+        timings = dict(est.timings, exact=time.perf_counter() - t0)
+        stats = {k: m.stats[k] for k in ("widened", "grown", "linprog")}
+        return MICStep(m.centers, m.radii, m.empty, None, stats, timings)
+
+
+class CellEngine:
+    """MICs from the float64 per-cell kernel, checked on the host."""
+
+    name = "cells"
+    gives_nn = True
+
+    def __init__(self, domain, *, device=None, profile=False):
+        from .cells import CellMIC
+
+        self.domain = domain
+        self.solver = CellMIC(domain, device=device, profile=profile)
+        self.device = self.solver.device_name
+
+    def mic(self, points, weights=None):
+        r = self.solver.solve(points, weights)
+        stats = {k: r.stats[k] for k in ("flagged", "rejected", "fallback")}
+        return MICStep(r.centers, r.radii, r.empty, r.nn, stats, r.timings)
+
+
+def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="auto", profile=False):
+    """The engine for `backend` (``opencl``, ``exact`` or ``auto``).
+
+    Parameters
+    ----------
+    domain : Domain
+    n : int
+        Number of sites (sizes the raster of the ``raster`` route).
+    backend : {"auto", "opencl", "exact"}
+        ``auto``: OpenCL when a device exists, else exact (see
+        :attr:`fallback` on the returned engine for why).
+    device : str or pyopencl.Context, optional
+    grid : tuple of int, optional
+        Raster shape ``(ny, nx)`` of the ``raster`` route.
+    route : {"auto", "cells", "raster"}
+        OpenCL route: ``auto`` takes ``cells`` on devices with float64.
+    profile : bool
+        Profile the kernels with OpenCL events.
+
+    Returns
+    -------
+    ExactEngine, RasterEngine or CellEngine
+        With an attribute ``fallback``: None, or the reason ``auto`` chose
+        the exact engine.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> make_engine(Domain.torus(), 100, "exact").name
+    'exact'
+    """
+    from ._device import NoOpenCLError, get_context
+
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if route not in ROUTES:
+        raise ValueError(f"route must be one of {ROUTES}, got {route!r}")
+    fallback = None
+    if backend == "exact":
+        engine = ExactEngine(domain)
+    else:
+        try:
+            ctx = get_context(device)
+        except NoOpenCLError as exc:
+            if backend == "opencl" or device is not None:
+                raise
+            engine, fallback = ExactEngine(domain), f"no OpenCL device ({exc})"
+        else:
+            from .cells import has_fp64
+
+            if route == "cells" or (route == "auto" and has_fp64(ctx)):
+                engine = CellEngine(domain, device=ctx, profile=profile)
+            else:
+                engine = RasterEngine(domain, n, device=ctx, grid=grid, profile=profile)
+    engine.fallback = fallback
+    return engine

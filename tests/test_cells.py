@@ -1,0 +1,216 @@
+"""The float64 per-cell MIC kernel against linprog, exact_mic and brute force."""
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from diskpack_cl import reference as ref
+from diskpack_cl.cells import FLAGS, NO_CODE, CellMIC, refine_active
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import exact_mic
+from diskpack_cl.sampling import dart_throwing
+
+SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+@pytest.fixture(scope="module")
+def solvers(ctx):
+    """One CellMIC per domain kind, built once (programs compile once)."""
+    cache = {}
+
+    def get(domain):
+        if domain not in cache:
+            cache[domain] = CellMIC(domain, device=ctx)
+        return cache[domain]
+    return get
+
+
+def _wrapped_diff(a, b, dom):
+    d = a - b
+    if dom.periodic:
+        d -= np.round(d)
+    return np.abs(d).max()
+
+
+def _same_as_exact(dom, pts, w, res, atol=1e-12):
+    m = exact_mic(pts, w, dom)
+    scale = max(dom.width, dom.height)
+    assert np.array_equal(res.empty, m.empty)
+    assert np.abs(res.radii - m.radii).max() <= atol * scale
+    live = ~m.empty
+    assert _wrapped_diff(res.centers[live], m.centers[live], dom) <= 1e-9 * scale
+
+
+@st.composite
+def cell_sets(draw):
+    periodic = draw(st.booleans())
+    dom = Domain.torus() if periodic else Domain.rect(draw(st.sampled_from([1.0, 7.0, 300.0])),
+                                                      draw(st.sampled_from([1.0, 3.0, 40.0])))
+    n = draw(st.integers(2, 40))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    kind = draw(st.sampled_from(["uniform", "cluster", "border", "power", "power-1000"]))
+    pts = rng.random((n, 2))
+    if kind == "cluster":      # most sites in a tiny patch
+        pts[: n // 2 + 1] = 0.3 + 1e-3 * rng.random((n // 2 + 1, 2))
+    if kind == "border" and not periodic:   # sites exactly on the rectangle's edges
+        pts[::2, 0] = rng.choice([0.0, 1.0], size=len(pts[::2]))
+    pts = pts * (dom.width, dom.height)
+    pts = np.unique(pts, axis=0)
+    spacing = np.sqrt(dom.area / len(pts))
+    w = None
+    if kind == "power":
+        w = (0.5 * spacing * rng.random(len(pts))) ** 2
+    elif kind == "power-1000":   # weights spanning a factor 1000: empty cells
+        w = (spacing * rng.random(len(pts))) ** 2 * 10.0 ** rng.uniform(-3, 0, len(pts))
+    return dom, pts, w
+
+
+@SETTINGS
+@given(cell_sets())
+def test_mic_matches_linprog_on_every_cell(solvers, case):
+    dom, pts, w = case
+    if len(pts) < 2:
+        return
+    res = solvers(dom).solve(pts, w)
+    scale = max(dom.width, dom.height)
+    for i in range(len(pts)):
+        r = ref.chebyshev_ref(pts, w, dom, i)
+        assert abs(res.radii[i] - r.radius) <= 1e-9 * scale, (i, res.radii[i], r.radius)
+        assert res.empty[i] == (r.radius < 0)
+        if r.unique and r.radius > 0:
+            assert _wrapped_diff(res.centers[i], r.center, dom) <= 1e-6 * scale
+
+
+@pytest.mark.parametrize("start", ["dart", "random", "relaxed"])
+def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start):
+    dom = Domain.torus()
+    n = 5000
+    if start == "dart":
+        pts = dart_throwing(n, seed=3)
+    else:
+        pts = np.random.default_rng(4).random((n, 2))
+    if start == "relaxed":
+        for _ in range(5):
+            pts = exact_mic(pts).centers
+    res = solvers(dom).solve(pts)
+    _same_as_exact(dom, pts, None, res)
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(pts, boxsize=1.0).query(pts, k=2)
+    assert np.abs(res.nn - d[:, 1]).max() <= 1e-15
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_nearest_neighbour_distance_by_brute_force(solvers, periodic):
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    pts = np.random.default_rng(10).random((300, 2)) * (dom.width, dom.height)
+    res = solvers(dom).solve(pts)
+    P, gid = ref.images(pts, dom)
+    d = np.hypot(*(pts[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
+    d[(np.arange(len(pts))[:, None] == gid[None, :]) & (d == 0)] = np.inf   # the site itself
+    assert np.abs(res.nn - d.min(axis=1)).max() <= 1e-15
+    assert res.min_distance == pytest.approx(ref.min_distance_ref(pts, dom), abs=1e-15)
+
+
+def test_power_cells_of_a_stippling_like_set(solvers):
+    """Dense dark parts, sparse light parts, weights from the local spacing."""
+    rng = np.random.default_rng(5)
+    W, H = 300.0, 200.0
+    dom = Domain.rect(W, H)
+    x = rng.random(20000) * W
+    keep = rng.random(20000) < (0.05 + x / W) ** 2      # density grows to the right
+    pts = np.column_stack([x[keep], rng.random(keep.sum()) * H])
+    spacing = 1.0 / np.sqrt((0.05 + pts[:, 0] / W) ** 2)
+    w = (0.3 * spacing) ** 2
+    res = solvers(dom).solve(pts, w)
+    _same_as_exact(dom, pts, w, res)
+    assert res.stats["fallback"] <= 0.01 * len(pts)
+
+
+def test_square_lattice_non_unique_mics(solvers):
+    """Every cell of a square lattice is a square: unique radius, unique centre
+    (the site); a rectangular lattice has a segment of centres: radius only."""
+    dom = Domain.torus()
+    g = (np.arange(16) + 0.5) / 16
+    pts = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    res = solvers(dom).solve(pts)
+    assert np.allclose(res.radii, 0.5 / 16, rtol=0, atol=1e-15)
+    assert _wrapped_diff(res.centers, pts, dom) <= 1e-12
+    gy = (np.arange(8) + 0.5) / 8
+    rect = np.stack(np.meshgrid(g, gy), -1).reshape(-1, 2)
+    r2 = solvers(dom).solve(rect)
+    assert np.allclose(r2.radii, 0.5 / 16, rtol=0, atol=1e-15)
+
+
+def test_near_coincident_sites(solvers):
+    dom = Domain.torus()
+    pts = np.random.default_rng(6).random((400, 2))
+    pts[1] = pts[0] + 1e-9
+    res = solvers(dom).solve(pts)
+    _same_as_exact(dom, pts, None, res)
+    assert res.nn[0] == pytest.approx(np.sqrt(2) * 1e-9, rel=1e-6)
+
+
+def test_flags_fire_when_the_gather_is_too_small(solvers):
+    """A site alone in a huge empty region: the rings never bound its cell,
+    or the proof would scan too far. The kernel must say so, and the answer
+    (from the host fallback) is still exact."""
+    dom = Domain.torus()
+    rng = np.random.default_rng(7)
+    pts = np.vstack([0.05 * rng.random((4000, 2)), [[0.55, 0.55]]])
+    res = solvers(dom).solve(pts)
+    assert res.stats["flagged"] >= 1
+    assert res.stats["unbounded"] + res.stats["scan_wide"] >= 1
+    _same_as_exact(dom, pts, None, res)
+
+
+def test_flags_fire_when_a_cell_has_too_many_tight_constraints(solvers):
+    """80 sites on a circle around one: the centre's cell has 80 sides, all
+    tight at its MIC; more than the list or the near-tight slots hold."""
+    dom = Domain.rect(10.0, 10.0)
+    t = np.arange(80) * 2 * np.pi / 80
+    ring = np.column_stack([5 + np.cos(t), 5 + np.sin(t)])
+    other = np.random.default_rng(8).random((300, 2)) * 10
+    other = other[np.hypot(*(other - 5).T) > 1.5]
+    pts = np.vstack([[5.0, 5.0], ring, other])
+    res = solvers(dom).solve(pts)
+    assert res.stats["list_full"] + res.stats["near_full"] >= 1
+    _same_as_exact(dom, pts, None, res)
+    assert res.radii[0] == pytest.approx(0.5, abs=1e-12)
+
+
+def test_host_refinement_rejects_what_it_can_check():
+    """refine_active re-solves the device's basis and rejects it when it is not
+    dual feasible, or when the vertex violates a reported near-tight constraint.
+    (That no other site cuts the disk is the kernel's proof; the outputs keep
+    their independent certificates.)"""
+    from scipy.spatial import cKDTree
+
+    dom = Domain.torus()
+    pts = dart_throwing(300, seed=9)
+    w = np.zeros(len(pts))
+    m = exact_mic(pts)
+    _, nb = cKDTree(pts, boxsize=1.0).query(pts, k=13)
+    # three sites on one side of the site: no multipliers l >= 0 exist
+    right = pts[None, :, 0] > pts[:, None, 0] + 0.01
+    dist = np.where(right, np.hypot(*(pts[None] - pts[:, None]).transpose(2, 0, 1)), 9.0)
+    side = np.argsort(dist, axis=1)[:, :3]
+    inner = pts[:, 0] < 0.8        # these have three sites to their right
+    q, R, ok = refine_active(pts, w, dom, 9 * side + 4, np.full((len(pts), 1), NO_CODE))
+    assert not np.any(ok[inner])
+    # the three nearest sites (dual feasible where they surround the site),
+    # with the twelve nearest reported as near-tight: a too-large vertex fails
+    q, R, ok = refine_active(pts, w, dom, 9 * nb[:, 1:4] + 4, 9 * nb[:, 4:] + 4)
+    wrong = np.abs(R - m.radii) > 1e-12
+    assert wrong.any() and not np.any(ok & wrong)
+
+
+def test_flag_bits_match_the_kernel():
+    import re
+
+    from diskpack_cl._kernels import kernel_dir
+
+    src = (kernel_dir() / "cell_mic.cl").read_text()
+    defined = {m[1].lower(): int(m[2]) for m in re.finditer(r"#define F_(\w+)\s+(\d+)", src)}
+    assert defined == FLAGS
