@@ -669,10 +669,9 @@ def _local_pool(todo, jobs, devices, collect):
                 yield fut.result()
             except BrokenProcessPool as exc:
                 yield _failed(futures[fut], f"worker process died: {exc}")
-    finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+    finally:  # stop the workers first: shutdown() forgets them
         _stop_workers(pool)
-        pool.shutdown(wait=True)
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _stop_workers(pool):
