@@ -174,6 +174,15 @@ class PowerRaster:
         nbx = max(1, int(np.sqrt(n / 2.0 * dom.width / dom.height)))
         nby = max(1, int(np.sqrt(n / 2.0 * dom.height / dom.width)))
         bw, bh = dom.width / nbx, dom.height / nby
+        if not dom.periodic:
+            # Square buckets: a ring search widens by the smaller bucket side
+            # per ring, so on an elongated image (1 x N, 2 x 50000) buckets
+            # as thin as the image would make it take N / 2 rings.  Buckets
+            # may overhang a rectangle (not a torus, whose wrap needs the
+            # exact period), so a side shorter than one bucket gets one.
+            bw = bh = max(bw, bh)
+            nbx = max(1, int(np.ceil(dom.width / bw)))
+            nby = max(1, int(np.ceil(dom.height / bh)))
         bxi = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
         byi = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
         bid = byi * nbx + bxi

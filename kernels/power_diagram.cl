@@ -74,8 +74,16 @@ inline int gather(int mode, float bound, float bound2, int skip,
     for (int r = 0; r <= rmax; ++r) {
         if (r > 0) {
             /* distance from the tile to buckets of ring >= r */
-            const float gap = fmin(fmin(x0 - (bx0 - r + 1) * bw, (bx1 + r) * bw - x1),
-                                   fmin(y0 - (by0 - r + 1) * bh, (by1 + r) * bh - y1));
+            float gl = x0 - (bx0 - r + 1) * bw, gr = (bx1 + r) * bw - x1;
+            float gb = y0 - (by0 - r + 1) * bh, gt = (by1 + r) * bh - y1;
+#if !PERIODIC
+            /* a side past the grid's edge has no buckets left: no bound */
+            if (bx0 - r < 0) gl = INFINITY;
+            if (bx1 + r >= nbx) gr = INFINITY;
+            if (by0 - r < 0) gb = INFINITY;
+            if (by1 + r >= nby) gt = INFINITY;
+#endif
+            const float gap = fmin(fmin(gl, gr), fmin(gb, gt));
             if (gap > 0.0f) {
                 if (mode == GATHER_OWNER && gap * gap - wmax > bound) break;
                 if (mode == GATHER_DIST && gap > bound + sqrt(fmax(bound2 + wmax, 0.0f))) break;
@@ -84,10 +92,23 @@ inline int gather(int mode, float bound, float bound2, int skip,
             if (bx0 - r < 0 && by0 - r < 0 && bx1 + r >= nbx && by1 + r >= nby) break;
 #endif
         }
-        for (int cy0 = by0 - r; cy0 <= by1 + r; ++cy0) {
+        /* the ring's rows; in a rectangle only those inside the grid, and
+           in its top and bottom rows only the columns inside the grid, so
+           that a ring costs what its existing buckets cost (elongated
+           images have rings far longer than the grid is wide) */
+        int cy_lo = by0 - r, cy_hi = by1 + r;
+#if !PERIODIC
+        cy_lo = max(cy_lo, 0);
+        cy_hi = min(cy_hi, nby - 1);
+#endif
+        for (int cy0 = cy_lo; cy0 <= cy_hi; ++cy0) {
             const int edge_row = (r == 0 || cy0 == by0 - r || cy0 == by1 + r);
             const int step = edge_row ? 1 : (bx1 - bx0 + 2 * r);
-            for (int cx0 = bx0 - r; cx0 <= bx1 + r; cx0 += (step > 0 ? step : 1)) {
+            int cx_lo = bx0 - r, cx_hi = bx1 + r;
+#if !PERIODIC
+            if (edge_row) { cx_lo = max(cx_lo, 0); cx_hi = min(cx_hi, nbx - 1); }
+#endif
+            for (int cx0 = cx_lo; cx0 <= cx_hi; cx0 += (step > 0 ? step : 1)) {
                 int cx = cx0, cy = cy0;
                 float sx, sy;
                 if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
@@ -166,9 +187,19 @@ void power_labels(
         const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
         float U1 = INFINITY, U2 = INFINITY;
         for (int r = 0; U2 == INFINITY || r <= 1; ++r) {
-            for (int dy = -r; dy <= r; ++dy) {
-                for (int dx = -r; dx <= r; ++dx) {
-                    if (max(abs(dx), abs(dy)) != r) continue;
+            /* ring r only (its perimeter), clipped to the grid in a rectangle */
+            int dy_lo = -r, dy_hi = r;
+#if !PERIODIC
+            dy_lo = max(dy_lo, -by);
+            dy_hi = min(dy_hi, nby - 1 - by);
+#endif
+            for (int dy = dy_lo; dy <= dy_hi; ++dy) {
+                const int edge = (dy == -r || dy == r);
+                int dx_lo = -r, dx_hi = r;
+#if !PERIODIC
+                if (edge) { dx_lo = max(dx_lo, -bx); dx_hi = min(dx_hi, nbx - 1 - bx); }
+#endif
+                for (int dx = dx_lo; dx <= dx_hi; dx += (edge ? 1 : 2 * r)) {
                     int cx = bx + dx, cy = by + dy;
                     float sx, sy;
                     if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
