@@ -26,7 +26,7 @@ import numpy as np
 from ._device import describe, get_context
 from ._kernels import build_program
 from .domain import Domain
-from .geometry import _solve_subsets, exact_mic
+from .geometry import _cramer, _vertex, exact_mic
 
 __all__ = ["CellMIC", "CellResult", "has_fp64", "FLAGS"]
 
@@ -289,37 +289,42 @@ class CellMIC:
         return CellResult(centers, R, empty, nn, stats, timings)
 
 
+_SHIFT = np.array([-1 - 1j, -1, -1 + 1j, -1j, 0, 1j, 1 - 1j, 1, 1 + 1j])   # code % 9 -> (sx, sy)
+
+
 def _code_constraints(X, w, cells, codes, domain):
     """Half-planes ``q . n <= beta`` of `cells` from the kernel's constraint codes.
 
     codes >= 0 name site ``code // 9`` shifted by ``(code % 9 // 3 - 1,
     code % 3 - 1)`` periods; -1..-4 the left, right, top and bottom edges;
     anything else is an unused slot (beta = 1e300).  Returns arrays of
-    shape ``codes.shape + (2,)`` and ``codes.shape``.
+    shape ``codes.shape + (2,)`` and ``codes.shape``.  Points are gathered
+    as complex numbers (one 16-byte load each, several times faster than
+    numpy's row gather) and lengths are ``sqrt(x^2 + y^2)``, as in the kernel.
     """
+    Z = np.ascontiguousarray(X).view(np.complex128).ravel()
     c = codes.ravel()
     i = np.repeat(cells, codes.shape[1])
-    N = np.zeros((len(c), 2))
-    N[:, 0] = 1.0
-    B = np.full(len(c), 1e300)
-    site = np.nonzero(c >= 0)[0]
-    j, r = np.divmod(c[site], 9)
-    ii = i[site]
-    a = X[j]    # shifted, then relative: the rounding of exact_mic's constraints
-    a[:, 0] += (r // 3 - 1) * domain.width
-    a[:, 1] += (r % 3 - 1) * domain.height
-    a -= X[ii]
-    L = np.hypot(a[:, 0], a[:, 1])
-    N[site] = a / L[:, None]
-    B[site] = (L * L - w[j] + w[ii]) / (2 * L)
-    if not domain.periodic:
-        edge = np.nonzero((c <= -1) & (c >= -4))[0]
+    site = c >= 0
+    j, r = np.divmod(np.where(site, c, 4), 9)
+    s = _SHIFT[r]
+    a = Z[j] + (s.real * domain.width + 1j * s.imag * domain.height) - Z[i]
+    L2 = a.real * a.real + a.imag * a.imag
+    L = np.sqrt(L2)
+    other = np.nonzero(~site | (L == 0))[0]
+    L[other] = 1.0
+    N = a / L
+    B = (L2 - w[j] + w[i]) / (2 * L) if w.any() else L2 / (2 * L)
+    N[other] = 1.0
+    B[other] = 1e300
+    edge = other[(c[other] <= -1) & (c[other] >= -4)]
+    if len(edge) and not domain.periodic:
         e = -c[edge] - 1
         xi = X[i[edge]]
         lim = np.stack([xi[:, 0], domain.width - xi[:, 0], xi[:, 1], domain.height - xi[:, 1]], 1)
-        N[edge] = _EDGE_NORMALS[e]
+        N[edge] = _EDGE_NORMALS[e] @ (1, 1j)
         B[edge] = lim[np.arange(len(edge)), e]
-    return N.reshape(codes.shape + (2,)), B.reshape(codes.shape)
+    return N.view(np.float64).reshape(codes.shape + (2,)), B.reshape(codes.shape)
 
 
 def refine_active(X, w, domain, active, near):
@@ -351,16 +356,15 @@ def refine_active(X, w, domain, active, near):
         optimum.
     """
     n = len(X)
-    cells = np.arange(n)
-    N, B = _code_constraints(X, w, cells, active, domain)
-    bad_code = ~((active >= 0) | ((active <= -1) & (active >= -4)))
-    q, R, ok = _solve_subsets(N, B, 1e-11 * max(domain.width, domain.height))
-    ok &= ~np.any(bad_code, axis=1)
+    tol = 1e-11 * max(domain.width, domain.height)
+    N, B = _code_constraints(X, w, np.arange(n), active, domain)
+    R, inv, ok = _cramer(N[..., 0], N[..., 1], B)
+    q = np.stack(_vertex(N[..., 0], N[..., 1], B, inv), 1)
+    ok &= np.all((active >= 0) | ((active <= -1) & (active >= -4)), axis=1)
     rows, cols = np.nonzero(near != NO_CODE)
     if len(rows):
         Nn, Bn = _code_constraints(X, w, rows, near[rows, cols][:, None], domain)
         slack = Bn[:, 0] - np.einsum("kj,kj->k", Nn[:, 0], q[rows]) - R[rows]
-        tol = 1e-11 * max(domain.width, domain.height)
         np.logical_and.at(ok, rows, slack >= -tol)
     return q, R, ok
 

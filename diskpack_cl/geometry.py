@@ -33,6 +33,36 @@ def _triples(m):
     return np.array(list(combinations(range(m), 3)), dtype=np.intp).reshape(-1, 3)
 
 
+def _cramer(a, b, beta):
+    """Dual side of the vertices of constraint triples ``(a_k, b_k) . q + R <= beta_k``.
+
+    The last axis holds the three constraints.  Cofactors of the last column
+    of the rows ``(a_k, b_k, 1)`` give both ``R = M^{-1} beta`` (third row)
+    and the multipliers ``l = M^{-T} e3``.  Returns ``(R, 1/det, good)``;
+    good: the triple is regular and dual feasible (l >= 0), so R bounds the
+    optimum from above.
+    """
+    e0 = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    e1 = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    e2 = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    det = e0 + e1 + e2
+    good = np.abs(det) > 1e-14
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / np.where(good, det, 1.0)
+        good &= (e0 * inv >= -1e-9) & (e1 * inv >= -1e-9) & (e2 * inv >= -1e-9)
+        R = (e0 * beta[..., 0] + e1 * beta[..., 1] + e2 * beta[..., 2]) * inv
+    return R, inv, good
+
+
+def _vertex(a, b, beta, inv):
+    """Centre ``(qx, qy)`` of the vertex of constraint triples (see :func:`_cramer`)."""
+    qx = ((b[..., 1] - b[..., 2]) * beta[..., 0] + (b[..., 2] - b[..., 0]) * beta[..., 1]
+          + (b[..., 0] - b[..., 1]) * beta[..., 2]) * inv
+    qy = ((a[..., 2] - a[..., 1]) * beta[..., 0] + (a[..., 0] - a[..., 2]) * beta[..., 1]
+          + (a[..., 1] - a[..., 0]) * beta[..., 2]) * inv
+    return qx, qy
+
+
 def _solve_subsets(N, B, tol, lead=None):
     """Chebyshev centres of the half-plane sets ``q . N[c,k] <= B[c,k]``.
 
@@ -55,26 +85,11 @@ def _solve_subsets(N, B, tol, lead=None):
     a = N[:, T, 0]                                         # (nc, t, 3)
     b = N[:, T, 1]
     beta = B[:, T]
-    # Cramer on rows (a_k, b_k, 1): cofactors of the last column give both
-    # R = M^{-1} beta (third row) and the multipliers l = M^{-T} e3
-    e0 = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    e1 = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    e2 = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    det = e0 + e1 + e2
-    good = np.abs(det) > 1e-14
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / np.where(good, det, 1.0)
-        good &= (e0 * inv >= -1e-9) & (e1 * inv >= -1e-9) & (e2 * inv >= -1e-9)
-        R = (e0 * beta[..., 0] + e1 * beta[..., 1] + e2 * beta[..., 2]) * inv
+    R, inv, good = _cramer(a, b, beta)
     rows = np.arange(nc)
 
     def vertex(pick):
-        aa, bb, be, iv = a[rows, pick], b[rows, pick], beta[rows, pick], inv[rows, pick]
-        qx = ((bb[:, 1] - bb[:, 2]) * be[:, 0] + (bb[:, 2] - bb[:, 0]) * be[:, 1]
-              + (bb[:, 0] - bb[:, 1]) * be[:, 2]) * iv
-        qy = ((aa[:, 2] - aa[:, 1]) * be[:, 0] + (aa[:, 0] - aa[:, 2]) * be[:, 1]
-              + (aa[:, 1] - aa[:, 0]) * be[:, 2]) * iv
-        return np.stack([qx, qy], 1)
+        return np.stack(_vertex(a[rows, pick], b[rows, pick], beta[rows, pick], inv[rows, pick]), 1)
 
     best = np.argmin(np.where(good, R, np.inf), axis=1)
     q = vertex(best)
@@ -84,11 +99,7 @@ def _solve_subsets(N, B, tol, lead=None):
     tie = np.nonzero(~ok & np.any(good, axis=1))[0]
     if len(tie):
         # degenerate ties among dual-feasible vertices: check them all
-        a_, b_, be, iv = a[tie], b[tie], beta[tie], inv[tie]
-        qx = ((b_[..., 1] - b_[..., 2]) * be[..., 0] + (b_[..., 2] - b_[..., 0]) * be[..., 1]
-              + (b_[..., 0] - b_[..., 1]) * be[..., 2]) * iv
-        qy = ((a_[..., 2] - a_[..., 1]) * be[..., 0] + (a_[..., 0] - a_[..., 2]) * be[..., 1]
-              + (a_[..., 1] - a_[..., 0]) * be[..., 2]) * iv
+        qx, qy = _vertex(a[tie], b[tie], beta[tie], inv[tie])
         Nt, Bt = N[tie], B[tie]
         sl = (Bt[:, None, :] - qx[..., None] * Nt[:, None, :, 0] - qy[..., None] * Nt[:, None, :, 1]
               - R[tie][..., None])
