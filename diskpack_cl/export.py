@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskpack_cl.io import atomic_write
+from diskpack_cl.io import atomic_write, check_writable
 
 __all__ = [
     "WRITERS",
@@ -465,7 +465,9 @@ def check_output_path(path):
     Raises
     ------
     ValueError
-        Unknown extension (the message lists the supported ones).
+        Unknown extension (the message lists the supported ones), ``path`` is
+        a folder, or its folder is not writable (a probe file is created
+        there and removed, see :func:`diskpack_cl.io.check_writable`).
     FileNotFoundError
         The output directory does not exist.
     """
@@ -476,9 +478,7 @@ def check_output_path(path):
             f"unknown output extension {ext or '(none)'!r} for {path}; supported: "
             + ", ".join(sorted(WRITERS))
         )
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise FileNotFoundError(f"output directory does not exist: {directory}")
+    check_writable(path)
     return ext
 
 

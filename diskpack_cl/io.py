@@ -37,6 +37,7 @@ __all__ = [
     "POINT_FORMATS",
     "atomic_write",
     "check_points_path",
+    "check_writable",
     "read_points",
     "validate_points",
     "write_points",
@@ -51,9 +52,11 @@ def atomic_write(path, mode="wb"):
     """Open a temporary file beside `path` and move it over `path` on success.
 
     Nothing is left behind when the body raises: the temporary file is removed
-    and an existing `path` is untouched. A new file gets the permissions that
-    ``open(path, "w")`` would give it (``0o666`` less the umask); a replaced
-    file keeps its permissions.
+    and an existing `path` is untouched; an ``OSError`` of the write (a
+    read-only or full file system, `path` a folder) names `path`, not the
+    temporary file. A new file gets the permissions that ``open(path, "w")``
+    would give it (``0o666`` less the umask); a replaced file keeps its
+    permissions.
 
     Examples
     --------
@@ -68,7 +71,10 @@ def atomic_write(path, mode="wb"):
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
         raise FileNotFoundError(f"output directory does not exist: {directory}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
+    except OSError as exc:
+        raise _named(exc, path) from exc
     try:
         # mkstemp creates 0600 files; give the result the mode a plain open() would
         # (or keep the mode of the file being replaced)
@@ -83,10 +89,17 @@ def atomic_write(path, mode="wb"):
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.errno and exc.filename in (None, tmp):
+            raise _named(exc, path) from exc
         raise
+
+
+def _named(exc, path):
+    """The OSError `exc` (of a temporary file) as one that names the target `path`."""
+    return type(exc)(exc.errno, exc.strerror or str(exc), str(path))
 
 
 def _umask():
@@ -99,16 +112,61 @@ def _suffix(path):
     return Path(path).suffix.lower()
 
 
+def check_writable(path):
+    """Raise unless :func:`atomic_write` can create `path`: checked before any work.
+
+    The folder must exist, `path` must not be a folder, and a real probe file
+    is created in the folder (where :func:`atomic_write` puts its temporary
+    file) and removed again, so a read-only file system, a folder without
+    write permission or a full disk is found before a long computation.
+
+    Raises
+    ------
+    FileNotFoundError
+        The output folder does not exist.
+    ValueError
+        `path` is a folder, or the probe cannot be created (the message
+        gives the reason, e.g. ``Read-only file system``).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> check_writable(os.path.join(d, "out.svg"))
+    >>> os.listdir(d)
+    []
+    >>> check_writable(d)
+    Traceback (most recent call last):
+    ...
+    ValueError: ... is a folder, not a file name
+    """
+    path = Path(os.fspath(path))
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise FileNotFoundError(f"{path}: output directory does not exist: {directory}")
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder, not a file name")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".probe", dir=directory)
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot write in {directory}: "
+                         f"{exc.strerror or exc}") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
 def check_points_path(path, *, for_writing=False):
     """Return the lower-case extension of `path`, or raise if it is unknown.
 
-    With ``for_writing=True`` also check that the output folder exists, so a
-    command can fail before a long computation rather than after it.
+    With ``for_writing=True`` also check that the file can be written
+    (:func:`check_writable`), so a command can fail before a long computation
+    rather than after it.
 
     Raises
     ------
     ValueError
-        The extension is not one of :data:`POINT_FORMATS`.
+        The extension is not one of :data:`POINT_FORMATS`, or (``for_writing``)
+        the path is a folder or its folder is not writable.
     FileNotFoundError
         ``for_writing`` and the output folder does not exist.
 
@@ -123,9 +181,7 @@ def check_points_path(path, *, for_writing=False):
             f"{path}: unknown point file extension {suffix or '(none)'!r}; "
             f"use one of {', '.join(POINT_FORMATS)}")
     if for_writing:
-        directory = Path(path).parent
-        if not directory.is_dir():
-            raise FileNotFoundError(f"{path}: output directory does not exist: {directory}")
+        check_writable(path)
     return suffix
 
 
