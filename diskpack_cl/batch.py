@@ -106,14 +106,16 @@ class Item:
     def identity(self):
         """The fields a manifest line must match for the item to be skipped.
 
-        The input's size and modification time stand for its content.
+        The input's size and modification time stand for its content. The
+        index ``i`` is not among them (a file added to a folder shifts the
+        indices of the others); a template with ``{i}`` puts it in the outputs.
 
         Examples
         --------
         >>> Item("poisson", 0, None, 7, {"n": 64}, ("a.npz",)).identity()["outputs"]
         ['a.npz']
         """
-        ident = {"kind": self.kind, "i": self.i, "input": self.input, "seed": self.seed,
+        ident = {"kind": self.kind, "input": self.input, "seed": self.seed,
                  "params": self.params, "write": self.write, "outputs": list(self.outputs)}
         if self.input is not None:
             try:
@@ -581,8 +583,7 @@ def run_item(item, *, device=None, collect=False, progress=None):
     import platform
 
     t0 = time.perf_counter()
-    record = item.identity()
-    record.update(status="failed", error=item.error)
+    record = {"i": item.i, **item.identity(), "status": "failed", "error": item.error}
     if item.error is None:
         try:
             with tempfile.TemporaryDirectory(prefix="diskpack-collect-") if collect \
@@ -646,7 +647,8 @@ def _run_in_worker(item, collect):
 
 
 def _failed(item, error):
-    return {**item.identity(), "status": "failed", "error": error, "finished": time.time()}
+    return {"i": item.i, **item.identity(), "status": "failed", "error": error,
+            "finished": time.time()}
 
 
 def _local_pool(todo, jobs, devices, collect):
@@ -778,6 +780,9 @@ def run_batch(items, *, manifest=None, overwrite=False, jobs=1, devices=None, cl
         identity and the earlier record's ``summary``.
     """
     man = Manifest(manifest) if manifest is not None else None
+    folder = os.path.dirname(manifest or "")
+    if folder and not os.path.isdir(folder):
+        raise FileNotFoundError(f"the manifest's folder does not exist: {folder}")
     finished = {} if (man is None or overwrite) else man.finished()
     todo = []
     for item in items:

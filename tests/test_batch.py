@@ -159,6 +159,18 @@ def test_rerun_skips_done_and_redoes_changed(tmp_path, capsys):
     assert len(_manifest_lines(tmp_path / "out" / "manifest.jsonl")) == 3 + 1 + 3 + 1 + 3
 
 
+def test_a_new_image_in_the_folder_leaves_the_others_done(ctx, tmp_path, capsys):
+    photos = tmp_path / "in"
+    _photos(photos)
+    argv = ["stipple", photos, "-n", 40, "-o", f"{tmp_path}/out/{{stem}}.npz", "--jobs", 1,
+            *QUICK_CLI, "--json", "-q"]
+    assert _cli(argv, capsys)[0] == 0
+    (photos / "aaa.png").write_bytes((photos / "camera.png").read_bytes())  # sorts first
+    rc, out, _ = _cli(argv, capsys)
+    summary = json.loads(out.splitlines()[-1])
+    assert (rc, summary["ok"], summary["skipped"]) == (0, 1, 3)
+
+
 def _kill_part_way(argv, manifest, after_lines, timeout=120):
     """Start the CLI as a child, SIGTERM it once the manifest has ``after_lines`` lines."""
     proc = subprocess.Popen([sys.executable, "-m", "diskpack_cl.cli", *map(str, argv)],
