@@ -862,6 +862,9 @@ def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
         raise ValueError("give exactly one of n, density (dots per megapixel) and dots_per_cm2")
     count = {"n": n, "density": density, "dots_per_cm2": dots_per_cm2}
     write = dict(write or {})
+    if dots_per_cm2 is not None:  # refused now, not once per image
+        dots_for_image(1, 1, dots_per_cm2=dots_per_cm2,
+                       **{k: write.get(k) for k in ("width_mm", "height_mm", "dpi")})
     params = {**{k: v for k, v in count.items() if v is not None}, **options}
     if allow_large:
         params["allow_large"] = True

@@ -105,6 +105,11 @@ def test_density_sets_n_per_image(tmp_path):
     recs = list(stipple_many([small, large], [str(tmp_path / "o" / "{parent}_{n}.npz")],
                              density=50000, **QUICK))
     assert sorted(r["summary"]["n"] for r in recs) == [80, 160]
+    with pytest.raises(ValueError, match="--dots-per-cm2 needs the print size"):
+        plan_stipple([small], [str(tmp_path / "{stem}.svg")], dots_per_cm2=10)
+    (item,) = plan_stipple([small], [str(tmp_path / "{stem}_{n}.svg")], dots_per_cm2=10,
+                           write={"width_mm": 100.0})
+    assert item.outputs[0].endswith("_1000.svg")  # 10 cm x 10 cm
 
 
 # ------------------------------------------------------------- bad inputs
