@@ -22,7 +22,9 @@ import time
 import numpy as np
 
 from diskpack_cl.image import load_gray, sample_image_path
-from diskpack_cl.stipple import SCHEDULE_OPTIONS, error_diffusion, stipple
+from diskpack_cl.dithering import error_diffusion
+from diskpack_cl.schedule import SCHEDULE_OPTIONS
+from diskpack_cl.stipple import stipple
 
 
 def image(size):

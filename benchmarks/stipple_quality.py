@@ -72,7 +72,7 @@ CONFIGS = {
     "paper": dict(schedule="paper"),
     # disk packing only, 60 iterations (gray radii)
     "pack": dict(schedule="pack"),
-    # the default (see stipple.SCHEDULE_OPTIONS["default"])
+    # the default (see schedule.SCHEDULE_OPTIONS["default"])
     "default": dict(schedule="default"),
     # ablations of the default (one change each)
     "default-gray": dict(schedule="default", radii="gray", floor=0.1),
@@ -120,7 +120,7 @@ def stipple_kwargs(name, extra):
     override = kw.pop("schedule_override", None)
     if override is not None:
         # the named schedule's options with another phase list
-        from diskpack_cl.stipple import SCHEDULE_OPTIONS
+        from diskpack_cl.schedule import SCHEDULE_OPTIONS
 
         opts = dict(SCHEDULE_OPTIONS[kw.pop("schedule")])
         opts.update(kw)
@@ -144,7 +144,7 @@ def run(image, n, spec, seed=0):
     kw = stipple_kwargs(name, extra)
     t = time.perf_counter()
     if kw.get("schedule") == []:
-        from diskpack_cl.stipple import error_diffusion
+        from diskpack_cl.dithering import error_diffusion
 
         pts = error_diffusion(gray, n, seed=seed)
         valid, iters = None, 0

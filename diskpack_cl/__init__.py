@@ -5,19 +5,29 @@ cell's maximal inscribed circle; numpy/scipy refine every circle exactly in
 float64, so returned points and radii are certified.
 """
 
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _version
+
 from .domain import Domain
 from .geometry import certify_disks, exact_mic
 from .measures import normalized_radius
 from .relax import RadiusResult, RelaxResult, max_points_for_radius, relax_poisson
 from .sampling import dart_throwing, random_points
-from .stipple import StippleResult, error_diffusion, stipple
+from ._device import NoOpenCLError, get_context, list_devices
+from .dithering import error_diffusion
+from .stipple import StippleResult, stipple
 from .export import write_stipple
 from .image import load_gray, sample_image_path
 
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
+    "NoOpenCLError", "get_context", "list_devices",
     "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleResult", "error_diffusion", "stipple", "write_stipple",
     "load_gray", "sample_image_path",
 ]
-__version__ = "0.1.0"
+
+try:  # the installed distribution's version (pyproject.toml), read once
+    __version__ = _version("diskpack_cl")
+except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
+    __version__ = "0+unknown"

@@ -4,9 +4,10 @@ Order of choice: the explicit ``device`` argument, then the environment
 variable ``DISKPACK_DEVICE``, then ``PYOPENCL_CTX``, then the first GPU, then
 the first CPU device (PoCL, installed from pip on Linux x86-64).
 
-A device string is ``"P"`` or ``"P:D"`` (platform and device indices, as in
-``PYOPENCL_CTX``), or a case-insensitive substring of the device or platform
-name (``"pocl"``, ``"nvidia"``, ``"cpu"``, ``"gpu"``).
+A device string is ``"P"`` or ``"P:D"`` (platform and device, each an index
+or a case-insensitive name substring, as pyopencl reads ``PYOPENCL_CTX``:
+``"0:1"``, ``"portable:0"``), or a case-insensitive substring of the device name,
+platform name or platform vendor (``"pocl"``, ``"nvidia"``), or ``"cpu"``/``"gpu"``.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ _CONTEXTS: dict = {}
 _FIX = (
     "install an OpenCL driver: on Linux x86-64 `pip install pocl-binary-distribution` "
     "gives a CPU device; elsewhere install PoCL or your GPU vendor's OpenCL runtime. "
-    "`--backend exact` works without OpenCL"
+    "Both algorithms also run without OpenCL on the exact backend"
 )
 
 
@@ -64,42 +65,52 @@ def list_devices():
     return rows
 
 
+def _available(pairs):
+    return ", ".join(f"{a}:{b} {d.name.strip()}" for a, b, _, d in pairs)
+
+
+def _matches(part, index, *names):
+    """A device-string part matches an index (digits) or a name substring (case-insensitive)."""
+    part = part.strip()
+    if part.isdigit():
+        return int(part) == index
+    return any(part.lower() in name.lower() for name in names)
+
+
 def _pick(spec):
+    """The device a device string names, or the default one (first GPU, else first device).
+
+    ``"P:D"``: platform P (index or name substring) and its device D (index
+    or name substring; empty: 0), as pyopencl reads ``PYOPENCL_CTX``
+    (``"portable:0"``, ``"0:1"``).  Without a colon: ``"P"`` (index: that
+    platform's first device), ``"gpu"``/``"cpu"``, or a substring of a
+    device or platform name.
+    """
     import pyopencl as cl
 
-    platforms = _platforms()
     pairs = []
-    for ip, p in enumerate(platforms):
+    for ip, p in enumerate(_platforms()):
         try:
             pairs += [(ip, idev, p, d) for idev, d in enumerate(p.get_devices())]
         except cl.Error:
             continue
     if not pairs:
         raise NoOpenCLError(f"OpenCL platforms exist but have no devices; {_FIX}")
-    if spec:
-        parts = spec.split(":")
-        if all(s.strip().isdigit() for s in parts if s.strip()) and parts[0].strip():
-            ip = int(parts[0])
-            idev = int(parts[1]) if len(parts) > 1 and parts[1].strip() else 0
-            for q in pairs:
-                if q[0] == ip and q[1] == idev:
-                    return q[3]
-            raise NoOpenCLError(
-                f"no OpenCL device {spec!r}; available: "
-                + ", ".join(f"{a}:{b} {d.name.strip()}" for a, b, _, d in pairs))
-        s = spec.lower()
-        kinds = {"gpu": cl.device_type.GPU, "cpu": cl.device_type.CPU}
-        for q in pairs:
-            d = q[3]
-            if (s in kinds and d.type & kinds[s]) or s in d.name.lower() or s in q[2].name.lower():
-                return d
-        raise NoOpenCLError(
-            f"no OpenCL device matches {spec!r}; available: "
-            + ", ".join(f"{a}:{b} {d.name.strip()}" for a, b, _, d in pairs))
-    for q in pairs:
-        if q[3].type & cl.device_type.GPU:
-            return q[3]
-    return pairs[0][3]
+    if not spec:
+        return next((q[3] for q in pairs if q[3].type & cl.device_type.GPU), pairs[0][3])
+    plat, colon, dev = spec.partition(":")
+    kinds = {"gpu": cl.device_type.GPU, "cpu": cl.device_type.CPU}
+    for ip, idev, p, d in pairs:
+        if colon:
+            hit = _matches(plat, ip, p.name, p.vendor) and _matches(dev or "0", idev, d.name)
+        elif spec.strip().isdigit():
+            hit = int(spec) == ip and idev == 0
+        else:
+            s = spec.strip().lower()
+            hit = (s in kinds and d.type & kinds[s]) or _matches(s, -1, d.name, p.name, p.vendor)
+        if hit:
+            return d
+    raise NoOpenCLError(f"no OpenCL device matches {spec!r}; available: {_available(pairs)}")
 
 
 def get_context(device=None):

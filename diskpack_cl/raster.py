@@ -17,7 +17,8 @@ import numpy as np
 
 from ._device import describe, get_context
 from ._kernels import build_program
-from .geometry import Domain
+from .domain import Domain
+from .labels import cell_centroids
 
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
@@ -117,7 +118,7 @@ class PowerRaster:
     Examples
     --------
     >>> import numpy as np
-    >>> from diskpack_cl.geometry import Domain
+    >>> from diskpack_cl.domain import Domain
     >>> pr = PowerRaster(Domain.torus(), (64, 64))
     >>> est = pr.compute(np.random.default_rng(0).random((50, 2)))
     >>> est.radii.shape, bool(np.all(est.radii > 0))
@@ -299,27 +300,5 @@ class PowerRaster:
         """
         if self._last is None:
             raise RuntimeError("centroids() needs a compute() first")
-        lab = self._last.labels.ravel()
-        n = len(self._pts)
-        ny, nx = self.shape
-        hx, hy = self.domain.width / nx, self.domain.height / ny
-        dens = np.ones(nx * ny) if density is None else np.asarray(density, np.float64).ravel()
-        if dens.size != nx * ny:
-            raise ValueError(f"density must have the raster shape {self.shape}")
-        iy, ix = np.divmod(np.arange(nx * ny), nx)
-        # offsets from the owning site, so that a cell crossing the seam of a
-        # torus averages its own contiguous piece
-        dx = (ix + 0.5) * hx - self._pts[lab, 0]
-        dy = (iy + 0.5) * hy - self._pts[lab, 1]
-        if self.domain.periodic:
-            dx -= self.domain.width * np.round(dx / self.domain.width)
-            dy -= self.domain.height * np.round(dy / self.domain.height)
-        mass = np.bincount(lab, dens, minlength=n)
-        sx = np.bincount(lab, dens * dx, minlength=n)
-        sy = np.bincount(lab, dens * dy, minlength=n)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            c = self._pts + np.stack([sx / mass, sy / mass], 1)
-        if self.domain.periodic:
-            c = self.domain.wrap(c)
-        return c, mass
+        return cell_centroids(self._last.labels, self._pts, density, self.domain)
 

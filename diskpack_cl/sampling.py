@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 
+from ._checks import check_count
 from .measures import hexagonal_radius, normalized_radius
 
 __all__ = [
@@ -34,14 +35,6 @@ def _rng(seed):
     return seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
 
 
-def _check_n(n, minimum=1):
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise ValueError(f"n must be an integer, got {n!r}")
-    if n < minimum:
-        raise ValueError(f"n must be at least {minimum}, got {n}")
-    return int(n)
-
-
 def random_points(n, seed=None):
     """`n` independent uniform points on the unit torus.
 
@@ -50,7 +43,7 @@ def random_points(n, seed=None):
     >>> random_points(3, seed=1).shape
     (3, 2)
     """
-    n = _check_n(n)
+    n = check_count(n)
     return _rng(seed).random((n, 2))
 
 
@@ -210,7 +203,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     >>> bool((p == p2).all()), info["shrinks"], info["rho"] >= 0.74
     (True, 0, True)
     """
-    n = _check_n(n)
+    n = check_count(n)
     if not 0.0 < rel_radius < 1.0:
         raise ValueError(f"rel_radius must be in (0, 1), got {rel_radius}")
     if not 0.0 < shrink < 1.0:
@@ -300,7 +293,7 @@ def bridson(n=None, *, radius=None, k=30, seed=None, max_tries=8):
         if not 0.0 < radius < 0.25:
             raise ValueError(f"radius must be in (0, 0.25), got {radius}")
         return _bridson_run(float(radius), int(k), rng)
-    n = _check_n(n, 2)
+    n = check_count(n, 2)
     radius = 0.725 * hexagonal_radius(n)  # Bridson with k=30 packs at rho ~ 0.727
     best = None
     for _ in range(max_tries):

@@ -4,26 +4,37 @@ Coordinates are pixel units: origin at the top-left pixel corner, x to the
 right, y down, so pixel (row r, col c) covers [c, c+1) x [r, r+1). Gray values
 are floats in [0, 1] with 1 = white; darkness is ``1 - gray``.
 
-The loop (:func:`stipple`):
+The stage is split by concept:
+
+- :mod:`diskpack_cl.dithering`: the start, :func:`error_diffusion`.
+- :mod:`diskpack_cl.radii`: radius mappings (:func:`radius_field`) and the
+  certified scale ``k`` (:func:`largest_valid_k`, :func:`certified_k`).
+- :mod:`diskpack_cl.schedule`: named schedules, their option defaults and
+  :class:`StippleOptions`, every option resolved and checked at once.
+- :mod:`diskpack_cl.stipple_engine`: MICs and centroids, OpenCL or exact.
+- this module: :func:`stipple`, a short driver over the steps
+  :func:`pack_step` (disk packing, and mix) and :func:`lloyd_step`, each
+  taking a :class:`StippleState` and returning the next one with its
+  measurements (one history entry).
+
+One iteration:
 
 1. Start: :func:`error_diffusion` of the darkness gives exactly ``n`` points.
-2. Disk-packing iteration: base radius ``r_i = max(I_i, floor) ** (gamma/2)``
-   with ``I_i`` the gray value of the pixel containing point ``i``; weights
-   ``w_i = (k r_i)^2``; bounded power diagram of the points in the image
-   rectangle on a grid of ``supersample`` cells per pixel side (OpenCL raster),
-   maximal inscribed circle (MIC) of each power cell (raster estimate refined
-   to the exact float64 Chebyshev centre with the rectangle's edges among the
-   constraints), points moved to the MIC centres, ``k = min_i R_i / r_i``.
-3. Lloyd iteration: density-weighted centroids (density = darkness) of the
-   Voronoi cells on the same raster (Secord 2002).
-3'. Mix iteration (the default schedule): a disk-packing step whose move is
+2. Disk-packing step: base radius ``r_i`` from the radius field at the pixel
+   holding point ``i``, weights ``w_i = (k r_i)^2``; the engine gives the
+   maximal inscribed circle (MIC) of each power cell in the image rectangle
+   (OpenCL raster estimate refined to the exact float64 Chebyshev centre, or
+   exact from the start), points move to the MIC centres, and ``k`` becomes
+   the ``k_quantile`` quantile of ``R_i / r_i`` (0: the minimum, the paper's).
+3. Mix step (the default schedule): a disk-packing step whose move is
    blended with the density-weighted centroid of the *same power cell*:
    ``x <- m + blend * (c - m)``, ``m`` the MIC centre, ``c`` the centroid.
    ``blend = 0`` is a disk-packing step.
-4. Final: radii re-sampled at the final positions and ``k`` set to the
+4. Lloyd step: density-weighted centroids of the Voronoi cells on the same
+   grid (Secord 2002); ``k`` is then the largest valid one.
+5. Final: radii re-sampled at the final positions and ``k`` set to the
    largest value for which all disks ``k r_i`` lie inside the image and are
-   pairwise disjoint; the result is certified by
-   :func:`diskpack_cl.geometry.certify_disks`.
+   pairwise disjoint, certified by :func:`diskpack_cl.certify_disks`.
 
 Radius mappings (:func:`radius_field`): ``"gray"`` is the paper's
 ``max(I, floor) ** (gamma/2)``; the ``floor`` on the gray value keeps black
@@ -57,46 +68,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = [
-    "StippleResult",
-    "stipple",
-    "error_diffusion",
-    "base_radii",
-    "radius_field",
-    "largest_valid_k",
-    "make_schedule",
-    "SCHEDULES",
-    "SCHEDULE_OPTIONS",
-]
+from ._timing import Stopwatch
+from .dithering import error_diffusion
+from .domain import Domain
+from .radii import certified_k, field_at, largest_valid_k, radius_field
+from .schedule import SCHEDULES, StippleOptions, make_schedule  # noqa: F401  (the CLI imports these two from here)
+from .stipple_engine import make_stipple_engine
 
-#: Named schedules: lists of (kind, iterations) or ("mix", iterations, blend),
-#: kind "pack", "lloyd" or "mix".
-SCHEDULES = {
-    # The paper's loop (section 5, Fig. 5): 40 disk-packing, 10 Lloyd, 40, 10, 20.
-    "paper": [("pack", 40), ("lloyd", 10), ("pack", 40), ("lloyd", 10), ("pack", 20)],
-    # Secord-style weighted Voronoi stippling, the baseline.
-    "lloyd": [("lloyd", 50)],
-    # Disk packing only (shows the paper's small holes, Fig. 5b).
-    "pack": [("pack", 60)],
-}
-# Disk packing blended with Lloyd (see :func:`stipple`, ``"mix"`` phases):
-# 35 steps of MIC + 0.5 (centroid - MIC), then 12 of MIC + 0.4 (centroid - MIC),
-# with the density-consistent radii. Measured in docs/stipple_quality.md.
-SCHEDULES["default"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
-
-#: Option defaults that come with a named schedule; explicit keyword arguments
-#: of :func:`stipple` override them. ``method="lloyd"`` uses ``"lloyd"``'s, and
-#: a schedule built from ``beta``/``lloyd``/``rounds`` uses ``"paper"``'s.
-SCHEDULE_OPTIONS = {
-    "paper": {"radii": "gray", "floor": 0.1, "blend": 0.0, "radius_sigma": 0.0,
-              "density_sigma": 0.0, "k_quantile": 0.0},
-    "lloyd": {"radii": "gray", "floor": 0.1, "blend": 0.0, "radius_sigma": 0.0,
-              "density_sigma": 0.0, "k_quantile": 0.0},
-    "pack": {"radii": "gray", "floor": 0.1, "blend": 0.0, "radius_sigma": 0.0,
-             "density_sigma": 0.0, "k_quantile": 0.0},
-    "default": {"radii": "density", "floor": 0.01, "blend": 0.5, "radius_sigma": 3.0,
-                "density_sigma": 0.5, "k_quantile": 0.15},
-}
+__all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step"]
 
 
 @dataclass
@@ -113,19 +92,23 @@ class StippleResult:
     k : float
         The final scale factor.
     base_radii : (n,) float64
-        ``r_i = max(I_i, floor) ** (gamma / 2)`` at the final positions.
-    certificate : object
-        The :func:`diskpack_cl.geometry.certify_disks` certificate.
+        The radius field (:func:`diskpack_cl.radii.radius_field`) at the
+        final positions.
+    certificate : Certificate
+        The :func:`diskpack_cl.certify_disks` certificate.
     history : list of dict
-        One entry per iteration: ``kind`` ("pack" or "lloyd"), ``iteration``,
-        ``k``, ``empty`` (empty power cells), ``moved`` (mean displacement, px),
-        ``seconds`` and per-stage seconds.
+        One entry per iteration: ``kind`` ("pack", "mix" or "lloyd"),
+        ``iteration``, ``k``, ``empty`` (empty power cells), ``moved`` (mean
+        displacement, px), ``seconds`` and per-stage seconds (``raster_s``,
+        ``exact_s``, ``centroids_s``).
     width, height : int
         Image size in pixels.
     timings : dict
         Total seconds per stage.
     params : dict
         The parameters used (for reports and ``--json``).
+    engine : str
+        ``"opencl"`` or ``"exact"`` (see :mod:`diskpack_cl.stipple_engine`).
     """
 
     points: np.ndarray
@@ -138,6 +121,7 @@ class StippleResult:
     height: int
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
+    engine: str = "opencl"
 
     @property
     def n(self):
@@ -165,442 +149,142 @@ class StippleResult:
         }
 
 
-# --------------------------------------------------------------------------
-# Start: error diffusion
-# --------------------------------------------------------------------------
 
 
-def _fs_wavefront(v):
-    """Multi-level Floyd-Steinberg error diffusion of ``v >= 0``.
+@dataclass(frozen=True)
+class StippleState:
+    """The loop's state between steps: points, the scale ``k``, packing steps done."""
 
-    Each pixel emits ``q = max(round(v + error), 0)`` points (so a pixel can
-    hold several when ``v > 1``), and its residual goes to the four usual
-    neighbours with weights 7/16, 3/16, 5/16, 1/16; error pushed across the
-    border is lost. Exactly the raster-order result, computed along
-    anti-diagonal wavefronts: pixel (r, c) only depends on pixels with a
-    smaller ``c + 2 r``, so each wavefront is one vectorized numpy step
-    (W + 2H steps instead of W * H Python iterations).
+    points: np.ndarray
+    k: float
+    packs: int = 0
 
-    Returns ``(counts, residual)``, both (H, W); residual is ``v + error - q``.
+
+@dataclass(frozen=True)
+class StippleStage:
+    """What every step works against: engine, options, radius field, centroid density."""
+
+    engine: object
+    options: StippleOptions
+    radius_field: np.ndarray
+    density: np.ndarray
+
+    @property
+    def size(self):
+        H, W = self.radius_field.shape
+        return W, H
+
+
+def _moved(old, new):
+    return float(np.mean(np.hypot(*(new - old).T)))
+
+
+def _add_timings(entry, seconds, names):
+    for name in names:
+        if name in seconds:
+            entry[f"{name}_s"] = seconds[name]
+
+
+def pack_step(state, stage, blend=0.0):
+    """One disk-packing step, blended towards the power-cell centroids when ``blend > 0`` (mix).
+
+    Returns ``(state, entry)``: the next state and this step's measurements
+    (``moved``, ``empty``, stage seconds); see the module docstring.
     """
-    H, W = v.shape
-    Wp = W + 2  # one pad column each side absorbs the error lost at the border
-    buf = np.zeros((H + 1) * Wp)
-    buf.reshape(H + 1, Wp)[:H, 1 : W + 1] = v
-    q = np.zeros((H + 1) * Wp)
-    rows = np.arange(H)
-    w7, w3, w5, w1 = 7 / 16, 3 / 16, 5 / 16, 1 / 16
-    for t in range(W + 2 * H - 2):
-        r0 = max(0, -((W - 1 - t) // 2))  # ceil((t - W + 1) / 2)
-        r1 = min(H - 1, t // 2)
-        r = rows[r0 : r1 + 1]
-        idx = r * Wp + (t - 2 * r + 1)
-        x = buf[idx]
-        qq = np.floor(x + 0.5)
-        np.maximum(qq, 0.0, out=qq)
-        e = x - qq
-        buf[idx] = e
-        q[idx] = qq
-        buf[idx + 1] += e * w7
-        buf[idx + (Wp - 1)] += e * w3
-        buf[idx + Wp] += e * w5
-        buf[idx + (Wp + 1)] += e * w1
-    counts = q.reshape(H + 1, Wp)[:H, 1 : W + 1].astype(np.int64)
-    resid = buf.reshape(H + 1, Wp)[:H, 1 : W + 1].copy()
-    return counts, resid
+    x, opt = state.points, stage.options
+    r = field_at(stage.radius_field, x)
+    w = (state.k * r) ** 2
+    refine = bool(opt.refine_every) and state.packs % opt.refine_every == 0
+    mic = stage.engine.mic(x, w, exact=refine)
+    entry = {}
+    _add_timings(entry, mic.timings, ("raster", "exact"))
+    ok = ~mic.empty & np.all(np.isfinite(mic.centers), axis=1)
+    newx = x.copy()
+    newx[ok] = mic.centers[ok]
+    if blend > 0:
+        cw = w if opt.blend_cell == "power" else np.zeros(len(x))
+        cen, mass, seconds = stage.engine.centroids(x, cw, stage.density)
+        okc = ok & (mass > 0) & np.all(np.isfinite(cen), axis=1)
+        newx[okc] += blend * (cen[okc] - newx[okc])
+        entry["centroids_s"] = sum(seconds.values())
+    entry["moved"] = _moved(x, newx)
+    k = state.k
+    if np.any(ok):
+        ratio = mic.radii[ok] / r[ok]
+        k = float(np.quantile(ratio, opt.k_quantile)) if opt.k_quantile > 0 else float(np.min(ratio))
+    entry["empty"] = int(np.count_nonzero(~ok))
+    return StippleState(newx, k, state.packs + 1), entry
 
 
-def _fix_count(counts, resid, n):
-    """Add or remove points where the residual says they are most owed or least."""
-    counts = counts.ravel().copy()
-    resid = resid.ravel()
-    diff = n - int(counts.sum())
-    if diff > 0:
-        # most owed first; stable sort: ties go to the lower pixel index
-        order = np.argsort(-resid, kind="stable")
-        while diff > 0:
-            take = order[: min(diff, order.size)]
-            counts[take] += 1
-            diff -= take.size
-    while diff < 0:
-        have = np.flatnonzero(counts > 0)
-        order = have[np.argsort(resid[have], kind="stable")]
-        take = order[: min(-diff, order.size)]
-        counts[take] -= 1
-        diff += take.size
-    return counts
+def lloyd_step(state, stage):
+    """One Lloyd step: every point to its Voronoi cell's density-weighted centroid.
 
-
-def error_diffusion(gray, n, *, seed=None, density=None):
-    """Exactly ``n`` points distributed like the darkness of ``gray``.
-
-    Floyd-Steinberg error diffusion of ``s * density`` (density defaults to
-    the darkness ``1 - gray``), with the scale ``s`` chosen so that the total
-    is ``n``. When there are fewer than a quarter as many points as pixels the
-    diffusion runs on ``b x b`` pixel blocks (about 4 points' worth of
-    density per block at most, on average 1/4 point), and each point then
-    picks a pixel of its block with probability proportional to the density. Pixels whose diffused value exceeds 1.5 emit several points, so
-    any ``n`` works, including more points than pixels. The few points gained
-    or lost at the borders (error diffused out of the image) are added where
-    the final residual is largest, or removed where it is smallest,
-    deterministically. Each point is placed uniformly at random inside its
-    pixel with ``seed``.
-
-    Parameters
-    ----------
-    gray : (H, W) array_like
-        Gray image in [0, 1], 1 = white.
-    n : int
-        Number of points, >= 1.
-    seed : int or numpy.random.Generator, optional
-        Jitter inside the pixel. The same seed gives the same points.
-    density : (H, W) array_like, optional
-        Non-negative density to diffuse instead of the darkness.
-
-    Returns
-    -------
-    points : (n, 2) float64
-        Pixel units, x right, y down, in row-major pixel order.
-
-    Raises
-    ------
-    ValueError
-        ``n < 1``, or the density is zero everywhere (a white image).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> g = np.tile(np.linspace(0, 1, 32), (16, 1))
-    >>> error_diffusion(g, 100, seed=1).shape
-    (100, 2)
+    ``k`` becomes the largest valid one at the new positions (at least 1e-6).
+    Returns ``(state, entry)`` like :func:`pack_step`.
     """
-    g = np.asarray(gray, dtype=np.float64)
-    if g.ndim != 2 or g.size == 0:
-        raise ValueError(f"gray must be a non-empty 2-D array, got shape {g.shape}")
-    n = _check_n(n)
-    d = 1.0 - g if density is None else np.asarray(density, dtype=np.float64)
-    if d.shape != g.shape:
-        raise ValueError(f"density shape {d.shape} differs from the image shape {g.shape}")
-    if not np.all(np.isfinite(d)) or d.min() < 0:
-        raise ValueError("density must be finite and non-negative")
-    d = np.maximum(d, 0.0)
-    total = d.sum()
-    if not total > 0:
-        raise ValueError("nothing to stipple: the image is white (zero darkness everywhere)")
-    H, W = d.shape
-    # Few points for many pixels: diffuse on b x b blocks (about 4 points per
-    # block... at most), so that the error does not wander across half the
-    # image before the first point is emitted; a point then picks a pixel of
-    # its block with probability proportional to the density.
-    b = max(1, int(np.sqrt(H * W / (4.0 * n))))
-    Hc, Wc = -(-H // b), -(-W // b)
-    dp = np.zeros((Hc * b, Wc * b))
-    dp[:H, :W] = d
-    blocks = dp.reshape(Hc, b, Wc, b).transpose(0, 2, 1, 3).reshape(Hc * Wc, b * b)
-    coarse = blocks.sum(axis=1).reshape(Hc, Wc)
-    scale = n / total
-    counts, resid = _fs_wavefront(coarse * scale)
-    m = int(counts.sum())
-    if abs(m - n) > max(8, 0.002 * n):
-        # one secant correction of the scale for the mass lost at the border
-        scale *= n / max(m, 1)
-        counts, resid = _fs_wavefront(coarse * scale)
-    counts = _fix_count(counts, resid, n)
-    blk = np.repeat(np.arange(Hc * Wc), counts)
-    rng = np.random.default_rng(seed)
-    if b > 1:
-        cum = np.cumsum(blocks[blk], axis=1)
-        tot = cum[:, -1]
-        u = rng.random(n) * tot
-        sub = np.count_nonzero(cum <= u[:, None], axis=1)
-        # a block without density (residual fix) or past the image: uniform
-        bad = (tot <= 0) | (sub >= b * b)
-        sub[bad] = rng.integers(0, b * b, size=int(bad.sum()))
-        brow, bcol = np.divmod(blk, Wc)
-        srow, scol = np.divmod(sub, b)
-        row = np.minimum(brow * b + srow, H - 1)
-        col = np.minimum(bcol * b + scol, W - 1)
-    else:
-        row, col = np.divmod(blk, W)
-    jitter = rng.random((n, 2))
-    pts = np.empty((n, 2))
-    pts[:, 0] = col + jitter[:, 0]
-    pts[:, 1] = row + jitter[:, 1]
-    # keep the open upper bound of the pixel (and the image)
-    np.minimum(pts[:, 0], np.nextafter(col + 1.0, 0), out=pts[:, 0])
-    np.minimum(pts[:, 1], np.nextafter(row + 1.0, 0), out=pts[:, 1])
-    return pts
+    x = state.points
+    cen, mass, seconds = stage.engine.centroids(x, np.zeros(len(x)), stage.density)
+    entry = {}
+    _add_timings(entry, seconds, ("raster", "centroids"))
+    ok = (mass > 0) & np.all(np.isfinite(cen), axis=1)
+    newx = x.copy()
+    newx[ok] = cen[ok]
+    entry["moved"] = _moved(x, newx)
+    entry["empty"] = int(np.count_nonzero(~ok))
+    W, H = stage.size
+    k = max(largest_valid_k(newx, field_at(stage.radius_field, newx), W, H), 1e-6)
+    return StippleState(newx, k, state.packs), entry
 
 
-# --------------------------------------------------------------------------
-# Radii, k
-# --------------------------------------------------------------------------
-
-
-def _check_n(n):
-    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
-        if isinstance(n, float) and n.is_integer():
-            n = int(n)
-        else:
-            raise ValueError(f"n must be an integer >= 1, got {n!r}")
-    n = int(n)
-    if n < 1:
-        raise ValueError(f"n must be >= 1, got {n}")
-    return n
-
-
-def _pixel_of(points, W, H):
-    col = np.clip(np.floor(points[:, 0]).astype(np.int64), 0, W - 1)
-    row = np.clip(np.floor(points[:, 1]).astype(np.int64), 0, H - 1)
-    return row, col
-
-
-def base_radii(gray, points, *, gamma=3.0, floor=0.1):
-    """``r_i = max(I_i, floor) ** (gamma / 2)``, ``I_i`` the gray of the pixel holding point i.
-
-    The paper's mapping (w_i = k^2 I_i^gamma) with a floor so that black
-    regions keep a positive radius.
-    """
-    g = np.asarray(gray, dtype=np.float64)
-    H, W = g.shape
-    row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
-    return np.maximum(g[row, col], floor) ** (0.5 * gamma)
-
-
-def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
-    """Base radius per pixel: ``r_i`` of a point is the value at its pixel.
-
-    Parameters
-    ----------
-    gray : (H, W) array_like
-        Gray image in [0, 1], 1 = white.
-    radii : {"gray", "density"}
-        ``"gray"``: the paper's ``max(I, floor) ** (gamma / 2)``.
-        ``"density"``: ``sqrt(floor / max(D, floor))`` with ``D`` the darkness
-        ``1 - I`` blurred with a Gaussian of ``sigma`` pixels; a packing of
-        disks with these radii has local point density ~ ``1 / r^2`` ~ ``D``,
-        the density Lloyd's centroids (and the tone measure) aim at, so
-        packing and Lloyd moves agree on the tone curve. ``gamma`` is unused.
-    gamma : float
-        Contrast exponent of the ``"gray"`` mapping.
-    floor : float
-        ``"gray"``: floor on the gray value; ``"density"``: floor on the
-        blurred darkness (largest/smallest radius ratio ``floor ** -0.5``).
-    sigma : float
-        Blur of the darkness for ``"density"`` (pixels; 0 = none).
-
-    Returns
-    -------
-    (H, W) float64, largest value 1 or less.
-
-    Examples
-    --------
-    >>> g = np.tile(np.linspace(0, 1, 16), (4, 1))
-    >>> f = radius_field(g, radii="density", floor=0.01, sigma=0)
-    >>> bool(f[0, 0] < f[0, 8] < f[0, 15])
-    True
-    """
-    g = np.asarray(gray, dtype=np.float64)
-    if radii == "gray":
-        return np.maximum(g, floor) ** (0.5 * gamma)
-    if radii == "density":
-        d = 1.0 - g
-        if sigma and sigma > 0:
-            from scipy import ndimage
-
-            d = ndimage.gaussian_filter(d, float(sigma), mode="reflect")
-        return np.sqrt(floor / np.maximum(d, floor))
-    raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
-
-
-def _field_at(field, points):
-    H, W = field.shape
-    row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
-    return field[row, col]
-
-
-def _radius_classes(r):
-    """Indices of points grouped by radius octave."""
-    lr = np.floor(np.log2(r / r.min())).astype(np.int64)
-    return [np.flatnonzero(lr == c) for c in np.unique(lr)]
-
-
-def largest_valid_k(points, r, width, height):
-    """Largest ``k`` with all disks ``(points_i, k r_i)`` inside the rectangle and disjoint.
-
-    Exact in float64 over all binding candidates: the edge constraints
-    ``k r_i <= min(x_i, W - x_i, y_i, H - y_i)`` and every pair with
-    ``d_ij <= k_u (r_i + r_j)``, where ``k_u`` is an upper bound from the
-    nearest neighbours; pairs are found with cKDTrees per radius octave, so
-    the search stays local even when the radii vary by orders of magnitude.
-
-    Returns
-    -------
-    k : float
-        ``min(min_i edge_i / r_i, min_ij d_ij / (r_i + r_j))``; 0 when two
-        points coincide or a point lies on the border.
-    """
-    from scipy.spatial import cKDTree
-
-    p = np.asarray(points, dtype=np.float64)
-    r = np.asarray(r, dtype=np.float64)
-    edge = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
-    k = float(np.min(edge / r))
-    if len(p) < 2:
-        return max(k, 0.0)
-    tree = cKDTree(p)
-    d, j = tree.query(p, k=2)
-    k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
-    if k <= 0:
-        return 0.0
-    classes = _radius_classes(r)
-    trees = [cKDTree(p[c]) for c in classes]
-    rmax = [r[c].max() for c in classes]
-    for a in range(len(classes)):
-        for b in range(a, len(classes)):
-            reach = k * (rmax[a] + rmax[b]) * (1 + 1e-9)
-            sdm = trees[a].sparse_distance_matrix(trees[b], reach, output_type="ndarray")
-            if sdm.size == 0:
-                continue
-            i = classes[a][sdm["i"]]
-            jj = classes[b][sdm["j"]]
-            keep = i != jj
-            if not np.any(keep):
-                continue
-            i, jj = i[keep], jj[keep]
-            dij = np.hypot(p[i, 0] - p[jj, 0], p[i, 1] - p[jj, 1])
-            k = min(k, float(np.min(dij / (r[i] + r[jj]))))
-    return max(k, 0.0)
-
-
-def _certified(points, r, width, height, domain):
-    """k and radii certified by certify_disks, shrinking k by ulps if rounding bites."""
-    from diskpack_cl.geometry import certify_disks
-
-    k = largest_valid_k(points, r, width, height)
-    if not k > 0:
-        raise ValueError("two stipples coincide or lie on the image border: no valid radius")
-    shrink = 1.0 - 4 * np.finfo(float).eps
-    for _ in range(8):
-        k *= shrink
-        radii = k * r
-        cert = certify_disks(points, radii, domain)
-        if cert.valid:
-            return k, radii, cert
-        shrink = shrink * shrink * shrink * (1 - 1e-12)
-    return k, radii, cert
-
-
-# --------------------------------------------------------------------------
-# Schedules
-# --------------------------------------------------------------------------
-
-
-def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, method="diskpack"):
-    """The list of phases to run: ``(kind, iterations)`` or ``("mix", iterations, blend)``.
-
-    ``schedule`` is a name in :data:`SCHEDULES` or a list of
-    ``("pack" | "lloyd" | "mix", iterations)`` and ``("mix", iterations,
-    blend)`` (a ``"mix"`` phase without its own blend uses :func:`stipple`'s
-    ``blend``); phases with 0 iterations are dropped. When any of ``beta`` (disk-packing
-    iterations per round), ``lloyd`` (Lloyd iterations between rounds) or
-    ``rounds`` is given, the schedule is built from them the paper's way:
-    ``rounds`` packing phases of ``beta`` iterations separated by ``lloyd``
-    Lloyd iterations, the last packing phase half as long (the paper: 40, 10,
-    40, 10, 20 is beta 40, lloyd 10, rounds 3). Missing ones come from the
-    paper (40, 10, 3). ``method="lloyd"`` gives ``[("lloyd", total)]`` with
-    the same total number of iterations (50 by default).
-
-    Examples
-    --------
-    >>> make_schedule("default")
-    [('mix', 35, 0.5), ('mix', 12, 0.4)]
-    >>> make_schedule([("mix", 3, 0.2), ("lloyd", 0), ("pack", 2)])
-    [('mix', 3, 0.2), ('pack', 2)]
-    """
-    if method not in ("diskpack", "lloyd"):
-        raise ValueError(f"method must be 'diskpack' or 'lloyd', got {method!r}")
-    if method == "diskpack" and (beta is not None or lloyd is not None or rounds is not None):
-        beta = 40 if beta is None else int(beta)
-        lloyd_n = 10 if lloyd is None else int(lloyd)
-        rounds = 3 if rounds is None else int(rounds)
-        if beta < 0 or lloyd_n < 0 or rounds < 1:
-            raise ValueError("beta and lloyd must be >= 0 and rounds >= 1")
-        phases = []
-        for i in range(rounds):
-            last = i == rounds - 1
-            phases.append(("pack", (beta + 1) // 2 if last and rounds > 1 else beta))
-            if not last:
-                phases.append(("lloyd", lloyd_n))
-    elif isinstance(schedule, str):
-        if schedule not in SCHEDULES:
-            raise ValueError(f"unknown schedule {schedule!r}; choose from {sorted(SCHEDULES)}")
-        phases = list(SCHEDULES[schedule])
-    else:
-        phases = []
-        for ph in schedule:
-            kind, it = str(ph[0]), int(ph[1])
-            if kind not in ("pack", "lloyd", "mix") or it < 0:
-                raise ValueError(
-                    f"bad schedule phase ({kind!r}, {it}): kind must be 'pack', 'mix' or 'lloyd'")
-            if len(ph) == 3 and kind == "mix":
-                a = float(ph[2])
-                if not 0.0 <= a <= 1.0:
-                    raise ValueError(f"blend must be in [0, 1], got {a}")
-                phases.append((kind, it, a))
-            elif len(ph) == 2:
-                phases.append((kind, it))
+def _run(state, stage, callback):
+    """Every phase of the schedule; returns (final state, history, seconds per stage)."""
+    history = []
+    totals = Stopwatch(["raster", "exact", "centroids"])
+    for phase in stage.options.phases:
+        kind, iters = phase[0], phase[1]
+        blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
+        for _ in range(iters):
+            t0 = time.perf_counter()
+            if kind == "lloyd":
+                state, step = lloyd_step(state, stage)
             else:
-                raise ValueError(f"bad schedule phase {tuple(ph)!r}: (kind, iterations) or ('mix', iterations, blend)")
-    if method == "lloyd":
-        # the baseline: Lloyd only; `lloyd` sets its length, else 50
-        phases = [("lloyd", 50 if lloyd is None else int(lloyd))]
-    return [tuple(p) for p in phases if p[1] > 0]
+                state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
+            entry = {"kind": kind, "iteration": len(history), **step, "k": float(state.k)}
+            entry["seconds"] = time.perf_counter() - t0
+            for name in totals.seconds:
+                totals.add(name, entry.get(f"{name}_s", 0.0))
+            history.append(entry)
+            if callback is not None:
+                callback(entry)
+    return state, history, totals.seconds
 
 
-# --------------------------------------------------------------------------
-# The loop
-# --------------------------------------------------------------------------
+def _start_points(gray, opt, start):
+    """Error diffusion with the options' seed, or the given start, checked."""
+    H, W = gray.shape
+    if start is None:
+        return error_diffusion(gray, opt.n, seed=opt.seed)
+    x = np.array(start, dtype=np.float64)
+    if x.shape != (opt.n, 2) or not np.all(np.isfinite(x)):
+        raise ValueError(f"start must be a finite ({opt.n}, 2) array")
+    if np.any(x < 0) or np.any(x[:, 0] > W) or np.any(x[:, 1] > H):
+        raise ValueError("start points must lie inside the image")
+    return x
 
 
-def _auto_supersample(n, W, H):
-    # about 16 grid cells per average cell; more where the image is dark is
-    # left to the user (--supersample)
-    return int(min(8, max(1, np.ceil(np.sqrt(16.0 * n / (W * H))))))
+def _centroid_density(darkness, opt):
+    """Density of the centroid integrals per grid cell: blurred darkness, upsampled."""
+    d = darkness
+    if opt.density_sigma > 0:
+        from scipy import ndimage
+
+        d = ndimage.gaussian_filter(darkness, float(opt.density_sigma), mode="reflect")
+    d = np.maximum(d, 1e-6)
+    s = opt.supersample
+    return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
 
-def _upsample(a, s):
-    if s == 1:
-        return np.ascontiguousarray(a)
-    return np.repeat(np.repeat(a, s, axis=0), s, axis=1)
-
-
-def stipple(
-    image,
-    n,
-    *,
-    gamma=3.0,
-    floor=None,
-    schedule="default",
-    beta=None,
-    lloyd=None,
-    rounds=None,
-    supersample=None,
-    seed=0,
-    device=None,
-    method="diskpack",
-    invert=False,
-    refine_every=1,
-    start=None,
-    k0=1e-6,
-    callback=None,
-    radii=None,
-    radius_sigma=None,
-    blend=None,
-    blend_cell="power",
-    k_quantile=None,
-    density_sigma=None,
-):
+def stipple(image, n, *, start=None, callback=None, device=None, backend="auto", **options):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
     Parameters
@@ -611,49 +295,61 @@ def stipple(
         1 = white).
     n : int
         Number of stipples.
+    start : (n, 2) array_like, optional
+        Start points instead of error diffusion (must lie inside the image).
+    callback : callable, optional
+        Called with each history entry (a dict) after every iteration.
+    device : str or pyopencl.Context, optional
+        OpenCL device (see :func:`diskpack_cl.get_context`).
+    backend : {"auto", "opencl", "exact"}
+        Engine (:mod:`diskpack_cl.stipple_engine`): ``opencl`` (raster
+        estimates refined exactly), ``exact`` (no OpenCL: exact MICs and
+        host labels), ``auto``: opencl when a device exists.
+    **options
+        The options of :meth:`diskpack_cl.schedule.StippleOptions.resolve`,
+        listed under Other Parameters; all are checked before any device work.
+
+    Other Parameters
+    ----------------
     gamma : float, optional
-        Contrast exponent of the paper: base radius ``r_i = I_i^(gamma/2)``.
+        Contrast exponent of the ``"gray"`` mapping, ``r_i = I_i^(gamma/2)``
+        (default 3).
     floor : float, optional
-        Gray-value floor in the radius mapping, ``max(I_i, floor)``, so that
-        black regions keep a positive radius (default 0.1: radius ratio
-        ``0.1^(-1.5)`` ~ 32 between white and black).
+        Floor of the radius mapping, so that black (``"gray"``) or white
+        (``"density"``) regions keep a finite radius (default: the
+        schedule's, 0.01 for ``"default"``, 0.1 for the others).
     schedule : str or list of phases, optional
         ``"default"`` (35 mix at blend 0.5, 12 mix at blend 0.4, with the
         options in ``SCHEDULE_OPTIONS["default"]``), ``"paper"`` (40 pack, 10
         Lloyd, 40, 10, 20 pack; gray radii), ``"pack"``, ``"lloyd"`` or an
         explicit list of ``(kind, iterations)`` with kind ``"pack"``,
         ``"lloyd"`` or ``"mix"``, or ``("mix", iterations, blend)``; see
-        :func:`make_schedule`. A named schedule brings its option defaults
-        (:data:`SCHEDULE_OPTIONS`); an explicit list, or ``beta``/``lloyd``/
-        ``rounds``, uses the paper's.
+        :func:`diskpack_cl.schedule.make_schedule`. A named schedule brings
+        its option defaults (``SCHEDULE_OPTIONS``); an explicit list, or
+        ``beta``/``lloyd``/``rounds``, uses the paper's.
     beta, lloyd, rounds : int, optional
         Build the schedule from disk-packing iterations per round, Lloyd
         iterations between rounds, and the number of rounds.
     supersample : int, optional
-        Grid cells per image pixel side (default: about 16 cells per average
-        power cell, at most 8).
+        Grid cells per image pixel side (default: about 16 grid cells per
+        average power cell, at most 8).
     seed : int, optional
-        Seed of the error-diffusion jitter. The same seed gives the same result.
-    device : str or pyopencl.Context, optional
-        OpenCL device (see :mod:`diskpack_cl._device`).
+        Seed of the error-diffusion jitter (default 0). The same seed gives
+        the same result.
     method : {"diskpack", "lloyd"}
         ``"lloyd"`` is weighted Voronoi stippling (Secord 2002) on the same
-        raster engine, from the same start.
+        engine, from the same start.
     invert : bool, optional
         Stipple the light parts (for light-on-dark output).
     refine_every : int, optional
         Refine the raster MIC estimate exactly every this many disk-packing
-        iterations (1 = always; 0 = never). The final output is always exact
-        and certified.
-    start : (n, 2) array_like, optional
-        Start points instead of error diffusion (must lie inside the image).
+        iterations (1 = always, the default; 0 = never). The final output is
+        always exact and certified.
     k0 : float, optional
         Initial scale factor (the paper: 1e-6, so that no disks overlap).
-    callback : callable, optional
-        Called with each history entry (a dict) after every iteration.
     radii : {"gray", "density"}, optional
-        Radius mapping, see :func:`radius_field` (schedule default: ``"gray"``
-        for the paper's, ``"density"`` for ``"default"``).
+        Radius mapping, see :func:`diskpack_cl.radii.radius_field` (schedule
+        default: ``"gray"`` for the paper's, ``"density"`` for ``"default"``).
     radius_sigma : float, optional
         Blur (pixels) of the darkness in the ``"density"`` mapping
         (``"default"``: 3).
@@ -663,7 +359,7 @@ def stipple(
         ``"default"``: 0.5.
     blend_cell : {"power", "voronoi"}, optional
         Cells whose centroids a mix step blends towards: the power cells of
-        the same raster (default, no extra work) or the Voronoi cells (one
+        the same grid (default, no extra work) or the Voronoi cells (one
         more labelling per step; measured worse).
     k_quantile : float in [0, 1), optional
         ``k`` after a disk-packing or mix step is this quantile of
@@ -682,174 +378,41 @@ def stipple(
     ------
     ValueError
         n < 1, n too large for the grid, gamma <= 0, a white image, bad
-        schedule, bad start, an option out of its range.
+        schedule, bad start, an option out of its range, an unknown backend.
+    NoOpenCLError
+        ``backend="opencl"`` (or a `device`) and no OpenCL device.
+
+    Examples
+    --------
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> res = stipple(g, 60, schedule=[("mix", 3, 0.5)], backend="exact")
+    >>> res.n, res.certificate.valid, res.engine
+    (60, True, 'exact')
     """
-    from diskpack_cl.geometry import Domain, exact_mic
-    from diskpack_cl.image import to_gray
-    from diskpack_cl.raster import PowerRaster
+    from .image import to_gray
 
     t_start = time.perf_counter()
-    gray = to_gray(image, invert=invert)
+    gray = to_gray(image, invert=options.get("invert", False))
     H, W = gray.shape
-    n = _check_n(n)
-    if not (np.isfinite(gamma) and gamma > 0):
-        raise ValueError(f"gamma must be > 0, got {gamma}")
+    opt = StippleOptions.resolve(n, W, H, **options)
     darkness = 1.0 - gray
     if not darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
-    s = _auto_supersample(n, W, H) if supersample is None else int(supersample)
-    if s < 1:
-        raise ValueError(f"supersample must be >= 1, got {supersample}")
-    ny, nx = s * H, s * W
-    if 4 * n > nx * ny:
-        raise ValueError(
-            f"n = {n} is too large for a {W}x{H} image at supersample {s}: at most "
-            f"{nx * ny // 4} points (4 grid cells per point); raise supersample"
-        )
-    phases = make_schedule(schedule, beta=beta, lloyd=lloyd, rounds=rounds, method=method)
-    opts = dict(SCHEDULE_OPTIONS["paper"])
-    if method == "lloyd":
-        opts = dict(SCHEDULE_OPTIONS["lloyd"])
-    elif beta is None and lloyd is None and rounds is None and isinstance(schedule, str):
-        opts.update(SCHEDULE_OPTIONS.get(schedule, {}))
-    radii = opts["radii"] if radii is None else radii
-    blend = float(opts["blend"] if blend is None else blend)
-    floor = float(opts["floor"] if floor is None else floor)
-    radius_sigma = float(opts["radius_sigma"] if radius_sigma is None else radius_sigma)
-    density_sigma = float(opts["density_sigma"] if density_sigma is None else density_sigma)
-    k_quantile = float(opts["k_quantile"] if k_quantile is None else k_quantile)
-    if not (np.isfinite(floor) and 0 < floor <= 1):
-        raise ValueError(f"floor must be in (0, 1], got {floor}")
-    if not (np.isfinite(radius_sigma) and radius_sigma >= 0):
-        raise ValueError(f"radius_sigma must be >= 0, got {radius_sigma}")
-    if not (np.isfinite(density_sigma) and density_sigma >= 0):
-        raise ValueError(f"density_sigma must be >= 0, got {density_sigma}")
-    if radii not in ("gray", "density"):
-        raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
-    if not 0.0 <= blend <= 1.0:
-        raise ValueError(f"blend must be in [0, 1], got {blend}")
-    if blend_cell not in ("power", "voronoi"):
-        raise ValueError(f"blend_cell must be 'power' or 'voronoi', got {blend_cell!r}")
-    if not 0.0 <= k_quantile < 1.0:
-        raise ValueError(f"k_quantile must be in [0, 1), got {k_quantile}")
-    rfield = radius_field(gray, radii=radii, gamma=gamma, floor=floor, sigma=radius_sigma)
-    params = {
-        "n": n, "gamma": float(gamma), "floor": float(floor), "supersample": s,
-        "seed": seed, "method": method, "invert": bool(invert),
-        "schedule": [list(p) for p in phases], "refine_every": int(refine_every),
-        "radii": radii, "radius_sigma": float(radius_sigma), "blend": blend,
-        "blend_cell": blend_cell, "k_quantile": float(k_quantile),
-        "density_sigma": float(density_sigma),
-    }
-
-    dom = Domain.rect(W, H)
+    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
     timings = {"load": time.perf_counter() - t_start}
     t0 = time.perf_counter()
-    if start is None:
-        x = error_diffusion(gray, n, seed=seed)
-    else:
-        x = np.array(start, dtype=np.float64)
-        if x.shape != (n, 2) or not np.all(np.isfinite(x)):
-            raise ValueError(f"start must be a finite ({n}, 2) array")
-        if np.any(x < 0) or np.any(x[:, 0] > W) or np.any(x[:, 1] > H):
-            raise ValueError("start points must lie inside the image")
+    x = _start_points(gray, opt, start)
     timings["start"] = time.perf_counter() - t0
-
-    pr = PowerRaster(dom, shape=(ny, nx), device=device)
-    dark_c = darkness
-    if density_sigma > 0:
-        from scipy import ndimage
-
-        dark_c = ndimage.gaussian_filter(darkness, float(density_sigma), mode="reflect")
-    dens = _upsample(np.maximum(dark_c, 1e-6), s)
-    if not (np.isfinite(k0) and k0 > 0):
-        raise ValueError(f"k0 must be > 0, got {k0}")
-    k = float(k0)
-    history = []
-    stage = {"raster": 0.0, "exact": 0.0, "centroids": 0.0}
-    it_total = 0
-    pack_count = 0
-    zeros = np.zeros(n)
-    for phase in phases:
-        kind, iters = phase[0], phase[1]
-        alpha = float(phase[2]) if len(phase) == 3 else blend
-        for _ in range(iters):
-            ti = time.perf_counter()
-            entry = {"kind": kind, "iteration": it_total}
-            if kind in ("pack", "mix"):
-                r = _field_at(rfield, x)
-                w = (k * r) ** 2
-                t1 = time.perf_counter()
-                est = pr.compute(x, w)
-                t2 = time.perf_counter()
-                entry["raster_s"] = t2 - t1
-                stage["raster"] += t2 - t1
-                refine = refine_every and (pack_count % refine_every == 0)
-                if refine:
-                    mic = exact_mic(x, w, dom, estimate=(est.centers, est.radii))
-                    centers, R = np.asarray(mic.centers), np.asarray(mic.radii)
-                    empty = np.asarray(mic.empty, bool) | ~np.isfinite(R)
-                    t3 = time.perf_counter()
-                    entry["exact_s"] = t3 - t2
-                    stage["exact"] += t3 - t2
-                else:
-                    centers, R = np.asarray(est.centers), np.asarray(est.radii)
-                    empty = ~(R > 0)
-                ok = ~empty & np.all(np.isfinite(centers), axis=1)
-                newx = x.copy()
-                newx[ok] = centers[ok]
-                if kind == "mix" and alpha > 0:
-                    t3 = time.perf_counter()
-                    if blend_cell == "voronoi":
-                        pr.compute(x, zeros, distance=False)
-                    cen, mass = pr.centroids(dens)
-                    cen = np.asarray(cen)
-                    okc = ok & (np.asarray(mass) > 0) & np.all(np.isfinite(cen), axis=1)
-                    newx[okc] += alpha * (cen[okc] - newx[okc])
-                    t4 = time.perf_counter()
-                    entry["centroids_s"] = t4 - t3
-                    stage["centroids"] += t4 - t3
-                entry["moved"] = float(np.mean(np.hypot(*(newx - x).T)))
-                x = newx
-                if np.any(ok):
-                    ratio = R[ok] / r[ok]
-                    k = float(np.quantile(ratio, k_quantile)) if k_quantile > 0 else float(np.min(ratio))
-                entry["empty"] = int(np.count_nonzero(~ok))
-                pack_count += 1
-            else:
-                t1 = time.perf_counter()
-                pr.compute(x, zeros, distance=False)  # labels only: centroids need no distance
-                t2 = time.perf_counter()
-                cen, mass = pr.centroids(dens)
-                t3 = time.perf_counter()
-                entry["raster_s"] = t2 - t1
-                entry["centroids_s"] = t3 - t2
-                stage["raster"] += t2 - t1
-                stage["centroids"] += t3 - t2
-                cen = np.asarray(cen)
-                ok = (np.asarray(mass) > 0) & np.all(np.isfinite(cen), axis=1)
-                newx = x.copy()
-                newx[ok] = cen[ok]
-                entry["moved"] = float(np.mean(np.hypot(*(newx - x).T)))
-                x = newx
-                entry["empty"] = int(np.count_nonzero(~ok))
-                # k for the next packing phase: largest valid for the new positions
-                r = _field_at(rfield, x)
-                k = max(largest_valid_k(x, r, W, H), 1e-6)
-            entry["k"] = float(k)
-            entry["seconds"] = time.perf_counter() - ti
-            history.append(entry)
-            it_total += 1
-            if callback is not None:
-                callback(entry)
-
+    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
+    stage = StippleStage(engine, opt, rfield, _centroid_density(darkness, opt))
+    state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
     t0 = time.perf_counter()
-    r = _field_at(rfield, x)
-    k, radii, cert = _certified(x, r, W, H, dom)
+    r = field_at(rfield, state.points)
+    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     timings["certify"] = time.perf_counter() - t0
-    timings.update(stage)
+    timings.update(stage_seconds)
     timings["total"] = time.perf_counter() - t_start
     return StippleResult(
-        points=x, radii=radii, k=float(k), base_radii=r, certificate=cert,
-        history=history, width=W, height=H, timings=timings, params=params,
+        points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
+        history=history, width=W, height=H, timings=timings, params=opt.params(), engine=engine.name,
     )

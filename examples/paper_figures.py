@@ -33,7 +33,8 @@ from diskpack_cl.image import load_gray
 from diskpack_cl.raster import PowerRaster
 from diskpack_cl.relax import max_points_for_radius, relax_poisson
 from diskpack_cl.sampling import bridson, dart_throwing, random_points
-from diskpack_cl.stipple import error_diffusion, stipple
+from diskpack_cl.dithering import error_diffusion
+from diskpack_cl.stipple import stipple
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 DPI = 100

@@ -1,8 +1,14 @@
 """Shared fixtures: an OpenCL context on the PoCL (or any) device.
 
-Tests that need OpenCL ask for ``ctx``. Without any OpenCL platform they are
-skipped with the driver error as the reason; with ``DISKPACK_CL_REQUIRE_OPENCL=1``
-(set by ``.ci/run``) they fail instead.
+Every test that needs OpenCL asks for ``ctx``. Without any OpenCL platform
+those tests are skipped with the driver error as the reason; with
+``DISKPACK_CL_REQUIRE_OPENCL=1`` (set by ``.ci/run``) they fail instead.
+Doctests that need a device are named in :data:`OPENCL_DOCTESTS` and treated
+the same way.
+
+``DISKPACK_CL_HIDE_OPENCL=1`` patches pyopencl's platform list empty for the
+whole run, so that one machine can check that the suite passes (and skips
+cleanly) where no OpenCL exists; ``.ci/run`` runs the suite once that way.
 """
 
 import os
@@ -17,13 +23,33 @@ try:  # no per-example deadline: a 2-core CI machine has noisy timings
 except ImportError:  # pragma: no cover - hypothesis is in the test extra
     pass
 
+#: Doctests that run OpenCL kernels (they cannot ask for the ``ctx`` fixture).
+OPENCL_DOCTESTS = {
+    "diskpack_cl._device.get_context",
+    "diskpack_cl.raster.PowerRaster",
+    "diskpack_cl.cells.CellMIC",
+}
+
 
 def _require_opencl():
     return os.environ.get("DISKPACK_CL_REQUIRE_OPENCL", "") == "1"
 
 
+def _hide_opencl():
+    return os.environ.get("DISKPACK_CL_HIDE_OPENCL", "") == "1"
+
+
+def pytest_configure(config):
+    if _hide_opencl():
+        import pyopencl
+
+        real = pyopencl.get_platforms
+        pyopencl.get_platforms = lambda: []
+        config.add_cleanup(lambda: setattr(pyopencl, "get_platforms", real))
+
+
 def pytest_report_header(config):
-    from diskpack_cl._device import NoOpenCLError, list_devices
+    from diskpack_cl import NoOpenCLError, list_devices
 
     try:
         rows = list_devices()
@@ -32,10 +58,8 @@ def pytest_report_header(config):
     return ["OpenCL devices:"] + [f"  {i}  {p} | {d} [{t}]" for i, p, d, t in rows]
 
 
-@pytest.fixture(scope="session")
-def ctx():
-    """A ``pyopencl.Context`` from :func:`diskpack_cl._device.get_context`."""
-    from diskpack_cl._device import NoOpenCLError, get_context
+def _context_or_skip():
+    from diskpack_cl import NoOpenCLError, get_context
 
     try:
         return get_context()
@@ -43,3 +67,22 @@ def ctx():
         if _require_opencl():
             pytest.fail(f"DISKPACK_CL_REQUIRE_OPENCL=1 but no OpenCL device: {exc}")
         pytest.skip(f"no OpenCL device: {exc}")
+
+
+@pytest.fixture(scope="session")
+def ctx():
+    """A ``pyopencl.Context`` from :func:`diskpack_cl.get_context`."""
+    return _context_or_skip()
+
+
+@pytest.fixture(params=["exact", "opencl"])
+def backend(request):
+    """Each engine in turn; the ``opencl`` one takes the ``ctx`` fixture (skips without a device)."""
+    if request.param == "opencl":
+        request.getfixturevalue("ctx")
+    return request.param
+
+
+def pytest_runtest_setup(item):
+    if getattr(item, "dtest", None) is not None and item.dtest.name in OPENCL_DOCTESTS:
+        _context_or_skip()

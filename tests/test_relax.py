@@ -9,17 +9,6 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.relax import relax_poisson
 
 
-def _has_opencl():
-    try:
-        _device.get_context()
-        return True
-    except _device.NoOpenCLError:
-        return False
-
-
-needs_cl = pytest.mark.skipif(not _has_opencl(), reason="no OpenCL device")
-
-
 def _dart(n, seed, r=None):
     """Naive dart throwing on the torus: accept a candidate farther than 2r from all."""
     rng = np.random.default_rng(seed)
@@ -43,7 +32,6 @@ def _hex_lattice():
 
 
 @pytest.mark.parametrize("start", ["random", "dart"])
-@pytest.mark.parametrize("backend", ["exact", pytest.param("opencl", marks=needs_cl)])
 def test_rho_never_decreases(start, backend):
     n = 300
     pts = np.random.default_rng(1).random((n, 2)) if start == "random" else _dart(n, 2)
@@ -59,8 +47,7 @@ def test_rho_never_decreases(start, backend):
         ref.min_distance_ref(res.points, Domain.torus()) / 2 / np.sqrt(1 / (2 * np.sqrt(3) * n)), abs=1e-12)
 
 
-@needs_cl
-def test_backends_give_the_same_iterates():
+def test_backends_give_the_same_iterates(ctx):
     pts = np.random.default_rng(3).random((200, 2))
     a = relax_poisson(pts, eps=0.99, max_iter=4, backend="exact")
     b = relax_poisson(pts, eps=0.99, max_iter=4, backend="opencl")
@@ -125,7 +112,6 @@ def test_points_outside_are_wrapped_and_input_not_mutated():
     assert np.allclose(a.rho, b.rho, atol=1e-12)
 
 
-@pytest.mark.parametrize("backend", ["exact", pytest.param("opencl", marks=needs_cl)])
 def test_same_input_same_output(backend):
     pts = np.random.default_rng(5).random((150, 2))
     a = relax_poisson(pts, eps=0.99, max_iter=5, backend=backend)
@@ -149,7 +135,6 @@ def test_stop_reasons():
     assert res.stop_reason == "eps" and res.iterations == 0
 
 
-@pytest.mark.parametrize("backend", ["exact", pytest.param("opencl", marks=needs_cl)])
 def test_stalled_on_a_lattice(backend):
     lat = _hex_lattice()
     rho0 = ref.min_distance_ref(lat, Domain.torus()) / 2 / np.sqrt(1 / (2 * np.sqrt(3) * len(lat)))
@@ -163,8 +148,7 @@ def test_stalled_on_a_lattice(backend):
     assert np.abs(d).max() <= 1e-12
 
 
-@needs_cl
-def test_opencl_with_unknown_device_raises(monkeypatch):
+def test_opencl_with_unknown_device_raises(monkeypatch, ctx):
     monkeypatch.setattr(_device, "_CONTEXTS", {})
     pts = np.random.default_rng(0).random((10, 2))
     with pytest.raises(_device.NoOpenCLError, match="no OpenCL device matches"):

@@ -3,16 +3,13 @@
 import numpy as np
 import pytest
 
-from diskpack_cl.stipple import (
-    SCHEDULE_OPTIONS,
-    _fs_wavefront,
-    base_radii,
-    error_diffusion,
-    largest_valid_k,
-    make_schedule,
-    radius_field,
-    stipple,
-)
+from diskpack_cl.dithering import _fs_wavefront, error_diffusion
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import exact_mic
+from diskpack_cl.radii import base_radii, field_at, largest_valid_k, radius_field
+from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, make_schedule
+from diskpack_cl.stipple import StippleStage, StippleState, pack_step, stipple
+from diskpack_cl.stipple_engine import ExactStippleEngine
 
 SHORT = [("pack", 6), ("lloyd", 3), ("pack", 4)]
 
@@ -85,7 +82,7 @@ def test_error_diffusion_follows_darkness():
 def test_error_diffusion_bad_input():
     with pytest.raises(ValueError, match="nothing to stipple: the image is white"):
         error_diffusion(np.ones((8, 8)), 10)
-    with pytest.raises(ValueError, match="n must be >= 1"):
+    with pytest.raises(ValueError, match="n must be at least 1"):
         error_diffusion(gradient(), 0)
 
 
@@ -123,7 +120,7 @@ def test_largest_valid_k_matches_brute_force():
 
 
 @pytest.fixture(scope="module")
-def small_result():
+def small_result(ctx):
     return stipple(gradient(), 150, seed=2, schedule=SHORT)
 
 
@@ -150,7 +147,7 @@ def test_stipple_radii_follow_gray(small_result):
     assert np.corrcoef(res.points[order, 0], res.base_radii[order])[0, 1] > 0.9
 
 
-def test_stipple_deterministic(small_result):
+def test_stipple_deterministic(small_result, ctx):
     again = stipple(gradient(), 150, seed=2, schedule=SHORT)
     np.testing.assert_array_equal(again.points, small_result.points)
     np.testing.assert_array_equal(again.radii, small_result.radii)
@@ -158,7 +155,7 @@ def test_stipple_deterministic(small_result):
     assert not np.array_equal(other.points, small_result.points)
 
 
-def test_stipple_input_not_mutated():
+def test_stipple_input_not_mutated(ctx):
     g = gradient()
     g0 = g.copy()
     res = stipple(g, 50, seed=0, schedule=[("pack", 2)])
@@ -166,13 +163,13 @@ def test_stipple_input_not_mutated():
     assert not np.may_share_memory(res.points, g)
 
 
-def test_lloyd_method_certified():
+def test_lloyd_method_certified(ctx):
     res = stipple(gradient(), 120, seed=1, method="lloyd", lloyd=5)
     assert [h["kind"] for h in res.history] == ["lloyd"] * 5
     assert res.certificate.valid and brute_force_valid(res.points, res.radii, 64, 64)
 
 
-def test_empty_power_cell_handled():
+def test_empty_power_cell_handled(ctx):
     # a light point (big radius) 0.5 px from a dark point (floor radius):
     # with k0 = 10 the dark point's power cell is empty in the first iteration
     g = np.ones((32, 32))
@@ -190,13 +187,13 @@ def test_empty_power_cell_handled():
     assert res.certificate.valid and brute_force_valid(res.points, res.radii, 32, 32)
 
 
-def test_uniform_gray_and_black_images_work():
+def test_uniform_gray_and_black_images_work(ctx):
     for v in (0.0, 0.5):
         res = stipple(np.full((32, 40), v), 60, seed=0, schedule=[("pack", 3)])
         assert res.points.shape == (60, 2) and res.certificate.valid
 
 
-def test_stipple_rgb_uint8_array():
+def test_stipple_rgb_uint8_array(ctx):
     rgb = np.zeros((32, 32, 3), np.uint8)
     rgb[:, 16:] = 255
     res = stipple(rgb, 30, seed=0, schedule=[("lloyd", 2)])
@@ -207,7 +204,7 @@ def test_stipple_rgb_uint8_array():
 @pytest.mark.parametrize(
     "kwargs, match",
     [
-        ({"n": 0}, "n must be >= 1"),
+        ({"n": 0}, "n must be at least 1"),
         ({"n": 2.5}, "n must be an integer"),
         ({"n": 10, "gamma": 0}, "gamma must be > 0"),
         ({"n": 10, "gamma": -1}, "gamma must be > 0"),
@@ -256,7 +253,7 @@ def test_radius_field_density():
         radius_field(g, radii="area")
 
 
-def test_mix_step_is_the_documented_blend():
+def test_mix_step_is_the_documented_blend(ctx):
     # one "mix" step moves each point to MIC + blend * (centroid - MIC); with
     # the same start and k0 the power diagram is the same for every blend
     g = gradient(32, 32)
@@ -271,7 +268,7 @@ def test_mix_step_is_the_documented_blend():
     np.testing.assert_array_equal(mic, pack)
 
 
-def test_default_schedule_certified_and_deterministic():
+def test_default_schedule_certified_and_deterministic(ctx):
     g = gradient()
     a = stipple(g, 150, seed=5)
     b = stipple(g, 150, seed=5)
@@ -286,7 +283,7 @@ def test_default_schedule_certified_and_deterministic():
     np.testing.assert_array_equal(a.base_radii, f[row, col])
 
 
-def test_paper_schedule_keeps_the_paper_mapping():
+def test_paper_schedule_keeps_the_paper_mapping(ctx):
     res = stipple(gradient(), 60, seed=0, schedule="paper", beta=2, lloyd=1, rounds=2)
     assert res.params["radii"] == "gray" and res.certificate.valid
     assert [h["kind"] for h in res.history] == ["pack", "pack", "lloyd", "pack"]
@@ -318,26 +315,72 @@ def test_make_schedule_mix_phases():
 
 
 def test_schedule_options_resolution():
-    g = gradient(32, 32)
+    def params(**kw):
+        return StippleOptions.resolve(30, 32, 32, **kw).params()
+
     # Lloyd baseline and explicit lists use the paper's options
-    lo = stipple(g, 30, seed=0, method="lloyd", lloyd=2)
-    assert lo.params["density_sigma"] == 0.0 and lo.params["radii"] == "gray"
-    ex = stipple(g, 30, seed=0, schedule=[("mix", 2, 0.5)])
-    assert ex.params["radii"] == "gray" and ex.params["k_quantile"] == 0.0
+    lo = params(method="lloyd", lloyd=2)
+    assert lo["density_sigma"] == 0.0 and lo["radii"] == "gray"
+    ex = params(schedule=[("mix", 2, 0.5)])
+    assert ex["radii"] == "gray" and ex["k_quantile"] == 0.0
     # a named schedule's options, one overridden by a keyword
-    d = stipple(g, 30, seed=0, schedule="default", k_quantile=0.0)
+    d = params(schedule="default", k_quantile=0.0)
     for key, v in SCHEDULE_OPTIONS["default"].items():
-        assert d.params[key] == (0.0 if key == "k_quantile" else v)
+        assert d[key] == (0.0 if key == "k_quantile" else v)
 
 
-def test_k_quantile_changes_weights_not_certificate():
-    # k from a quantile of R_i / r_i is >= the minimum: heavier weights in the
-    # next iteration, so the trajectory differs; the output is still certified
+@pytest.mark.parametrize("kwargs, match", [
+    ({"k0": 0.0}, "k0 must be > 0, got 0.0"),
+    ({"k0": np.inf}, "k0 must be > 0, got inf"),
+    ({"refine_every": -1}, "refine_every must be an integer >= 0, got -1"),
+    ({"refine_every": 1.5}, "refine_every must be an integer >= 0, got 1.5"),
+    ({"radius_sigma": -1}, "radius_sigma must be >= 0, got -1.0"),
+    ({"density_sigma": np.nan}, "density_sigma must be >= 0, got nan"),
+    ({"supersample": 0}, "supersample must be >= 1, got 0"),
+])
+def test_options_checked_before_any_work(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        StippleOptions.resolve(30, 32, 32, **kwargs)
+    # stipple() checks them before the start set and the engine exist
+    with pytest.raises(ValueError, match=match):
+        stipple(gradient(32, 32), 30, backend="no such backend", **kwargs)
+
+
+def test_options_are_frozen():
+    opt = StippleOptions.resolve(30, 32, 32)
+    with pytest.raises(AttributeError):
+        opt.blend = 0.3
+    assert opt.grid_shape(32, 16) == (16 * opt.supersample, 32 * opt.supersample)
+
+
+@pytest.mark.parametrize("q", [0.0, 0.15, 0.5])
+def test_pack_step_k_is_the_quantile_of_mic_over_base_radius(q):
+    """After a packing step, k is the k_quantile quantile of R_i / r_i (q = 0: the minimum)."""
+    g = gradient(32, 32)
+    x = error_diffusion(g, 60, seed=1)
+    rfield = radius_field(g, radii="density", floor=0.01, sigma=0)
+    opt = StippleOptions.resolve(60, 32, 32, schedule=[("pack", 1)], radii="density", floor=0.01,
+                                 k_quantile=q)
+    dom = Domain.rect(32, 32)
+    stage = StippleStage(ExactStippleEngine(dom, opt.grid_shape(32, 32)), opt, rfield, None)
+    state, entry = pack_step(StippleState(x, 0.05), stage)
+    r = field_at(rfield, x)
+    mic = exact_mic(x, (0.05 * r) ** 2, dom)
+    ok = ~mic.empty
+    ratio = mic.radii[ok] / r[ok]
+    assert state.k == (np.quantile(ratio, q) if q > 0 else ratio.min())
+    assert state.packs == 1 and entry["empty"] == int(mic.empty.sum())
+    np.testing.assert_array_equal(state.points[ok], mic.centers[ok])
+
+
+def test_k_quantile_changes_weights_not_certificate(ctx):
+    # k from a quantile of R_i / r_i: heavier weights in the next iteration,
+    # so the trajectory differs; the output is still certified
     g = gradient(32, 32)
     kw = dict(seed=1, schedule=[("mix", 4, 0.5)], radii="density", floor=0.01)
     a = stipple(g, 60, k_quantile=0.0, **kw)
     b = stipple(g, 60, k_quantile=0.5, **kw)
-    assert all(hb["k"] >= ha["k"] for ha, hb in zip(a.history[:1], b.history[:1]))
+    assert b.history[0]["k"] > a.history[0]["k"]
     assert not np.array_equal(a.points, b.points)
     for r in (a, b):
         assert r.certificate.valid and brute_force_valid(r.points, r.radii, 32, 32)

@@ -1,0 +1,179 @@
+"""Stipple radii: the radius mappings (gray, density) and the certified scale ``k``.
+
+A point's base radius ``r_i`` is the value of a radius field at its pixel;
+its disk is ``k r_i``.  :func:`largest_valid_k` is the largest ``k`` for which
+all disks lie inside the image and are pairwise disjoint, and
+:func:`certified_k` checks it with :func:`diskpack_cl.geometry.certify_disks`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["base_radii", "radius_field", "field_at", "largest_valid_k", "certified_k"]
+
+
+def _pixel_of(points, W, H):
+    col = np.clip(np.floor(points[:, 0]).astype(np.int64), 0, W - 1)
+    row = np.clip(np.floor(points[:, 1]).astype(np.int64), 0, H - 1)
+    return row, col
+
+
+def base_radii(gray, points, *, gamma=3.0, floor=0.1):
+    """``r_i = max(I_i, floor) ** (gamma / 2)``, ``I_i`` the gray of the pixel holding point i.
+
+    The paper's mapping (w_i = k^2 I_i^gamma) with a floor so that black
+    regions keep a positive radius.
+    """
+    g = np.asarray(gray, dtype=np.float64)
+    H, W = g.shape
+    row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
+    return np.maximum(g[row, col], floor) ** (0.5 * gamma)
+
+
+def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
+    """Base radius per pixel: ``r_i`` of a point is the value at its pixel.
+
+    Parameters
+    ----------
+    gray : (H, W) array_like
+        Gray image in [0, 1], 1 = white.
+    radii : {"gray", "density"}
+        ``"gray"``: the paper's ``max(I, floor) ** (gamma / 2)``.
+        ``"density"``: ``sqrt(floor / max(D, floor))`` with ``D`` the darkness
+        ``1 - I`` blurred with a Gaussian of ``sigma`` pixels; a packing of
+        disks with these radii has local point density ~ ``1 / r^2`` ~ ``D``,
+        the density Lloyd's centroids (and the tone measure) aim at, so
+        packing and Lloyd moves agree on the tone curve. ``gamma`` is unused.
+    gamma : float
+        Contrast exponent of the ``"gray"`` mapping.
+    floor : float
+        ``"gray"``: floor on the gray value; ``"density"``: floor on the
+        blurred darkness (largest/smallest radius ratio ``floor ** -0.5``).
+    sigma : float
+        Blur of the darkness for ``"density"`` (pixels; 0 = none).
+
+    Returns
+    -------
+    (H, W) float64, largest value 1 or less.
+
+    Examples
+    --------
+    >>> g = np.tile(np.linspace(0, 1, 16), (4, 1))
+    >>> f = radius_field(g, radii="density", floor=0.01, sigma=0)
+    >>> bool(f[0, 0] < f[0, 8] < f[0, 15])
+    True
+    """
+    g = np.asarray(gray, dtype=np.float64)
+    if radii == "gray":
+        return np.maximum(g, floor) ** (0.5 * gamma)
+    if radii == "density":
+        d = 1.0 - g
+        if sigma and sigma > 0:
+            from scipy import ndimage
+
+            d = ndimage.gaussian_filter(d, float(sigma), mode="reflect")
+        return np.sqrt(floor / np.maximum(d, floor))
+    raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
+
+
+def field_at(field, points):
+    """Value of a per-pixel field at the pixel holding each point (clipped to the image).
+
+    Examples
+    --------
+    >>> field_at(np.arange(6.0).reshape(2, 3), [[2.5, 1.5], [-1.0, 0.2]]).tolist()
+    [5.0, 0.0]
+    """
+    H, W = field.shape
+    row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
+    return field[row, col]
+
+
+def _radius_classes(r):
+    """Indices of points grouped by radius octave."""
+    lr = np.floor(np.log2(r / r.min())).astype(np.int64)
+    return [np.flatnonzero(lr == c) for c in np.unique(lr)]
+
+
+def largest_valid_k(points, r, width, height):
+    """Largest ``k`` with all disks ``(points_i, k r_i)`` inside the rectangle and disjoint.
+
+    Exact in float64 over all binding candidates: the edge constraints
+    ``k r_i <= min(x_i, W - x_i, y_i, H - y_i)`` and every pair with
+    ``d_ij <= k_u (r_i + r_j)``, where ``k_u`` is an upper bound from the
+    nearest neighbours; pairs are found with cKDTrees per radius octave, so
+    the search stays local even when the radii vary by orders of magnitude.
+
+    Returns
+    -------
+    k : float
+        ``min(min_i edge_i / r_i, min_ij d_ij / (r_i + r_j))``; 0 when two
+        points coincide or a point lies on the border.
+    """
+    from scipy.spatial import cKDTree
+
+    p = np.asarray(points, dtype=np.float64)
+    r = np.asarray(r, dtype=np.float64)
+    edge = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
+    k = float(np.min(edge / r))
+    if len(p) < 2:
+        return max(k, 0.0)
+    tree = cKDTree(p)
+    d, j = tree.query(p, k=2)
+    k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
+    if k <= 0:
+        return 0.0
+    classes = _radius_classes(r)
+    trees = [cKDTree(p[c]) for c in classes]
+    rmax = [r[c].max() for c in classes]
+    for a in range(len(classes)):
+        for b in range(a, len(classes)):
+            reach = k * (rmax[a] + rmax[b]) * (1 + 1e-9)
+            sdm = trees[a].sparse_distance_matrix(trees[b], reach, output_type="ndarray")
+            if sdm.size == 0:
+                continue
+            i = classes[a][sdm["i"]]
+            jj = classes[b][sdm["j"]]
+            keep = i != jj
+            if not np.any(keep):
+                continue
+            i, jj = i[keep], jj[keep]
+            dij = np.hypot(p[i, 0] - p[jj, 0], p[i, 1] - p[jj, 1])
+            k = min(k, float(np.min(dij / (r[i] + r[jj]))))
+    return max(k, 0.0)
+
+
+def certified_k(points, r, width, height, domain):
+    """``(k, radii, certificate)``: the largest valid k, shrunk by ulps until certified.
+
+    :func:`largest_valid_k` is exact up to rounding; the disks ``k r_i`` are
+    then checked by :func:`diskpack_cl.geometry.certify_disks`, and k shrinks
+    by a few ulps while rounding makes two disks touch.
+
+    Raises
+    ------
+    ValueError
+        Two points coincide or one lies on the border (no positive k).
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> k, radii, cert = certified_k([[1.0, 1.0], [3.0, 1.0]], np.ones(2), 4, 2, Domain.rect(4, 2))
+    >>> round(float(k), 9), cert.valid
+    (1.0, True)
+    """
+    from .geometry import certify_disks
+
+    k = largest_valid_k(points, r, width, height)
+    if not k > 0:
+        raise ValueError("two stipples coincide or lie on the image border: no valid radius")
+    shrink = 1.0 - 4 * np.finfo(float).eps
+    for _ in range(8):
+        k *= shrink
+        radii = k * r
+        cert = certify_disks(points, radii, domain)
+        if cert.valid:
+            return k, radii, cert
+        shrink = shrink * shrink * shrink * (1 - 1e-12)
+    return k, radii, cert

@@ -1,0 +1,182 @@
+"""Engines of the stippling loop: who computes power-cell MICs and cell centroids.
+
+A disk-packing or mix step asks its engine two questions:
+``engine.mic(points, weights)`` (the maximal inscribed circle of every power
+cell) and ``engine.centroids(points, weights, density)`` (density-weighted
+centroids of the power cells on the stippling grid).  The backend names are
+those of :func:`diskpack_cl.relax_poisson`:
+
+==========  ================================================================
+backend     engine
+==========  ================================================================
+``opencl``  :class:`OpenCLStippleEngine`: OpenCL float32 raster (labels and
+            MIC estimates), estimates refined by
+            :func:`diskpack_cl.exact_mic`; centroids from the raster labels
+``exact``   :class:`ExactStippleEngine`: no OpenCL; exact MICs from the
+            sites, exact float64 labels on the host
+            (:func:`diskpack_cl.labels.grid_power_labels`)
+``auto``    ``opencl`` when a device exists, else ``exact``
+==========  ================================================================
+
+Both give the same MICs (certified LP optima) and the same centroids except
+at grid cells where the float32 raster labels tie.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._timing import Stopwatch
+from .engine import BACKENDS
+from .geometry import exact_mic
+from .labels import cell_centroids, grid_power_labels
+
+__all__ = ["CellMICs", "OpenCLStippleEngine", "ExactStippleEngine", "make_stipple_engine"]
+
+
+@dataclass
+class CellMICs:
+    """MICs of every power cell from :meth:`OpenCLStippleEngine.mic` (or the exact engine).
+
+    ``radii`` < 0 or ``empty``: no circle (the centre is then the site);
+    ``timings``: seconds per stage (``raster``, ``exact``).
+    """
+
+    centers: np.ndarray
+    radii: np.ndarray
+    empty: np.ndarray
+    timings: dict = field(default_factory=dict)
+
+
+def _exact(points, weights, domain, estimate, watch):
+    with watch("exact"):
+        mic = exact_mic(points, weights, domain, estimate=estimate)
+    centers, R = np.asarray(mic.centers), np.asarray(mic.radii)
+    return CellMICs(centers, R, np.asarray(mic.empty, bool) | ~np.isfinite(R), watch.seconds)
+
+
+class OpenCLStippleEngine:
+    """The OpenCL raster engine (see the module docstring).
+
+    Parameters
+    ----------
+    domain : Domain
+        The image rectangle.
+    shape : tuple of int
+        Raster ``(ny, nx)``.
+    device : str or pyopencl.Context, optional
+        See :func:`diskpack_cl.get_context`.
+    """
+
+    name = "opencl"
+
+    def __init__(self, domain, shape, device=None, route="auto"):
+        from .cells import CellMIC, has_fp64
+        from .raster import PowerRaster
+
+        self.domain = domain
+        self.raster = PowerRaster(domain, shape=shape, device=device)
+        self.device = self.raster.device_name
+        self._labelled = None   # (points, weights) of the raster's last labels
+        # exact MICs from the float64 per-cell kernel where the device has
+        # float64; else (or route="raster") the raster estimate refined by exact_mic
+        use_cells = route == "cells" or (route == "auto" and has_fp64(self.raster.ctx))
+        self.cells = CellMIC(domain, device=self.raster.ctx) if use_cells else None
+
+    def _label(self, points, weights, distance):
+        est = self.raster.compute(points, weights, distance=distance)
+        self._labelled = (np.array(points), np.array(weights))
+        return est
+
+    def mic(self, points, weights, *, exact=True):
+        """MICs of the power cells; ``exact=False``: the raster estimate alone."""
+        watch = Stopwatch()
+        if exact and self.cells is not None:
+            with watch("exact"):
+                r = self.cells.solve(points, weights)
+            return CellMICs(r.centers, r.radii, r.empty | ~np.isfinite(r.radii), watch.seconds)
+        with watch("raster"):
+            est = self._label(points, weights, True)
+        if exact:
+            return _exact(points, weights, self.domain, (est.centers, est.radii), watch)
+        R = np.asarray(est.radii)
+        return CellMICs(np.asarray(est.centers), R, ~(R > 0), watch.seconds)
+
+    def centroids(self, points, weights, density):
+        """``(centroids, mass, timings)`` of the power cells (labels reused from :meth:`mic`)."""
+        watch = Stopwatch()
+        last = self._labelled
+        with watch("raster"):
+            if last is None or not (np.array_equal(last[0], points) and np.array_equal(last[1], weights)):
+                self._label(points, weights, False)
+        with watch("centroids"):
+            c, mass = self.raster.centroids(density)
+        return np.asarray(c), np.asarray(mass), watch.seconds
+
+
+class ExactStippleEngine:
+    """The host engine: exact MICs and exact float64 grid labels, no OpenCL.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> eng = ExactStippleEngine(Domain.rect(8, 8), (16, 16))
+    >>> pts = np.array([[2.0, 2.0], [6.0, 5.0], [3.0, 6.5]])
+    >>> mic = eng.mic(pts, np.zeros(3))
+    >>> c, mass, _ = eng.centroids(pts, np.zeros(3), None)
+    >>> bool(np.all(mic.radii > 0)), float(mass.sum())
+    (True, 256.0)
+    """
+
+    name = "exact"
+    device = "cpu (scipy)"
+
+    def __init__(self, domain, shape):
+        self.domain = domain
+        self.shape = tuple(shape)
+
+    def mic(self, points, weights, *, exact=True):
+        """Exact MICs (``exact`` is ignored: there is no estimate to stop at)."""
+        return _exact(points, weights, self.domain, None, Stopwatch())
+
+    def centroids(self, points, weights, density):
+        """``(centroids, mass, timings)`` of the power cells on the grid."""
+        watch = Stopwatch()
+        with watch("raster"):
+            lab = grid_power_labels(points, weights, self.domain, self.shape)
+        with watch("centroids"):
+            c, mass = cell_centroids(lab, points, density, self.domain)
+        return c, mass, watch.seconds
+
+
+def make_stipple_engine(domain, shape, backend="auto", device=None):
+    """The stippling engine for `backend` (``opencl``, ``exact`` or ``auto``).
+
+    ``auto`` takes the exact engine when no OpenCL device exists, unless a
+    `device` was asked for (then the :class:`diskpack_cl.NoOpenCLError` is
+    raised).  The engine's ``fallback`` is None or why ``auto`` chose exact.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> make_stipple_engine(Domain.rect(8, 8), (16, 16), "exact").name
+    'exact'
+    """
+    from ._device import NoOpenCLError
+
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    fallback = None
+    if backend == "exact":
+        engine = ExactStippleEngine(domain, shape)
+    else:
+        try:
+            engine = OpenCLStippleEngine(domain, shape, device=device)
+        except NoOpenCLError as exc:
+            if backend == "opencl" or device is not None:
+                raise
+            engine, fallback = ExactStippleEngine(domain, shape), f"no OpenCL device ({exc})"
+    engine.fallback = fallback
+    return engine

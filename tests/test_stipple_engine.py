@@ -1,0 +1,114 @@
+"""Stippling engines: exact host labels and centroids against brute force and the OpenCL raster."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from diskpack_cl import NoOpenCLError
+from diskpack_cl import reference as ref
+from diskpack_cl.domain import Domain
+from diskpack_cl.labels import cell_centroids, grid_power_labels
+from diskpack_cl.stipple import stipple
+from diskpack_cl.stipple_engine import ExactStippleEngine, OpenCLStippleEngine, make_stipple_engine
+
+
+def _sites(seed, dom, n=40, heavy=0.5):
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    spacing = np.sqrt(dom.area / n)
+    return pts, (heavy * spacing * rng.random(n)) ** 2
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), voronoi=st.booleans())
+def test_host_labels_are_the_brute_force_owners(seed, periodic, voronoi):
+    dom = Domain.torus() if periodic else Domain.rect(30.0, 20.0)
+    pts, w = _sites(seed, dom)
+    w = None if voronoi else w
+    lab = grid_power_labels(pts, w, dom, (24, 36))
+    want, gap = ref.power_labels_ref(pts, w, dom, (24, 36))
+    scale = max(dom.width, dom.height)
+    sure = gap > 1e-9 * scale ** 2       # not a tie in float64
+    assert np.array_equal(lab[sure], want[sure])
+
+
+def test_host_centroids_are_the_brute_force_centroids():
+    dom = Domain.torus()
+    pts, w = _sites(3, dom)
+    dens = np.random.default_rng(4).random((24, 36))
+    c, mass = cell_centroids(grid_power_labels(pts, w, dom, (24, 36)), pts, dens, dom)
+    c_ref, m_ref = ref.lloyd_centroids_ref(pts, w, dom, (24, 36), dens)
+    np.testing.assert_allclose(mass, m_ref, rtol=1e-12)
+    d = c - c_ref
+    d -= np.round(d)
+    assert np.nanmax(np.abs(d)) <= 1e-12
+    with pytest.raises(ValueError, match=r"density must have the raster shape \(24, 36\)"):
+        cell_centroids(np.zeros((24, 36), int), pts, np.ones((3, 3)), dom)
+
+
+def test_exact_and_opencl_engines_agree(ctx):
+    """Same MICs; same labels except where float32 power distances tie; so same centroids there."""
+    dom, shape = Domain.rect(48.0, 32.0), (64, 96)
+    pts, w = _sites(7, dom, n=120)
+    dens = np.random.default_rng(8).random(shape) + 0.1
+    cl = OpenCLStippleEngine(dom, shape, device=ctx)
+    ex = ExactStippleEngine(dom, shape)
+    a, b = cl.mic(pts, w), ex.mic(pts, w)
+    np.testing.assert_array_equal(a.empty, b.empty)
+    np.testing.assert_allclose(a.radii, b.radii, rtol=0, atol=1e-9)
+    lab_cl = cl.raster.compute(pts, w, distance=False).labels
+    lab_ex = grid_power_labels(pts, w, dom, shape)
+    _, gap = ref.power_labels_ref(pts, w, dom, shape)
+    differ = lab_cl != lab_ex
+    assert np.all(gap[differ] < 1e-4 * 48.0 ** 2)          # float32 ties only
+    ca, ma, _ = cl.centroids(pts, w, dens)
+    cb, mb, _ = ex.centroids(pts, w, dens)
+    touched = np.unique(np.concatenate([lab_cl[differ], lab_ex[differ]]))
+    same = np.setdiff1d(np.arange(len(pts)), touched)
+    same = same[mb[same] > 0]
+    np.testing.assert_allclose(ca[same], cb[same], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ma[same], mb[same], rtol=1e-12)
+
+
+def test_opencl_engine_reuses_the_labels_of_its_mic(ctx, monkeypatch):
+    dom, shape = Domain.rect(16.0, 16.0), (32, 32)
+    pts, w = _sites(1, dom, n=20)
+    eng = OpenCLStippleEngine(dom, shape, device=ctx)
+    eng.mic(pts, w)
+    calls = []
+    real = eng.raster.compute
+    monkeypatch.setattr(eng.raster, "compute", lambda *a, **k: calls.append(1) or real(*a, **k))
+    eng.centroids(pts, w, None)
+    assert calls == []                          # the power cells of the mic step
+    eng.centroids(pts, np.zeros(len(pts)), None)
+    assert calls == [1]                         # Voronoi cells: labelled again
+
+
+def test_stipple_exact_backend_runs_without_opencl(monkeypatch):
+    from diskpack_cl import _device
+
+    def boom():
+        raise NoOpenCLError("no OpenCL platform found (test)")
+
+    monkeypatch.setattr(_device, "_platforms", boom)
+    monkeypatch.setattr(_device, "_CONTEXTS", {})
+    monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
+    monkeypatch.delenv("PYOPENCL_CTX", raising=False)
+    g = np.tile(np.linspace(0.0, 1.0, 40), (30, 1))
+    res = stipple(g, 80, seed=1, schedule=[("mix", 3, 0.5), ("lloyd", 1), ("pack", 2)])
+    assert res.engine == "exact" and res.certificate.valid
+    assert [h["kind"] for h in res.history] == ["mix"] * 3 + ["lloyd"] + ["pack"] * 2
+    again = stipple(g, 80, seed=1, schedule=[("mix", 3, 0.5), ("lloyd", 1), ("pack", 2)], backend="exact")
+    np.testing.assert_array_equal(again.points, res.points)
+    with pytest.raises(NoOpenCLError, match="no OpenCL platform found"):
+        stipple(g, 80, backend="opencl")
+    with pytest.raises(NoOpenCLError):
+        make_stipple_engine(Domain.rect(40, 30), (30, 40), "auto", device="0:0")
+
+
+def test_make_stipple_engine_checks_the_backend():
+    eng = make_stipple_engine(Domain.rect(8, 8), (8, 8), "exact")
+    assert eng.name == "exact" and eng.fallback is None
+    with pytest.raises(ValueError, match=r"backend must be one of \('opencl', 'exact', 'auto'\), got 'gpu'"):
+        make_stipple_engine(Domain.rect(8, 8), (8, 8), "gpu")
