@@ -228,12 +228,28 @@ def write_svg(
     pen_path="auto",
     layer="stipples",
     invert=False,
+    pen_mm=None,
 ):
     """Write an SVG for pen plotters and Inkscape.
 
     The dots are ``<circle>`` elements in one Inkscape layer
     (``<g inkscape:groupmode="layer">``), user units are millimetres, and
-    the document has the physical size ``width="..mm" height="..mm"``.
+    the document has the exact physical size of the image: ``width="..px"``
+    (CSS pixels, 1/96 inch) when the size comes from ``dpi``, else
+    ``width="..mm"``.
+
+    Every dot lies inside the page: a dot that would stick out past an edge
+    (its centre closer to the edge than its radius) is moved inward until it
+    touches the edge, keeping its size (a dot wider than the page shrinks to
+    it).  Only border dots move, by less than their radius.
+
+    Plotting: a pen plotter traces each ``<circle>`` once along its outline,
+    so a dot drawn with a pen of width W comes out its diameter plus W
+    across.  With ``pen_mm=W`` the circles are outlines (``stroke-width`` W,
+    no fill) of radius ``(dot diameter - W) / 2``, so the traced dot is the
+    dot's size; a dot not wider than the pen becomes one pen touch (a path
+    0.01 mm long, round caps).  Without ``pen_mm`` the circles are filled
+    (for Inkscape and screens, or a plotter set to fill shapes).
 
     Parameters
     ----------
@@ -253,14 +269,32 @@ def write_svg(
         Dot order; see :func:`pen_path_order`.
     invert : bool, optional
         White dots on a black background rectangle.
+    pen_mm : float, optional
+        The plotter pen's line width in mm (see above).
 
     Returns
     -------
     dict
         ``width_mm``, ``height_mm``, ``n``, ``travel_before_mm``,
-        ``travel_after_mm`` (pen-up travel from the origin).
+        ``travel_after_mm`` (pen-up travel from the origin), ``moved_inside``
+        (dots moved inside the page) and, with ``pen_mm``, ``pen_touches``
+        (dots drawn as one touch).
+
+    Examples
+    --------
+    >>> import tempfile, os, types, numpy as np
+    >>> res = types.SimpleNamespace(points=np.array([[0.0, 8.0], [8.0, 8.0]]),
+    ...                             radii=np.array([1.0, 1.0]), width=16, height=16)
+    >>> out = os.path.join(tempfile.mkdtemp(), "dots.svg")
+    >>> info = write_svg(out, res, dpi=25.4, pen_mm=0.5)
+    >>> info["moved_inside"], info["pen_touches"]
+    (1, 0)
+    >>> [line.strip() for line in open(out) if "<circle" in line][0]
+    '<circle cx="1.0052" cy="8.0000" r="0.7500"/>'
     """
     p, r, W, H = _arrays(result)
+    if pen_mm is not None and not pen_mm > 0:
+        raise ValueError(f"pen_mm must be > 0, got {pen_mm}")
     s = mm_per_px(W, H, width_mm, height_mm, dpi)
     if dot_mm is not None:
         if not dot_mm > 0:
@@ -270,47 +304,81 @@ def write_svg(
         if not radius_scale > 0:
             raise ValueError(f"radius_scale must be > 0, got {radius_scale}")
         rad = r * s * float(radius_scale)
-    pm = p * s
-    order, before, after = pen_path_order(pm, method=pen_path)
     wmm, hmm = W * s, H * s
+    pm, rad, moved = _inside_page(p * s, rad, wmm, hmm)
+    order, before, after = pen_path_order(pm, method=pen_path)
     fg, bg = ("white", "black") if invert else ("black", None)
+    if width_mm is None and height_mm is None:  # exact in CSS pixels (1/96 in)
+        size = f'width="{W * s / MM_PER_INCH * 96:.10g}px" height="{H * s / MM_PER_INCH * 96:.10g}px"'
+    else:
+        size = f'width="{wmm:.10g}mm" height="{hmm:.10g}mm"'
     head = [
         '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
         '<svg xmlns="http://www.w3.org/2000/svg"',
         '     xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"',
         '     xmlns:sodipodi="http://sodipodi.sourceforge.net/DTD/sodipodi-0.dtd"',
-        f'     width="{wmm:.4f}mm" height="{hmm:.4f}mm" viewBox="0 0 {wmm:.4f} {hmm:.4f}"',
+        f'     {size} viewBox="0 0 {wmm:.10g} {hmm:.10g}"',
         '     version="1.1">',
         '  <sodipodi:namedview inkscape:document-units="mm"/>',
     ]
     if bg:
-        head.append(f'  <rect x="0" y="0" width="{wmm:.4f}" height="{hmm:.4f}" fill="{bg}"/>')
+        head.append(f'  <rect x="0" y="0" width="{wmm:.10g}" height="{hmm:.10g}" fill="{bg}"/>')
+    paint = (f'fill="{fg}" stroke="none"' if pen_mm is None else
+             f'fill="none" stroke="{fg}" stroke-width="{pen_mm:.4f}" stroke-linecap="round"')
     head.append(
-        f'  <g inkscape:groupmode="layer" inkscape:label="{layer}" id="layer1" '
-        f'fill="{fg}" stroke="none">'
+        f'  <g inkscape:groupmode="layer" inkscape:label="{layer}" id="layer1" {paint}>'
     )
+    touch = np.zeros(len(p), bool) if pen_mm is None else 2.0 * rad <= pen_mm
+    drawn = rad if pen_mm is None else rad - 0.5 * pen_mm
     with atomic_write(path, "w") as fh:
         fh.write("\n".join(head) + "\n")
         chunk = 100_000
         for a in range(0, len(order), chunk):
             o = order[a : a + chunk]
-            lines = _svg_circles(_fmt(pm[o, 0]), _fmt(pm[o, 1]), _fmt(rad[o]))
-            fh.write(lines)
+            fh.write(_svg_dots(pm[o], drawn[o], touch[o]))
         fh.write("  </g>\n</svg>\n")
-    return {
+    info = {
         "width_mm": wmm,
         "height_mm": hmm,
         "n": int(len(p)),
         "travel_before_mm": before,
         "travel_after_mm": after,
+        "moved_inside": moved,
     }
+    if pen_mm is not None:
+        info["pen_touches"] = int(touch.sum())
+    return info
 
 
-def _svg_circles(cx, cy, r):
-    parts = np.char.add(np.char.add('    <circle cx="', cx), '" cy="')
-    parts = np.char.add(np.char.add(parts, cy), '" r="')
-    parts = np.char.add(np.char.add(parts, r), '"/>\n')
-    return "".join(parts.tolist())
+# coordinates are written with 4 decimals: keep dots this far inside the page
+_EDGE_MM = 2e-4
+# a pen touch: a path this long (mm), centred on the dot
+_TOUCH_MM = 0.01
+
+
+def _inside_page(c, rad, wmm, hmm):
+    """Move dots that stick out of the page inward; return (centres, radii, moved)."""
+    rad = np.minimum(rad, 0.5 * min(wmm, hmm) - 2 * _EDGE_MM - _TOUCH_MM)
+    ext = rad + _EDGE_MM + 0.5 * _TOUCH_MM
+    inside = np.column_stack([np.clip(c[:, 0], ext, wmm - ext), np.clip(c[:, 1], ext, hmm - ext)])
+    moved = int(np.count_nonzero(np.any(inside != c, axis=1)))
+    return inside, rad, moved
+
+
+def _svg_dots(c, r, touch):
+    """``<circle>`` lines, and for ``touch`` dots a 0.01 mm path (one pen touch)."""
+    x, y = c[:, 0], c[:, 1]
+    circles = _join('    <circle cx="', _fmt(x), '" cy="', _fmt(y), '" r="', _fmt(r), '"/>\n')
+    touches = _join('    <path d="M ', _fmt(x - 0.5 * _TOUCH_MM), ',', _fmt(y),
+                    f' h {_TOUCH_MM}"/>\n')
+    return "".join(np.where(touch, touches, circles).tolist())
+
+
+def _join(*parts):
+    out = parts[0]
+    for part in parts[1:]:
+        out = np.char.add(out, part)
+    return out
 
 
 def _coverage(c, rad, ow, oh, aa):

@@ -9,6 +9,7 @@ import pytest
 from PIL import Image
 
 from diskpack_cl import export
+from diskpack_cl.domain import Domain
 from diskpack_cl.export import (
     check_output_path,
     path_travel,
@@ -19,6 +20,7 @@ from diskpack_cl.export import (
     write_stipple,
     write_svg,
 )
+from diskpack_cl.geometry import certify_disks
 
 SVG = "{http://www.w3.org/2000/svg}"
 INK = "{http://www.inkscape.org/namespaces/inkscape}"
@@ -29,8 +31,9 @@ def result():
     rng = np.random.default_rng(3)
     W, H = 80, 60
     pts = np.column_stack([rng.uniform(2, W - 2, 200), rng.uniform(2, H - 2, 200)])
-    cert = SimpleNamespace(valid=True, min_gap=0.01, n_pairs=123)
-    return SimpleNamespace(points=pts, radii=rng.uniform(0.3, 1.0, 200), k=0.5,
+    radii = rng.uniform(0.3, 1.0, 200)
+    cert = certify_disks(pts, radii, Domain.rect(W, H))   # the real certificate type
+    return SimpleNamespace(points=pts, radii=radii, k=0.5,
                            width=W, height=H, certificate=cert,
                            base_radii=np.ones(200), params={"n": 200})
 
@@ -47,9 +50,10 @@ def test_svg_layer_circles_and_size(tmp_path, result):
     info = write_svg(out, result, width_mm=160.0)
     root, layer, circles = _svg_circles(out)
     assert len(circles) == 200
-    assert root.get("width") == "160.0000mm"
-    assert root.get("height") == "120.0000mm"  # aspect 80:60 kept
-    assert root.get("viewBox") == "0 0 160.0000 120.0000"
+    assert root.get("width") == "160mm"
+    assert root.get("height") == "120mm"  # aspect 80:60 kept
+    assert root.get("viewBox") == "0 0 160 120"
+    assert info["moved_inside"] == 0  # no dot near an edge
     assert info["travel_after_mm"] < info["travel_before_mm"]
     # the circles are the input dots (in some order), scaled to mm
     xy = np.array([[float(c.get("cx")), float(c.get("cy"))] for c in circles])
@@ -61,7 +65,10 @@ def test_svg_dpi_and_fixed_dot(tmp_path, result):
     out = tmp_path / "b.svg"
     write_svg(out, result, dpi=25.4, dot_mm=0.5)  # 1 px = 1 mm
     root, _, circles = _svg_circles(out)
-    assert root.get("width") == "80.0000mm" and root.get("height") == "60.0000mm"
+    # a size from dpi is exact in CSS pixels (96 per inch)
+    assert root.get("width") == f"{80 / 25.4 * 96:.10g}px"
+    assert root.get("height") == f"{60 / 25.4 * 96:.10g}px"
+    assert root.get("viewBox") == "0 0 80 60"
     assert {c.get("r") for c in circles} == {"0.2500"}
 
 
@@ -100,7 +107,10 @@ def test_npz_round_trip(tmp_path, result):
         np.testing.assert_array_equal(z["points"], result.points)
         np.testing.assert_array_equal(z["radii"], result.radii)
         assert float(z["k"]) == 0.5 and int(z["width"]) == 80 and int(z["height"]) == 60
-        assert bool(z["certificate_valid"]) and int(z["certificate_n_pairs"]) == 123
+        cert = result.certificate.as_dict()
+        assert {k[len("certificate_"):] for k in z.files if k.startswith("certificate_")} == set(cert)
+        for name, v in cert.items():
+            assert z[f"certificate_{name}"].item() == v
 
 
 def test_csv_round_trip(tmp_path, result):
@@ -135,7 +145,7 @@ def test_failure_mid_write_leaves_nothing(tmp_path, result, monkeypatch):
         calls.append(1)
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(export, "_svg_circles", boom)
+    monkeypatch.setattr(export, "_svg_dots", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         write_svg(out, result)
     assert calls and list(tmp_path.iterdir()) == []
