@@ -409,7 +409,7 @@ def _is_done(item, record):
 
 def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=None, dpi=None,
                           dots="tone", dot_mm=None, radius_scale=1.0, pen_path="auto",
-                          png_scale=2.0, invert=False):
+                          png_scale=2.0, invert=False, pen_mm=None):
     """Write a stippling to every path of ``outputs``, as ``diskpack stipple`` does.
 
     With ``dots="tone"`` (and no ``dot_mm``) every dot gets one size, chosen
@@ -424,6 +424,8 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
         The gray image that was stippled (before ``invert``).
     outputs : list of str
         ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
+    pen_mm : float, optional
+        Plotter pen width for the SVG (see :func:`diskpack_cl.export.write_svg`).
 
     Returns
     -------
@@ -452,7 +454,8 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
         darkness = gray if invert else 1.0 - gray
         dot_mm = 2.0 * tone_radius(result.n, darkness) * radius_scale * scale
     svg_opts = dict(width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
-                    radius_scale=radius_scale, pen_path=pen_path, invert=invert)
+                    radius_scale=radius_scale, pen_path=pen_path, invert=invert,
+                    pen_mm=pen_mm)
     png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale

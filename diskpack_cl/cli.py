@@ -74,9 +74,22 @@ def _device_options(p):
                         "then PYOPENCL_CTX, then a GPU, else the first CPU device")
 
 
+class _Once(argparse.Action):
+    """An option that may be given once: a second one is a usage error."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        first = getattr(namespace, self.dest, None)
+        if first is not None:
+            parser.error(f"{option_string} given twice ({first} and {values}): this command "
+                         f"writes one point file (several sets: --count K with a template "
+                         f"such as -o sets/{{i:04d}}.npz)")
+        setattr(namespace, self.dest, values)
+
+
 def _output_options(p):
-    p.add_argument("-o", "--output", required=True, metavar="OUT",
-                   help="output point file (.npz, .npy, .csv, .txt, .xy); written atomically")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", action=_Once,
+                   help="output point file (.npz, .npy, .csv, .txt, .xy); written atomically; "
+                        "given once")
     p.add_argument("--quiet", "-q", action="store_true",
                    help="no progress bar and no summary on stderr")
     p.add_argument("--json", action="store_true",
@@ -376,7 +389,7 @@ def _phase_text(phase):
 
 
 def _add_stipple(subparsers):
-    from diskpack_cl.stipple import SCHEDULES
+    from diskpack_cl.schedule import SCHEDULES
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -411,12 +424,15 @@ def _add_stipple(subparsers):
                         "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
                         "(x,y,r in pixels)")
     g = p.add_argument_group("stippling (the paper's parameters)")
-    g.add_argument("--gamma", type=_positive_float, default=3.0,
-                   help="gamma: contrast exponent, base radius r_i = gray^(gamma/2) (default 3.0)")
+    g.add_argument("--gamma", type=_positive_float, default=None,
+                   help="gamma: contrast exponent of the gray radius mapping, base radius "
+                        "r_i = max(gray, FLOOR)^(gamma/2) (default 3.0); only --radii gray has "
+                        "it (the paper, pack and lloyd schedules), so the default schedule's "
+                        "density radii refuse it")
     g.add_argument("--floor", type=_unit_half_open, default=None,
                    help="floor of the radius mapping, so that black (gray) or white (density) "
                         "regions keep a finite radius (default: the schedule's, 0.1 for paper, "
-                        "0.01 for default)")
+                        "pack and lloyd, 0.01 for default)")
     g.add_argument("--radii", choices=("gray", "density"), default=None,
                    help="radius mapping: gray = the paper's r_i = max(gray, FLOOR)^(gamma/2); "
                         "density = r_i ~ darkness^(-1/2), the density Lloyd aims at "
@@ -427,7 +443,7 @@ def _add_stipple(subparsers):
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
-    g.add_argument("--schedule", choices=sorted(SCHEDULES), default="default",
+    g.add_argument("--schedule", choices=sorted(SCHEDULES), default=None,
                    help="named schedule of disk-packing (pack) and Lloyd phases: "
                         + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
                                     for name, phases in sorted(SCHEDULES.items()))
@@ -465,14 +481,19 @@ def _add_stipple(subparsers):
                    help="SVG height in mm")
     o.add_argument("--dpi", type=_positive_float, default=None,
                    help="SVG size from the image's pixels at DPI (default 96 when no mm size)")
-    o.add_argument("--dots", choices=("tone", "packing"), default="tone",
+    o.add_argument("--dots", choices=("tone", "packing"), default=None,
                    help="dot size in SVG and PNG: tone (default) = one size for all dots, "
                         "chosen so that the total ink equals the image's total darkness; "
                         "packing = each dot its certified packing disk (large where the image "
                         "is light: it shows the packing, not the tone)")
     o.add_argument("--dot-mm", type=_positive_float, default=None, metavar="MM",
-                   help="fixed dot diameter in mm (the pen width) instead of --dots; the PNG "
-                        "preview shows the same dots")
+                   help="fixed dot diameter in mm instead of --dots; the PNG preview shows "
+                        "the same dots")
+    o.add_argument("--pen-mm", type=_positive_float, default=None, metavar="W",
+                   help="plotter pen width in mm: the SVG circles become outlines of width W "
+                        "and radius (dot diameter - W)/2, so that the traced dot has the dot's "
+                        "size; a dot not wider than the pen is one pen touch (default: filled "
+                        "circles, which a plotter traces W wider)")
     o.add_argument("--radius-scale", type=_positive_float, default=1.0, metavar="F",
                    help="factor on the dot radii of --dots in SVG and PNG (default 1.0)")
     o.add_argument("--pen-path", choices=("auto", "greedy", "hilbert", "none"), default="auto",
@@ -511,11 +532,58 @@ def _stipple_progress(args, total):
     return callback, bar.close
 
 
+class _UsageError(ValueError):
+    """Options that contradict each other: :func:`main` returns 2, as argparse does."""
+
+
+def _resolve_stipple_options(args):
+    """Refuse contradicting stipple options, then fill in the defaults left open.
+
+    Raises
+    ------
+    _UsageError
+        Naming both options: ``--dot-mm`` with ``--dots``, ``--method lloyd``
+        with ``--schedule``, ``--schedule`` with ``--beta/--rounds``, and
+        ``--gamma`` where the radius mapping has no gamma (density radii).
+    """
+    from diskpack_cl.schedule import SCHEDULE_OPTIONS
+
+    if args.dot_mm is not None and args.dots is not None:
+        raise _UsageError(f"--dot-mm {args.dot_mm:g} and --dots {args.dots} both set the dot "
+                          f"size; give one")
+    if args.method == "lloyd" and args.schedule is not None:
+        raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
+                          f"--schedule {args.schedule} would be ignored; give one")
+    built = [f"--{k}" for k in ("beta", "rounds") if getattr(args, k) is not None]
+    if args.method == "diskpack" and args.lloyd is not None:
+        built.append("--lloyd")
+    if built and args.schedule is not None:
+        raise _UsageError(f"{'/'.join(built)} build the schedule the paper's way, so "
+                          f"--schedule {args.schedule} would be ignored; give one")
+    if args.method == "lloyd":
+        radii = SCHEDULE_OPTIONS["lloyd"]["radii"]
+    elif built:
+        radii = SCHEDULE_OPTIONS["paper"]["radii"]
+    else:
+        radii = SCHEDULE_OPTIONS[args.schedule or "default"]["radii"]
+    radii = args.radii or radii
+    if args.gamma is not None and radii != "gray":
+        which = f"--radii {args.radii}" if args.radii else (
+            f"the {args.schedule or 'default'} schedule's {radii} radii")
+        raise _UsageError(f"--gamma has no effect with {which} (r ~ darkness^(-1/2)); it is "
+                          f"the exponent of --radii gray, which the paper, pack and lloyd "
+                          f"schedules use (e.g. --schedule paper --gamma {args.gamma:g})")
+    args.gamma = 3.0 if args.gamma is None else args.gamma
+    args.schedule = args.schedule or "default"
+    args.dots = args.dots or "tone"
+
+
 def _write_options(args):
     """The options of :func:`diskpack_cl.batch.write_stipple_outputs` from the arguments."""
     return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
                 dots=args.dots, dot_mm=args.dot_mm, radius_scale=args.radius_scale,
-                pen_path=args.pen_path, png_scale=args.png_scale, invert=args.invert)
+                pen_path=args.pen_path, png_scale=args.png_scale, invert=args.invert,
+                pen_mm=args.pen_mm)
 
 
 def _stipple_options(args):
@@ -530,8 +598,10 @@ def _run_stipple(args):
     from diskpack_cl.batch import dots_for_image, write_stipple_outputs
     from diskpack_cl.export import check_output_path
     from diskpack_cl.image import load_gray
-    from diskpack_cl.stipple import make_schedule, stipple
+    from diskpack_cl.schedule import make_schedule
+    from diskpack_cl.stipple import stipple
 
+    _resolve_stipple_options(args)
     if _batch_mode(args, args.images, args.output):
         return _run_stipple_batch(args)
     t0 = time.perf_counter()
@@ -717,10 +787,10 @@ def _run_analyze(args):
     if plot:
         from diskpack_cl.plots import _format
 
+        from diskpack_cl.io import check_writable
+
         _format(args.output)
-        directory = os.path.dirname(args.output) or "."
-        if not os.path.isdir(directory):
-            raise FileNotFoundError(f"output directory does not exist: {directory}")
+        check_writable(args.output)
         if not _have_matplotlib() and not args.json:
             raise ValueError(f"{_PLOT_HINT} (the numbers print without it with --json)")
     stipplings = [(path, _stipple_file(path)) for path in args.inputs]
@@ -835,8 +905,11 @@ def _report_batch(args, batch):
         if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
             handlers[sig] = signal.signal(sig, _raise_terminated)
 
+    def tally():
+        return f"ok {counts['ok']} failed {counts['failed']} skipped {counts['skipped']}"
+
     def on_iteration(item, iteration, text):
-        bar.set_postfix_str(f"{os.path.basename(item.input or item.outputs[0])} "
+        bar.set_postfix_str(f"{tally()} | {os.path.basename(item.input or item.outputs[0])} "
                             f"it {iteration} {text}")
 
     if bar is not None:
@@ -850,8 +923,7 @@ def _report_batch(args, batch):
             if args.json:
                 print(json.dumps(rec, default=json_default), flush=True)
             if bar is not None:
-                bar.set_postfix(ok=counts["ok"], failed=counts["failed"],
-                                skipped=counts["skipped"], refresh=False)
+                bar.set_postfix_str(tally(), refresh=False)
                 bar.update(1)
             elif not args.quiet:
                 done = sum(counts.values())
@@ -889,7 +961,7 @@ def _report_batch(args, batch):
 
 def _run_stipple_batch(args):
     from diskpack_cl.batch import stipple_many
-    from diskpack_cl.stipple import make_schedule
+    from diskpack_cl.schedule import make_schedule
 
     if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
         raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
@@ -942,8 +1014,50 @@ def build_parser():
     return parser
 
 
+def _terminate_handlers():
+    """Make SIGTERM and SIGHUP raise :class:`_Terminated`, as Ctrl-C raises
+    KeyboardInterrupt, so that a killed run cleans up like an interrupted
+    one; return the handlers to restore (none off the main thread)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    handlers = {}
+    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
+            handlers[sig] = signal.signal(sig, _raise_terminated)
+    return handlers
+
+
+def _stdout_closed():
+    """After a BrokenPipeError (``diskpack ... --json | head``): end quietly.
+
+    Point the stdout descriptor at /dev/null so that the interpreter's final
+    flush does not raise again; return 141, the status of a SIGPIPE death.
+    """
+    with open(os.devnull, "wb") as null:
+        try:
+            os.dup2(null.fileno(), sys.stdout.fileno())
+        except (OSError, ValueError):  # stdout is no real file (tests)
+            pass
+    return 128 + 13
+
+
+def _os_error_text(exc):
+    """``path: reason`` for an OSError, without the raw ``[Errno N]`` prefix."""
+    reason = exc.strerror or str(exc)
+    return f"{exc.filename}: {reason}" if exc.filename else reason
+
+
 def main(argv=None):
-    """Run the CLI; return the exit status (0 ok, 1 error, 2 usage, 130 interrupted)."""
+    """Run the CLI; return the exit status.
+
+    0 ok, 1 error, 2 usage error, 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (an
+    interrupted run leaves none of its outputs), 141 when stdout was closed.
+    """
+    import signal
+
     from diskpack_cl._device import NoOpenCLError
 
     parser = build_parser()
@@ -951,14 +1065,24 @@ def main(argv=None):
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 1
+    handlers = _terminate_handlers()
     try:
         return int(args.run(args) or 0)
-    except KeyboardInterrupt:
-        print(f"{PROG}: error: interrupted, nothing written", file=sys.stderr)
-        return 130
-    except (ValueError, FileNotFoundError, IsADirectoryError, PermissionError,
-            NoOpenCLError) as exc:
+    except _UsageError as exc:
+        print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        how = (signal.Signals(exc.args[0]).name if isinstance(exc, _Terminated)
+               else "interrupted")
+        print(f"{PROG}: error: {how}, nothing written", file=sys.stderr)
+        return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
+    except BrokenPipeError:
+        return _stdout_closed()
+    except (ValueError, NoOpenCLError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 1
+    except OSError as exc:  # a write failed: read-only, full, gone
+        print(f"{PROG}: error: {_os_error_text(exc)}; nothing written", file=sys.stderr)
         return 1
     except MemoryError:
         print(f"{PROG}: error: out of memory, nothing written", file=sys.stderr)
@@ -969,6 +1093,9 @@ def main(argv=None):
         print(f"{PROG}: error: OpenCL failed ({type(exc).__name__}: {exc}); try another "
               f"--device (see 'diskpack devices'); nothing written", file=sys.stderr)
         return 1
+    finally:
+        for sig, old in handlers.items():
+            signal.signal(sig, old)
 
 
 if __name__ == "__main__":  # pragma: no cover

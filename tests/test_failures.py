@@ -1,0 +1,206 @@
+"""Every failure answered: signals, unwritable outputs, contradicting options.
+
+Signals are sent to a real child process; read-only folders are a read-only
+tmpfs mount when running as root (permissions do not stop root), else a
+folder without write permission.
+"""
+
+import errno
+import importlib
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from diskpack_cl import cli
+from diskpack_cl.io import write_points
+
+STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
+
+
+@pytest.fixture
+def read_only_dir(tmp_path):
+    """A folder in which no file can be created, whoever runs the tests."""
+    path = tmp_path / "ro"
+    path.mkdir()
+    if os.geteuid() != 0:
+        path.chmod(0o500)
+        yield path
+        path.chmod(0o700)
+        return
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro", "tmpfs", str(path)],
+                             capture_output=True).returncode == 0
+    # without mount privileges, /proc refuses new files even to root
+    yield path if mounted else type(path)("/proc")
+    if mounted:
+        subprocess.run(["umount", str(path)], check=True)
+
+
+def _run(argv, capsys):
+    rc = cli.main(argv)
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@pytest.fixture
+def no_stipple(monkeypatch):
+    """Fail the test if the computation starts."""
+    def not_called(*args, **kwargs):
+        raise AssertionError("the computation ran although an output was unwritable")
+
+    monkeypatch.setattr(STIPPLE_MODULE, "stipple", not_called)
+    monkeypatch.setattr(importlib.import_module("diskpack_cl.relax"), "relax_poisson",
+                        not_called)
+
+
+# ------------------------------------------------------------------ signals
+
+CHILD = textwrap.dedent("""
+    import sys, time
+    import diskpack_cl.export as export
+
+    def png_that_hangs(path, result, **opts):
+        print("writing png", flush=True)   # the .npz and .svg are written by now
+        time.sleep(600)
+
+    export.WRITERS[".png"] = png_that_hangs
+    from diskpack_cl.cli import main
+    sys.exit(main(sys.argv[1:]))
+""")
+
+
+@pytest.mark.parametrize("sig, code, name", [(signal.SIGTERM, 143, "SIGTERM"),
+                                             (signal.SIGHUP, 129, "SIGHUP"),
+                                             (signal.SIGINT, 130, "interrupted")])
+def test_signal_while_writing_leaves_no_output(ctx, tmp_path, sig, code, name):
+    from PIL import Image
+
+    Image.fromarray(np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)).save(
+        tmp_path / "g.png")
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = [str(tmp_path / "g.png"), "-n", "30", "--schedule", "pack", "-q",
+            "-o", str(out / "a.npz"), "-o", str(out / "a.svg"), "-o", str(out / "a.png")]
+    child = subprocess.Popen([sys.executable, "-c", CHILD, "stipple", *argv],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline() == "writing png\n"
+        assert sorted(os.listdir(out)) == ["a.npz", "a.svg"]   # written before the signal
+        child.send_signal(sig)
+        _, err = child.communicate(timeout=120)
+    finally:
+        child.kill()
+    assert child.returncode == code, err
+    assert f"diskpack: error: {name}, nothing written" in err
+    assert "Traceback" not in err
+    assert os.listdir(out) == []
+
+
+# -------------------------------------------------------- unwritable outputs
+
+def test_stipple_output_in_read_only_folder(read_only_dir, no_stipple, capsys):
+    rc, out, err = _run(["stipple", "sample", "-n", "100", "-o", str(read_only_dir / "a.svg")],
+                        capsys)
+    assert rc == 1, err
+    assert err.startswith("diskpack: error: ") and "cannot write in" in err
+    assert "Traceback" not in err and "[Errno" not in err
+
+
+def test_stipple_output_that_is_a_folder(tmp_path, no_stipple, capsys):
+    (tmp_path / "d.svg").mkdir()
+    rc, _, err = _run(["stipple", "sample", "-n", "100", "-o", str(tmp_path / "d.svg")], capsys)
+    assert rc == 1 and "d.svg is a folder, not a file name" in err
+    assert os.listdir(tmp_path) == ["d.svg"] and os.listdir(tmp_path / "d.svg") == []
+
+
+def test_poisson_output_in_read_only_folder(read_only_dir, no_stipple, capsys):
+    rc, _, err = _run(["poisson", "-n", "64", "-o", str(read_only_dir / "p.npz")], capsys)
+    assert rc == 1 and "cannot write in" in err
+
+
+def test_analyze_report_in_read_only_folder(read_only_dir, tmp_path, monkeypatch, capsys):
+    import diskpack_cl.analysis
+
+    pts = tmp_path / "p.npz"
+    write_points(pts, np.random.default_rng(0).random((50, 2)))
+
+    def not_called(*args, **kwargs):
+        raise AssertionError("analysis ran although the report was unwritable")
+
+    monkeypatch.setattr(diskpack_cl.analysis, "periodogram", not_called)
+    rc, out, err = _run(["analyze", str(pts), "--json", "-o", str(read_only_dir / "r.png")],
+                        capsys)
+    assert rc == 1 and "cannot write in" in err and out == ""
+
+
+def test_write_failure_after_the_work_is_an_error_message(tmp_path, monkeypatch, capsys):
+    """A disk that fills up during the write: a message naming the file, nothing left."""
+    import diskpack_cl.io
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(diskpack_cl.io.os, "fsync", full)
+    target = tmp_path / "p.npz"
+    rc, _, err = _run(["poisson", "-n", "16", "--backend", "exact", "--max-iter", "1", "-q",
+                       "-o", str(target)], capsys)
+    assert rc == 1, err
+    assert f"diskpack: error: {target}: No space left on device; nothing written" in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_check_writable_leaves_nothing(tmp_path):
+    from diskpack_cl.io import check_writable
+
+    check_writable(tmp_path / "new.svg")
+    (tmp_path / "old.svg").write_text("x")
+    check_writable(tmp_path / "old.svg")
+    assert sorted(os.listdir(tmp_path)) == ["old.svg"]
+    assert (tmp_path / "old.svg").read_text() == "x"
+
+
+# ---------------------------------------------------------- usage conflicts
+
+@pytest.mark.parametrize("argv, names", [
+    (["poisson", "-n", "16", "-o", "a.npz", "-o", "b.npz"], ["-o given twice", "a.npz", "b.npz"]),
+    (["relax", "in.npz", "-o", "a.npz", "-o", "b.npz"], ["-o given twice"]),
+    (["stipple", "sample", "-n", "9", "-o", "a.svg", "--dot-mm", "0.5", "--dots", "packing"],
+     ["--dot-mm", "--dots packing"]),
+    (["stipple", "sample", "-n", "9", "-o", "a.svg", "--method", "lloyd", "--schedule", "paper"],
+     ["--method lloyd", "--schedule paper"]),
+    (["stipple", "sample", "-n", "9", "-o", "a.svg", "--beta", "5", "--schedule", "pack"],
+     ["--beta", "--schedule pack"]),
+    (["stipple", "sample", "-n", "9", "-o", "a.svg", "--gamma", "2"],
+     ["--gamma", "default schedule", "--schedule paper"]),
+    (["stipple", "sample", "-n", "9", "-o", "a.svg", "--schedule", "paper", "--radii", "density",
+      "--gamma", "2"], ["--gamma", "--radii density"]),
+])
+def test_contradicting_options_are_usage_errors(tmp_path, no_stipple, capsys, monkeypatch,
+                                                argv, names):
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = _run(argv, capsys)
+    assert rc == 2, err
+    assert "error:" in err
+    for name in names:
+        assert name in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_gamma_is_accepted_where_it_acts(monkeypatch, tmp_path, capsys):
+    calls = []
+
+    def fake(image, n, **kwargs):
+        calls.append(kwargs)
+        raise ValueError("stop")
+
+    monkeypatch.setattr(STIPPLE_MODULE, "stipple", fake)
+    for extra in (["--schedule", "paper"], ["--radii", "gray"], ["--beta", "4"],
+                  ["--method", "lloyd"]):
+        rc, _, err = _run(["stipple", "sample", "-n", "9", "-o", str(tmp_path / "a.svg"),
+                           "--gamma", "2", *extra], capsys)
+        assert rc == 1 and "stop" in err
+    assert [c["gamma"] for c in calls] == [2.0] * 4
