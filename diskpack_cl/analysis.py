@@ -456,6 +456,12 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
         ``psi6`` (n,) per-point |psi_6| and ``mean``. A point that coincides
         with another has no neighbours of its own and gets 0.
 
+    Raises
+    ------
+    ValueError
+        Fewer than 3 points, or no triangulation (all points coincide or
+        lie on one line).
+
     References
     ----------
     .. [1] D. R. Nelson and B. I. Halperin, "Dislocation-mediated melting in
@@ -478,7 +484,11 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
             raise ValueError(f"width and height must be positive, got {width} x {height}")
         dom = Domain(float(width), float(height), True)
         p = dom.wrap(p)
-        allp, tri = _torus_delaunay(p, dom)
+        try:
+            allp, tri = _torus_delaunay(p, dom)
+        except QhullError as exc:
+            raise ValueError("the points are degenerate (fewer than 3 distinct points, or "
+                             "all on one line): no Delaunay triangulation") from exc
     else:
         allp = p
         try:

@@ -780,6 +780,7 @@ def _run_analyze(args):
     import numpy as np
 
     from diskpack_cl.io import read_points
+    from diskpack_cl.measures import nearest_neighbor_distances
 
     if args.output is None and not args.json:
         raise ValueError("nothing to do: give -o REPORT.png for a figure and/or --json")
@@ -832,6 +833,11 @@ def _run_analyze(args):
                 raise ValueError(f"{path}: points must lie on the unit torus [0,1)^2 (a "
                                  f"stippling in pixels is analyzed through its .npz with "
                                  f"--image)")
+            same = nearest_neighbor_distances(pts) == 0
+            if same.any():
+                raise ValueError(f"{path}: {int(same.sum())} of {len(pts)} points coincide "
+                                 f"with another (first: row {int(np.argmax(same))}); rho, the "
+                                 f"spectra and the hexatic order need distinct points")
             sets.append(pts)
         if plot and _have_matplotlib():
             from diskpack_cl.plots import point_set_report

@@ -65,13 +65,41 @@ def _bomb_limit(allow_large):
         Image.MAX_IMAGE_PIXELS = old
 
 
+def _image_source(path):
+    """``(name, source)`` for Pillow: a regular file's path, or the bytes of
+    standard input (``"-"``) or of a pipe (``/dev/stdin``, a FIFO) in memory
+    (Pillow needs to seek, and a pipe reports size 0)."""
+    import io
+    import stat
+    import sys
+
+    if os.fspath(path) == "-":
+        name, data = "standard input", sys.stdin.buffer.read()
+    else:
+        p = Path(os.fspath(path))
+        if not p.exists():
+            raise FileNotFoundError(f"image file not found: {p}")
+        if p.is_dir():
+            raise ValueError(f"not an image file (it is a directory): {p}")
+        if stat.S_ISREG(p.stat().st_mode):
+            if p.stat().st_size == 0:
+                raise ValueError(f"image file is empty (0 bytes): {p}")
+            return str(p), p
+        name, data = str(p), p.read_bytes()
+    if not data:
+        raise ValueError(f"no image data (0 bytes) on {name}")
+    return name, io.BytesIO(data)
+
+
 def load_gray(path, *, invert=False, allow_large=False):
     """Read an image file as a float64 gray image in [0, 1], 1 = white.
 
     Parameters
     ----------
     path : str or os.PathLike
-        Any file Pillow can read.
+        Any file Pillow can read; ``"-"`` reads the image from standard input
+        (``./-`` names a file of that name), and a pipe such as ``/dev/stdin``
+        is read to its end.
     invert : bool, optional
         Return ``1 - gray`` (for light-on-dark stippling).
     allow_large : bool, optional
@@ -100,29 +128,23 @@ def load_gray(path, *, invert=False, allow_large=False):
     """
     from PIL import Image, ImageOps, UnidentifiedImageError
 
-    path = Path(os.fspath(path))
-    if not path.exists():
-        raise FileNotFoundError(f"image file not found: {path}")
-    if path.is_dir():
-        raise ValueError(f"not an image file (it is a directory): {path}")
-    if path.stat().st_size == 0:
-        raise ValueError(f"image file is empty (0 bytes): {path}")
+    name, source = _image_source(path)
     try:
         with _bomb_limit(allow_large):
-            with Image.open(path) as im:
+            with Image.open(source) as im:
                 im.load()
                 im = ImageOps.exif_transpose(im)
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
         raise ValueError(
             f"image is larger than Pillow's decompression-bomb limit "
-            f"({Image.MAX_IMAGE_PIXELS} pixels): {path}; pass allow_large=True "
+            f"({Image.MAX_IMAGE_PIXELS} pixels): {name}; pass allow_large=True "
             f"(CLI: --allow-large) if you trust the file"
         ) from exc
     except UnidentifiedImageError as exc:
-        raise ValueError(f"not an image Pillow can read: {path}") from exc
+        raise ValueError(f"not an image Pillow can read: {name}") from exc
     except (OSError, SyntaxError, EOFError) as exc:
-        raise ValueError(f"image file is truncated or corrupt: {path} ({exc})") from exc
-    return _pil_to_gray(im, invert=invert, name=str(path))
+        raise ValueError(f"image file is truncated or corrupt: {name} ({exc})") from exc
+    return _pil_to_gray(im, invert=invert, name=name)
 
 
 def _pil_to_gray(im, *, invert=False, name="image"):

@@ -204,3 +204,59 @@ def test_gamma_is_accepted_where_it_acts(monkeypatch, tmp_path, capsys):
                            "--gamma", "2", *extra], capsys)
         assert rc == 1 and "stop" in err
     assert [c["gamma"] for c in calls] == [2.0] * 4
+
+
+# ------------------------------------------------------------------ analyze
+
+@pytest.mark.parametrize("n", [2, 1000])
+def test_analyze_identical_points_is_an_error(tmp_path, capsys, n):
+    pts = tmp_path / "same.npz"
+    write_points(pts, np.full((n, 2), 0.3))
+    rc, out, err = _run(["analyze", str(pts), "--json"], capsys)
+    assert rc == 1 and out == ""
+    assert f"same.npz: {n} of {n} points coincide" in err
+
+
+def test_hexatic_order_of_identical_points_is_a_value_error():
+    from diskpack_cl.analysis import hexatic_order
+
+    with pytest.raises(ValueError, match="degenerate"):
+        hexatic_order(np.full((1000, 2), 0.3))
+
+
+def test_closed_stdout_ends_quietly(tmp_path):
+    """``diskpack analyze good.npz --json | head -c 0``: no traceback, status 141."""
+    pts = tmp_path / "good.npz"
+    write_points(pts, np.random.default_rng(0).random((300, 2)))
+    child = subprocess.Popen([sys.executable, "-m", "diskpack_cl.cli", "analyze", str(pts),
+                              "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    child.stdout.close()   # the reader went away before the first byte
+    err = child.stderr.read().decode()
+    child.wait(timeout=120)
+    assert child.returncode == 141, err
+    assert err == ""
+
+
+# ------------------------------------------------------------ image on a pipe
+
+@pytest.mark.parametrize("name", ["-", "/dev/stdin"])
+def test_stipple_reads_the_image_from_a_pipe(ctx, tmp_path, name):
+    from diskpack_cl.image import sample_image_path
+
+    data = sample_image_path().read_bytes()
+    args = ["-n", "50", "--schedule", "pack", "-q"]
+    piped = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", "stipple", name, *args,
+                            "-o", str(tmp_path / "pipe.npz")], input=data,
+                           capture_output=True)
+    assert piped.returncode == 0, piped.stderr.decode()
+    assert cli.main(["stipple", "sample", *args, "-o", str(tmp_path / "file.npz")]) == 0
+    with np.load(tmp_path / "pipe.npz") as a, np.load(tmp_path / "file.npz") as b:
+        np.testing.assert_array_equal(a["points"], b["points"])
+
+
+def test_empty_pipe_is_an_error(tmp_path):
+    piped = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", "stipple", "-", "-n", "5",
+                            "-o", str(tmp_path / "a.npz")], input=b"", capture_output=True)
+    assert piped.returncode == 1
+    assert b"diskpack: error: no image data (0 bytes) on standard input" in piped.stderr
+    assert os.listdir(tmp_path) == []
