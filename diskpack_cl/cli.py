@@ -195,6 +195,9 @@ def _relax_and_write(points, args, *, extra_summary=None):
     }
     if extra_summary:
         summary.update(extra_summary)
+    if res.stats.get("fallback") and not args.quiet:
+        print(f"{PROG}: note: {res.stats['fallback']}: used the exact backend "
+              f"(--backend auto)", file=sys.stderr)
     if not args.quiet:
         print(f"{PROG}: {summary['n']} points, rho {summary['rho_start']:.4f} -> "
               f"{summary['rho_final']:.4f} in {summary['iterations']} iterations "
@@ -643,6 +646,9 @@ def _run_stipple(args):
     summary["outputs"] = written
     summary["write_seconds"] = seconds_write
     summary["seconds"] = time.perf_counter() - t0
+    if res.engine == "exact" and not args.quiet:
+        print(f"{PROG}: note: no OpenCL device: stippled with the exact (scipy) engine",
+              file=sys.stderr)
     if not args.quiet:
         cert = res.certificate
         travel = "".join(
@@ -893,9 +899,11 @@ def _raise_terminated(signum, frame):
 
 
 def _report_batch(args, batch):
-    """Run a planned batch with a progress bar / log lines / JSON; the exit status."""
-    import signal
+    """Run a planned batch with a progress bar / log lines / JSON; the exit status.
 
+    :func:`main` turns SIGTERM and SIGHUP into :class:`_Terminated`; an
+    interrupted batch says how far it came and how to resume.
+    """
     total = len(batch)
     bar = None
     if not args.quiet and sys.stderr.isatty():
@@ -906,10 +914,6 @@ def _report_batch(args, batch):
     counts = {"ok": 0, "failed": 0, "skipped": 0}
     failures = []
     t0 = time.perf_counter()
-    handlers = {}
-    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
-        if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
-            handlers[sig] = signal.signal(sig, _raise_terminated)
 
     def tally():
         return f"ok {counts['ok']} failed {counts['failed']} skipped {counts['skipped']}"
@@ -944,9 +948,6 @@ def _report_batch(args, batch):
         print(f"{PROG}: error: interrupted after {done} of {total} items; the finished ones "
               f"are in {batch.manifest}: rerun the same command to resume", file=sys.stderr)
         return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
-    finally:
-        for sig, old in handlers.items():
-            signal.signal(sig, old)
     if bar is not None:
         bar.close()
     seconds = time.perf_counter() - t0
@@ -1073,6 +1074,11 @@ def main(argv=None):
         return exc.code if isinstance(exc.code, int) else 1
     handlers = _terminate_handlers()
     try:
+        device = getattr(args, "device", None)
+        if device and "," not in device:  # an explicit device must exist, on every command
+            from diskpack_cl._device import get_context
+
+            get_context(device)
         return int(args.run(args) or 0)
     except _UsageError as exc:
         print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)

@@ -260,3 +260,54 @@ def test_empty_pipe_is_an_error(tmp_path):
     assert piped.returncode == 1
     assert b"diskpack: error: no image data (0 bytes) on standard input" in piped.stderr
     assert os.listdir(tmp_path) == []
+
+
+# ------------------------------------------------------------------ devices
+
+@pytest.mark.parametrize("argv", [
+    ["poisson", "-n", "64", "-o", "p.npz"],
+    ["poisson", "-n", "64", "-o", "p.npz", "--backend", "exact"],
+    ["poisson", "--radius", "0.1", "-o", "p.npz"],
+    ["relax", "in.npz", "-o", "p.npz"],
+    ["stipple", "sample", "-n", "20", "-o", "s.npz"],
+])
+def test_explicit_device_that_matches_nothing_is_an_error(tmp_path, monkeypatch, capsys, argv):
+    monkeypatch.chdir(tmp_path)
+    write_points("in.npz", np.random.default_rng(0).random((64, 2)))
+    rc, _, err = _run([*argv, "--device", "no-such-device-xyz"], capsys)
+    assert rc == 1, err
+    assert "diskpack: error: no OpenCL device matches 'no-such-device-xyz'" in err
+    assert sorted(os.listdir(tmp_path)) == ["in.npz"]
+
+
+@pytest.fixture
+def no_opencl(monkeypatch):
+    """No OpenCL platform, and no context cached from earlier tests."""
+    import pyopencl
+
+    import diskpack_cl._device as dev
+
+    monkeypatch.setattr(pyopencl, "get_platforms", lambda: [])
+    monkeypatch.setattr(dev, "_CONTEXTS", {})
+
+
+def test_auto_falls_back_and_says_so(tmp_path, no_opencl, capsys):
+    rc, _, err = _run(["poisson", "-n", "64", "--max-iter", "2", "-o",
+                       str(tmp_path / "p.npz")], capsys)
+    assert rc == 0, err
+    assert "diskpack: note: no OpenCL device" in err and "used the exact backend" in err
+    rc, _, err = _run(["poisson", "-n", "64", "--backend", "opencl", "-o",
+                       str(tmp_path / "q.npz")], capsys)
+    assert rc == 1 and "no OpenCL platform" in err
+    assert os.listdir(tmp_path) == ["p.npz"]
+
+
+def test_stipple_without_opencl_says_which_engine(tmp_path, no_opencl, capsys):
+    from PIL import Image
+
+    Image.fromarray(np.tile(np.linspace(0, 255, 20), (20, 1)).astype(np.uint8)).save(
+        tmp_path / "g.png")
+    rc, _, err = _run(["stipple", str(tmp_path / "g.png"), "-n", "20", "--schedule", "pack",
+                       "-o", str(tmp_path / "s.npz")], capsys)
+    assert rc == 0, err
+    assert "diskpack: note: no OpenCL device: stippled with the exact (scipy) engine" in err
