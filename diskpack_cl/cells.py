@@ -34,6 +34,9 @@ MAXC = 64        # constraint list capacity per work item
 MAXNEAR = 8      # near-tight constraints reported besides the basis
 NO_CODE = -9     # empty slot of the near-tight list
 CHUNK = 1 << 17  # work items per enqueue: each wait lets Ctrl-C through
+# Work-group size: each work item keeps a ~2.3 KB constraint list in private
+# memory, and PoCL lays a whole work-group's out on one thread's stack.
+GROUP = 64
 
 #: Flag bits of the kernel (``kernels/cell_mic.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
@@ -117,7 +120,7 @@ class CellMIC:
     True
     """
 
-    def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=1.0):
+    def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=2.0):
         import pyopencl as cl
 
         self.domain = domain
@@ -133,6 +136,7 @@ class CellMIC:
         self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
         self._bufs = {}
         self._order = None
+        self._warm_n = None
         self._warm()
 
     def _warm(self):
@@ -141,7 +145,7 @@ class CellMIC:
         dom = self.domain
         pts = (np.random.default_rng(0).random((16, 2)) * (dom.width, dom.height))
         self.solve(pts)
-        self._order = None
+        self._order = self._warm_n = None
 
     # -- buffers -----------------------------------------------------------
     def _buffer(self, name, nbytes):
@@ -240,14 +244,16 @@ class CellMIC:
                 "near": np.empty((n, MAXNEAR), np.int32), "nn": np.empty(n)}
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
         near_tol = 1e-7 * np.sqrt(dom.area / n)
+        # the last call's bases (by original index) start this call's solves
+        previous = self._bufs.get("out_active") if self._warm_n == n else None
         events = []
         for off in range(0, n, CHUNK):
-            size = min(CHUNK, n - off)
+            size = -(-min(CHUNK, n - off) // GROUP) * GROUP
             events.append(self._kernel(
-                self.queue, (size,), None, b_site, b_w, b_id, b_start, b_wmax,
+                self.queue, (size,), (GROUP,), b_site, b_w, b_id, b_start, b_wmax,
                 np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
                 np.float64(dom.width), np.float64(dom.height), np.float64(w.max()),
-                np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),
+                np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off), previous,
                 bufs["center"], bufs["radius"], bufs["active"], bufs["near"], bufs["nn"]))
         for ev in events:
             ev.wait()   # one chunk at a time: a pending signal is handled in between
@@ -256,6 +262,7 @@ class CellMIC:
         for k, v in outs.items():
             cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
         self.queue.finish()
+        self._warm_n = n
         return outs
 
     def _finish(self, X, w, out, timings, t_start):

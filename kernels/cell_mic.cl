@@ -43,10 +43,10 @@
 
 #define KMIN 14          /* sites gathered before the first solve */
 #define RMAX 6           /* most bucket rings gathered up front */
-#define RMAX_UNBOUNDED 12 /* most rings gathered while the cell is unbounded */
+#define RMAX_GROW 12     /* most rings gathered while the cell reaches past them */
 #define MAX_PIVOTS 96
-#define MAX_ROUNDS 8
-#define MAX_SCAN 48      /* widest verification scan, in buckets per side */
+#define MAX_ROUNDS 16
+#define MAX_SCAN 256     /* widest verification scan, in buckets per side */
 #define GATHER_CAP (MAXC - 16)  /* list room kept for the sites step 3 adds */
 
 /* flag bits, mirrored in diskpack_cl/cells.py */
@@ -61,6 +61,7 @@
 
 typedef struct {
     double nx[MAXC], ny[MAXC], be[MAXC];
+    double d[MAXC];      /* distance of the site from x_i (0 for edges) */
     int code[MAXC];
     int m;
 } clist;
@@ -115,18 +116,77 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
     return F_PIVOTS;
 }
 
+/* Start from last call's basis when all three of its constraints are in the
+ * list and still dual feasible (sites move little between iterations, so the
+ * dual simplex then needs a pivot or two instead of leaving the triangle). */
+static void warm_basis(const clist *L, int4 prev, int *b)
+{
+    const int want[3] = {prev.x, prev.y, prev.z};
+    int cand[3];
+    for (int k = 0; k < 3; ++k) {
+        cand[k] = -1;
+        if (want[k] <= -5) return;
+        for (int t = 3; t < L->m; ++t)
+            if (L->code[t] == want[k]) { cand[k] = t; break; }
+        if (cand[k] < 0) return;
+    }
+    double ax[3], ay[3], inv[9];
+    for (int k = 0; k < 3; ++k) { ax[k] = L->nx[cand[k]]; ay[k] = L->ny[cand[k]]; }
+    if (!inv3(ax, ay, inv)) return;
+    if (inv[6] < 0.0 || inv[7] < 0.0 || inv[8] < 0.0) return;   /* multipliers l >= 0 */
+    for (int k = 0; k < 3; ++k) b[k] = cand[k];
+}
+
+static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
+                     int code)
+{
+    const double len = sqrt(len2), il = 1.0 / len;
+    L->nx[k] = ax * il;
+    L->ny[k] = ay * il;
+    L->be[k] = 0.5 * (len2 - wj + wi) * il;
+    L->d[k] = len;
+    L->code[k] = code;
+}
+
+/* The list is full: the new constraint (slack `sl` at the vertex z) takes
+ * the place of the non-basic one with the most slack, when that has more;
+ * returns whether it found a place.
+ * A constraint pushed out this way comes back if it is ever violated, in a
+ * later round. */
+static int replace_slackest(clist *L, const int *b, const double *z, double sl,
+                            double ax, double ay, double len2, double wj, double wi, int code)
+{
+    int worst = -1;
+    double most = sl;
+    for (int k = 3; k < L->m; ++k) {
+        if (k == b[0] || k == b[1] || k == b[2] || L->code[k] < 0) continue;
+        const double sk = L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
+        if (sk > most) { most = sk; worst = k; }
+    }
+    if (worst < 0) return 0;
+    set_site(L, worst, ax, ay, len2, wj, wi, code);
+    return 1;
+}
+
+/* Radius around the centre beyond which no site can have slack below near_tol:
+ * slack < near_tol  <=>  (d_j - Rp)^2 < (|q| + Rp)^2 + w_j - w_i, Rp = R + near_tol,
+ * with w_j <= wmax. Also returns Rp, |q| and (|q| + Rp)^2 - w_i. */
+static double cutter_reach(const double *z, double wi, double wmax, double near_tol,
+                           double *Rp, double *qn, double *reach2)
+{
+    *Rp = fmax(z[2], 0.0) + near_tol;
+    *qn = sqrt(z[0] * z[0] + z[1] * z[1]);
+    *reach2 = (*qn + *Rp) * (*qn + *Rp) - wi;
+    return *Rp + sqrt(fmax(*reach2 + wmax, 0.0));
+}
+
 /* Add site (xj + shift) as a constraint of cell i, unless it is the site itself. */
 static int push_site(clist *L, double ax, double ay, double wj, double wi, int code)
 {
     const double len2 = ax * ax + ay * ay;
     if (len2 == 0.0) return 0;                 /* coincident: no bisector */
     if (L->m >= MAXC) return F_LIST_FULL;
-    const double len = sqrt(len2);
-    L->nx[L->m] = ax / len;
-    L->ny[L->m] = ay / len;
-    L->be[L->m] = (len2 - wj + wi) / (2.0 * len);
-    L->code[L->m] = code;
-    L->m++;
+    set_site(L, L->m++, ax, ay, len2, wj, wi, code);
     return 0;
 }
 
@@ -148,7 +208,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                         __global const int *sid, __global const int *bstart,
                         int s, double2 xi, double wi, int hx, int hy, int ring,
                         int nbx, int nby, double W, double H,
-                        clist *L, double *nn2, int *partial, int *flag)
+                        int fixed, clist *L, double *nn2, double *dropped, int *flag)
 {
     for (int dy = -ring; dy <= ring; ++dy) {
         for (int dx = -ring; dx <= ring; ++dx) {
@@ -165,11 +225,23 @@ static void gather_ring(__global const double2 *site, __global const double *wei
             for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
                 if (t == s && qx == 0 && qy == 0) continue;
                 const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
-                *nn2 = fmin(*nn2, ax * ax + ay * ay);
-                if (L->m < GATHER_CAP)
+                const double len2 = ax * ax + ay * ay;
+                *nn2 = fmin(*nn2, len2);
+                if (L->m < GATHER_CAP) {
                     push_site(L, ax, ay, weight[t], wi, site_code(sid[t], qx, qy, flag));
-                else
-                    *partial = 1;
+                    continue;
+                }
+                /* full: keep the GATHER_CAP nearest, remember the nearest dropped */
+                int far = fixed;
+                for (int k = fixed + 1; k < L->m; ++k)
+                    if (L->d[k] > L->d[far]) far = k;
+                const double len = sqrt(len2);
+                if (len < L->d[far]) {
+                    *dropped = fmin(*dropped, L->d[far]);
+                    set_site(L, far, ax, ay, len2, weight[t], wi, site_code(sid[t], qx, qy, flag));
+                } else {
+                    *dropped = fmin(*dropped, len);
+                }
             }
         }
     }
@@ -189,6 +261,7 @@ __kernel void cell_mic(
     const double tol,                /* feasibility tolerance (length units) */
     const double near_tol,               /* slack below which a constraint is near-tight */
     const int offset,                /* first sorted site of this enqueue */
+    __global const int4 *previous,   /* last call's basis codes by original index, or NULL */
     __global double2 *center,        /* out, by original index: MIC centre */
     __global double *radius,         /* out: MIC radius (negative: empty power cell) */
     __global int4 *active,           /* out: three basic constraint codes, flag word */
@@ -223,40 +296,46 @@ __kernel void cell_mic(
     /* 1. gather rings of buckets around the home bucket, and more while the
      *    cell is still unbounded by what was gathered */
     double nn2 = INFINITY;
-    int ring = 0, partial = 0;
+    int ring = 0;
+    double dropped = INFINITY;
     for (;; ++ring) {
         gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ring, nbx, nby, W, H,
-                    &L, &nn2, &partial, &flag);
+                    fixed, &L, &nn2, &dropped, &flag);
         if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
     }
     int b[3] = {0, 1, 2};
+    if (previous) warm_basis(&L, previous[i], b);
     double z[3];
     flag |= dual_simplex(&L, b, z, tol);
-    while (is_artificial(&L, b) && ring < RMAX_UNBOUNDED && !partial && !(flag & F_PIVOTS)) {
+    /* 2. more rings while the cell is unbounded by the list, or its disk
+     *    reaches past what the rings cover; no replacements once solved
+     *    (the basis indexes the list), so this stops at the first dropped site */
+    double Rp, qn, reach2, rad, G;
+    for (;;) {
+        rad = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
+        /* every site within G of x_i is in the list: the rings cover their
+         * width, and a full list kept the nearest, none dropped closer */
+        G = fmin(ring * fmin(bw, bh), dropped);
+        /* grown far enough when the disk and its equal-weight neighbours'
+         * reach are covered: the scan below then finds a few heavier cutters */
+        if (!is_artificial(&L, b) && qn + 2.0 * Rp <= G) break;
+        if (ring >= RMAX_GROW || dropped < INFINITY || (flag & F_PIVOTS)) break;
         gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
-                    &L, &nn2, &partial, &flag);
+                    fixed, &L, &nn2, &dropped, &flag);
         flag |= dual_simplex(&L, b, z, tol);
     }
-    /* every site within G of x_i is in the list, unless a dense bucket filled
-     * it first: then nothing is taken for granted and step 3 scans */
     const double Gnn = ring * fmin(bw, bh);
-    const double G = partial ? 0.0 : Gnn;
 
-
-    /* 3. prove it against every site that could cut the disk */
+    /* 3. prove it by scanning the buckets the proof ball touches */
     int round = 0;
     for (; round < MAX_ROUNDS && !(flag & (F_PIVOTS | F_LIST_FULL)); ++round) {
-        /* slack < near_tol  <=>  (d_j - Rp)^2 < (|q| + Rp)^2 + w_j - w_i, Rp = R + near_tol */
-        const double Rp = fmax(z[2], 0.0) + near_tol;
-        const double qn = sqrt(z[0] * z[0] + z[1] * z[1]);
-        const double reach2 = (qn + Rp) * (qn + Rp) - wi;
-        const double rad = Rp + sqrt(fmax(reach2 + wmax, 0.0));
+        if (round > 0) rad = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
         if (qn + rad <= G) break;
         const double cxp = xi.x + z[0], cyp = xi.y + z[1];
         const int x0 = (int)floor((cxp - rad) / bw), x1 = (int)floor((cxp + rad) / bw);
         const int y0 = (int)floor((cyp - rad) / bh), y1 = (int)floor((cyp + rad) / bh);
         if (x1 - x0 > MAX_SCAN || y1 - y0 > MAX_SCAN) { flag |= F_SCAN_WIDE; break; }
-        int added = 0;
+        int added = 0, waiting = 0;
         for (int by = y0; by <= y1; ++by) {
             for (int bx = x0; bx <= x1; ++bx) {
                 int cx = bx, cy = by;
@@ -287,12 +366,22 @@ __kernel void cell_mic(
                     int known = 0;
                     for (int k = fixed; k < L.m; ++k) known |= (L.code[k] == code);
                     if (known) continue;
-                    flag |= push_site(&L, ax, ay, weight[t], wi, code);
-                    added += (sl < -tol);
+                    /* a full list takes a violated site in place of a slack one;
+                     * one that finds no place waits for the next round */
+                    int placed = 1;
+                    if (L.m < MAXC)
+                        push_site(&L, ax, ay, weight[t], wi, code);
+                    else
+                        placed = replace_slackest(&L, b, z, sl, ax, ay, len2, weight[t], wi, code);
+                    added += placed && sl < -tol;
+                    waiting += !placed && sl < -tol;
                 }
             }
         }
-        if (!added) break;
+        if (!added) {
+            if (waiting) flag |= F_LIST_FULL;
+            break;
+        }
         flag |= dual_simplex(&L, b, z, tol);
     }
     if (round == MAX_ROUNDS) flag |= F_ROUNDS;
