@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["NoOpenCLError", "get_context", "list_devices", "describe"]
+__all__ = ["NoOpenCLError", "get_context", "list_devices", "describe", "wait_for"]
 
 _CONTEXTS: dict = {}
 
@@ -135,6 +135,43 @@ def get_context(device=None):
     if spec not in _CONTEXTS:
         _CONTEXTS[spec] = cl.Context([_pick(spec)])
     return _CONTEXTS[spec]
+
+
+def wait_for(event):
+    """Wait for an OpenCL event so that Ctrl-C and SIGTERM still get through.
+
+    ``event.wait()`` blocks inside the OpenCL library, and Python runs signal
+    handlers only between bytecodes, so a long kernel would hold off Ctrl-C
+    until it ends.  Here a helper thread waits on the event, and the calling
+    thread waits on that thread in slices of 0.1 s, handling signals in
+    between: the ``KeyboardInterrupt`` (or the CLI's SIGTERM exception)
+    arrives while the device is still busy.  Callers keep each enqueue
+    bounded (see :class:`diskpack_cl.raster.PowerRaster`), so that what is
+    already queued ends soon after.
+
+    Raises
+    ------
+    pyopencl.Error
+        What ``event.wait()`` raised in the helper thread.
+    """
+    import threading
+
+    done = threading.Event()
+    failed = []
+
+    def wait():
+        try:
+            event.wait()
+        except BaseException as exc:  # handed to the caller below
+            failed.append(exc)
+        finally:
+            done.set()
+
+    threading.Thread(target=wait, name="diskpack-opencl-wait", daemon=True).start()
+    while not done.wait(0.1):
+        pass
+    if failed:
+        raise failed[0]
 
 
 def describe(ctx):

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._device import describe, get_context
+from ._device import describe, get_context, wait_for
 from ._kernels import build_program
 from .domain import Domain
 from .labels import cell_centroids
@@ -24,6 +24,7 @@ __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
 TILE = 8   # work-group side of power_labels (kernels/power_diagram.cl)
+MAX_GROUPS = 4096   # work-groups per enqueue of power_labels (about 0.26 M grid cells)
 
 
 def auto_grid(n, domain, cells_per_site=16):
@@ -111,9 +112,12 @@ class PowerRaster:
     shape : tuple of int
         Raster size ``(ny, nx)``.
     device : str or pyopencl.Context, optional
-        See :func:`diskpack_cl._device.get_context`.
-    profile : bool
-        Wait for each kernel so that stage timings are exact.
+        See :func:`diskpack_cl.get_context`.
+    max_groups : int
+        Work-groups (8 x 8 grid cells each) per enqueue of the labelling
+        kernel: the raster is labelled in bands of tile rows, each waited for
+        with :func:`diskpack_cl._device.wait_for`, so that stage timings are
+        exact and Ctrl-C is answered between bands, even on huge rasters.
 
     Examples
     --------
@@ -125,7 +129,7 @@ class PowerRaster:
     ((50,), True)
     """
 
-    def __init__(self, domain: Domain, shape, device=None, profile=True):
+    def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS):
         import pyopencl as cl
 
         self.domain = domain
@@ -135,7 +139,9 @@ class PowerRaster:
         self.ctx = get_context(device)
         self.device_name = describe(self.ctx)
         self.queue = cl.CommandQueue(self.ctx)
-        self.profile = profile
+        self.max_groups = int(max_groups)
+        if self.max_groups < 1:
+            raise ValueError(f"max_groups must be at least 1, got {max_groups}")
         periodic = int(domain.periodic)
         self._k_labels = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": TILE})["power_labels"]
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
@@ -246,14 +252,18 @@ class PowerRaster:
                 "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32)}
         self._pts = pts
         gx, gy = -(-nx // TILE) * TILE, -(-ny // TILE) * TILE
-        ev = self._k_labels(
-            self.queue, (gx, gy), (TILE, TILE), b_site, b_w, b_id, b_start, b_wmax,
-            np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
-            np.float32(dom.width), np.float32(dom.height), np.float32(wmax_b.max() if n else 0),
-            np.int32(nx), np.int32(ny), np.int32(bool(distance)),
-            maps["label"][0], maps["dist"][0], maps["nbr"][0])
-        if self.profile:
-            ev.wait()
+        # bands of tile rows, at most max_groups work-groups each, one at a
+        # time: a signal (Ctrl-C, SIGTERM) is answered between them
+        band = max(1, self.max_groups // (gx // TILE)) * TILE
+        for y0 in range(0, gy, band):
+            ev = self._k_labels(
+                self.queue, (gx, min(band, gy - y0)), (TILE, TILE), b_site, b_w, b_id,
+                b_start, b_wmax, np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
+                np.float32(dom.width), np.float32(dom.height),
+                np.float32(wmax_b.max() if n else 0), np.int32(nx), np.int32(ny),
+                np.int32(bool(distance)), maps["label"][0], maps["dist"][0], maps["nbr"][0],
+                global_offset=(0, y0))
+            wait_for(ev)
         t1 = time.perf_counter()
         if not distance:
             del maps["dist"], maps["nbr"]
@@ -293,10 +303,8 @@ class PowerRaster:
 
         Returns
         -------
-        centroids : (n, 2) float64
-            NaN where a cell has zero mass (wrapped into the torus there).
-        mass : (n,) float64
-            Integral of the density over each cell (grid-cell area units).
+        centroids, mass : (n, 2) and (n,) float64
+            See :func:`diskpack_cl.labels.cell_centroids` (which computes them).
         """
         if self._last is None:
             raise RuntimeError("centroids() needs a compute() first")

@@ -172,7 +172,8 @@ void power_labels(
        item runs the same loops (they write nothing) */
     const float px = (min(ix, nx - 1) + 0.5f) * hx, py = (min(iy, ny - 1) + 0.5f) * hy;
     /* the tile's grid-cell centres span this box */
-    const int gx0 = get_group_id(0) * TILE, gy0 = get_group_id(1) * TILE;
+    /* (not get_group_id: the host enqueues bands of tile rows with a global offset) */
+    const int gx0 = ix - lx, gy0 = iy - ly;
     const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
     const float x1 = (min(gx0 + TILE, nx) - 0.5f) * hx, y1 = (min(gy0 + TILE, ny) - 0.5f) * hy;
     /* float rounding must never drop a needed site: pad the bounds */

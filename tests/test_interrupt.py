@@ -1,0 +1,91 @@
+"""Long device work answers Ctrl-C: OpenCL waits let signals through, and the
+raster is labelled in bounded enqueues (bands of tile rows)."""
+
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from diskpack_cl.domain import Domain
+
+pytest.importorskip("pyopencl")
+
+# A kernel that spins for minutes, a wait on it, and a report of the event's
+# state when Ctrl-C arrives (os._exit: the process does not wait for the kernel).
+CHILD = textwrap.dedent("""
+    import os, sys
+    import numpy as np
+    import pyopencl as cl
+    from diskpack_cl._device import get_context, wait_for
+
+    ctx = get_context()
+    queue = cl.CommandQueue(ctx)
+    prg = cl.Program(ctx, '''
+        __kernel void spin(__global float *out, const int n) {
+            float x = 0.0f;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < 1000; ++j)
+                    x = x * 0.9999f + 1.0f;
+            out[get_global_id(0)] = x;
+        }''').build()
+    out = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, 4 * 64)
+    ev = prg.spin(queue, (64,), None, out, np.int32(2_000_000_000))
+    queue.flush()
+    try:
+        print("waiting", flush=True)
+        wait_for(ev)
+        print("finished", flush=True)
+    except KeyboardInterrupt:
+        running = ev.command_execution_status != cl.command_execution_status.COMPLETE
+        print("interrupted while running" if running else "interrupted after", flush=True)
+    os._exit(0)
+""")
+
+
+def test_ctrl_c_is_answered_while_a_kernel_runs(ctx):
+    child = subprocess.Popen([sys.executable, "-c", CHILD], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline() == "waiting\n"
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=300)
+    finally:
+        child.kill()
+    # a plain event.wait() would only return (and see the signal) after the kernel
+    assert out == "interrupted while running\n", err
+
+
+def test_wait_for_raises_the_wait_error(ctx):
+    from diskpack_cl._device import wait_for
+
+    class Broken:
+        def wait(self):
+            raise RuntimeError("device lost")
+
+    with pytest.raises(RuntimeError, match="device lost"):
+        wait_for(Broken())
+
+
+@pytest.mark.parametrize("max_groups", [1, 2, 5])
+def test_labels_in_bands_equal_labels_in_one_enqueue(ctx, monkeypatch, max_groups):
+    import diskpack_cl.raster as raster
+
+    rng = np.random.default_rng(2)
+    dom = Domain.rect(30.0, 20.0)
+    pts = rng.random((40, 2)) * (30.0, 20.0)
+    w = rng.random(40) * 0.5
+    shape = (44, 61)  # 6 x 8 tiles, the last ones partial
+    one = raster.PowerRaster(dom, shape, device=ctx).compute(pts, w)
+    pr = raster.PowerRaster(dom, shape, device=ctx, max_groups=max_groups)
+    waits = []
+    real = raster.wait_for
+    monkeypatch.setattr(raster, "wait_for", lambda ev: (waits.append(ev), real(ev)))
+    banded = pr.compute(pts, w)
+    np.testing.assert_array_equal(banded.labels, one.labels)
+    np.testing.assert_array_equal(banded.dist, one.dist)
+    np.testing.assert_array_equal(banded.radii, one.radii)
+    rows_per_band = max(1, max_groups // 8)
+    assert len(waits) == -(-6 // rows_per_band)  # one bounded enqueue per band of tile rows
