@@ -24,6 +24,7 @@ __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
 TILE = 8   # work-group side of power_labels (kernels/power_diagram.cl)
+TILE_W, TILE_H = 8, 16   # grid cells per work item of power_labels_tile (TW, TH there)
 MAX_GROUPS = 4096   # work-groups per enqueue of power_labels (about 0.26 M grid cells)
 
 
@@ -129,7 +130,7 @@ class PowerRaster:
     ((50,), True)
     """
 
-    def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS):
+    def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None):
         import pyopencl as cl
 
         self.domain = domain
@@ -143,7 +144,14 @@ class PowerRaster:
         if self.max_groups < 1:
             raise ValueError(f"max_groups must be at least 1, got {max_groups}")
         periodic = int(domain.periodic)
-        self._k_labels = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": TILE})["power_labels"]
+        prg = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": TILE})
+        self._k_labels, self._k_tile = prg["power_labels"], prg["power_labels_tile"]
+        # labels-only layout: vector tiles on CPUs, one work item per grid cell elsewhere
+        if layout is None:
+            layout = "tile" if self.ctx.devices[0].type & cl.device_type.CPU else "item"
+        if layout not in ("tile", "item"):
+            raise ValueError(f"layout must be 'tile' or 'item', got {layout!r}")
+        self.layout = layout
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._site_bufs = {}
@@ -204,6 +212,21 @@ class PowerRaster:
         return order, start, wmax, (nbx, nby, bw, bh)
 
     # -- work --------------------------------------------------------------
+    def _label_tiles(self, b_site, b_w, b_id, b_start, b_wmax, grid, wmax, b_label):
+        """Labels only with the CPU layout (power_labels_tile, TW x TH grid cells a
+        work item), in bands of tile rows waited for one at a time."""
+        nbx, nby, bw, bh = grid
+        ny, nx = self.shape
+        dom = self.domain
+        tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
+        band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
+        for y0 in range(0, ty, band):
+            wait_for(self._k_tile(
+                self.queue, (tx, min(band, ty - y0)), (1, 1), b_site, b_w, b_id, b_start, b_wmax,
+                np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
+                np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
+                np.int32(nx), np.int32(ny), b_label, global_offset=(0, y0)))
+
     def compute(self, points, weights=None, distance=True):
         """Label the raster and estimate every power cell's inscribed circle.
 
@@ -251,11 +274,14 @@ class PowerRaster:
                 "dist": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.float32),
                 "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32)}
         self._pts = pts
+        if not distance and self.layout == "tile":
+            self._label_tiles(b_site, b_w, b_id, b_start, b_wmax, (nbx, nby, bw, bh),
+                              float(wmax_b.max() if n else 0), maps["label"][0])
         gx, gy = -(-nx // TILE) * TILE, -(-ny // TILE) * TILE
         # bands of tile rows, at most max_groups work-groups each, one at a
         # time: a signal (Ctrl-C, SIGTERM) is answered between them
         band = max(1, self.max_groups // (gx // TILE)) * TILE
-        for y0 in range(0, gy, band):
+        for y0 in range(0, gy if distance or self.layout == "item" else 0, band):
             ev = self._k_labels(
                 self.queue, (gx, min(band, gy - y0)), (TILE, TILE), b_site, b_w, b_id,
                 b_start, b_wmax, np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),

@@ -140,6 +140,52 @@ inline int gather(int mode, float bound, float bound2, int skip,
     return total;
 }
 
+/* Bound U: the second best "worst corner" power distance over the tile
+ * [x0,x1] x [y0,y1] among the sites of the nearest bucket rings.  Two sites
+ * have pow <= U everywhere in the tile, so every grid cell finds its owner
+ * and a runner-up among the sites with  boxdist^2 - w <= U. */
+inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
+                        __global const float2 *site, __global const float *weight,
+                        __global const int *bucket_start,
+                        int nbx, int nby, float bw, float bh, float W, float H)
+{
+    const int bx = clamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
+    const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
+    float U1 = INFINITY, U2 = INFINITY;
+    for (int r = 0; U2 == INFINITY || r <= 1; ++r) {
+        /* ring r only (its perimeter), clipped to the grid in a rectangle */
+        int dy_lo = -r, dy_hi = r;
+#if !PERIODIC
+        dy_lo = max(dy_lo, -by);
+        dy_hi = min(dy_hi, nby - 1 - by);
+#endif
+        for (int dy = dy_lo; dy <= dy_hi; ++dy) {
+            const int edge = (dy == -r || dy == r);
+            int dx_lo = -r, dx_hi = r;
+#if !PERIODIC
+            if (edge) { dx_lo = max(dx_lo, -bx); dx_hi = min(dx_hi, nbx - 1 - bx); }
+#endif
+            for (int dx = dx_lo; dx <= dx_hi; dx += (edge ? 1 : 2 * r)) {
+                int cx = bx + dx, cy = by + dy;
+                float sx, sy;
+                if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
+                const int b = cy * nbx + cx;
+                for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
+                    const float xs = site[k].x + sx, ys = site[k].y + sy;
+                    const float fx = fmax(fabs(x0 - xs), fabs(x1 - xs));
+                    const float fy = fmax(fabs(y0 - ys), fabs(y1 - ys));
+                    const float u = fx * fx + fy * fy - weight[k];
+                    if (u < U1) { U2 = U1; U1 = u; } else if (u < U2) { U2 = u; }
+                }
+            }
+        }
+#if !PERIODIC
+        if (r > max(nbx, nby)) break;
+#endif
+    }
+    return U2 + pad + 1e-5f * fabs(U2);
+}
+
 __kernel __attribute__((reqd_work_group_size(TILE, TILE, 1)))
 void power_labels(
     __global const float2 *site,        /* sites sorted by bucket */
@@ -183,43 +229,8 @@ void power_labels(
        sites of the nearest rings.  Two sites have pow <= U everywhere in the
        tile, so every grid cell finds its owner and a runner-up among the
        sites with  boxdist^2 - w <= U, and the runner-up bounds pass 2. */
-    if (lid == 0) {
-        const int bx = clamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
-        const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
-        float U1 = INFINITY, U2 = INFINITY;
-        for (int r = 0; U2 == INFINITY || r <= 1; ++r) {
-            /* ring r only (its perimeter), clipped to the grid in a rectangle */
-            int dy_lo = -r, dy_hi = r;
-#if !PERIODIC
-            dy_lo = max(dy_lo, -by);
-            dy_hi = min(dy_hi, nby - 1 - by);
-#endif
-            for (int dy = dy_lo; dy <= dy_hi; ++dy) {
-                const int edge = (dy == -r || dy == r);
-                int dx_lo = -r, dx_hi = r;
-#if !PERIODIC
-                if (edge) { dx_lo = max(dx_lo, -bx); dx_hi = min(dx_hi, nbx - 1 - bx); }
-#endif
-                for (int dx = dx_lo; dx <= dx_hi; dx += (edge ? 1 : 2 * r)) {
-                    int cx = bx + dx, cy = by + dy;
-                    float sx, sy;
-                    if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
-                    const int b = cy * nbx + cx;
-                    for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
-                        const float xs = site[k].x + sx, ys = site[k].y + sy;
-                        const float fx = fmax(fabs(x0 - xs), fabs(x1 - xs));
-                        const float fy = fmax(fabs(y0 - ys), fabs(y1 - ys));
-                        const float u = fx * fx + fy * fy - weight[k];
-                        if (u < U1) { U2 = U1; U1 = u; } else if (u < U2) { U2 = u; }
-                    }
-                }
-            }
-#if !PERIODIC
-            if (r > max(nbx, nby)) break;
-#endif
-        }
-        bound_l = U2 + pad + 1e-5f * fabs(U2);
-    }
+    if (lid == 0)
+        bound_l = tile_bound(x0, y0, x1, y1, pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
     barrier(CLK_LOCAL_MEM_FENCE);
     const float U = bound_l;
 
@@ -317,5 +328,87 @@ void power_labels(
     if (valid) {
         dist[pix] = fmax(D, 0.0f);
         nbr[pix] = D_id;
+    }
+}
+
+/* Labels only, laid out for CPUs: one work item per TW x TH tile of grid
+ * cells, no barriers, and the candidate scan written with explicit float8
+ * vectors (a row of the tile at a time), which PoCL turns into packed SIMD
+ * instructions where it would not vectorize the scalar scan of power_labels.
+ * The candidates and the arithmetic are those of power_labels' pass 1, so
+ * both give the same labels.  (GPUs want the opposite layout: one work
+ * item per grid cell, power_labels.) */
+/* (8 lanes: AVX2 registers; 16-wide vectors would change the call ABI of
+ * the builtins on CPUs without AVX-512) */
+#define TW 8
+#define TH 16
+
+__kernel __attribute__((reqd_work_group_size(1, 1, 1)))
+void power_labels_tile(
+    __global const float2 *site,        /* sites sorted by bucket */
+    __global const float *weight,       /* their weights (squared radii) */
+    __global const int *site_id,        /* sorted position -> caller's index */
+    __global const int *bucket_start,   /* nbx*nby + 1 offsets into site[] */
+    __global const float *bucket_wmax,  /* largest weight in each bucket */
+    const int nbx, const int nby,       /* bucket grid size */
+    const float bw, const float bh,     /* bucket size */
+    const float W, const float H,       /* domain size */
+    const float wmax,                   /* largest weight overall */
+    const int nx, const int ny,         /* raster size */
+    __global int *label)                /* out: caller's index of the owning site */
+{
+    __local float2 cpos[CAP];
+    __local float cw[CAP];
+    __local int cid[CAP];
+    const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
+    if (gx0 >= nx || gy0 >= ny) return;
+    const float hx = W / nx, hy = H / ny;
+    const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
+    const float x1 = (min(gx0 + TW, nx) - 0.5f) * hx, y1 = (min(gy0 + TH, ny) - 0.5f) * hy;
+    const float pad = 1e-4f * (hx * hx + hy * hy);
+    const float U = tile_bound(x0, y0, x1, y1, pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
+
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
+    /* columns past the raster shadow its last column (they write nothing) */
+    const float8 px = (convert_float8(min(gx0 + lane, (int8)(nx - 1))) + 0.5f) * hx;
+    float py[TH];
+    float8 best[TH];
+    int8 best_id[TH];
+    for (int r = 0; r < TH; ++r) {
+        py[r] = (min(gy0 + r, ny - 1) + 0.5f) * hy;
+        best[r] = (float8)(INFINITY);
+        best_id[r] = (int8)(INT_MAX);
+    }
+    for (int chunk = 0; ; ++chunk) {
+        const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
+                                 site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
+                                 cpos, cw, cid);
+        const int m = min(total - chunk * CAP, CAP);
+        for (int c = 0; c < m; ++c) {
+            const float2 s = cpos[c];
+            const float wc = cw[c];
+            const int8 id = (int8)(cid[c]);
+            const float8 dx = px - s.x;
+            const float8 dx2 = dx * dx;
+            for (int r = 0; r < TH; ++r) {
+                const float dy = py[r] - s.y;
+                const float8 pw = (dx2 + dy * dy) - wc;
+                const int8 take = (pw < best[r]) | ((pw == best[r]) & (id < best_id[r]));
+                best[r] = take ? pw : best[r];
+                best_id[r] = take ? id : best_id[r];
+            }
+        }
+        if (total <= (chunk + 1) * CAP) break;
+    }
+    const int cols = min(TW, nx - gx0);
+    for (int r = 0; r < TH && gy0 + r < ny; ++r) {
+        __global int *row = label + (size_t)(gy0 + r) * nx + gx0;
+        if (cols == TW) {
+            vstore8(best_id[r], 0, row);
+        } else {
+            int tmp[TW];
+            vstore8(best_id[r], 0, tmp);
+            for (int k = 0; k < cols; ++k) row[k] = tmp[k];
+        }
     }
 }
