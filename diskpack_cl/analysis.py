@@ -338,7 +338,7 @@ def nearest_neighbor_distances(points, periodic=True):
     periodic : bool, (W, H) or Domain
         ``True``: the unit torus [0,1)^2 (points are wrapped into it);
         ``(W, H)``: the torus [0,W) x [0,H); ``False``: the plane (a bounded
-        domain, no wrap); a :class:`~diskpack_cl.geometry.Domain`: its torus
+        domain, no wrap); a :class:`~diskpack_cl.Domain`: its torus
         or its rectangle.
 
     Returns

@@ -289,7 +289,7 @@ def write_svg(
     >>> info = write_svg(out, res, dpi=25.4, pen_mm=0.5)
     >>> info["moved_inside"], info["pen_touches"]
     (1, 0)
-    >>> [line.strip() for line in open(out) if "<circle" in line][0]
+    >>> [line.strip() for line in Path(out).read_text().splitlines() if "<circle" in line][0]
     '<circle cx="1.0052" cy="8.0000" r="0.7500"/>'
     """
     p, r, W, H = _arrays(result)

@@ -64,7 +64,7 @@ def atomic_write(path, mode="wb"):
     >>> p = os.path.join(tempfile.mkdtemp(), "a.txt")
     >>> with atomic_write(p, "w") as f:
     ...     _ = f.write("hello")
-    >>> open(p).read()
+    >>> Path(p).read_text()
     'hello'
     """
     path = Path(path)
@@ -194,7 +194,7 @@ def validate_points(points, *, min_points=2, domain=None, source=None):
         Coordinates, shape ``(n, 2)``.
     min_points : int, optional
         Smallest accepted ``n``.
-    domain : diskpack_cl.geometry.Domain, optional
+    domain : diskpack_cl.Domain, optional
         For a bounded domain (``periodic=False``), every point must lie in the
         closed rectangle ``[0, W] x [0, H]``. Periodic domains accept any
         finite coordinates; callers wrap them onto the torus.
@@ -295,7 +295,7 @@ def read_points(path, *, min_points=2, domain=None):
         Point file; the format follows the extension (see the module docstring).
     min_points : int, optional
         Smallest accepted number of points.
-    domain : diskpack_cl.geometry.Domain, optional
+    domain : diskpack_cl.Domain, optional
         Passed to :func:`validate_points`.
 
     Returns
@@ -315,7 +315,7 @@ def read_points(path, *, min_points=2, domain=None):
     >>> import tempfile, os, numpy as np
     >>> p = os.path.join(tempfile.mkdtemp(), "pts.csv")
     >>> write_points(p, np.array([[0.25, 0.5], [0.75, 0.125]]))
-    >>> open(p).read().splitlines()[0]
+    >>> Path(p).read_text().splitlines()[0]
     'x,y'
     >>> read_points(p)
     array([[0.25 , 0.5  ],
@@ -329,14 +329,16 @@ def read_points(path, *, min_points=2, domain=None):
         raise ValueError(f"{path}: not a regular file")
     try:
         if suffix == ".npz":
-            archive = np.load(p, allow_pickle=False)
-            if not isinstance(archive, np.lib.npyio.NpzFile):
-                raise ValueError(f"{path}: unreadable .npz file: not a numpy zip archive")
-            with archive:
-                if "points" not in archive.files:
-                    raise ValueError(f"{path}: .npz file has no array 'points' "
-                                     f"(keys: {', '.join(archive.files) or 'none'})")
-                data = archive["points"]
+            # our own handle: np.load leaks its file when the zip is broken
+            with open(p, "rb") as fh:
+                archive = np.load(fh, allow_pickle=False)
+                if not isinstance(archive, np.lib.npyio.NpzFile):
+                    raise ValueError(f"{path}: unreadable .npz file: not a numpy zip archive")
+                with archive:
+                    if "points" not in archive.files:
+                        raise ValueError(f"{path}: .npz file has no array 'points' "
+                                         f"(keys: {', '.join(archive.files) or 'none'})")
+                    data = archive["points"]
         elif suffix == ".npy":
             with open(p, "rb") as fh:
                 if fh.read(6) != b"\x93NUMPY":

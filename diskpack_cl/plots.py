@@ -86,7 +86,7 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     centre), the radial mean power (1 = white noise) and the anisotropy in dB
     (dashed: ``-10 log10(K)``, the value of K averaged isotropic
     realizations). The title carries n, rho (exact, from
-    :func:`diskpack_cl.geometry.normalized_radius`), the mean nearest-neighbour
+    :func:`diskpack_cl.normalized_radius`), the mean nearest-neighbour
     rho and the mean |psi_6|.
 
     Parameters

@@ -3,8 +3,7 @@
 Every function here is deliberately simple: it loops (or broadcasts) over
 *all* sites and, on a torus, all 9 periodic images, with no buckets, trees or
 pruning.  They share no code with the modules they check beyond
-:class:`~diskpack_cl.geometry.Domain`, and are meant for small inputs (tests,
-``--check``).
+:class:`~diskpack_cl.Domain`, and are meant for small inputs (the tests).
 
 On a unit-period torus the 3 x 3 images suffice: a power cell lies inside the
 Voronoi cell of its own site's lattice of images (the square of side W x H
@@ -21,7 +20,7 @@ import numpy as np
 
 
 __all__ = ["grid_centers", "images", "power_labels_ref", "boundary_distance_ref",
-           "edt_distance_ref", "mic_estimate_ref", "chebyshev_ref", "lloyd_centroids_ref",
+           "mic_estimate_ref", "chebyshev_ref", "lloyd_centroids_ref",
            "min_distance_ref", "certify_ref", "cells_within_ref", "ChebyshevRef"]
 
 ChebyshevRef = namedtuple("ChebyshevRef", "center radius unique")
@@ -138,39 +137,6 @@ def boundary_distance_ref(points, weights, domain, shape):
         edge = np.minimum.reduce([P[:, 0], domain.width - P[:, 0], P[:, 1], domain.height - P[:, 1]])
         D = np.minimum(D, edge)
     return D.reshape(shape), lab.reshape(shape)
-
-
-def edt_distance_ref(labels, domain):
-    """Discrete distance to the cell boundary from the labels alone (equal weights).
-
-    For each grid cell, the Euclidean distance (in domain units, square grid
-    cells assumed) to the nearest grid cell with another label, by
-    ``scipy.ndimage.distance_transform_edt``; on a torus the labels are tiled
-    3 x 3 first.  This measures centre-to-centre distance to the nearest
-    foreign grid cell, so it exceeds the analytic distance by up to about
-    one grid cell.
-    """
-    from scipy import ndimage
-
-    lab = np.asarray(labels)
-    ny, nx = lab.shape
-    h = domain.width / nx
-    big = np.tile(lab, (3, 3)) if domain.periodic else lab
-    out = np.full(big.shape, np.inf)
-    for k in np.unique(lab):
-        inside = big == k
-        if inside.all():
-            continue
-        d = ndimage.distance_transform_edt(inside)
-        out[inside] = d[inside]
-    if domain.periodic:
-        out = out[ny:2 * ny, nx:2 * nx]
-    else:
-        # distance to the outside of the rectangle: half a grid cell past the edge
-        iy, ix = np.mgrid[0:ny, 0:nx]
-        edge = np.minimum.reduce([ix + 0.5, nx - ix - 0.5, iy + 0.5, ny - iy - 0.5])
-        out = np.minimum(out, edge)
-    return out * h
 
 
 def mic_estimate_ref(labels, dist, n, domain):

@@ -129,11 +129,6 @@ class StippleResult:
 
     def summary(self):
         """A JSON-ready dict: sizes, k, certificate fields, timings."""
-        cert = self.certificate
-        if hasattr(cert, "as_dict"):
-            cdict = cert.as_dict()
-        else:
-            cdict = {"valid": bool(getattr(cert, "valid", False))}
         return {
             "n": int(self.n),
             "width": int(self.width),
@@ -143,7 +138,7 @@ class StippleResult:
             "max_radius": float(self.radii.max()),
             "iterations": len(self.history),
             "empty_cells_total": int(sum(h.get("empty", 0) for h in self.history)),
-            "certificate": cdict,
+            "certificate": self.certificate.as_dict(),
             "timings": {k: float(v) for k, v in self.timings.items()},
             "params": self.params,
         }

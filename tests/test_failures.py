@@ -85,15 +85,15 @@ def test_signal_while_writing_leaves_no_output(ctx, tmp_path, sig, code, name):
     out.mkdir()
     argv = [str(tmp_path / "g.png"), "-n", "30", "--schedule", "pack", "-q",
             "-o", str(out / "a.npz"), "-o", str(out / "a.svg"), "-o", str(out / "a.png")]
-    child = subprocess.Popen([sys.executable, "-c", CHILD, "stipple", *argv],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert child.stdout.readline() == "writing png\n"
-        assert sorted(os.listdir(out)) == ["a.npz", "a.svg"]   # written before the signal
-        child.send_signal(sig)
-        _, err = child.communicate(timeout=120)
-    finally:
-        child.kill()
+    with subprocess.Popen([sys.executable, "-c", CHILD, "stipple", *argv],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as child:
+        try:
+            assert child.stdout.readline() == "writing png\n"
+            assert sorted(os.listdir(out)) == ["a.npz", "a.svg"]   # written before the signal
+            child.send_signal(sig)
+            _, err = child.communicate(timeout=120)
+        finally:
+            child.kill()
     assert child.returncode == code, err
     assert f"diskpack: error: {name}, nothing written" in err
     assert "Traceback" not in err
@@ -228,11 +228,11 @@ def test_closed_stdout_ends_quietly(tmp_path):
     """``diskpack analyze good.npz --json | head -c 0``: no traceback, status 141."""
     pts = tmp_path / "good.npz"
     write_points(pts, np.random.default_rng(0).random((300, 2)))
-    child = subprocess.Popen([sys.executable, "-m", "diskpack_cl.cli", "analyze", str(pts),
-                              "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    child.stdout.close()   # the reader went away before the first byte
-    err = child.stderr.read().decode()
-    child.wait(timeout=120)
+    with subprocess.Popen([sys.executable, "-m", "diskpack_cl.cli", "analyze", str(pts),
+                           "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE) as child:
+        child.stdout.close()   # the reader went away before the first byte
+        err = child.stderr.read().decode()
+        child.wait(timeout=120)
     assert child.returncode == 141, err
     assert err == ""
 

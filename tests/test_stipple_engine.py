@@ -74,7 +74,7 @@ def test_exact_and_opencl_engines_agree(ctx):
 def test_opencl_engine_reuses_the_labels_of_its_mic(ctx, monkeypatch):
     dom, shape = Domain.rect(16.0, 16.0), (32, 32)
     pts, w = _sites(1, dom, n=20)
-    eng = OpenCLStippleEngine(dom, shape, device=ctx)
+    eng = OpenCLStippleEngine(dom, shape, device=ctx, route="raster")   # MICs from the raster's labels
     eng.mic(pts, w)
     calls = []
     real = eng.raster.compute

@@ -1,4 +1,4 @@
-"""Shared fixtures: an OpenCL context on the PoCL (or any) device.
+"""Test fixtures and hooks for tests/ and the doctests: an OpenCL context on the PoCL (or any) device.
 
 Every test that needs OpenCL asks for ``ctx``. Without any OpenCL platform
 those tests are skipped with the driver error as the reason; with

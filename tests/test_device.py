@@ -1,0 +1,76 @@
+"""Device strings: how DISKPACK_DEVICE / PYOPENCL_CTX / device= pick a device (fake platforms)."""
+
+import pyopencl as cl
+import pytest
+
+from diskpack_cl import NoOpenCLError
+from diskpack_cl import _device
+
+
+class _Dev:
+    def __init__(self, name, kind):
+        self.name, self.type = name, kind
+
+
+class _Plat:
+    def __init__(self, name, vendor, devices):
+        self.name, self.vendor, self._devices = name, vendor, devices
+
+    def get_devices(self):
+        return self._devices
+
+
+CPU = _Dev("pthread-AMD EPYC", cl.device_type.CPU)
+GPU0 = _Dev("NVIDIA H200", cl.device_type.GPU)
+GPU1 = _Dev("NVIDIA A100", cl.device_type.GPU)
+PLATFORMS = [_Plat("Portable Computing Language", "The pocl project", [CPU]),
+             _Plat("NVIDIA CUDA", "NVIDIA Corporation", [GPU0, GPU1])]
+
+
+@pytest.fixture
+def fake(monkeypatch):
+    monkeypatch.setattr(_device, "_platforms", lambda: PLATFORMS)
+
+
+@pytest.mark.parametrize("spec, want", [
+    ("", GPU0),                      # default: the first GPU
+    ("0", CPU), ("1", GPU0), ("1:1", GPU1), ("0:0", CPU), ("1:", GPU0),
+    ("portable:0", CPU),             # pyopencl's PYOPENCL_CTX form: platform substring, device index
+    ("nvidia:1", GPU1), ("NVIDIA:a100", GPU1), ("cuda:h200", GPU0),
+    ("pocl", CPU),                   # platform vendor
+    ("cpu", CPU), ("gpu", GPU0), ("a100", GPU1), ("Portable", CPU),
+])
+def test_device_strings(fake, spec, want):
+    assert _device._pick(spec) is want
+
+
+@pytest.mark.parametrize("spec", ["2", "0:1", "portable:1", "amd:0", "opencl-nowhere", "1:h100"])
+def test_unknown_device_strings_name_the_devices(fake, spec):
+    with pytest.raises(NoOpenCLError, match=rf"no OpenCL device matches '{spec}'; available: "
+                                            r"0:0 pthread-AMD EPYC, 1:0 NVIDIA H200, 1:1 NVIDIA A100"):
+        _device._pick(spec)
+
+
+def test_no_platform_message_names_no_command_line_flag(monkeypatch):
+    monkeypatch.setattr(cl, "get_platforms", lambda: [])
+    with pytest.raises(NoOpenCLError, match="no OpenCL platform found") as err:
+        _device._platforms()
+    assert "--" not in str(err.value) and "exact backend" in str(err.value)
+
+
+def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
+    made = []
+
+    class Context:
+        def __init__(self, devices):
+            made.append(devices)
+
+    monkeypatch.setattr(_device, "_CONTEXTS", {})
+    monkeypatch.setattr(cl, "Context", Context)
+    monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
+    monkeypatch.setenv("PYOPENCL_CTX", "portable:0")
+    ctx = _device.get_context()
+    assert made == [[CPU]] and _device.get_context() is ctx
+    monkeypatch.setenv("DISKPACK_DEVICE", "1:1")      # ours first
+    _device.get_context()
+    assert made[-1] == [GPU1]
