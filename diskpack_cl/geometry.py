@@ -8,7 +8,6 @@ import numpy as np
 
 from .domain import Domain
 from .measures import kdtree
-from .measures import coincident_pairs, min_distance, normalized_radius  # noqa: F401  (moved; old imports)
 
 __all__ = ["MIC", "exact_mic", "chebyshev_center_linprog", "Certificate", "certify_disks"]
 

@@ -72,7 +72,7 @@ from ._timing import Stopwatch
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at, largest_valid_k, radius_field
-from .schedule import SCHEDULES, StippleOptions, make_schedule  # noqa: F401  (the CLI imports these two from here)
+from .schedule import StippleOptions
 from .stipple_engine import make_stipple_engine
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step"]
