@@ -67,8 +67,9 @@ def test_exact_and_opencl_engines_agree(ctx):
     touched = np.unique(np.concatenate([lab_cl[differ], lab_ex[differ]]))
     same = np.setdiff1d(np.arange(len(pts)), touched)
     same = same[mb[same] > 0]
-    np.testing.assert_allclose(ca[same], cb[same], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(ma[same], mb[same], rtol=1e-12)
+    # the OpenCL engine reduces on the device in fixed point (2^-24 a run)
+    np.testing.assert_allclose(ca[same], cb[same], rtol=0, atol=1e-5)
+    np.testing.assert_allclose(ma[same], mb[same], rtol=1e-7)
 
 
 def test_opencl_engine_reuses_the_labels_of_its_mic(ctx, monkeypatch):

@@ -1,0 +1,78 @@
+/* Density integrals of every cell of a grid labelling, reduced on the device:
+ * per site the mass  sum d  and the first moments  sum d (p - x_i)  about
+ * the site (in grid-cell units), from which the host forms centroids.
+ *
+ * One work item per SEG grid cells of a row.  Runs of equal labels are summed
+ * in `real` (double where the device has cl_khr_fp64), and each run is added
+ * to its site's totals with 64-bit integer atomics in fixed point (FIX units
+ * per unit), which are exact and order-independent: the sums do not depend
+ * on the schedule, so results are reproducible.  On a torus, offsets take
+ * the nearest periodic image, so a cell crossing the seam averages its own
+ * contiguous piece.
+ *
+ * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1).
+ */
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+#include "common.h"
+
+#if USE_FP64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double real;
+#else
+typedef float real;
+#endif
+
+#define SEG 32
+#define FIX 16777216.0f   /* 2^24: totals stay below 2^63 for densities <= 1 and
+                             compact cells of up to about 2^26 grid cells */
+
+inline void add_run(__global long *acc, int l, real m, real mx, real my)
+{
+    atom_add(&acc[3 * l], (long)rint(m * FIX));
+    atom_add(&acc[3 * l + 1], (long)rint(mx * FIX));
+    atom_add(&acc[3 * l + 2], (long)rint(my * FIX));
+}
+
+__kernel void cell_sums(
+    __global const int *label,       /* owning site of each grid cell */
+    __global const real *density,    /* density of each grid cell */
+    __global const real *site,       /* site positions in grid-cell units, x then y */
+    const int nx, const int ny,      /* raster size */
+    const int row0,                  /* first row of this enqueue */
+    __global long *acc)              /* in/out: per site mass, x moment, y moment (init 0) */
+{
+    const int iy = row0 + get_global_id(1);
+    const int ix0 = get_global_id(0) * SEG;
+    if (iy >= ny || ix0 >= nx) return;
+    const int ix1 = min(ix0 + SEG, nx);
+    const size_t base = (size_t)iy * nx;
+    const real py = iy + (real)0.5;
+    int cur = label[base + ix0];
+    real m = 0, mx = 0, my = 0;
+    real sx = site[2 * cur], dy = py - site[2 * cur + 1];
+#if PERIODIC
+    dy -= ny * rint(dy / ny);
+#endif
+    for (int ix = ix0; ix < ix1; ++ix) {
+        const int l = label[base + ix];
+        if (l != cur) {
+            add_run(acc, cur, m, mx, my);
+            cur = l;
+            m = mx = my = 0;
+            sx = site[2 * cur];
+            dy = py - site[2 * cur + 1];
+#if PERIODIC
+            dy -= ny * rint(dy / ny);
+#endif
+        }
+        const real d = density[base + ix];
+        real dx = (ix + (real)0.5) - sx;
+#if PERIODIC
+        dx -= nx * rint(dx / nx);
+#endif
+        m += d;
+        mx += d * dx;
+        my += d * dy;
+    }
+    add_run(acc, cur, m, mx, my);
+}
