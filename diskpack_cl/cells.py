@@ -69,7 +69,8 @@ class CellResult:
     stats : dict
         ``flagged`` (cells the device could not prove), ``rejected`` (cells
         the host check refused), ``fallback`` (cells solved by
-        ``exact_mic``), flag counts by reason.
+        ``exact_mic``), flag counts by reason, ``bytes_to_device`` and
+        ``bytes_from_device`` (the transfers of this call).
     timings : dict
         Seconds: ``buckets``, ``device`` (upload, kernel, readback),
         ``refine`` (host re-solve and check), ``fallback``; with profiling,
@@ -235,11 +236,9 @@ class CellMIC:
         nbx, nby, bw, bh = grid
         dom = self.domain
         scale = max(dom.width, dom.height)
-        b_site = self._upload("site", np.ascontiguousarray(X[order]))
-        b_w = self._upload("weight", np.ascontiguousarray(w[order]))
-        b_id = self._upload("id", order.astype(np.int32))
-        b_start = self._upload("start", start)
-        b_wmax = self._upload("bwmax", bwmax)
+        up = {"site": np.ascontiguousarray(X[order]), "weight": np.ascontiguousarray(w[order]),
+              "id": order.astype(np.int32), "start": start, "bwmax": bwmax}
+        b_site, b_w, b_id, b_start, b_wmax = (self._upload(k, v) for k, v in up.items())
         outs = {"center": np.empty((n, 2)), "radius": np.empty(n), "active": np.empty((n, 4), np.int32),
                 "near": np.empty((n, MAXNEAR), np.int32), "nn": np.empty(n)}
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
@@ -263,6 +262,8 @@ class CellMIC:
             cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
         self.queue.finish()
         self._warm_n = n
+        self.transfers = {"bytes_to_device": int(sum(v.nbytes for v in up.values())),
+                          "bytes_from_device": int(sum(v.nbytes for v in outs.values()))}
         return outs
 
     def _finish(self, X, w, out, timings, t_start):
@@ -293,6 +294,7 @@ class CellMIC:
         stats = {"flagged": int(np.count_nonzero(~proven)), "rejected": int(np.count_nonzero(proven & ~(ok & agree))),
                  "fallback": int(len(bad)), "empty": int(empty.sum())}
         stats.update({name: int(np.count_nonzero(flags & bit)) for name, bit in FLAGS.items()})
+        stats.update(self.transfers)
         return CellResult(centers, R, empty, nn, stats, timings)
 
 

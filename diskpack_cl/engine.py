@@ -129,7 +129,8 @@ class CellEngine:
 
     def mic(self, points, weights=None):
         r = self.solver.solve(points, weights)
-        stats = {k: r.stats[k] for k in ("flagged", "rejected", "fallback")}
+        stats = {k: r.stats[k] for k in ("flagged", "rejected", "fallback", "bytes_to_device",
+                                         "bytes_from_device")}
         return MICStep(r.centers, r.radii, r.empty, r.nn, stats, r.timings)
 
 
