@@ -208,7 +208,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                         __global const int *sid, __global const int *bstart,
                         int s, double2 xi, double wi, int hx, int hy, int ring,
                         int nbx, int nby, double W, double H,
-                        int fixed, clist *L, double *nn2, double *dropped, int *flag)
+                        int fixed, int replace, clist *L, double *nn2, double *dropped, int *flag)
 {
     for (int dy = -ring; dy <= ring; ++dy) {
         for (int dx = -ring; dx <= ring; ++dx) {
@@ -231,11 +231,13 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                     push_site(L, ax, ay, weight[t], wi, site_code(sid[t], qx, qy, flag));
                     continue;
                 }
-                /* full: keep the GATHER_CAP nearest, remember the nearest dropped */
+                /* full: keep the GATHER_CAP nearest (before the first solve; after
+                 * it the basis indexes the list), remember the nearest dropped */
+                const double len = sqrt(len2);
+                if (!replace) { *dropped = fmin(*dropped, len); continue; }
                 int far = fixed;
                 for (int k = fixed + 1; k < L->m; ++k)
                     if (L->d[k] > L->d[far]) far = k;
-                const double len = sqrt(len2);
                 if (len < L->d[far]) {
                     *dropped = fmin(*dropped, L->d[far]);
                     set_site(L, far, ax, ay, len2, weight[t], wi, site_code(sid[t], qx, qy, flag));
@@ -300,7 +302,7 @@ __kernel void cell_mic(
     double dropped = INFINITY;
     for (;; ++ring) {
         gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ring, nbx, nby, W, H,
-                    fixed, &L, &nn2, &dropped, &flag);
+                    fixed, 1, &L, &nn2, &dropped, &flag);
         if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
     }
     int b[3] = {0, 1, 2};
@@ -321,7 +323,7 @@ __kernel void cell_mic(
         if (!is_artificial(&L, b) && qn + 2.0 * Rp <= G) break;
         if (ring >= RMAX_GROW || dropped < INFINITY || (flag & F_PIVOTS)) break;
         gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
-                    fixed, &L, &nn2, &dropped, &flag);
+                    fixed, 0, &L, &nn2, &dropped, &flag);
         flag |= dual_simplex(&L, b, z, tol);
     }
     const double Gnn = ring * fmin(bw, bh);

@@ -214,3 +214,20 @@ def test_flag_bits_match_the_kernel():
     src = (kernel_dir() / "cell_mic.cl").read_text()
     defined = {m[1].lower(): int(m[2]) for m in re.finditer(r"#define F_(\w+)\s+(\d+)", src)}
     assert defined == FLAGS
+
+
+def test_dense_cluster_beside_sparse_sites_keeps_the_basis(solvers):
+    """Rings grown after the first solve reach a dense cluster and fill the
+    list: the kernel must drop the far sites, not overwrite a basic
+    constraint (which once gave a dual-infeasible answer the host rejected)."""
+    dom = Domain.rect(200.0, 200.0)
+    for seed in (0, 1, 4):    # each gave one rejected cell before the fix
+        rng = np.random.default_rng(seed)
+        ns, nc, sig = int(rng.integers(50, 400)), int(rng.integers(500, 4000)), rng.uniform(0.5, 5)
+        sparse = rng.random((ns, 2)) * 200
+        cluster = np.clip(100 + sig * rng.standard_normal((nc, 2)), 0, 200)
+        pts = np.vstack([sparse, cluster])
+        w = np.where(np.arange(len(pts)) < ns, 4.0, 1e-4) * rng.random(len(pts))
+        res = solvers(dom).solve(pts, w)
+        assert res.stats["rejected"] == 0
+        _same_as_exact(dom, pts, w, res)
