@@ -71,7 +71,7 @@ import numpy as np
 from ._timing import Stopwatch
 from .dithering import error_diffusion
 from .domain import Domain
-from .radii import certified_k, field_at, largest_valid_k, radius_field
+from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
 from .schedule import StippleOptions
 from .stipple_engine import make_stipple_engine
 
@@ -163,6 +163,7 @@ class StippleStage:
     options: StippleOptions
     radius_field: np.ndarray
     density: np.ndarray
+    blend_weight: object = None  # features="detail": per-pixel weight, see radii.detail_fields
 
     @property
     def size(self):
@@ -200,7 +201,11 @@ def pack_step(state, stage, blend=0.0):
         cw = w if opt.blend_cell == "power" else np.zeros(len(x))
         cen, mass, seconds = stage.engine.centroids(x, cw, stage.density)
         okc = ok & (mass > 0) & np.all(np.isfinite(cen), axis=1)
-        newx[okc] += blend * (cen[okc] - newx[okc])
+        if stage.blend_weight is None:
+            newx[okc] += blend * (cen[okc] - newx[okc])
+        else:
+            a = blend + (1.0 - blend) * field_at(stage.blend_weight, x[okc])
+            newx[okc] += a[:, None] * (cen[okc] - newx[okc])
         entry["centroids_s"] = sum(seconds.values())
     entry["moved"] = _moved(x, newx)
     k = state.k
@@ -364,6 +369,13 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     density_sigma : float, optional
         Blur (pixels) of the darkness used as the centroid density of Lloyd
         and mix steps (paper: 0; ``"default"``: 0.5).
+    features : {"none", "detail"}, optional
+        ``"detail"``: feature-aware mix steps (:func:`diskpack_cl.radii.detail_fields`):
+        where the image holds detail finer than the dot spacing, a point
+        moves further towards its cell's centroid, and the radii are the
+        largest within a quarter of a dot spacing. More tone at sigma 3 and
+        1.5 on most images, measured in ``docs/stipple_quality.md``
+        (default ``"none"``).
 
     Returns
     -------
@@ -399,7 +411,10 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     x = _start_points(gray, opt, start)
     timings["start"] = time.perf_counter() - t0
     engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
-    stage = StippleStage(engine, opt, rfield, _centroid_density(darkness, opt))
+    weight = None
+    if opt.features == "detail":
+        rfield, weight = detail_fields(gray, opt.n, rfield)
+    stage = StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight)
     state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
     t0 = time.perf_counter()
     r = field_at(rfield, state.points)
