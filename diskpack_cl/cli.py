@@ -407,7 +407,8 @@ def _add_stipple(subparsers):
         epilog="examples:\n"
                "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
                "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
-               "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json",
+               "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json\n"
+               "  diskpack stipple photos/ --density 80000 -o out/{stem}.svg -o out/{stem}.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("images", nargs="+", metavar="IMAGE",
                    help="image file Pillow reads (PNG, JPEG, TIFF, ...; colour is converted to "
@@ -581,6 +582,75 @@ def _resolve_stipple_options(args):
     args.dots = args.dots or "tone"
 
 
+# Peak memory measured per unit (diskpack stipple, default schedule; PNG writer)
+HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
+DEVICE_BYTES_PER_CELL = 12     # labels, distances, neighbours (4 bytes each)
+HOST_BYTES_PER_PNG_PIXEL = 32  # ink coverage, gray values, the encoded image
+
+
+def _available_memory():
+    """Bytes of memory the machine has available now (MemAvailable), or None."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _check_sizes(args, width, height, n, outputs):
+    """Refuse, before the work, a raster or a PNG that memory cannot hold.
+
+    The raster (``--supersample``) is checked against the machine's available
+    memory and the OpenCL device's largest buffer and global memory; each PNG
+    (``--png-scale``) against the machine's memory. The message names the
+    option to lower and the largest value that fits.
+    """
+    import math
+
+    from diskpack_cl._device import NoOpenCLError, get_context
+    from diskpack_cl.schedule import auto_supersample
+
+    def gib(b):
+        return f"{b / 2**30:.3g} GiB"
+
+    free = _available_memory()
+    s = args.supersample or auto_supersample(n, width, height)
+    cells = (s * width) * (s * height)
+    limits = []  # (bytes per raster cell, bytes available, what)
+    if free is not None:
+        limits.append((HOST_BYTES_PER_CELL, free, "memory available on this machine"))
+    try:
+        dev = get_context(args.device).devices[0]
+    except NoOpenCLError:
+        dev = None
+    if dev is not None:
+        limits += [(4, dev.max_mem_alloc_size, "the OpenCL device's largest buffer"),
+                   (DEVICE_BYTES_PER_CELL, dev.global_mem_size, "the OpenCL device's memory")]
+    for per_cell, have, what in limits:
+        if cells * per_cell > have:
+            fit = math.isqrt(int(have // (per_cell * width * height)))
+            lower = (f"lower --supersample (at most {fit} here)" if fit >= 1 else
+                     "the image is too large even at --supersample 1: downscale it")
+            raise ValueError(f"supersample {s} makes a {s * width}x{s * height} raster "
+                             f"needing {gib(cells * per_cell)}, more than {what} "
+                             f"({gib(have)}): {lower}")
+    if free is None or not any(o.lower().endswith(".png") for o in outputs):
+        return
+    pw, ph = max(1, round(width * args.png_scale)), max(1, round(height * args.png_scale))
+    if pw * ph * HOST_BYTES_PER_PNG_PIXEL > free:
+        fit = math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (width * height))
+        raise ValueError(f"--png-scale {args.png_scale:g} makes a {pw}x{ph} PNG needing "
+                         f"{gib(pw * ph * HOST_BYTES_PER_PNG_PIXEL)}, more than the memory "
+                         f"available ({gib(free)}): lower --png-scale (at most "
+                         f"{math.floor(fit * 10) / 10:g} here)")
+
+
 def _write_options(args):
     """The options of :func:`diskpack_cl.batch.write_stipple_outputs` from the arguments."""
     return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
@@ -626,6 +696,7 @@ def _run_stipple(args):
     n = dots_for_image(gray.shape[1], gray.shape[0], n=args.n, density=args.density,
                        dots_per_cm2=args.dots_per_cm2, width_mm=args.width_mm,
                        height_mm=args.height_mm, dpi=args.dpi)
+    _check_sizes(args, gray.shape[1], gray.shape[0], n, outputs)
 
     callback, close = _stipple_progress(args, sum(ph[1] for ph in phases))
     try:

@@ -311,3 +311,31 @@ def test_stipple_without_opencl_says_which_engine(tmp_path, no_opencl, capsys):
                        "-o", str(tmp_path / "s.npz")], capsys)
     assert rc == 0, err
     assert "diskpack: note: no OpenCL device: stippled with the exact (scipy) engine" in err
+
+
+# ------------------------------------------------------------ sizes vs memory
+
+@pytest.mark.parametrize("argv, option", [
+    (["--supersample", "100"], "lower --supersample (at most "),
+    (["--png-scale", "200", "-o", "big.png"], "lower --png-scale (at most "),
+])
+def test_sizes_beyond_memory_are_refused_before_the_work(tmp_path, monkeypatch, no_stipple,
+                                                         capsys, argv, option):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cli, "_available_memory", lambda: 2**30)  # a 1 GiB machine
+    rc, _, err = _run(["stipple", "sample", "-n", "100", "-o", "s.npz", *argv], capsys)
+    assert rc == 1, err
+    assert option in err and "more than" in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_supersample_beyond_the_device_buffer_is_refused(ctx, tmp_path, monkeypatch, no_stipple,
+                                                         capsys):
+    """The device's largest buffer, not the machine, is the limit here."""
+    monkeypatch.setattr(cli, "_available_memory", lambda: None)  # unknown: not checked
+    biggest = ctx.devices[0].max_mem_alloc_size
+    s = int(np.ceil(np.sqrt(biggest / 4 / (512 * 512)))) + 1
+    rc, _, err = _run(["stipple", "sample", "-n", "100", "--supersample", str(s), "-o",
+                       str(tmp_path / "s.npz")], capsys)
+    assert rc == 1, err
+    assert "the OpenCL device's largest buffer" in err and "lower --supersample" in err
