@@ -9,9 +9,12 @@ those of :func:`diskpack_cl.relax_poisson`:
 ==========  ================================================================
 backend     engine
 ==========  ================================================================
-``opencl``  :class:`OpenCLStippleEngine`: OpenCL float32 raster (labels and
-            MIC estimates), estimates refined by
-            :func:`diskpack_cl.exact_mic`; centroids from the raster labels
+``opencl``  :class:`OpenCLStippleEngine`: MICs from the float64 per-cell
+            kernel (:class:`diskpack_cl.cells.CellMIC`) on devices with
+            float64, else (``route="raster"``) the float32 raster's
+            estimates refined by :func:`diskpack_cl.exact_mic`; centroids
+            from the raster labels (reused from the MIC step when it
+            labelled the same power diagram)
 ``exact``   :class:`ExactStippleEngine`: no OpenCL; exact MICs from the
             sites, exact float64 labels on the host
             (:func:`diskpack_cl.labels.grid_power_labels`)
@@ -58,7 +61,7 @@ def _exact(points, weights, domain, estimate, watch):
 
 
 class OpenCLStippleEngine:
-    """The OpenCL raster engine (see the module docstring).
+    """The OpenCL engine (see the module docstring).
 
     Parameters
     ----------
@@ -68,6 +71,10 @@ class OpenCLStippleEngine:
         Raster ``(ny, nx)``.
     device : str or pyopencl.Context, optional
         See :func:`diskpack_cl.get_context`.
+    route : {"auto", "cells", "raster"}
+        Where the MICs come from: the per-cell kernel (``cells``), the
+        raster estimate refined exactly (``raster``); ``auto``: cells on
+        devices with float64.
     """
 
     name = "opencl"
