@@ -455,8 +455,8 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
         dot_mm = 2.0 * tone_radius(result.n, darkness) * radius_scale * scale
     svg_opts = dict(width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
                     radius_scale=radius_scale, pen_path=pen_path, invert=invert,
-                    pen_mm=pen_mm)
-    png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert)
+                    pen_mm=pen_mm, dots=dots)
+    png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert, dots=dots)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
     written = []

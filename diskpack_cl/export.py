@@ -180,6 +180,30 @@ def _arrays(result):
     return p, r, float(result.width), float(result.height)
 
 
+DOTS = ("tone", "packing")
+
+
+def _dot_radii(result, radii, scale, dots, radius_scale):
+    """Drawn radius per dot, in output units (``scale`` of them per pixel).
+
+    ``"tone"``: one size for all dots, ``result.tone_radius`` (the radius at
+    which the dots' ink equals the image's darkness, see
+    :func:`diskpack_cl.analysis.tone_radius`); ``"packing"``: each dot its
+    certified packing radius. Both times ``radius_scale``.
+    """
+    if dots not in DOTS:
+        raise ValueError(f"dots must be 'tone' or 'packing', got {dots!r}")
+    if not radius_scale > 0:
+        raise ValueError(f"radius_scale must be > 0, got {radius_scale}")
+    if dots == "packing":
+        return radii * scale * float(radius_scale)
+    tone = getattr(result, "tone_radius", None)
+    if tone is None:
+        raise ValueError("dots='tone' needs the result's tone_radius (a StippleResult has "
+                         "it); pass dots='packing' or a fixed dot size")
+    return np.full(len(radii), float(tone) * scale * float(radius_scale))
+
+
 def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
     """Millimetres per image pixel for a physical size, as :func:`write_svg` uses it.
 
@@ -229,6 +253,7 @@ def write_svg(
     layer="stipples",
     invert=False,
     pen_mm=None,
+    dots="tone",
 ):
     """Write an SVG for pen plotters and Inkscape.
 
@@ -260,17 +285,21 @@ def write_svg(
         Physical size from the image's pixels (default 96 dpi, CSS pixels),
         when neither width_mm nor height_mm is given.
     dot_mm : float, optional
-        Fixed dot diameter in mm (the pen's width). Default: the certified
-        packing radii times ``radius_scale``.
+        Fixed dot diameter in mm, instead of ``dots``.
     radius_scale : float, optional
-        Factor on the packing radii (1 = touching disks where the packing is
-        tight).
+        Factor on the radii of ``dots``.
     pen_path : {"auto", "greedy", "hilbert", "none"}
         Dot order; see :func:`pen_path_order`.
     invert : bool, optional
         White dots on a black background rectangle.
     pen_mm : float, optional
         The plotter pen's line width in mm (see above).
+    dots : {"tone", "packing"}
+        Dot size (without ``dot_mm``): ``"tone"`` (default, as ``diskpack
+        stipple`` draws) one size for all dots, chosen so that their ink is
+        the image's darkness (``result.tone_radius``); ``"packing"`` each dot
+        its certified packing disk (large where the image is light: it shows
+        the packing, nearly the inverse of the tone).
 
     Returns
     -------
@@ -284,7 +313,8 @@ def write_svg(
     --------
     >>> import tempfile, os, types, numpy as np
     >>> res = types.SimpleNamespace(points=np.array([[0.0, 8.0], [8.0, 8.0]]),
-    ...                             radii=np.array([1.0, 1.0]), width=16, height=16)
+    ...                             radii=np.array([1.0, 1.0]), width=16, height=16,
+    ...                             tone_radius=1.0)
     >>> out = os.path.join(tempfile.mkdtemp(), "dots.svg")
     >>> info = write_svg(out, res, dpi=25.4, pen_mm=0.5)
     >>> info["moved_inside"], info["pen_touches"]
@@ -301,9 +331,7 @@ def write_svg(
             raise ValueError(f"dot_mm must be > 0, got {dot_mm}")
         rad = np.full(len(p), 0.5 * float(dot_mm))
     else:
-        if not radius_scale > 0:
-            raise ValueError(f"radius_scale must be > 0, got {radius_scale}")
-        rad = r * s * float(radius_scale)
+        rad = _dot_radii(result, r, s, dots, radius_scale)
     wmm, hmm = W * s, H * s
     pm, rad, moved = _inside_page(p * s, rad, wmm, hmm)
     order, before, after = pen_path_order(pm, method=pen_path)
@@ -422,7 +450,8 @@ def _coverage(c, rad, ow, oh, aa):
     return np.minimum(ink, 1.0).reshape(oh, ow)
 
 
-def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=False, aa=4):
+def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=False, aa=4,
+              dots="tone"):
     """Write an anti-aliased PNG preview (8-bit gray).
 
     Each output pixel's ink is the fraction of its ``aa x aa`` sample
@@ -434,13 +463,16 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
     scale : float, optional
         Output pixels per image pixel.
     radius_scale : float, optional
-        Factor on the packing radii.
+        Factor on the radii of ``dots``.
     dot_px : float, optional
-        Fixed dot radius in output pixels instead.
+        Fixed dot radius in output pixels, instead of ``dots``.
     invert : bool, optional
         White dots on black.
     aa : int, optional
         Samples per output pixel side.
+    dots : {"tone", "packing"}
+        As for :func:`write_svg`: equal-ink dots by default (what ``diskpack
+        stipple`` draws), or the packing disks.
 
     Returns
     -------
@@ -461,9 +493,7 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
             raise ValueError(f"dot_px must be > 0, got {dot_px}")
         rad = np.full(len(p), float(dot_px))
     else:
-        if not radius_scale > 0:
-            raise ValueError(f"radius_scale must be > 0, got {radius_scale}")
-        rad = r * scale * float(radius_scale)
+        rad = _dot_radii(result, r, scale, dots, radius_scale)
     ink = _coverage(p * scale, rad, ow, oh, aa)
     val = ink if invert else 1.0 - ink
     img = Image.fromarray(np.round(val * 255).astype(np.uint8))

@@ -69,6 +69,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._timing import Stopwatch
+from .analysis import tone_radius
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
@@ -109,6 +110,10 @@ class StippleResult:
         The parameters used (for reports and ``--json``).
     engine : str
         ``"opencl"`` or ``"exact"`` (see :mod:`diskpack_cl.stipple_engine`).
+    tone_radius : float
+        Radius (px) at which n equal dots hold the image's darkness as ink
+        (:func:`diskpack_cl.analysis.tone_radius`): what the writers draw by
+        default.
     """
 
     points: np.ndarray
@@ -122,6 +127,7 @@ class StippleResult:
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
     engine: str = "opencl"
+    tone_radius: float = None
 
     @property
     def n(self):
@@ -425,4 +431,5 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     return StippleResult(
         points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
         history=history, width=W, height=H, timings=timings, params=opt.params(), engine=engine.name,
+        tone_radius=tone_radius(len(state.points), darkness),
     )

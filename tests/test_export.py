@@ -34,7 +34,7 @@ def result():
     radii = rng.uniform(0.3, 1.0, 200)
     cert = certify_disks(pts, radii, Domain.rect(W, H))   # the real certificate type
     return SimpleNamespace(points=pts, radii=radii, k=0.5,
-                           width=W, height=H, certificate=cert,
+                           width=W, height=H, certificate=cert, tone_radius=0.6,
                            base_radii=np.ones(200), params={"n": 200})
 
 
@@ -95,7 +95,7 @@ def test_png_coverage_matches_ink(tmp_path):
     res = SimpleNamespace(points=np.array([[32.3, 31.7]]), radii=np.array([10.0]),
                           width=64, height=64)
     out = tmp_path / "d.png"
-    write_png(out, res)
+    write_png(out, res, dots="packing")
     ink = (255 - np.asarray(Image.open(out), dtype=float)).sum() / 255
     assert ink == pytest.approx(np.pi * 100, rel=0.01)
 
@@ -170,3 +170,28 @@ def test_pen_path_small_and_bad():
     assert list(pen_path_order(np.ones((1, 2)))[0]) == [0]
     with pytest.raises(ValueError, match="pen path method"):
         pen_path_order(np.ones((3, 2)), method="tsp")
+
+
+def test_python_writers_draw_what_the_cli_draws(ctx, tmp_path):
+    """write_stipple(path, res) with no options: the CLI's equal-ink dots, byte for byte."""
+    from diskpack_cl import cli, stipple
+
+    gray = np.tile(np.linspace(0, 1, 40), (30, 1))
+    Image.fromarray(np.round(gray * 255).astype(np.uint8)).save(tmp_path / "g.png")
+    res = stipple(str(tmp_path / "g.png"), 150, schedule=[("pack", 3)], device=ctx)
+    assert cli.main(["stipple", str(tmp_path / "g.png"), "-n", "150", "--beta", "3",
+                     "--rounds", "1", "-q", "--png-scale", "1",
+                     "-o", str(tmp_path / "cli.png"), "-o", str(tmp_path / "cli.svg")]) == 0
+    for ext in ("png", "svg"):
+        write_stipple(tmp_path / f"api.{ext}", res)
+        assert (tmp_path / f"api.{ext}").read_bytes() == (tmp_path / f"cli.{ext}").read_bytes()
+    # and the default is not the packing drawing
+    write_stipple(tmp_path / "packing.png", res, dots="packing")
+    assert (tmp_path / "packing.png").read_bytes() != (tmp_path / "api.png").read_bytes()
+
+
+def test_tone_dots_need_a_tone_radius(tmp_path, result):
+    del result.tone_radius
+    with pytest.raises(ValueError, match="needs the result's tone_radius"):
+        write_svg(tmp_path / "a.svg", result)
+    assert list(tmp_path.iterdir()) == []

@@ -66,7 +66,7 @@ def test_pen_width_makes_the_traced_dot_its_size(tmp_path):
     res = _border_result()
     res.radii = np.where(np.arange(len(res.radii)) % 2 == 0, 0.6, 0.2)  # 1.2 and 0.4 mm wide
     out = tmp_path / "p.svg"
-    info = write_svg(out, res, dpi=25.4, pen_mm=0.5)  # 1 px = 1 mm
+    info = write_svg(out, res, dpi=25.4, pen_mm=0.5, dots="packing")  # 1 px = 1 mm
     page, lines = _read(out)
     assert len(lines) == len(res.points) and _inside(lines, page)
     assert info["pen_touches"] == len(res.points) // 2  # 0.4 mm dots: narrower than the pen
