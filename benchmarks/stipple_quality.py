@@ -74,6 +74,8 @@ CONFIGS = {
     "pack": dict(schedule="pack"),
     # the default (see schedule.SCHEDULE_OPTIONS["default"])
     "default": dict(schedule="default"),
+    # the default with feature-aware mix steps (radii.detail_fields; issue 11)
+    "detail": dict(schedule="default", features="detail"),
     # ablations of the default (one change each)
     "default-gray": dict(schedule="default", radii="gray", floor=0.1),
     "default-pack": dict(schedule="default", blend=0.0,
