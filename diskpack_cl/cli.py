@@ -12,10 +12,12 @@ Adding a subcommand means adding two functions to this module:
 * ``_run_NAME(args) -> int`` does the work and returns the exit status.
 
 Every function named ``_add_*`` is registered, in the order of definition.
-Raise ``ValueError``/``FileNotFoundError`` for user errors: :func:`main` prints
-``diskpack: error: ...`` and returns 1 (130 on Ctrl-C). Write outputs with the
-atomic writers of :mod:`diskpack_cl.io`, after all the computation, so that a
-failed run leaves no output file.
+Raise ``ValueError``/``OSError`` for user errors: :func:`main` prints
+``diskpack: error: ...`` and returns 1 (2 for :class:`_UsageError`, 130 on
+Ctrl-C, 143 on SIGTERM, 129 on SIGHUP). Check outputs with
+:func:`diskpack_cl.io.check_writable` before the work and write them with the
+atomic writers of :mod:`diskpack_cl.io` after it, so that a failed or
+interrupted run leaves no output file.
 """
 
 from __future__ import annotations
