@@ -147,7 +147,9 @@ def wait_for(event):
     between: the ``KeyboardInterrupt`` (or the CLI's SIGTERM exception)
     arrives while the device is still busy.  Callers keep each enqueue
     bounded (see :class:`diskpack_cl.raster.PowerRaster`), so that what is
-    already queued ends soon after.
+    already queued ends soon after; the helper is not a daemon thread, so an
+    interrupted process exits once that enqueue is done (a daemon thread
+    stopped inside the OpenCL library at exit would abort the process).
 
     Raises
     ------
@@ -167,7 +169,7 @@ def wait_for(event):
         finally:
             done.set()
 
-    threading.Thread(target=wait, name="diskpack-opencl-wait", daemon=True).start()
+    threading.Thread(target=wait, name="diskpack-opencl-wait").start()
     while not done.wait(0.1):
         pass
     if failed:
