@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._device import describe, get_context
+from ._device import describe, get_context, wait_for
 from ._kernels import build_program
 from .domain import Domain
 from .geometry import _cramer, _vertex, exact_mic
@@ -137,7 +137,6 @@ class CellMIC:
         self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
         self._bufs = {}
         self._order = None
-        self._warm_n = None
         self._warm()
 
     def _warm(self):
@@ -146,7 +145,7 @@ class CellMIC:
         dom = self.domain
         pts = (np.random.default_rng(0).random((16, 2)) * (dom.width, dom.height))
         self.solve(pts)
-        self._order = self._warm_n = None
+        self._order = None
 
     # -- buffers -----------------------------------------------------------
     def _buffer(self, name, nbytes):
@@ -221,53 +220,59 @@ class CellMIC:
         w -= w.min()   # as exact_mic: the diagram ignores a common shift
         timings = {}
         t0 = time.perf_counter()
+        # everything below runs in bucket order: neighbours sit close in memory
         order, start, bwmax, grid = self._buckets(X, w)
+        Xs, ws = X[order], w[order]
         t1 = time.perf_counter()
         timings["buckets"] = t1 - t0
-        out = self._run(X, w, order, start, bwmax, grid, timings)
+        out = self._run(Xs, ws, start, bwmax, grid, timings)
         t2 = time.perf_counter()
         timings["device"] = t2 - t1
-        return self._finish(X, w, out, timings, t2)
+        res = self._finish(Xs, ws, out, timings, t2)
+        for name in ("centers", "radii", "empty", "nn"):
+            a = getattr(res, name)
+            back = np.empty_like(a)
+            back[order] = a
+            setattr(res, name, back)
+        return res
 
-    def _run(self, X, w, order, start, bwmax, grid, timings):
+    def _run(self, Xs, ws, start, bwmax, grid, timings):
+        """The kernel on the sorted sites; outputs in sorted order."""
         import pyopencl as cl
 
-        n = len(X)
+        n = len(Xs)
         nbx, nby, bw, bh = grid
         dom = self.domain
         scale = max(dom.width, dom.height)
-        up = {"site": np.ascontiguousarray(X[order]), "weight": np.ascontiguousarray(w[order]),
-              "id": order.astype(np.int32), "start": start, "bwmax": bwmax}
-        b_site, b_w, b_id, b_start, b_wmax = (self._upload(k, v) for k, v in up.items())
+        up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
+              "bwmax": bwmax}
+        b_site, b_w, b_start, b_wmax = (self._upload(k, v) for k, v in up.items())
         outs = {"center": np.empty((n, 2)), "radius": np.empty(n), "active": np.empty((n, 4), np.int32),
                 "near": np.empty((n, MAXNEAR), np.int32), "nn": np.empty(n)}
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
         near_tol = 1e-7 * np.sqrt(dom.area / n)
-        # the last call's bases (by original index) start this call's solves
-        previous = self._bufs.get("out_active") if self._warm_n == n else None
         events = []
         for off in range(0, n, CHUNK):
             size = -(-min(CHUNK, n - off) // GROUP) * GROUP
             events.append(self._kernel(
-                self.queue, (size,), (GROUP,), b_site, b_w, b_id, b_start, b_wmax,
+                self.queue, (size,), (GROUP,), b_site, b_w, b_start, b_wmax,
                 np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
-                np.float64(dom.width), np.float64(dom.height), np.float64(w.max()),
-                np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off), previous,
+                np.float64(dom.width), np.float64(dom.height), np.float64(ws.max()),
+                np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),
                 bufs["center"], bufs["radius"], bufs["active"], bufs["near"], bufs["nn"]))
         for ev in events:
-            ev.wait()   # one chunk at a time: a pending signal is handled in between
+            wait_for(ev)   # one chunk at a time: a signal is answered in between
         if self.profile:
             timings["kernel"] = sum((ev.profile.end - ev.profile.start) * 1e-9 for ev in events)
         for k, v in outs.items():
             cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
         self.queue.finish()
-        self._warm_n = n
         self.transfers = {"bytes_to_device": int(sum(v.nbytes for v in up.values())),
                           "bytes_from_device": int(sum(v.nbytes for v in outs.values()))}
         return outs
 
     def _finish(self, X, w, out, timings, t_start):
-        n = len(X)
+        """Host re-solve and check (sorted order), exact_mic for the rest."""
         flags = out["active"][:, 3]
         proven = (flags & ~_NN) == 0
         q, R, ok = refine_active(X, w, self.domain, out["active"][:, :3], out["near"])

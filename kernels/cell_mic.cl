@@ -20,11 +20,11 @@
  *      When that ball lies inside the gathered rings, nothing is left to
  *      check; otherwise the buckets it touches are scanned, and violated or
  *      near-tight sites join the list and the solve continues (warm start);
- *   4. writes the centre, the radius, the three basic (active) constraints,
+ *   4. writes, in sorted order (sequential writes), the centre, the radius, the three basic (active) constraints,
  *      the other near-tight ones, the nearest-neighbour distance of the site
  *      and a flag word, non-zero where it could not prove its answer.
  *
- * Constraint codes: 9 * j + 3 * (sx + 1) + (sy + 1) for site j shifted by
+ * Constraint codes: 9 * j + 3 * (sx + 1) + (sy + 1) for sorted site j shifted by
  * (sx, sy) periods (|sx|, |sy| <= 1); -1..-4 for the left, right, top and
  * bottom edges; artificial constraints never leave the kernel unflagged.
  *
@@ -116,27 +116,6 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
     return F_PIVOTS;
 }
 
-/* Start from last call's basis when all three of its constraints are in the
- * list and still dual feasible (sites move little between iterations, so the
- * dual simplex then needs a pivot or two instead of leaving the triangle). */
-static void warm_basis(const clist *L, int4 prev, int *b)
-{
-    const int want[3] = {prev.x, prev.y, prev.z};
-    int cand[3];
-    for (int k = 0; k < 3; ++k) {
-        cand[k] = -1;
-        if (want[k] <= -5) return;
-        for (int t = 3; t < L->m; ++t)
-            if (L->code[t] == want[k]) { cand[k] = t; break; }
-        if (cand[k] < 0) return;
-    }
-    double ax[3], ay[3], inv[9];
-    for (int k = 0; k < 3; ++k) { ax[k] = L->nx[cand[k]]; ay[k] = L->ny[cand[k]]; }
-    if (!inv3(ax, ay, inv)) return;
-    if (inv[6] < 0.0 || inv[7] < 0.0 || inv[8] < 0.0) return;   /* multipliers l >= 0 */
-    for (int k = 0; k < 3; ++k) b[k] = cand[k];
-}
-
 static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
                      int code)
 {
@@ -205,7 +184,7 @@ static int is_artificial(const clist *L, const int *b)
 /* Add the sites of the buckets at Chebyshev distance `ring` from the home
  * bucket (hx, hy) to the list, and track the nearest one. */
 static void gather_ring(__global const double2 *site, __global const double *weight,
-                        __global const int *sid, __global const int *bstart,
+                        __global const int *bstart,
                         int s, double2 xi, double wi, int hx, int hy, int ring,
                         int nbx, int nby, double W, double H,
                         int fixed, int replace, clist *L, double *nn2, double *dropped, int *flag)
@@ -228,7 +207,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                 const double len2 = ax * ax + ay * ay;
                 *nn2 = fmin(*nn2, len2);
                 if (L->m < GATHER_CAP) {
-                    push_site(L, ax, ay, weight[t], wi, site_code(sid[t], qx, qy, flag));
+                    push_site(L, ax, ay, weight[t], wi, site_code(t, qx, qy, flag));
                     continue;
                 }
                 /* full: keep the GATHER_CAP nearest (before the first solve; after
@@ -240,7 +219,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                     if (L->d[k] > L->d[far]) far = k;
                 if (len < L->d[far]) {
                     *dropped = fmin(*dropped, L->d[far]);
-                    set_site(L, far, ax, ay, len2, weight[t], wi, site_code(sid[t], qx, qy, flag));
+                    set_site(L, far, ax, ay, len2, weight[t], wi, site_code(t, qx, qy, flag));
                 } else {
                     *dropped = fmin(*dropped, len);
                 }
@@ -252,7 +231,6 @@ static void gather_ring(__global const double2 *site, __global const double *wei
 __kernel void cell_mic(
     __global const double2 *site,    /* sites sorted by bucket */
     __global const double *weight,   /* their weights, shifted so that min = 0 */
-    __global const int *sid,         /* original index of each sorted site */
     __global const int *bstart,      /* bucket b holds sorted sites bstart[b] .. bstart[b+1]-1 */
     __global const double *bwmax,    /* largest weight in each bucket */
     const int n,                     /* number of sites */
@@ -263,8 +241,7 @@ __kernel void cell_mic(
     const double tol,                /* feasibility tolerance (length units) */
     const double near_tol,               /* slack below which a constraint is near-tight */
     const int offset,                /* first sorted site of this enqueue */
-    __global const int4 *previous,   /* last call's basis codes by original index, or NULL */
-    __global double2 *center,        /* out, by original index: MIC centre */
+    __global double2 *center,        /* out, by sorted position: MIC centre */
     __global double *radius,         /* out: MIC radius (negative: empty power cell) */
     __global int4 *active,           /* out: three basic constraint codes, flag word */
     __global int *near_code,         /* out: MAXNEAR more near-tight codes, -9 = none */
@@ -274,7 +251,6 @@ __kernel void cell_mic(
     if (s >= n) return;
     const double2 xi = site[s];
     const double wi = weight[s];
-    const int i = sid[s];
     const int hx = clamp((int)(xi.x / bw), 0, nbx - 1), hy = clamp((int)(xi.y / bh), 0, nby - 1);
     int flag = 0;
     clist L;
@@ -301,12 +277,11 @@ __kernel void cell_mic(
     int ring = 0;
     double dropped = INFINITY;
     for (;; ++ring) {
-        gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ring, nbx, nby, W, H,
+        gather_ring(site, weight, bstart, s, xi, wi, hx, hy, ring, nbx, nby, W, H,
                     fixed, 1, &L, &nn2, &dropped, &flag);
         if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
     }
     int b[3] = {0, 1, 2};
-    if (previous) warm_basis(&L, previous[i], b);
     double z[3];
     flag |= dual_simplex(&L, b, z, tol);
     /* 2. more rings while the cell is unbounded by the list, or its disk
@@ -322,7 +297,7 @@ __kernel void cell_mic(
          * reach are covered: the scan below then finds a few heavier cutters */
         if (!is_artificial(&L, b) && qn + 2.0 * Rp <= G) break;
         if (ring >= RMAX_GROW || dropped < INFINITY || (flag & F_PIVOTS)) break;
-        gather_ring(site, weight, sid, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
+        gather_ring(site, weight, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
                     fixed, 0, &L, &nn2, &dropped, &flag);
         flag |= dual_simplex(&L, b, z, tol);
     }
@@ -364,7 +339,7 @@ __kernel void cell_mic(
                     const double be = (len2 - weight[t] + wi) / (2.0 * len);
                     const double sl = be - (ax * z[0] + ay * z[1]) / len - z[2];
                     if (sl >= near_tol) continue;
-                    const int code = site_code(sid[t], qx, qy, &flag);
+                    const int code = site_code(t, qx, qy, &flag);
                     int known = 0;
                     for (int k = fixed; k < L.m; ++k) known |= (L.code[k] == code);
                     if (known) continue;
@@ -398,14 +373,14 @@ __kernel void cell_mic(
         if (k == b[0] || k == b[1] || k == b[2]) continue;
         const double sl = L.be[k] - L.nx[k] * z[0] - L.ny[k] * z[1] - z[2];
         if (sl < near_tol) {
-            if (nnear < MAXNEAR) near_code[(size_t)i * MAXNEAR + nnear] = L.code[k];
+            if (nnear < MAXNEAR) near_code[(size_t)s * MAXNEAR + nnear] = L.code[k];
             nnear++;
         }
     }
     if (nnear > MAXNEAR) flag |= F_NEAR_FULL;
-    for (int k = nnear; k < MAXNEAR; ++k) near_code[(size_t)i * MAXNEAR + k] = -9;
-    center[i] = (double2)(xi.x + z[0], xi.y + z[1]);
-    radius[i] = z[2];
-    active[i] = (int4)(L.code[b[0]], L.code[b[1]], L.code[b[2]], flag);
-    nn_dist[i] = sqrt(nn2);
+    for (int k = nnear; k < MAXNEAR; ++k) near_code[(size_t)s * MAXNEAR + k] = -9;
+    center[s] = (double2)(xi.x + z[0], xi.y + z[1]);
+    radius[s] = z[2];
+    active[s] = (int4)(L.code[b[0]], L.code[b[1]], L.code[b[2]], flag);
+    nn_dist[s] = sqrt(nn2);
 }
