@@ -240,6 +240,14 @@ def test_one_set_recreated_alone(tmp_path, capsys):
                                   np.load(tmp_path / "2.npz")["points"])
 
 
+def test_rerun_without_seed_takes_the_recorded_one(tmp_path):
+    outputs = [str(tmp_path / "{i}.npz")]
+    first = list(poisson_many(3, 64, outputs, backend="exact", jobs=1))
+    again = list(poisson_many(3, 64, outputs, backend="exact", jobs=1))
+    assert [r["status"] for r in again] == ["skipped"] * 3
+    assert [r["seed"] for r in again] == [r["seed"] for r in first]
+
+
 def test_manifest_ignores_a_torn_line(tmp_path):
     path = tmp_path / "m.jsonl"
     m = Manifest(path)
