@@ -549,8 +549,9 @@ def _resolve_stipple_options(args):
     ------
     _UsageError
         Naming both options: ``--dot-mm`` with ``--dots``, ``--method lloyd``
-        with ``--schedule``, ``--schedule`` with ``--beta/--rounds``, and
-        ``--gamma`` where the radius mapping has no gamma (density radii).
+        with ``--schedule`` or ``--beta/--rounds``, ``--schedule`` with
+        ``--beta/--lloyd/--rounds``, and ``--gamma`` where the radius mapping
+        has no gamma (density radii).
     """
     from diskpack_cl.schedule import SCHEDULE_OPTIONS
 
@@ -561,6 +562,9 @@ def _resolve_stipple_options(args):
         raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
                           f"--schedule {args.schedule} would be ignored; give one")
     built = [f"--{k}" for k in ("beta", "rounds") if getattr(args, k) is not None]
+    if args.method == "lloyd" and built:
+        raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
+                          f"{'/'.join(built)} would be ignored; give one")
     if args.method == "diskpack" and args.lloyd is not None:
         built.append("--lloyd")
     if built and args.schedule is not None:

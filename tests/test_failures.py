@@ -174,6 +174,8 @@ def test_check_writable_leaves_nothing(tmp_path):
      ["--method lloyd", "--schedule paper"]),
     (["stipple", "sample", "-n", "9", "-o", "a.svg", "--beta", "5", "--schedule", "pack"],
      ["--beta", "--schedule pack"]),
+    (["stipple", "sample", "-n", "9", "-o", "a.svg", "--method", "lloyd", "--rounds", "2"],
+     ["--method lloyd", "--rounds"]),
     (["stipple", "sample", "-n", "9", "-o", "a.svg", "--gamma", "2"],
      ["--gamma", "default schedule", "--schedule paper"]),
     (["stipple", "sample", "-n", "9", "-o", "a.svg", "--schedule", "paper", "--radii", "density",
