@@ -115,7 +115,7 @@ def test_devices(ctx, capsys):
 
 # ------------------------------------------------------- with a fake relax
 
-def test_poisson_passes_options(fake_relax, tmp_path, capsys):
+def test_poisson_passes_options(fake_relax, tmp_path, capsys, ctx):   # --device pocl is probed
     out = tmp_path / "p.npz"
     rc = cli.main(["poisson", "-n", "20", "-o", str(out), "--eps", "0.7", "--max-iter", "9",
                    "--backend", "opencl", "--grid", "32", "--device", "pocl", "--json"])
@@ -393,7 +393,7 @@ def fake_stipple(monkeypatch):
     return calls
 
 
-def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys):
+def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):   # --device pocl is probed
     rc = cli.main(["stipple", "sample", "-n", "77", "-o", str(tmp_path / "a.svg"), "--gamma", "2",
                    "--floor", "0.2", "--schedule", "paper", "--supersample", "3", "--seed", "5",
                    "--invert", "--refine-every", "2", "--device", "pocl"])

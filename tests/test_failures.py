@@ -273,7 +273,7 @@ def test_empty_pipe_is_an_error(tmp_path):
     ["relax", "in.npz", "-o", "p.npz"],
     ["stipple", "sample", "-n", "20", "-o", "s.npz"],
 ])
-def test_explicit_device_that_matches_nothing_is_an_error(tmp_path, monkeypatch, capsys, argv):
+def test_explicit_device_that_matches_nothing_is_an_error(ctx, tmp_path, monkeypatch, capsys, argv):
     monkeypatch.chdir(tmp_path)
     write_points("in.npz", np.random.default_rng(0).random((64, 2)))
     rc, _, err = _run([*argv, "--device", "no-such-device-xyz"], capsys)
