@@ -46,6 +46,32 @@ _NN = FLAGS["nn"]
 _EDGE_NORMALS = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
 
 
+def _keep_freed_memory():
+    """Let glibc keep freed large blocks instead of unmapping them.
+
+    Every iteration allocates the same large numpy temporaries (tens of MB
+    at a million sites).  By default glibc unmaps blocks above its mmap
+    threshold when they are freed, so the next iteration faults every page
+    in again; on the development VM those page faults took more time than
+    the arithmetic (1M sites: 1.3-1.7 s a call, 0.9 s with this).  Peak
+    memory is unchanged; freed memory stays with the process for reuse.
+    """
+    import ctypes
+    import ctypes.util
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):   # not glibc
+        return
+    M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+    mallopt(M_MMAP_THRESHOLD, 1 << 30)
+    mallopt(M_TRIM_THRESHOLD, (1 << 31) - 1)
+
+
 def has_fp64(ctx):
     """True when the context's device supports double precision (``cl_khr_fp64``)."""
     return "cl_khr_fp64" in ctx.devices[0].extensions
@@ -137,6 +163,7 @@ class CellMIC:
         self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
         self._bufs = {}
         self._order = None
+        _keep_freed_memory()
         self._warm()
 
     def _warm(self):
