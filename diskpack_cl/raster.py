@@ -118,8 +118,8 @@ class PowerRaster:
     max_groups : int
         Work-groups (8 x 8 grid cells each) per enqueue of the labelling
         kernel: the raster is labelled in bands of tile rows, each waited for
-        with :func:`diskpack_cl._device.wait_for`, so that stage timings are
-        exact and Ctrl-C is answered between bands, even on huge rasters.
+        in a way that lets Ctrl-C through, so that stage timings are exact and
+        an interrupt is answered between bands, even on huge rasters.
 
     Examples
     --------
