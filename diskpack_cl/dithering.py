@@ -74,6 +74,26 @@ def _fix_count(counts, resid, n):
     return counts
 
 
+def _pixels_in_blocks(blk, blocks, b, shape, rng):
+    """(row, col) of a pixel for each point of block ``blk``, drawn by the block's density.
+
+    A block without density (a point added by the residual fix) or a draw
+    past the image picks a pixel of its block uniformly.
+    """
+    H, W = shape
+    n = len(blk)
+    Wc = -(-W // b)
+    cum = np.cumsum(blocks[blk], axis=1)
+    tot = cum[:, -1]
+    u = rng.random(n) * tot
+    sub = np.count_nonzero(cum <= u[:, None], axis=1)
+    bad = (tot <= 0) | (sub >= b * b)
+    sub[bad] = rng.integers(0, b * b, size=int(bad.sum()))
+    brow, bcol = np.divmod(blk, Wc)
+    srow, scol = np.divmod(sub, b)
+    return np.minimum(brow * b + srow, H - 1), np.minimum(bcol * b + scol, W - 1)
+
+
 def error_diffusion(gray, n, *, seed=None, density=None):
     """Exactly ``n`` points distributed like the darkness of ``gray``.
 
@@ -151,20 +171,7 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     counts = _fix_count(counts, resid, n)
     blk = np.repeat(np.arange(Hc * Wc), counts)
     rng = np.random.default_rng(seed)
-    if b > 1:
-        cum = np.cumsum(blocks[blk], axis=1)
-        tot = cum[:, -1]
-        u = rng.random(n) * tot
-        sub = np.count_nonzero(cum <= u[:, None], axis=1)
-        # a block without density (residual fix) or past the image: uniform
-        bad = (tot <= 0) | (sub >= b * b)
-        sub[bad] = rng.integers(0, b * b, size=int(bad.sum()))
-        brow, bcol = np.divmod(blk, Wc)
-        srow, scol = np.divmod(sub, b)
-        row = np.minimum(brow * b + srow, H - 1)
-        col = np.minimum(bcol * b + scol, W - 1)
-    else:
-        row, col = np.divmod(blk, W)
+    row, col = _pixels_in_blocks(blk, blocks, b, (H, W), rng) if b > 1 else np.divmod(blk, W)
     jitter = rng.random((n, 2))
     pts = np.empty((n, 2))
     pts[:, 0] = col + jitter[:, 0]
