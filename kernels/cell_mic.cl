@@ -46,7 +46,7 @@
 #define RMAX_GROW 12     /* most rings gathered while the cell reaches past them */
 #define MAX_PIVOTS 96
 #define MAX_ROUNDS 16
-#define MAX_SCAN 256     /* widest verification scan, in buckets per side */
+#define MAX_SCAN 256     /* widest verification scan on a torus, in buckets per side */
 #define GATHER_CAP (MAXC - 16)  /* list room kept for the sites step 3 adds */
 
 /* flag bits, mirrored in diskpack_cl/cells.py */
@@ -309,9 +309,16 @@ __kernel void cell_mic(
         if (round > 0) rad = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
         if (qn + rad <= G) break;
         const double cxp = xi.x + z[0], cyp = xi.y + z[1];
-        const int x0 = (int)floor((cxp - rad) / bw), x1 = (int)floor((cxp + rad) / bw);
-        const int y0 = (int)floor((cyp - rad) / bh), y1 = (int)floor((cyp + rad) / bh);
+        /* (clamped before the conversion: a huge ball must not overflow int) */
+        int x0 = (int)floor(fmax((cxp - rad) / bw, -1e8)), x1 = (int)floor(fmin((cxp + rad) / bw, 1e8));
+        int y0 = (int)floor(fmax((cyp - rad) / bh, -1e8)), y1 = (int)floor(fmin((cyp + rad) / bh, 1e8));
+#if PERIODIC
+        /* past one period the images repeat: the scan would only grow */
         if (x1 - x0 > MAX_SCAN || y1 - y0 > MAX_SCAN) { flag |= F_SCAN_WIDE; break; }
+#else
+        /* a rectangle has no buckets outside the grid: the whole grid at most */
+        x0 = max(x0, 0); y0 = max(y0, 0); x1 = min(x1, nbx - 1); y1 = min(y1, nby - 1);
+#endif
         int added = 0, waiting = 0;
         for (int by = y0; by <= y1; ++by) {
             for (int bx = x0; bx <= x1; ++bx) {
