@@ -8,7 +8,7 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.radii import base_radii, field_at, largest_valid_k, radius_field
 from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, make_schedule
-from diskpack_cl.stipple import StippleStage, StippleState, pack_step, stipple
+from diskpack_cl.stipple import StippleStage, StippleState, lloyd_step, pack_step, stipple
 from diskpack_cl.stipple_engine import ExactStippleEngine
 
 SHORT = [("pack", 6), ("lloyd", 3), ("pack", 4)]
@@ -371,6 +371,24 @@ def test_pack_step_k_is_the_quantile_of_mic_over_base_radius(q):
     assert state.k == (np.quantile(ratio, q) if q > 0 else ratio.min())
     assert state.packs == 1 and entry["empty"] == int(mic.empty.sum())
     np.testing.assert_array_equal(state.points[ok], mic.centers[ok])
+
+
+def test_lloyd_step_moves_to_the_voronoi_centroids_and_takes_the_largest_k():
+    from diskpack_cl.labels import cell_centroids, grid_power_labels
+
+    g = gradient(24, 32)
+    x = error_diffusion(g, 40, seed=2)
+    opt = StippleOptions.resolve(40, 32, 24, schedule=[("lloyd", 1)])
+    rfield = radius_field(g, radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
+    dom, shape = Domain.rect(32, 24), opt.grid_shape(32, 24)
+    dens = np.random.default_rng(3).random(shape) + 0.01
+    stage = StippleStage(ExactStippleEngine(dom, shape), opt, rfield, dens)
+    state, entry = lloyd_step(StippleState(x, 0.5, packs=3), stage)
+    want, mass = cell_centroids(grid_power_labels(x, None, dom, shape), x, dens, dom)
+    np.testing.assert_array_equal(state.points, np.where((mass > 0)[:, None], want, x))
+    assert state.k == max(largest_valid_k(state.points, field_at(rfield, state.points), 32, 24), 1e-6)
+    assert state.packs == 3 and entry["empty"] == int(np.count_nonzero(mass == 0))
+    assert entry["moved"] == pytest.approx(np.mean(np.hypot(*(state.points - x).T)))
 
 
 def test_k_quantile_changes_weights_not_certificate(ctx):
