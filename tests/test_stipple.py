@@ -373,6 +373,28 @@ def test_pack_step_k_is_the_quantile_of_mic_over_base_radius(q):
     np.testing.assert_array_equal(state.points[ok], mic.centers[ok])
 
 
+@pytest.mark.parametrize("blend_cell", ["power", "voronoi"])
+def test_mix_step_blends_the_mic_towards_the_cell_centroid(blend_cell):
+    from diskpack_cl.labels import cell_centroids, grid_power_labels
+
+    g = gradient(24, 32)
+    x = error_diffusion(g, 40, seed=5)
+    opt = StippleOptions.resolve(40, 32, 24, schedule=[("mix", 1, 0.3)], radii="density",
+                                 floor=0.01, blend_cell=blend_cell)
+    rfield = radius_field(g, radii="density", floor=0.01, sigma=opt.radius_sigma)
+    dom, shape = Domain.rect(32, 24), opt.grid_shape(32, 24)
+    dens = np.random.default_rng(6).random(shape) + 0.01
+    stage = StippleStage(ExactStippleEngine(dom, shape), opt, rfield, dens)
+    state, _ = pack_step(StippleState(x, 0.2), stage, blend=0.3)
+    w = (0.2 * field_at(rfield, x)) ** 2
+    mic = exact_mic(x, w, dom)
+    cells_w = w if blend_cell == "power" else None
+    c, mass = cell_centroids(grid_power_labels(x, cells_w, dom, shape), x, dens, dom)
+    ok = ~mic.empty & (mass > 0)
+    np.testing.assert_allclose(state.points[ok], mic.centers[ok] + 0.3 * (c[ok] - mic.centers[ok]),
+                               rtol=0, atol=1e-12)
+
+
 def test_lloyd_step_moves_to_the_voronoi_centroids_and_takes_the_largest_k():
     from diskpack_cl.labels import cell_centroids, grid_power_labels
 
