@@ -134,6 +134,22 @@ class CellEngine:
         return MICStep(r.centers, r.radii, r.empty, r.nn, stats, r.timings)
 
 
+def _opencl_engine(ctx, domain, n, backend, route, grid, profile):
+    """The OpenCL route for `ctx`: the per-cell kernel where the device has
+    float64; else the raster route on GPUs, and for ``auto`` on CPUs without
+    float64 the exact engine (measured: the raster route is slower than scipy
+    alone on a CPU)."""
+    import pyopencl as cl
+
+    from .cells import has_fp64
+
+    if route == "cells" or (route == "auto" and has_fp64(ctx)):
+        return CellEngine(domain, device=ctx, profile=profile), None
+    if route == "raster" or backend == "opencl" or ctx.devices[0].type & cl.device_type.GPU:
+        return RasterEngine(domain, n, device=ctx, grid=grid, profile=profile), None
+    return ExactEngine(domain), "a CPU device without float64: scipy alone is faster"
+
+
 def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="auto", profile=False):
     """The engine for `backend` (``opencl``, ``exact`` or ``auto``).
 
@@ -149,7 +165,10 @@ def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="aut
     grid : tuple of int, optional
         Raster shape ``(ny, nx)`` of the ``raster`` route.
     route : {"auto", "cells", "raster"}
-        OpenCL route: ``auto`` takes ``cells`` on devices with float64.
+        OpenCL route: ``auto`` takes ``cells`` on devices with float64 (the
+        fastest engine there at every size measured), ``raster`` on GPUs
+        without float64, and with ``backend="auto"`` the exact engine on a
+        CPU without float64.
     profile : bool
         Profile the kernels with OpenCL events.
 
@@ -182,11 +201,6 @@ def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="aut
                 raise
             engine, fallback = ExactEngine(domain), f"no OpenCL device ({exc})"
         else:
-            from .cells import has_fp64
-
-            if route == "cells" or (route == "auto" and has_fp64(ctx)):
-                engine = CellEngine(domain, device=ctx, profile=profile)
-            else:
-                engine = RasterEngine(domain, n, device=ctx, grid=grid, profile=profile)
+            engine, fallback = _opencl_engine(ctx, domain, n, backend, route, grid, profile)
     engine.fallback = fallback
     return engine
