@@ -1,11 +1,12 @@
 """A large stippling within the machine's memory: n = 1M dots on an 8192 x 8192 image.
 
-Usage: python benchmarks/stipple_large.py [--size 8192] [--n 1000000] [--pack 2] [--lloyd 1]
+Usage: python benchmarks/stipple_large.py [--size 8192] [--n 1000000] [--mix 3] [--full]
 
-The image is the bundled sample photograph scaled up (Lanczos).  Runs a short
-schedule (a full schedule of ~200 iterations at this size takes hours on two
-CPU cores) and prints seconds per iteration by kind and stage, the time to the
-certified result, and the peak resident memory of the process.
+The image is the bundled sample photograph scaled up (Lanczos).  Runs a few
+iterations of the default schedule's step ("mix", with the default's
+options), or with --full the whole default schedule, and prints seconds per
+iteration by stage, the time to the certified result, and the peak resident
+memory of the process.
 """
 
 import argparse
@@ -16,6 +17,7 @@ import numpy as np
 from PIL import Image
 
 from diskpack_cl.image import load_gray, sample_image_path
+from diskpack_cl.schedule import SCHEDULE_OPTIONS
 from diskpack_cl.stipple import stipple
 
 
@@ -23,15 +25,16 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=8192)
     ap.add_argument("--n", type=int, default=1_000_000)
-    ap.add_argument("--pack", type=int, default=2)
-    ap.add_argument("--lloyd", type=int, default=1)
+    ap.add_argument("--mix", type=int, default=3)
+    ap.add_argument("--full", action="store_true", help="the whole default schedule")
     args = ap.parse_args()
     gray = load_gray(sample_image_path())
     img = Image.fromarray((gray * 255).astype(np.uint8)).resize((args.size, args.size), Image.LANCZOS)
     gray = np.asarray(img, np.float64) / 255.0
     del img
     t = time.perf_counter()
-    res = stipple(gray, args.n, schedule=[("lloyd", args.lloyd), ("pack", args.pack)], seed=0)
+    kw = {} if args.full else dict(SCHEDULE_OPTIONS["default"], schedule=[("mix", args.mix)])
+    res = stipple(gray, args.n, seed=0, **kw)
     total = time.perf_counter() - t
     peak_gib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     by_kind = {}
