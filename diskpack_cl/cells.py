@@ -34,8 +34,9 @@ MAXC = 64        # constraint list capacity per work item
 MAXNEAR = 8      # near-tight constraints reported besides the basis
 NO_CODE = -9     # empty slot of the near-tight list
 CHUNK = 1 << 17  # work items per enqueue: each wait lets Ctrl-C through
-# Work-group size: each work item keeps a ~2.3 KB constraint list in private
-# memory, and PoCL lays a whole work-group's out on one thread's stack.
+# Work-group size (at most the device's): each work item keeps a ~2.3 KB
+# constraint list in private memory, and PoCL lays a whole work-group's out
+# on one thread's stack.
 GROUP = 64
 
 #: Flag bits of the kernel (``kernels/cell_mic.cl``): why a cell was not proven.
@@ -157,6 +158,7 @@ class CellMIC:
         self.device_name = describe(self.ctx)
         props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
         self.queue = cl.CommandQueue(self.ctx, properties=props)
+        self.group = min(GROUP, self.ctx.devices[0].max_work_group_size)
         self.profile = profile
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
@@ -280,9 +282,9 @@ class CellMIC:
         near_tol = 1e-7 * np.sqrt(dom.area / n)
         events = []
         for off in range(0, n, CHUNK):
-            size = -(-min(CHUNK, n - off) // GROUP) * GROUP
+            size = -(-min(CHUNK, n - off) // self.group) * self.group
             events.append(self._kernel(
-                self.queue, (size,), (GROUP,), b_site, b_w, b_start, b_wmax,
+                self.queue, (size,), (self.group,), b_site, b_w, b_start, b_wmax,
                 np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
                 np.float64(dom.width), np.float64(dom.height), np.float64(ws.max()),
                 np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),
