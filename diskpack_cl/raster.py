@@ -64,6 +64,7 @@ class RasterResult:
     _owner: object = None
 
     _maps: dict = field(default_factory=dict)
+    _generation: int = 0
 
     def _fetch(self, name):
         """Copy one of this result's device maps to the host (once)."""
@@ -71,6 +72,9 @@ class RasterResult:
 
         entry = self._maps[name]
         if isinstance(entry, tuple):
+            if self._owner._generation != self._generation:
+                raise RuntimeError(f"the {name} map of this result was overwritten by a later "
+                                   "compute() (the raster reuses its device buffers): read it first")
             buf, dtype = entry
             out = np.empty(self.shape, dtype)
             cl.enqueue_copy(self._owner.queue, out, buf)
@@ -165,6 +169,8 @@ class PowerRaster:
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._site_bufs = {}
+        self._maps = {}
+        self._generation = 0
         self._pts = np.zeros((0, 2))
         self._last = None
         self._warm()
@@ -190,6 +196,15 @@ class PowerRaster:
             self._site_bufs[name] = buf
         if host.nbytes:
             cl.enqueue_copy(self.queue, buf, host)
+        return buf
+
+    def _map_buffer(self, name, nbytes):
+        import pyopencl as cl
+
+        buf = self._maps.get(name)
+        if buf is None or buf.size != nbytes:
+            buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, nbytes)
+            self._maps[name] = buf
         return buf
 
     def _buckets(self, pts, w):
@@ -278,11 +293,13 @@ class PowerRaster:
         ny, nx = self.shape
         dom = self.domain
         npix = nx * ny
-        # fresh maps per call, so that an earlier result stays readable
-        mf = cl.mem_flags
-        maps = {"label": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32),
-                "dist": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.float32),
-                "nbr": (cl.Buffer(self.ctx, mf.READ_WRITE, 4 * npix), np.int32)}
+        # the maps are allocated once and reused (a fresh buffer of a large
+        # raster costs its page faults every call); an earlier result's maps
+        # are read before the next compute or not at all
+        maps = {"label": (self._map_buffer("label", 4 * npix), np.int32),
+                "dist": (self._map_buffer("dist", 4 * npix), np.float32),
+                "nbr": (self._map_buffer("nbr", 4 * npix), np.int32)}
+        self._generation += 1
         self._pts = pts
         self._label_buf = maps["label"][0]   # stays on the device for centroids()
         if not distance and self.layout == "tile":
@@ -306,7 +323,8 @@ class PowerRaster:
             del maps["dist"], maps["nbr"]
             self._last = RasterResult(pts.copy(), np.full(n, -1.0), self.shape,
                                       (dom.width / nx, dom.height / ny),
-                                      {"raster_labels": t1 - t0, "mic_estimate": 0.0}, self, maps)
+                                      {"raster_labels": t1 - t0, "mic_estimate": 0.0}, self, maps,
+                                      self._generation)
             return self._last
         rbits = np.full(n, -1, np.int32)
         argpix = np.full(n, INT_MAX, np.int32)
@@ -327,7 +345,8 @@ class PowerRaster:
         centers[has, 1] = (iy + 0.5) * hy
         t2 = time.perf_counter()
         self._last = RasterResult(centers, radii, self.shape, (hx, hy),
-                                  {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps)
+                                  {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps,
+                                  self._generation)
         return self._last
 
     def centroids(self, density=None):
