@@ -76,6 +76,8 @@ CONFIGS = {
     "default": dict(schedule="default"),
     # the default with feature-aware mix steps (radii.detail_fields; issue 11)
     "detail": dict(schedule="default", features="detail"),
+    # the "detail" schedule: 18 + 7 mix steps with features="detail" (issue 11)
+    "detail-schedule": dict(schedule="detail"),
     # ablations of the default (one change each)
     "default-gray": dict(schedule="default", radii="gray", floor=0.1),
     "default-pack": dict(schedule="default", blend=0.0,

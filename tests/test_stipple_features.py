@@ -59,3 +59,10 @@ def test_stipple_detail_certified_deterministic_and_different():
     assert a.params["features"] == "detail"
     # the radii the result reports are the dilated field's, certified
     assert np.all(a.base_radii > 0)
+
+
+def test_detail_schedule_brings_the_option():
+    opt = StippleOptions.resolve(500, 64, 48, schedule="detail")
+    assert opt.features == "detail" and opt.radii == "density"
+    assert opt.phases == (("mix", 18, 0.5), ("mix", 7, 0.4))
+    assert StippleOptions.resolve(500, 64, 48, schedule="detail", features="none").features == "none"
