@@ -175,6 +175,21 @@ static int site_code(int j, int qx, int qy, int *flag)
     return 9 * j + 3 * (clamp(qx, -1, 1) + 1) + (clamp(qy, -1, 1) + 1);
 }
 
+/* Bucket (cx, cy) of the unbounded bucket lattice: on a torus, wrap it onto
+ * the grid and give its period shift (qx, qy); on a rectangle, 0 when it
+ * lies outside the grid.  (common.h's locate_bucket, with integer shifts.) */
+static int wrap_bucket(int *cx, int *cy, int *qx, int *qy, int nbx, int nby)
+{
+#if PERIODIC
+    *qx = floordiv(*cx, nbx); *qy = floordiv(*cy, nby);
+    *cx -= *qx * nbx; *cy -= *qy * nby;
+    return 1;
+#else
+    *qx = 0; *qy = 0;
+    return *cx >= 0 && *cy >= 0 && *cx < nbx && *cy < nby;
+#endif
+}
+
 /* Does the basis still hold one of the artificial half-planes? */
 static int is_artificial(const clist *L, const int *b)
 {
@@ -192,14 +207,8 @@ static void gather_ring(__global const double2 *site, __global const double *wei
     for (int dy = -ring; dy <= ring; ++dy) {
         for (int dx = -ring; dx <= ring; ++dx) {
             if (max(abs(dx), abs(dy)) != ring) continue;
-            int cx = hx + dx, cy = hy + dy;
-            int qx = 0, qy = 0;
-#if PERIODIC
-            qx = floordiv(cx, nbx); qy = floordiv(cy, nby);
-            cx -= qx * nbx; cy -= qy * nby;
-#else
-            if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
-#endif
+            int cx = hx + dx, cy = hy + dy, qx, qy;
+            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int b = cy * nbx + cx;
             for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
                 if (t == s && qx == 0 && qy == 0) continue;
@@ -322,14 +331,8 @@ __kernel void cell_mic(
         int added = 0, waiting = 0;
         for (int by = y0; by <= y1; ++by) {
             for (int bx = x0; bx <= x1; ++bx) {
-                int cx = bx, cy = by;
-                int qx = 0, qy = 0;
-#if PERIODIC
-                qx = floordiv(cx, nbx); qy = floordiv(cy, nby);
-                cx -= qx * nbx; cy -= qy * nby;
-#else
-                if (cx < 0 || cy < 0 || cx >= nbx || cy >= nby) continue;
-#endif
+                int cx = bx, cy = by, qx, qy;
+                if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
                 const int bb = cy * nbx + cx;
                 /* distance from the centre to this bucket (with its shift) */
                 const double ox = bx * bw, oy = by * bh;
