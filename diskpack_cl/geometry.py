@@ -9,7 +9,7 @@ import numpy as np
 from .domain import Domain
 from .measures import kdtree
 
-__all__ = ["MIC", "exact_mic", "chebyshev_center_linprog", "Certificate", "certify_disks"]
+__all__ = ["MIC", "exact_mic", "chebyshev_center_linprog", "Certificate", "certify_disks", "radius_octaves"]
 
 
 def _sites_tree(points, domain, margin, lift=None):
@@ -690,11 +690,28 @@ class Certificate:
                 "disjoint": bool(self.disjoint)}
 
 
+def radius_octaves(r):
+    """Indices of the disks grouped by radius octave (zero radii in one group).
+
+    Examples
+    --------
+    >>> [c.tolist() for c in radius_octaves(np.array([1.0, 3.0, 1.5, 0.0]))]
+    [[3], [0, 2], [1]]
+    """
+    r = np.asarray(r, np.float64)
+    pos = r > 0
+    lr = np.full(len(r), -1, np.int64)
+    if pos.any():
+        lr[pos] = np.floor(np.log2(r[pos] / r[pos].min())).astype(np.int64)
+    return [np.flatnonzero(lr == c) for c in np.unique(lr)]
+
+
 def certify_disks(centers, radii, domain):
     """Certify closed disks: inside the domain and pairwise disjoint (exact float64).
 
-    Every pair that could overlap is examined: a KD-tree returns, for each
-    disk, all centres within ``r_i + r_max``, so no overlapping pair escapes.
+    Every pair that could overlap is examined: for each radius octave a
+    KD-tree returns, for each disk, all centres of that octave within
+    ``r_i`` plus the octave's largest radius, so no overlapping pair escapes.
 
     Examples
     --------
@@ -708,16 +725,24 @@ def certify_disks(centers, radii, domain):
         return Certificate(True, np.inf, 0, True, True)
     if not (np.all(np.isfinite(C)) and np.all(np.isfinite(r)) and np.all(r >= 0)):
         return Certificate(False, -np.inf, 0, False, False)
-    C, tree = kdtree(C, domain)
     if domain.periodic:
+        C = domain.wrap(C)
         edge_gap = np.inf
         inside = True
     else:
         edge = np.minimum.reduce([C[:, 0], domain.width - C[:, 0], C[:, 1], domain.height - C[:, 1]])
         edge_gap = float(np.min(edge - r))
         inside = edge_gap >= 0
-    rmax = float(r.max())
-    i, j = _query_pairs(tree, C, r + rmax)
+    # one tree per radius octave: disk i meets the disks of octave c only
+    # within r_i + (largest radius of c), a short query even when the radii
+    # vary by orders of magnitude; every pair is found from both sides
+    i, j = [], []
+    for cls in radius_octaves(r):
+        _, tree_c = kdtree(C[cls], domain)
+        ii, jj = _query_pairs(tree_c, C, r + r[cls].max())
+        i.append(ii)
+        j.append(cls[jj])
+    i, j = np.concatenate(i), np.concatenate(j)
     keep = j > i
     i, j = i[keep], j[keep]
     d = C[j] - C[i]

@@ -155,12 +155,6 @@ def field_at(field, points):
     return field[row, col]
 
 
-def _radius_classes(r):
-    """Indices of points grouped by radius octave."""
-    lr = np.floor(np.log2(r / r.min())).astype(np.int64)
-    return [np.flatnonzero(lr == c) for c in np.unique(lr)]
-
-
 def largest_valid_k(points, r, width, height):
     """Largest ``k`` with all disks ``(points_i, k r_i)`` inside the rectangle and disjoint.
 
@@ -189,7 +183,9 @@ def largest_valid_k(points, r, width, height):
     k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
     if k <= 0:
         return 0.0
-    classes = _radius_classes(r)
+    from .geometry import radius_octaves
+
+    classes = radius_octaves(r)
     trees = [cKDTree(p[c]) for c in classes]
     rmax = [r[c].max() for c in classes]
     for a in range(len(classes)):

@@ -269,3 +269,31 @@ def test_exact_mic_disks_certify(case):
     scale = max(dom.width, dom.height)
     r = np.maximum(mic.radii[keep] - 1e-9 * scale, 0)
     assert certify_disks(mic.centers[keep], r, dom).valid
+
+
+@SETTINGS
+@given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(2, 60),
+       spread=st.sampled_from([1.0, 30.0, 1000.0]))
+def test_certify_disks_against_all_pairs(seed, periodic, n, spread):
+    """Octave trees find the closest pair of a brute-force scan, radii spanning up to 1000x."""
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    C = rng.random((n, 2)) * (dom.width, dom.height)
+    r = 0.3 / np.sqrt(n) * spread ** -rng.random(n) * rng.uniform(0.3, 2.0)   # overlaps about half the time
+    cert = certify_disks(C, r, dom)
+    d = C[:, None, :] - C[None, :, :]
+    if periodic:
+        d -= np.round(d)
+    gap = np.hypot(d[..., 0], d[..., 1]) - r[:, None] - r[None, :]
+    gap = gap[np.triu_indices(n, 1)].min()
+    assert cert.disjoint == (gap > 0)
+    if not periodic:
+        edge = np.minimum.reduce([C[:, 0], 3.0 - C[:, 0], C[:, 1], 2.0 - C[:, 1]]) - r
+        assert cert.inside == (edge.min() >= 0)
+        gap = min(gap, edge.min())
+    # min_gap is over the checked pairs (and edges): exact when disks
+    # overlap (every overlapping pair is checked), a bound from above otherwise
+    if gap <= 0:
+        assert cert.min_gap == pytest.approx(gap, abs=1e-12)
+    else:
+        assert cert.min_gap >= gap - 1e-12
