@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._device import describe, get_context, wait_for
+from ._device import describe, get_context
 from ._kernels import build_program
 from .domain import Domain
 from .geometry import _cramer, _vertex, exact_mic
@@ -36,8 +36,9 @@ NO_CODE = -9     # empty slot of the near-tight list
 CHUNK = 1 << 17  # work items per enqueue: each wait lets Ctrl-C through
 # Work-group size (at most the device's): each work item keeps a ~2.3 KB
 # constraint list in private memory, and PoCL lays a whole work-group's out
-# on one thread's stack.
-GROUP = 64
+# on one thread's stack; 16 also balances small sets over the cores (n = 1024:
+# kernel 0.44 ms against 0.76 ms with 64; no difference measured at 20k, 200k).
+GROUP = 16
 
 #: Flag bits of the kernel (``kernels/cell_mic.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
@@ -290,7 +291,9 @@ class CellMIC:
                 np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),
                 bufs["center"], bufs["radius"], bufs["active"], bufs["near"], bufs["nn"]))
         for ev in events:
-            wait_for(ev)   # one chunk at a time: a signal is answered in between
+            # a chunk takes well under a second, so a plain wait per chunk
+            # answers Ctrl-C in time without wait_for's helper thread
+            ev.wait()
         if self.profile:
             timings["kernel"] = sum((ev.profile.end - ev.profile.start) * 1e-9 for ev in events)
         for k, v in outs.items():
