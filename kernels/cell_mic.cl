@@ -250,11 +250,10 @@ __kernel void cell_mic(
     const double tol,                /* feasibility tolerance (length units) */
     const double near_tol,               /* slack below which a constraint is near-tight */
     const int offset,                /* first sorted site of this enqueue */
-    __global double2 *center,        /* out, by sorted position: MIC centre */
-    __global double *radius,         /* out: MIC radius (negative: empty power cell) */
-    __global int4 *active,           /* out: three basic constraint codes, flag word */
-    __global int *near_code,         /* out: MAXNEAR more near-tight codes, -9 = none */
-    __global double *nn_dist)        /* out: distance to the nearest other site */
+    __global double4 *mic,           /* out, by sorted position: MIC centre x, y, radius
+                                        (negative: empty power cell), nearest-neighbour distance */
+    __global int *codes)             /* out: NCODES a site: three basic constraint codes,
+                                        the flag word, MAXNEAR near-tight codes (-9 = none) */
 {
     const int s = offset + get_global_id(0);
     if (s >= n) return;
@@ -378,19 +377,18 @@ __kernel void cell_mic(
     if (!(nn2 <= Gnn * Gnn)) flag |= F_NN;
 
     /* 4. outputs */
+    __global int *out = codes + (size_t)s * (4 + MAXNEAR);
     int nnear = 0;
     for (int k = 3; k < L.m; ++k) {
         if (k == b[0] || k == b[1] || k == b[2]) continue;
         const double sl = L.be[k] - L.nx[k] * z[0] - L.ny[k] * z[1] - z[2];
         if (sl < near_tol) {
-            if (nnear < MAXNEAR) near_code[(size_t)s * MAXNEAR + nnear] = L.code[k];
+            if (nnear < MAXNEAR) out[4 + nnear] = L.code[k];
             nnear++;
         }
     }
     if (nnear > MAXNEAR) flag |= F_NEAR_FULL;
-    for (int k = nnear; k < MAXNEAR; ++k) near_code[(size_t)s * MAXNEAR + k] = -9;
-    center[s] = (double2)(xi.x + z[0], xi.y + z[1]);
-    radius[s] = z[2];
-    active[s] = (int4)(L.code[b[0]], L.code[b[1]], L.code[b[2]], flag);
-    nn_dist[s] = sqrt(nn2);
+    for (int k = nnear; k < MAXNEAR; ++k) out[4 + k] = -9;
+    out[0] = L.code[b[0]]; out[1] = L.code[b[1]]; out[2] = L.code[b[2]]; out[3] = flag;
+    mic[s] = (double4)(xi.x + z[0], xi.y + z[1], z[2], sqrt(nn2));
 }
