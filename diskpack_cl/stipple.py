@@ -222,11 +222,13 @@ def pack_step(state, stage, blend=0.0):
     return StippleState(newx, k, state.packs + 1), entry
 
 
-def lloyd_step(state, stage):
+def lloyd_step(state, stage, new_k=True):
     """One Lloyd step: every point to its Voronoi cell's density-weighted centroid.
 
-    ``k`` becomes the largest valid one at the new positions (at least 1e-6).
-    Returns ``(state, entry)`` like :func:`pack_step`.
+    With `new_k`, ``k`` becomes the largest valid one at the new positions
+    (at least 1e-6), which the next disk-packing step starts from; without,
+    it is kept (Lloyd steps do not use it, and finding it is an exact pair
+    search).  Returns ``(state, entry)`` like :func:`pack_step`.
     """
     x = state.points
     cen, mass, seconds = stage.engine.centroids(x, np.zeros(len(x)), stage.density)
@@ -237,8 +239,10 @@ def lloyd_step(state, stage):
     newx[ok] = cen[ok]
     entry["moved"] = _moved(x, newx)
     entry["empty"] = int(np.count_nonzero(~ok))
-    W, H = stage.size
-    k = max(largest_valid_k(newx, field_at(stage.radius_field, newx), W, H), 1e-6)
+    k = state.k
+    if new_k:
+        W, H = stage.size
+        k = max(largest_valid_k(newx, field_at(stage.radius_field, newx), W, H), 1e-6)
     return StippleState(newx, k, state.packs), entry
 
 
@@ -249,10 +253,11 @@ def _run(state, stage, callback):
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
-        for _ in range(iters):
+        for it in range(iters):
             t0 = time.perf_counter()
             if kind == "lloyd":
-                state, step = lloyd_step(state, stage)
+                # only the phase's last step sets k, for the packing after it
+                state, step = lloyd_step(state, stage, new_k=it == iters - 1)
             else:
                 state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
             entry = {"kind": kind, "iteration": len(history), **step, "k": float(state.k)}
