@@ -74,3 +74,22 @@ def test_verify_catches_a_wrong_engine(ctx, monkeypatch):
 def test_bad_route():
     with pytest.raises(ValueError, match="route must be one of"):
         make_engine(Domain.torus(), 10, "opencl", route="gpu")
+
+
+def test_stipple_engine_routes_agree(ctx):
+    """The stippling engine's float64 per-cell route and its raster route (for
+    devices without float64), forced on PoCL, give the same power-cell MICs."""
+    from diskpack_cl.stipple_engine import OpenCLStippleEngine
+
+    rng = np.random.default_rng(15)
+    dom, shape = Domain.rect(90.0, 60.0), (120, 180)
+    pts = rng.random((900, 2)) * (90.0, 60.0)
+    w = (0.8 * rng.random(900)) ** 2
+    cells = OpenCLStippleEngine(dom, shape, device=ctx, route="cells")
+    raster = OpenCLStippleEngine(dom, shape, device=ctx, route="raster")
+    assert cells.cells is not None and raster.cells is None
+    a, b = cells.mic(pts, w), raster.mic(pts, w)
+    assert np.array_equal(a.empty, b.empty)
+    assert np.abs(a.radii - b.radii).max() <= 1e-9
+    live = ~a.empty
+    assert np.abs(a.centers[live] - b.centers[live]).max() <= 1e-9
