@@ -74,7 +74,7 @@ from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
 from .schedule import StippleOptions
-from .stipple_engine import make_stipple_engine
+from .stipple_engine import VerifiedEngine, make_stipple_engine
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step"]
 
@@ -295,7 +295,8 @@ def _centroid_density(darkness, opt):
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
 
-def stipple(image, n, *, start=None, callback=None, device=None, backend="auto", **options):
+def stipple(image, n, *, start=None, callback=None, device=None, backend="auto", verify=False,
+            **options):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
     Parameters
@@ -313,9 +314,15 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     device : str or pyopencl.Context, optional
         OpenCL device (see :func:`diskpack_cl.get_context`).
     backend : {"auto", "opencl", "exact"}
-        Engine (:mod:`diskpack_cl.stipple_engine`): ``opencl`` (raster
-        estimates refined exactly), ``exact`` (no OpenCL: exact MICs and
-        host labels), ``auto``: opencl when a device exists.
+        Engine (:mod:`diskpack_cl.stipple_engine`): ``opencl`` (MICs from
+        the float64 per-cell kernel checked on the host, or on devices
+        without float64 raster estimates refined exactly; labels and
+        centroids on the device), ``exact`` (no OpenCL: exact MICs and host
+        labels), ``auto``: opencl when a device exists.
+    verify : bool, optional
+        Check every MIC step against :func:`diskpack_cl.exact_mic` (radii
+        to 1e-9 of the image size, the same empty cells); RuntimeError on a
+        mismatch.  Slow: for testing.
     **options
         The options of :meth:`diskpack_cl.schedule.StippleOptions.resolve`,
         listed under Other Parameters; all are checked before any device work.
@@ -424,6 +431,8 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     x = _start_points(gray, opt, start)
     timings["start"] = time.perf_counter() - t0
     engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
+    if verify:
+        engine = VerifiedEngine(engine)
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield)

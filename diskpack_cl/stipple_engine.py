@@ -32,11 +32,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._timing import Stopwatch
-from .engine import BACKENDS
+from .engine import BACKENDS, check_against_exact
 from .geometry import exact_mic
 from .labels import cell_centroids, grid_power_labels
 
-__all__ = ["CellMICs", "OpenCLStippleEngine", "ExactStippleEngine", "make_stipple_engine"]
+__all__ = ["CellMICs", "OpenCLStippleEngine", "ExactStippleEngine", "VerifiedEngine", "make_stipple_engine"]
 
 
 @dataclass
@@ -156,6 +156,25 @@ class ExactStippleEngine:
         with watch("centroids"):
             c, mass = cell_centroids(lab, points, density, self.domain)
         return c, mass, watch.seconds
+
+
+class VerifiedEngine:
+    """An engine whose every MIC answer is checked against :func:`exact_mic`
+    (``stipple(verify=True)``): RuntimeError on a mismatch."""
+
+    def __init__(self, engine):
+        self.engine = engine
+        self.name, self.device = engine.name, engine.device
+        self.fallback = engine.fallback
+
+    def mic(self, points, weights, *, exact=True):
+        m = self.engine.mic(points, weights, exact=exact)
+        if exact:
+            check_against_exact(points, weights, self.engine.domain, m.radii, m.empty)
+        return m
+
+    def centroids(self, points, weights, density):
+        return self.engine.centroids(points, weights, density)
 
 
 def make_stipple_engine(domain, shape, backend="auto", device=None):

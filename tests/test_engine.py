@@ -93,3 +93,28 @@ def test_stipple_engine_routes_agree(ctx):
     assert np.abs(a.radii - b.radii).max() <= 1e-9
     live = ~a.empty
     assert np.abs(a.centers[live] - b.centers[live]).max() <= 1e-9
+
+
+def test_stipple_verify_runs_every_step_against_exact_mic(ctx):
+    from diskpack_cl import stipple
+
+    gray = np.linspace(0.05, 0.95, 48 * 64).reshape(48, 64)
+    res = stipple(gray, 300, device=ctx, verify=True, schedule=[("mix", 3, 0.5), ("pack", 2)])
+    assert res.certificate.valid and len(res.history) == 5
+
+
+def test_stipple_verify_catches_a_wrong_engine(ctx, monkeypatch):
+    from diskpack_cl import stipple
+    from diskpack_cl import stipple_engine as se
+
+    real = se.OpenCLStippleEngine.mic
+
+    def off(self, points, weights, *, exact=True):
+        m = real(self, points, weights, exact=exact)
+        m.radii = m.radii * (1 + 1e-6)
+        return m
+
+    monkeypatch.setattr(se.OpenCLStippleEngine, "mic", off)
+    gray = np.linspace(0.05, 0.95, 48 * 64).reshape(48, 64)
+    with pytest.raises(RuntimeError, match="differ from exact_mic"):
+        stipple(gray, 300, device=ctx, verify=True, schedule=[("pack", 2)])
