@@ -15,6 +15,8 @@ import numpy as np
 
 from ._checks import check_count
 
+GAMMA_DEFAULT = 3.0   # exponent of the gray radius mapping (the paper's)
+
 __all__ = ["SCHEDULES", "SCHEDULE_OPTIONS", "make_schedule", "StippleOptions"]
 
 #: Named schedules: lists of (kind, iterations) or ("mix", iterations, blend),
@@ -184,7 +186,7 @@ class StippleOptions:
     features: str = "none"
 
     @classmethod
-    def resolve(cls, n, width, height, *, gamma=3.0, floor=None, schedule="default", beta=None,
+    def resolve(cls, n, width, height, *, gamma=GAMMA_DEFAULT, floor=None, schedule="default", beta=None,
                 lloyd=None, rounds=None, supersample=None, seed=0, method="diskpack", invert=False,
                 refine_every=1, k0=1e-6, radii=None, radius_sigma=None, blend=None,
                 blend_cell="power", k_quantile=None, density_sigma=None, features=None):
@@ -193,8 +195,9 @@ class StippleOptions:
         Raises
         ------
         ValueError
-            An option out of its range, a bad schedule, or n too large for
-            the grid.
+            An option out of its range, a bad schedule, n too large for the
+            grid, or a `gamma` other than the default with density radii
+            (which have no exponent).
         """
         n = check_count(n)
         if not (np.isfinite(gamma) and gamma > 0):
@@ -212,6 +215,11 @@ class StippleOptions:
         def pick(name, value):
             return d[name] if value is None else value
 
+        if float(gamma) != GAMMA_DEFAULT and pick("radii", radii) != "gray":
+            # the density mapping has no exponent: a gamma there would be ignored
+            raise ValueError(f"gamma = {gamma:g} has no effect with {pick('radii', radii)} radii "
+                             f"(schedule {schedule!r}); it is the exponent of radii='gray', which "
+                             "the 'paper', 'pack' and 'lloyd' schedules use")
         return cls(n=n, gamma=float(gamma), floor=float(pick("floor", floor)), supersample=s,
                    seed=seed, method=method, invert=bool(invert), phases=tuple(phases),
                    refine_every=refine_every, radii=pick("radii", radii),

@@ -424,3 +424,15 @@ def test_k_quantile_changes_weights_not_certificate(ctx):
     assert not np.array_equal(a.points, b.points)
     for r in (a, b):
         assert r.certificate.valid and brute_force_valid(r.points, r.radii, 32, 32)
+
+
+def test_gamma_is_refused_where_the_radii_have_no_exponent():
+    """The API, like the CLI, refuses a gamma the default schedule would ignore."""
+    gray = np.linspace(0.1, 0.9, 32 * 32).reshape(32, 32)
+    with pytest.raises(ValueError, match="gamma = 1 has no effect with density radii"):
+        stipple(gray, 50, gamma=1.0, backend="exact", schedule=[("pack", 1)], radii="density")
+    with pytest.raises(ValueError, match="has no effect"):
+        stipple(gray, 50, gamma=6.0)
+    a = stipple(gray, 50, gamma=1.0, schedule="paper", backend="exact", beta=2, lloyd=1, rounds=1)
+    b = stipple(gray, 50, gamma=6.0, schedule="paper", backend="exact", beta=2, lloyd=1, rounds=1)
+    assert not np.allclose(a.base_radii, b.base_radii)      # gamma acts on gray radii
