@@ -13,7 +13,7 @@ from .geometry import certify_disks, exact_mic
 from .measures import normalized_radius
 from .relax import RadiusResult, RelaxResult, max_points_for_radius, relax_poisson
 from .sampling import dart_throwing, random_points
-from ._device import NoOpenCLError, get_context, list_devices
+from ._device import NoOpenCLError, describe, get_context, list_devices
 from .dithering import error_diffusion
 from .stipple import StippleResult, stipple
 from .export import write_stipple
@@ -21,7 +21,7 @@ from .image import load_gray, sample_image_path
 
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
-    "NoOpenCLError", "get_context", "list_devices",
+    "NoOpenCLError", "describe", "get_context", "list_devices",
     "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleResult", "error_diffusion", "stipple", "write_stipple",
     "load_gray", "sample_image_path",

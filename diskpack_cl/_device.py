@@ -177,6 +177,12 @@ def wait_for(event):
 
 
 def describe(ctx):
-    """One line naming the context's device and platform."""
+    """One line naming the context's device and platform.
+
+    Examples
+    --------
+    >>> describe(get_context())  # doctest: +SKIP
+    'NVIDIA H200 (NVIDIA CUDA)'
+    """
     d = ctx.devices[0]
     return f"{d.name.strip()} ({d.platform.name.strip()})"

@@ -221,7 +221,7 @@ def _add_devices(subparsers):
 
 
 def _run_devices(args):
-    from diskpack_cl._device import describe, get_context, list_devices
+    from diskpack_cl import describe, get_context, list_devices
 
     rows = list_devices()
     for index, platform, device, kind in rows:
@@ -619,7 +619,7 @@ def _check_sizes(args, width, height, n, outputs):
     """
     import math
 
-    from diskpack_cl._device import NoOpenCLError, get_context
+    from diskpack_cl import NoOpenCLError, get_context
     from diskpack_cl.schedule import auto_supersample
 
     def gib(b):
@@ -814,51 +814,6 @@ def _stipple_file(path):
         raise ValueError(f"{path}: unreadable .npz file: {exc}") from None
 
 
-def _point_set_numbers(sets, kmax=None):
-    """The numbers of plots.point_set_report, without matplotlib."""
-    import math
-
-    import numpy as np
-
-    from diskpack_cl import analysis
-    from diskpack_cl.plots import _num, _nums
-
-    freqs, P = analysis.periodogram(sets, kmax=kmax)
-    centres, power = analysis.radial_power(P, freqs)
-    _, aniso = analysis.anisotropy(P, freqs)
-    rhos = [analysis.normalized_radius(s) for s in sets]
-    mean_rhos = [analysis.mean_normalized_radius(s) for s in sets]
-    psi6 = analysis.hexatic_order(sets[0]).mean if len(sets[0]) >= 3 else float("nan")
-    finite = np.isfinite(aniso)
-    peak = int(np.argmax(power))
-    return {
-        "n": int(len(sets[0])), "realizations": len(sets), "kmax": int(freqs[-1]),
-        "rho": _num(rhos[0]), "rho_min": _num(min(rhos)), "rho_mean": _num(np.mean(rhos)),
-        "mean_rho": _num(np.mean(mean_rhos)), "psi6_mean": _num(psi6),
-        "peak_frequency": _num(centres[peak]), "peak_power": _num(power[peak]),
-        "anisotropy_mean_db": _num(aniso[finite].mean()) if finite.any() else None,
-        "anisotropy_reference_db": _num(-10.0 * math.log10(len(sets))),
-        "radial_frequency": _nums(centres), "radial_power": _nums(power),
-        "anisotropy_db": _nums(aniso),
-    }
-
-
-def _stipple_numbers(points, radii, darkness, certificate, sigma):
-    """The numbers of plots.stipple_report, without matplotlib."""
-    import numpy as np
-
-    from diskpack_cl import analysis
-    from diskpack_cl.plots import _certificate_items, _num
-
-    numbers = {k: _num(v) for k, v in
-               analysis.stipple_measures(points, darkness, sigma=sigma).items()}
-    numbers["tone_radius"] = _num(analysis.tone_radius(len(points), darkness))
-    numbers.update(radius_min=_num(radii.min()), radius_median=_num(np.median(radii)),
-                   radius_max=_num(radii.max()))
-    numbers["certificate"] = _certificate_items(certificate)
-    return numbers
-
-
 def _run_analyze(args):
     import numpy as np
 
@@ -869,11 +824,10 @@ def _run_analyze(args):
         raise ValueError("nothing to do: give -o REPORT.png for a figure and/or --json")
     plot = args.output is not None
     if plot:
-        from diskpack_cl.plots import _format
-
         from diskpack_cl.io import check_writable
+        from diskpack_cl.plots import figure_format
 
-        _format(args.output)
+        figure_format(args.output)
         check_writable(args.output)
         if not _have_matplotlib() and not args.json:
             raise ValueError(f"{_PLOT_HINT} (the numbers print without it with --json)")
@@ -905,7 +859,9 @@ def _run_analyze(args):
             numbers = stipple_report(points, radii, darkness, args.output, certificate=cert,
                                      sigma=args.sigma, title=args.title)
         else:
-            numbers = _stipple_numbers(points, radii, darkness, cert, args.sigma)
+            from diskpack_cl.plots import stipple_numbers
+
+            numbers = stipple_numbers(points, radii, darkness, cert, sigma=args.sigma)
     else:
         if args.image is not None:
             raise ValueError("--image is for a stippling .npz; these are point sets")
@@ -927,7 +883,9 @@ def _run_analyze(args):
 
             numbers = point_set_report(sets, args.output, title=args.title, kmax=args.kmax)
         else:
-            numbers = _point_set_numbers(sets, kmax=args.kmax)
+            from diskpack_cl.plots import point_set_numbers
+
+            numbers = point_set_numbers(sets, kmax=args.kmax)
     if args.json:
         print(json.dumps(numbers, default=json_default), flush=True)
     if plot and not _have_matplotlib():
@@ -1142,7 +1100,7 @@ def main(argv=None):
     """
     import signal
 
-    from diskpack_cl._device import NoOpenCLError
+    from diskpack_cl import NoOpenCLError
 
     parser = build_parser()
     try:
@@ -1153,7 +1111,7 @@ def main(argv=None):
     try:
         device = getattr(args, "device", None)
         if device and "," not in device:  # an explicit device must exist, on every command
-            from diskpack_cl._device import get_context
+            from diskpack_cl import get_context
 
             get_context(device)
         return int(args.run(args) or 0)

@@ -21,7 +21,8 @@ from scipy import ndimage
 from . import analysis
 from .io import atomic_write
 
-__all__ = ["point_set_report", "stipple_report"]
+__all__ = ["figure_format", "point_set_numbers", "point_set_report", "stipple_numbers",
+           "stipple_report"]
 
 _MISSING = "plots need matplotlib: pip install 'diskpack_cl[plot]'"
 _FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
@@ -36,7 +37,17 @@ def _figure(figsize):
     return Figure(figsize=figsize, dpi=_DPI, layout="constrained")
 
 
-def _format(path):
+def figure_format(path):
+    """The matplotlib format of a figure path: ``png``, ``pdf`` or ``svg``.
+
+    Raises ``ValueError`` for any other extension, so that a caller can
+    refuse a bad output name before the work (matplotlib is not needed).
+
+    Examples
+    --------
+    >>> figure_format("report.PNG")
+    'png'
+    """
     fmt = _FORMATS.get(Path(path).suffix.lower())
     if fmt is None:
         raise ValueError(f"unknown figure extension {Path(path).suffix!r} (use .png, .pdf or .svg)")
@@ -76,6 +87,67 @@ def _num(x):
 
 def _nums(a):
     return [_num(v) for v in np.asarray(a).ravel()]
+
+
+def _real(x):
+    """A number of :func:`_num` back as a float (None is nan)."""
+    return float("nan") if x is None else x
+
+
+def _point_set_measures(sets, kmax):
+    """(numbers, (freqs, P, centres, power, aniso)) of the realizations `sets`."""
+    freqs, P = analysis.periodogram(sets, kmax=kmax)
+    centres, power = analysis.radial_power(P, freqs)
+    _, aniso = analysis.anisotropy(P, freqs)
+    rhos = [analysis.normalized_radius(s) for s in sets]
+    mean_rhos = [analysis.mean_normalized_radius(s) for s in sets]
+    psi6 = analysis.hexatic_order(sets[0]).mean if len(sets[0]) >= 3 else float("nan")
+    finite = np.isfinite(aniso)
+    peak = int(np.argmax(power))
+    numbers = {
+        "n": int(len(sets[0])),
+        "realizations": len(sets),
+        "kmax": int(freqs[-1]),
+        "rho": _num(rhos[0]),
+        "rho_min": _num(min(rhos)),
+        "rho_mean": _num(np.mean(rhos)),
+        "mean_rho": _num(np.mean(mean_rhos)),
+        "psi6_mean": _num(psi6),
+        "peak_frequency": _num(centres[peak]),
+        "peak_power": _num(power[peak]),
+        "anisotropy_mean_db": _num(aniso[finite].mean()) if finite.any() else None,
+        "anisotropy_reference_db": _num(-10.0 * math.log10(len(sets))),
+        "radial_frequency": _nums(centres),
+        "radial_power": _nums(power),
+        "anisotropy_db": _nums(aniso),
+    }
+    return numbers, (freqs, P, centres, power, aniso)
+
+
+def point_set_numbers(points_list, *, kmax=None):
+    """The numbers of :func:`point_set_report`, without a figure (no matplotlib).
+
+    Parameters
+    ----------
+    points_list : array_like
+        One (n, 2) point set, a (K, n, 2) stack or a sequence of point sets
+        (the realizations), all on the unit torus [0,1)^2.
+    kmax : int, optional
+        Periodogram range (see :func:`diskpack_cl.analysis.periodogram`).
+
+    Returns
+    -------
+    dict
+        The dict :func:`point_set_report` returns (non-finite values None).
+
+    Examples
+    --------
+    >>> pts = np.random.default_rng(0).random((64, 2))
+    >>> numbers = point_set_numbers(pts, kmax=8)
+    >>> numbers["n"], numbers["realizations"], numbers["kmax"]
+    (64, 1, 8)
+    """
+    return _point_set_measures(analysis._as_realizations(points_list), kmax)[0]
 
 
 def point_set_report(points_list, path, *, title=None, kmax=None):
@@ -119,36 +191,13 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     >>> out = os.path.join(tempfile.mkdtemp(), "report.png")
     >>> numbers = point_set_report(pts, out)  # doctest: +SKIP
     """
-    fmt = _format(path)
+    fmt = figure_format(path)
     sets = analysis._as_realizations(points_list)
-    freqs, P = analysis.periodogram(sets, kmax=kmax)
-    centres, power = analysis.radial_power(P, freqs)
-    _, aniso = analysis.anisotropy(P, freqs)
-    rhos = [analysis.normalized_radius(s) for s in sets]
-    mean_rhos = [analysis.mean_normalized_radius(s) for s in sets]
+    numbers, (freqs, P, centres, power, aniso) = _point_set_measures(sets, kmax)
     first = sets[0]
-    psi6 = analysis.hexatic_order(first).mean if len(first) >= 3 else float("nan")
-    K = len(sets)
-    ref_db = -10.0 * math.log10(K)
+    K = numbers["realizations"]
+    ref_db = numbers["anisotropy_reference_db"]
     finite = np.isfinite(aniso)
-    peak = int(np.argmax(power))
-    numbers = {
-        "n": int(len(first)),
-        "realizations": K,
-        "kmax": int(freqs[-1]),
-        "rho": _num(rhos[0]),
-        "rho_min": _num(min(rhos)),
-        "rho_mean": _num(np.mean(rhos)),
-        "mean_rho": _num(np.mean(mean_rhos)),
-        "psi6_mean": _num(psi6),
-        "peak_frequency": _num(centres[peak]),
-        "peak_power": _num(power[peak]),
-        "anisotropy_mean_db": _num(aniso[finite].mean()) if finite.any() else None,
-        "anisotropy_reference_db": _num(ref_db),
-        "radial_frequency": _nums(centres),
-        "radial_power": _nums(power),
-        "anisotropy_db": _nums(aniso),
-    }
 
     fig = _figure((10, 3))
     from matplotlib.colors import LogNorm
@@ -194,8 +243,8 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
 
     head = f"{title}\n" if title else ""
     fig.suptitle(
-        f"{head}n = {len(first)}, rho = {rhos[0]:.3f}, mean rho = {np.mean(mean_rhos):.3f}, "
-        f"|psi6| = {psi6:.3f}",
+        f"{head}n = {len(first)}, rho = {_real(numbers['rho']):.3f}, "
+        f"mean rho = {_real(numbers['mean_rho']):.3f}, |psi6| = {_real(numbers['psi6_mean']):.3f}",
         fontsize=10,
     )
     _save(fig, path, fmt)
@@ -218,6 +267,49 @@ def _certificate_items(certificate):
         elif isinstance(value, str) or value is None:
             out[key] = value
     return out
+
+
+def stipple_numbers(points, radii, darkness, certificate=None, *, sigma=3.0):
+    """The numbers of :func:`stipple_report`, without a figure (no matplotlib).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        Dot centres in pixel units.
+    radii : array_like, shape (n,) or None
+        The certified packing radii.
+    darkness : ndarray, shape (ny, nx)
+        Input darkness in [0, 1], 1 = black.
+    certificate : dataclass, dict or object, optional
+        The validity certificate (e.g. ``diskpack_cl.geometry.Certificate``).
+    sigma : float
+        Blur in pixels for tone and spacing.
+
+    Returns
+    -------
+    dict
+        The dict :func:`stipple_report` returns (non-finite values None).
+
+    Examples
+    --------
+    >>> dark = np.full((32, 32), 0.5)
+    >>> pts = np.random.default_rng(1).random((50, 2)) * 32
+    >>> numbers = stipple_numbers(pts, np.full(50, 1.0), dark)
+    >>> numbers["n"], numbers["radius_max"], "certificate" in numbers
+    (50, 1.0, False)
+    """
+    p, d = analysis._stipple_inputs(points, darkness)
+    numbers = {key: _num(v) for key, v in analysis.stipple_measures(p, d, sigma=sigma).items()}
+    numbers["tone_radius"] = _num(analysis.tone_radius(len(p), d))
+    if radii is not None:
+        r = np.asarray(radii, dtype=np.float64).ravel()
+        if r.shape != (len(p),):
+            raise ValueError(f"radii must have shape ({len(p)},), got {np.shape(radii)}")
+        numbers.update(radius_min=_num(r.min()), radius_median=_num(np.median(r)), radius_max=_num(r.max()))
+    cert = _certificate_items(certificate)
+    if cert is not None:
+        numbers["certificate"] = cert
+    return numbers
 
 
 def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0, title=None):
@@ -254,19 +346,11 @@ def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0
         ``radius_min``, ``radius_median``, ``radius_max`` (when radii are
         given) and ``certificate`` (a dict of its fields, when given).
     """
-    fmt = _format(path)
+    fmt = figure_format(path)
+    numbers = stipple_numbers(points, radii, darkness, certificate, sigma=sigma)
     p, d = analysis._stipple_inputs(points, darkness)
-    numbers = {key: _num(v) for key, v in analysis.stipple_measures(p, d, sigma=sigma).items()}
-    r_tone = analysis.tone_radius(len(p), d)
-    numbers["tone_radius"] = _num(r_tone)
-    if radii is not None:
-        r = np.asarray(radii, dtype=np.float64).ravel()
-        if r.shape != (len(p),):
-            raise ValueError(f"radii must have shape ({len(p)},), got {np.shape(radii)}")
-        numbers.update(radius_min=_num(r.min()), radius_median=_num(np.median(r)), radius_max=_num(r.max()))
-    cert = _certificate_items(certificate)
-    if cert is not None:
-        numbers["certificate"] = cert
+    r_tone = numbers["tone_radius"]
+    cert = numbers.get("certificate")
 
     drawing = analysis.render_dots(p, r_tone, d.shape)
     blur_draw = ndimage.gaussian_filter(drawing, sigma, mode="reflect")

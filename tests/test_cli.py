@@ -246,12 +246,12 @@ def test_help_returns_zero(capsys):
 
 
 def test_devices_without_opencl(monkeypatch, capsys):
-    import diskpack_cl._device as dev
+    import diskpack_cl
 
     def none():
-        raise dev.NoOpenCLError("no OpenCL platform found; install an OpenCL driver")
+        raise diskpack_cl.NoOpenCLError("no OpenCL platform found; install an OpenCL driver")
 
-    monkeypatch.setattr(dev, "list_devices", none)
+    monkeypatch.setattr(diskpack_cl, "list_devices", none)
     assert cli.main(["devices"]) == 1
     assert "diskpack: error: no OpenCL platform found; install" in capsys.readouterr().err
 
