@@ -16,14 +16,14 @@ from .sampling import dart_throwing, random_points
 from ._device import NoOpenCLError, describe, get_context, list_devices
 from .dithering import error_diffusion
 from .stipple import StippleResult, stipple
-from .export import write_stipple
+from .export import read_stipple, write_stipple
 from .image import load_gray, sample_image_path
 
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
     "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
-    "StippleResult", "error_diffusion", "stipple", "write_stipple",
+    "StippleResult", "error_diffusion", "stipple", "read_stipple", "write_stipple",
     "load_gray", "sample_image_path",
 ]
 

@@ -790,33 +790,10 @@ def _have_matplotlib():
         return False
 
 
-def _stipple_file(path):
-    """(points, radii, width, height, params) for a stippling .npz, else None."""
-    import numpy as np
-
-    if not str(path).lower().endswith(".npz"):
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if not {"points", "radii", "width", "height"} <= set(z.files):
-                return None
-            params = {}
-            if "params" in z.files:
-                try:
-                    params = json.loads(str(z["params"]))
-                except ValueError:
-                    params = {}
-            return (np.asarray(z["points"], np.float64), np.asarray(z["radii"], np.float64),
-                    int(z["width"]), int(z["height"]), params)
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such file") from None
-    except (OSError, ValueError, EOFError) as exc:
-        raise ValueError(f"{path}: unreadable .npz file: {exc}") from None
-
-
 def _run_analyze(args):
     import numpy as np
 
+    from diskpack_cl import read_stipple
     from diskpack_cl.io import read_points
     from diskpack_cl.measures import nearest_neighbor_distances
 
@@ -831,7 +808,8 @@ def _run_analyze(args):
         check_writable(args.output)
         if not _have_matplotlib() and not args.json:
             raise ValueError(f"{_PLOT_HINT} (the numbers print without it with --json)")
-    stipplings = [(path, _stipple_file(path)) for path in args.inputs]
+    stipplings = [(path, read_stipple(path) if str(path).lower().endswith(".npz") else None)
+                  for path in args.inputs]
     kinds = {s is not None for _, s in stipplings}
     if True in kinds:
         if len(args.inputs) != 1:
@@ -840,7 +818,8 @@ def _run_analyze(args):
         from diskpack_cl.geometry import Domain, certify_disks
         from diskpack_cl.image import load_gray
 
-        path, (points, radii, width, height, params) = stipplings[0]
+        path, st = stipplings[0]
+        points, radii, width, height, params = st.points, st.radii, st.width, st.height, st.params
         if args.image is None:
             raise ValueError(f"{path} is a stippling: give its input image with --image IMAGE "
                              f"(or --image {SAMPLE})")

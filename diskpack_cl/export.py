@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -24,6 +25,7 @@ __all__ = [
     "mm_per_px",
     "pen_path_order",
     "path_travel",
+    "read_stipple",
     "write_stipple",
     "write_svg",
     "write_png",
@@ -589,3 +591,64 @@ def write_stipple(path, result, **opts):
     """
     ext = check_output_path(path)
     return WRITERS[ext](path, result, **opts)
+
+
+def read_stipple(path):
+    """Read a stippling ``.npz`` written by :func:`write_stipple` (:func:`write_npz`).
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.npz`` file.
+
+    Returns
+    -------
+    types.SimpleNamespace or None
+        ``points`` ((n, 2) float64, pixels), ``radii`` ((n,) float64),
+        ``width`` and ``height`` (int pixels), ``k`` (float, nan when not
+        stored), ``base_radii`` (or None) and ``params`` (a dict, empty when
+        not stored or unreadable): a result :func:`write_stipple` writes
+        again. None when the ``.npz`` lacks ``points``, ``radii``, ``width``
+        or ``height`` (a point set, as :func:`diskpack_cl.io.write_points`
+        writes it). The certificate is not read back: check the disks again
+        with :func:`diskpack_cl.certify_disks`.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    ValueError
+        ``path`` is not a readable ``.npz`` file.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> res = SimpleNamespace(points=np.array([[2.0, 3.0]]), radii=np.array([1.0]),
+    ...                       width=8, height=6)
+    >>> out = os.path.join(tempfile.mkdtemp(), "s.npz")
+    >>> write_stipple(out, res)
+    {'n': 1}
+    >>> back = read_stipple(out)
+    >>> back.points.tolist(), back.width, back.height
+    ([[2.0, 3.0]], 8, 6)
+    """
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if not {"points", "radii", "width", "height"} <= set(z.files):
+                return None
+            params = {}
+            if "params" in z.files:
+                try:
+                    params = json.loads(str(z["params"]))
+                except ValueError:
+                    params = {}
+            return SimpleNamespace(
+                points=np.asarray(z["points"], np.float64), radii=np.asarray(z["radii"], np.float64),
+                width=int(z["width"]), height=int(z["height"]),
+                k=float(z["k"]) if "k" in z.files else float("nan"),
+                base_radii=np.asarray(z["base_radii"], np.float64) if "base_radii" in z.files else None,
+                params=params)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: no such file") from None
+    except (OSError, ValueError, EOFError) as exc:
+        raise ValueError(f"{path}: unreadable .npz file: {exc}") from None

@@ -14,6 +14,7 @@ from diskpack_cl.export import (
     check_output_path,
     path_travel,
     pen_path_order,
+    read_stipple,
     write_csv,
     write_npz,
     write_png,
@@ -111,6 +112,34 @@ def test_npz_round_trip(tmp_path, result):
         assert {k[len("certificate_"):] for k in z.files if k.startswith("certificate_")} == set(cert)
         for name, v in cert.items():
             assert z[f"certificate_{name}"].item() == v
+
+
+def test_read_stipple_round_trips_write_stipple(tmp_path, result):
+    out = tmp_path / "a.npz"
+    write_stipple(out, result)
+    back = read_stipple(out)
+    np.testing.assert_array_equal(back.points, result.points)
+    np.testing.assert_array_equal(back.radii, result.radii)
+    np.testing.assert_array_equal(back.base_radii, result.base_radii)
+    assert (back.k, back.width, back.height, back.params) == (0.5, 80, 60, {"n": 200})
+    again = tmp_path / "b.npz"   # what it reads, write_stipple writes again
+    write_stipple(again, back)
+    with np.load(out) as z1, np.load(again) as z2:
+        assert set(z2.files) == set(z1.files) - {k for k in z1.files if k.startswith("certificate_")}
+        for name in z2.files:
+            np.testing.assert_array_equal(z2[name], z1[name])
+
+
+def test_read_stipple_of_a_point_set_or_a_bad_file(tmp_path):
+    from diskpack_cl.io import write_points
+
+    write_points(tmp_path / "p.npz", np.random.default_rng(0).random((8, 2)))
+    assert read_stipple(tmp_path / "p.npz") is None
+    (tmp_path / "bad.npz").write_bytes(b"plain text")
+    with pytest.raises(ValueError, match=r"bad\.npz: unreadable \.npz file"):
+        read_stipple(tmp_path / "bad.npz")
+    with pytest.raises(FileNotFoundError, match=r"nope\.npz: no such file"):
+        read_stipple(tmp_path / "nope.npz")
 
 
 def test_csv_round_trip(tmp_path, result):
