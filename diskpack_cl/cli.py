@@ -1018,8 +1018,11 @@ def _run_relax_batch(args):
 
 # ----------------------------------------------------------------------- main
 
+_SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_analyze)
+
+
 def build_parser():
-    """The argument parser, with every ``_add_*`` subcommand of this module."""
+    """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`."""
     parser = argparse.ArgumentParser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
@@ -1029,9 +1032,8 @@ def build_parser():
     except Exception:  # pragma: no cover - not installed
         pass
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, func in list(globals().items()):
-        if name.startswith("_add_") and callable(func):
-            func(subparsers)
+    for add in _SUBCOMMANDS:
+        add(subparsers)
     return parser
 
 

@@ -259,6 +259,7 @@ def test_devices_without_opencl(monkeypatch, capsys):
 def test_subcommands_are_registered_from_add_functions():
     names = [n[5:] for n in vars(cli) if n.startswith("_add_")]
     assert {"devices", "poisson", "relax", "stipple", "analyze"} <= set(names)
+    assert [f.__name__[5:] for f in cli._SUBCOMMANDS] == names   # none forgotten, in order
     for name in names:
         assert callable(getattr(cli, f"_run_{name}"))
 
