@@ -145,14 +145,21 @@ def _max_iter(args):
     return 1000 if args.max_iter is None else args.max_iter
 
 
-def _progress(args, label):
-    """Return (callback, close) feeding a tqdm bar on a terminal, or no-ops."""
+def _bar(args, desc, unit, total=None, *, leave=False):
+    """A tqdm bar on stderr when it is a terminal and not ``--quiet``, else None."""
     if args.quiet or not sys.stderr.isatty():
-        return None, lambda: None
+        return None
     from tqdm import tqdm
 
-    bar = tqdm(total=_max_iter(args) or None, desc=label, unit="it", file=sys.stderr,
-               dynamic_ncols=True, leave=False)
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, dynamic_ncols=True,
+                leave=leave)
+
+
+def _progress(args, label):
+    """Return (callback, close) feeding a tqdm bar on a terminal, or no-ops."""
+    bar = _bar(args, label, "it", _max_iter(args) or None)
+    if bar is None:
+        return None, lambda: None
 
     def callback(iteration, rho):
         bar.set_postfix_str(f"rho={rho:.4f}", refresh=False)
@@ -270,13 +277,9 @@ def _run_poisson_radius(args):
 
     if args.init not in ("dart", "random"):
         raise ValueError("--radius chooses n itself: use --init dart or random, not a file")
-    bar = callback = None
-    if not args.quiet and sys.stderr.isatty():
-        from tqdm import tqdm
-
-        bar = tqdm(desc="radius search", unit="trial", file=sys.stderr, dynamic_ncols=True,
-                   leave=False)
-
+    bar = _bar(args, "radius search", "trial")
+    callback = None
+    if bar is not None:
         def callback(trial):
             bar.set_postfix_str(f"n={trial['n']} {'reached' if trial['reached'] else 'missed'}",
                                 refresh=False)
@@ -521,12 +524,9 @@ def _add_stipple(subparsers):
 
 def _stipple_progress(args, total):
     """Return (callback, close): a tqdm bar (iteration, phase kind, k) on a terminal."""
-    if args.quiet or not sys.stderr.isatty():
+    bar = _bar(args, "stipple", "it", total or None)
+    if bar is None:
         return None, lambda: None
-    from tqdm import tqdm
-
-    bar = tqdm(total=total or None, desc="stipple", unit="it", file=sys.stderr,
-               dynamic_ncols=True, leave=False)
 
     def callback(entry):
         post = f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}"
@@ -919,12 +919,7 @@ def _report_batch(args, batch):
     interrupted batch says how far it came and how to resume.
     """
     total = len(batch)
-    bar = None
-    if not args.quiet and sys.stderr.isatty():
-        from tqdm import tqdm
-
-        bar = tqdm(total=total, desc=args.command, unit="item", file=sys.stderr,
-                   dynamic_ncols=True)
+    bar = _bar(args, args.command, "item", total, leave=True)
     counts = {"ok": 0, "failed": 0, "skipped": 0}
     failures = []
     t0 = time.perf_counter()
