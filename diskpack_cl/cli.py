@@ -475,6 +475,9 @@ def _add_stipple(subparsers):
     g.add_argument("--refine-every", type=_nonnegative_int, default=1, metavar="R",
                    help="refine the raster MIC estimate exactly every R disk-packing iterations "
                         "(default 1 = always; 0 = never); the output is always certified")
+    g.add_argument("--verify", action="store_true",
+                   help="check every MIC step against scipy (exact_mic); slow, for testing "
+                        "(single inputs)")
     g.add_argument("--seed", type=int, default=0,
                    help="seed of the error-diffusion start (default 0; same seed, same result)")
     g.add_argument("--invert", action="store_true",
@@ -707,7 +710,7 @@ def _run_stipple(args):
     callback, close = _stipple_progress(args, sum(ph[1] for ph in phases))
     try:
         res = stipple(gray, n, seed=args.seed, device=args.device, callback=callback,
-                      **_stipple_options(args))
+                      verify=args.verify, **_stipple_options(args))
     finally:
         close()
     if not getattr(res.certificate, "valid", False):

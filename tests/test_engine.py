@@ -118,3 +118,12 @@ def test_stipple_verify_catches_a_wrong_engine(ctx, monkeypatch):
     gray = np.linspace(0.05, 0.95, 48 * 64).reshape(48, 64)
     with pytest.raises(RuntimeError, match="differ from exact_mic"):
         stipple(gray, 300, device=ctx, verify=True, schedule=[("pack", 2)])
+
+
+def test_stipple_cli_verify(ctx, tmp_path):
+    from diskpack_cl import cli
+
+    out = tmp_path / "s.npz"
+    assert cli.main(["stipple", "sample", "-n", "300", "--schedule", "pack", "--verify",
+                     "-o", str(out), "--quiet"]) == 0
+    assert out.exists()
