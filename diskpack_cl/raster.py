@@ -65,6 +65,12 @@ class RasterResult:
 
     _maps: dict = field(default_factory=dict)
     _generation: int = 0
+    _sites: np.ndarray = None
+
+    def _fetch_check(self, name):
+        if self._owner._generation != self._generation:
+            raise RuntimeError(f"the {name} map of this result was overwritten by a later "
+                               "compute() (the raster reuses its device buffers): read it first")
 
     def _fetch(self, name):
         """Copy one of this result's device maps to the host (once)."""
@@ -72,14 +78,39 @@ class RasterResult:
 
         entry = self._maps[name]
         if isinstance(entry, tuple):
-            if self._owner._generation != self._generation:
-                raise RuntimeError(f"the {name} map of this result was overwritten by a later "
-                                   "compute() (the raster reuses its device buffers): read it first")
+            self._fetch_check(name)
             buf, dtype = entry
             out = np.empty(self.shape, dtype)
             cl.enqueue_copy(self._owner.queue, out, buf)
             self._maps[name] = entry = out
         return entry
+
+    def centroids(self, density=None):
+        """Density-weighted centroids and masses of this result's cells.
+
+        Parameters
+        ----------
+        density : (ny, nx) array_like, optional
+            Non-negative density per grid cell (uniform when omitted).
+
+        Returns
+        -------
+        centroids, mass : (n, 2) and (n,) float64
+            As :func:`diskpack_cl.labels.cell_centroids` computes them; on
+            devices with 64-bit atomics the sums are reduced on the device
+            (fixed point, 2^-24), and the label map never leaves it.
+
+        Raises
+        ------
+        RuntimeError
+            A later compute() of the raster overwrote the labels, and they
+            were not read before.
+        """
+        lab = self._maps["label"]
+        if isinstance(lab, np.ndarray) or self._owner._k_sums is None or density is None:
+            return cell_centroids(self.labels, self._sites, density, self._owner.domain)
+        self._fetch_check("label")
+        return self._owner._device_centroids(lab[0], self._sites, density)
 
     @property
     def labels(self):
@@ -171,8 +202,6 @@ class PowerRaster:
         self._site_bufs = {}
         self._maps = {}
         self._generation = 0
-        self._pts = np.zeros((0, 2))
-        self._last = None
         self._warm()
 
     def _warm(self):
@@ -183,7 +212,6 @@ class PowerRaster:
             self.compute(np.full((1, 2), 0.5 * self.domain.width))
         finally:
             self.shape = shape
-            self._last = None
 
     # -- buffers -----------------------------------------------------------
     def _site_buffer(self, name, host):
@@ -300,8 +328,6 @@ class PowerRaster:
                 "dist": (self._map_buffer("dist", 4 * npix), np.float32),
                 "nbr": (self._map_buffer("nbr", 4 * npix), np.int32)}
         self._generation += 1
-        self._pts = pts
-        self._label_buf = maps["label"][0]   # stays on the device for centroids()
         if not distance and self.layout == "tile":
             self._label_tiles(b_site, b_w, b_id, b_start, b_wmax, (nbx, nby, bw, bh),
                               float(wmax_b.max() if n else 0), maps["label"][0])
@@ -321,11 +347,10 @@ class PowerRaster:
         t1 = time.perf_counter()
         if not distance:
             del maps["dist"], maps["nbr"]
-            self._last = RasterResult(pts.copy(), np.full(n, -1.0), self.shape,
+            return RasterResult(pts.copy(), np.full(n, -1.0), self.shape,
                                       (dom.width / nx, dom.height / ny),
                                       {"raster_labels": t1 - t0, "mic_estimate": 0.0}, self, maps,
-                                      self._generation)
-            return self._last
+                                      self._generation, pts)
         rbits = np.full(n, -1, np.int32)
         argpix = np.full(n, INT_MAX, np.int32)
         b_r = self._site_buffer("rbits", rbits)
@@ -344,31 +369,11 @@ class PowerRaster:
         centers[has, 0] = (ix + 0.5) * hx
         centers[has, 1] = (iy + 0.5) * hy
         t2 = time.perf_counter()
-        self._last = RasterResult(centers, radii, self.shape, (hx, hy),
+        return RasterResult(centers, radii, self.shape, (hx, hy),
                                   {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps,
-                                  self._generation)
-        return self._last
+                                  self._generation, pts)
 
-    def centroids(self, density=None):
-        """Density-weighted centroids of the cells of the last :meth:`compute`.
-
-        Parameters
-        ----------
-        density : (ny, nx) array_like, optional
-            Non-negative density per grid cell (uniform when omitted).
-
-        Returns
-        -------
-        centroids, mass : (n, 2) and (n,) float64
-            See :func:`diskpack_cl.labels.cell_centroids` (which computes them).
-        """
-        if self._last is None:
-            raise RuntimeError("centroids() needs a compute() first")
-        if self._k_sums is None or density is None:
-            return cell_centroids(self._last.labels, self._pts, density, self.domain)
-        return self._device_centroids(density)
-
-    def _device_centroids(self, density):
+    def _device_centroids(self, label_buf, sites, density):
         """Centroids from the device reduction (kernels/cell_sums.cl): the label
         map never leaves the device; the density is uploaded once per array.
         The sums are fixed point (2^-24), so masses and centroids agree with a
@@ -383,8 +388,8 @@ class PowerRaster:
             self._density = (density, self._site_buffer("density", d))
         dom = self.domain
         hx, hy = dom.width / nx, dom.height / ny
-        n = len(self._pts)
-        grid_pts = np.ascontiguousarray(self._pts / (hx, hy), self._real)
+        n = len(sites)
+        grid_pts = np.ascontiguousarray(sites / (hx, hy), self._real)
         b_pts = self._site_buffer("grid_sites", grid_pts)
         acc = np.zeros((n, 3), np.int64)
         b_acc = self._site_buffer("sums", acc)
@@ -392,13 +397,13 @@ class PowerRaster:
         band = max(1, (self.max_groups * TILE * TILE) // (seg * CELL_SUMS_SEG))
         for y0 in range(0, ny, band):
             wait_for(self._k_sums(self.queue, (seg, min(band, ny - y0)), None,
-                                  self._label_buf, self._density[1], b_pts,
+                                  label_buf, self._density[1], b_pts,
                                   np.int32(nx), np.int32(ny), np.int32(y0), b_acc))
         cl.enqueue_copy(self.queue, acc, b_acc)
         sums = acc / CELL_SUMS_FIX
         mass = sums[:, 0]
         with np.errstate(invalid="ignore", divide="ignore"):
-            c = self._pts + np.stack([sums[:, 1] / mass * hx, sums[:, 2] / mass * hy], 1)
+            c = sites + np.stack([sums[:, 1] / mass * hx, sums[:, 2] / mass * hy], 1)
         if dom.periodic:
             c = dom.wrap(c)
         return c, mass

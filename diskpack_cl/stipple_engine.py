@@ -86,7 +86,7 @@ class OpenCLStippleEngine:
         self.domain = domain
         self.raster = PowerRaster(domain, shape=shape, device=device)
         self.device = self.raster.device_name
-        self._labelled = None   # (points, weights) of the raster's last labels
+        self._labelled = None   # (points, weights, raster result) of the last labels
         # exact MICs from the float64 per-cell kernel where the device has
         # float64; else (or route="raster") the raster estimate refined by exact_mic
         use_cells = route == "cells" or (route == "auto" and has_fp64(self.raster.ctx))
@@ -94,7 +94,7 @@ class OpenCLStippleEngine:
 
     def _label(self, points, weights, distance):
         est = self.raster.compute(points, weights, distance=distance)
-        self._labelled = (np.array(points), np.array(weights))
+        self._labelled = (np.array(points), np.array(weights), est)
         return est
 
     def mic(self, points, weights, *, exact=True):
@@ -117,9 +117,9 @@ class OpenCLStippleEngine:
         last = self._labelled
         with watch("raster"):
             if last is None or not (np.array_equal(last[0], points) and np.array_equal(last[1], weights)):
-                self._label(points, weights, False)
+                last = (None, None, self._label(points, weights, False))
         with watch("centroids"):
-            c, mass = self.raster.centroids(density)
+            c, mass = last[2].centroids(density)
         return np.asarray(c), np.asarray(mass), watch.seconds
 
 

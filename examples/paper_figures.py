@@ -274,8 +274,7 @@ def lloyd_torus(points, iterations=50, grid=512):
     pr = PowerRaster(Domain.torus(), (grid, grid))
     x = np.array(points, dtype=np.float64)
     for _ in range(iterations):
-        pr.compute(x, distance=False)
-        c, _ = pr.centroids()
+        c, _ = pr.compute(x, distance=False).centroids()
         x = np.mod(c, 1.0)
     return x
 
