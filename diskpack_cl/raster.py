@@ -125,6 +125,8 @@ class RasterResult:
     @property
     def neighbor(self):
         """(ny, nx) int32 site across the nearest boundary line (-1: domain edge)."""
+        if "nbr" not in self._maps:
+            raise RuntimeError("no neighbour map: ask compute(..., neighbors=True) for it")
         return self._fetch("nbr")
 
     def adjacency(self):
@@ -280,7 +282,7 @@ class PowerRaster:
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
                 np.int32(nx), np.int32(ny), b_label, global_offset=(0, y0)))
 
-    def compute(self, points, weights=None, distance=True):
+    def compute(self, points, weights=None, distance=True, neighbors=False):
         """Label the raster and estimate every power cell's inscribed circle.
 
         Parameters
@@ -293,6 +295,9 @@ class PowerRaster:
             False: labels only (about half the work; enough for centroids).
             The result then has no distance map and no MIC estimates
             (``radii`` all -1, ``centers`` the sites).
+        neighbors : bool
+            Also keep, per grid cell, the site across the nearest boundary
+            line (:attr:`RasterResult.neighbor`; with ``distance`` only).
 
         Returns
         -------
@@ -345,8 +350,10 @@ class PowerRaster:
                 global_offset=(0, y0))
             wait_for(ev)
         t1 = time.perf_counter()
+        if not (distance and neighbors):
+            del maps["nbr"]     # the kernel writes it with the distances; kept on request
         if not distance:
-            del maps["dist"], maps["nbr"]
+            del maps["dist"]
             return RasterResult(pts.copy(), np.full(n, -1.0), self.shape,
                                       (dom.width / nx, dom.height / ny),
                                       {"raster_labels": t1 - t0, "mic_estimate": 0.0}, self, maps,

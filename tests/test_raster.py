@@ -20,11 +20,11 @@ TIE = 1e-5
 DIST = 1e-4
 
 
-def _raster(ctx, domain, shape, pts, w=None):
+def _raster(ctx, domain, shape, pts, w=None, neighbors=False):
     from diskpack_cl.raster import PowerRaster
 
     pr = PowerRaster(domain, shape, device=ctx)
-    est = pr.compute(pts, w)
+    est = pr.compute(pts, w, neighbors=neighbors)
     # copy now: the result views the raster's buffers
     return pr, est, est.labels.copy(), est.dist.copy()
 
@@ -273,7 +273,7 @@ def test_deterministic(ctx, periodic):
     w = rng.random(300) * 2.0 if not periodic else None
     out = []
     for _ in range(2):
-        est = PowerRaster(dom, (64, 96), device=ctx).compute(pts, w)
+        est = PowerRaster(dom, (64, 96), device=ctx).compute(pts, w, neighbors=True)
         out.append((est.labels.copy(), est.dist.copy(), est.neighbor.copy(), est.radii, est.centers))
     for a, b in zip(*out):
         assert np.array_equal(a, b)
@@ -297,7 +297,7 @@ def test_neighbor_is_the_site_of_the_nearest_boundary_line(ctx):
     dom = Domain.rect(1, 1)
     pts = rng.random((12, 2))
     shape = (32, 32)
-    _, est, lab, dist = _raster(ctx, dom, shape, pts)
+    _, est, lab, dist = _raster(ctx, dom, shape, pts, neighbors=True)
     nb = est.neighbor
     P = ref.grid_centers(dom, shape)
     edge = np.minimum.reduce([P[..., 0], 1 - P[..., 0], P[..., 1], 1 - P[..., 1]])
@@ -396,3 +396,12 @@ def test_a_result_overwritten_by_a_later_compute_says_so(ctx):
     assert np.array_equal(kept.labels, lab)
     c, m = kept.centroids(np.ones((32, 32)))     # from the labels it read
     assert np.isclose(m.sum(), 32 * 32)
+
+
+def test_neighbour_map_is_opt_in(ctx):
+    pts = np.random.default_rng(12).random((12, 2))
+    _, est, lab, _ = _raster(ctx, Domain.torus(), (32, 32), pts)
+    with pytest.raises(RuntimeError, match="neighbors=True"):
+        est.neighbor
+    _, with_nb, lab2, _ = _raster(ctx, Domain.torus(), (32, 32), pts, neighbors=True)
+    assert np.array_equal(lab, lab2) and with_nb.neighbor.shape == (32, 32)
