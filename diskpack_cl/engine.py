@@ -103,14 +103,17 @@ class RasterEngine:
 
         shape = auto_grid(n, domain) if grid is None else grid
         self.domain = domain
-        self.raster = PowerRaster(domain, shape, device=device)
+        self.raster = PowerRaster(domain, shape, device=device, profile=profile)
         self.device = self.raster.device_name
 
     def mic(self, points, weights=None):
+        before = sum(self.raster.kernel_seconds.values())
         est = self.raster.compute(points, weights)
         t0 = time.perf_counter()
         m = exact_mic(points, weights, self.domain, estimate=(est.centers, est.radii))
         timings = dict(est.timings, exact=time.perf_counter() - t0)
+        if self.raster.profile:
+            timings["kernel"] = sum(self.raster.kernel_seconds.values()) - before
         stats = {k: m.stats[k] for k in ("widened", "grown", "linprog")}
         return MICStep(m.centers, m.radii, m.empty, None, stats, timings)
 

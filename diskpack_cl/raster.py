@@ -152,6 +152,9 @@ class PowerRaster:
         Raster size ``(ny, nx)``.
     device : str or pyopencl.Context, optional
         See :func:`diskpack_cl.get_context`.
+    profile : bool
+        Profile the kernels with OpenCL events: device seconds per kernel
+        accumulate in :attr:`kernel_seconds` (off by default).
     max_groups : int
         Work-groups (8 x 8 grid cells each) per enqueue of the labelling
         kernel: the raster is labelled in bands of tile rows, each waited for
@@ -168,7 +171,8 @@ class PowerRaster:
     ((50,), True)
     """
 
-    def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None):
+    def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None,
+                 profile=False):
         import pyopencl as cl
 
         self.domain = domain
@@ -177,7 +181,11 @@ class PowerRaster:
             raise ValueError(f"raster shape must be positive, got {shape}")
         self.ctx = get_context(device)
         self.device_name = describe(self.ctx)
-        self.queue = cl.CommandQueue(self.ctx)
+        props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
+        self.queue = cl.CommandQueue(self.ctx, properties=props)
+        self.profile = profile
+        #: with `profile`: device seconds per kernel name, summed over calls
+        self.kernel_seconds = {}
         self.max_groups = int(max_groups)
         if self.max_groups < 1:
             raise ValueError(f"max_groups must be at least 1, got {max_groups}")
@@ -228,6 +236,13 @@ class PowerRaster:
             cl.enqueue_copy(self.queue, buf, host)
         return buf
 
+    def _wait(self, event, name):
+        """Wait for kernel `name` (signals get through); with `profile`, add its device time."""
+        wait_for(event)
+        if self.profile:
+            secs = (event.profile.end - event.profile.start) * 1e-9
+            self.kernel_seconds[name] = self.kernel_seconds.get(name, 0.0) + secs
+
     def _map_buffer(self, name, nbytes):
         import pyopencl as cl
 
@@ -276,11 +291,11 @@ class PowerRaster:
         tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
         band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
         for y0 in range(0, ty, band):
-            wait_for(self._k_tile(
+            self._wait(self._k_tile(
                 self.queue, (tx, min(band, ty - y0)), (1, 1), b_site, b_w, b_id, b_start, b_wmax,
                 np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
-                np.int32(nx), np.int32(ny), b_label, global_offset=(0, y0)))
+                np.int32(nx), np.int32(ny), b_label, global_offset=(0, y0)), "power_labels_tile")
 
     def compute(self, points, weights=None, distance=True, neighbors=False):
         """Label the raster and estimate every power cell's inscribed circle.
@@ -348,7 +363,7 @@ class PowerRaster:
                 np.float32(wmax_b.max() if n else 0), np.int32(nx), np.int32(ny),
                 np.int32(bool(distance)), maps["label"][0], maps["dist"][0], maps["nbr"][0],
                 global_offset=(0, y0))
-            wait_for(ev)
+            self._wait(ev, "power_labels")
         t1 = time.perf_counter()
         if not (distance and neighbors):
             del maps["nbr"]     # the kernel writes it with the distances; kept on request
@@ -403,9 +418,9 @@ class PowerRaster:
         seg = -(-nx // CELL_SUMS_SEG)
         band = max(1, (self.max_groups * TILE * TILE) // (seg * CELL_SUMS_SEG))
         for y0 in range(0, ny, band):
-            wait_for(self._k_sums(self.queue, (seg, min(band, ny - y0)), None,
+            self._wait(self._k_sums(self.queue, (seg, min(band, ny - y0)), None,
                                   label_buf, self._density[1], b_pts,
-                                  np.int32(nx), np.int32(ny), np.int32(y0), b_acc))
+                                  np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
         cl.enqueue_copy(self.queue, acc, b_acc)
         sums = acc / CELL_SUMS_FIX
         mass = sums[:, 0]

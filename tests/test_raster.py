@@ -405,3 +405,18 @@ def test_neighbour_map_is_opt_in(ctx):
         est.neighbor
     _, with_nb, lab2, _ = _raster(ctx, Domain.torus(), (32, 32), pts, neighbors=True)
     assert np.array_equal(lab, lab2) and with_nb.neighbor.shape == (32, 32)
+
+
+def test_profiling_is_opt_in_and_counts_each_kernel(ctx):
+    from diskpack_cl.raster import PowerRaster
+
+    pts = np.random.default_rng(13).random((50, 2))
+    quiet = PowerRaster(Domain.torus(), (64, 64), device=ctx)
+    quiet.compute(pts, distance=False).centroids(np.ones((64, 64)))
+    assert quiet.kernel_seconds == {}
+    pr = PowerRaster(Domain.torus(), (64, 64), device=ctx, profile=True)
+    pr.kernel_seconds.clear()                    # the warm-up run counted too
+    pr.compute(pts)
+    pr.compute(pts, distance=False).centroids(np.ones((64, 64)))
+    assert set(pr.kernel_seconds) >= {"power_labels"}
+    assert all(v > 0 for v in pr.kernel_seconds.values())
