@@ -26,6 +26,7 @@ except ImportError:  # pragma: no cover - hypothesis is in the test extra
 #: Doctests that run OpenCL kernels (they cannot ask for the ``ctx`` fixture).
 OPENCL_DOCTESTS = {
     "diskpack_cl._device.get_context",
+    "diskpack_cl._device.describe",
     "diskpack_cl.raster.PowerRaster",
     "diskpack_cl.cells.CellMIC",
 }
