@@ -37,7 +37,8 @@ def _same_as_exact(dom, pts, w, res, atol=1e-12):
     m = exact_mic(pts, w, dom)
     scale = max(dom.width, dom.height)
     assert np.array_equal(res.empty, m.empty)
-    assert np.abs(res.radii - m.radii).max() <= atol * scale
+    live = ~m.empty if dom.periodic else np.ones(len(pts), bool)   # see test_mic_matches_linprog
+    assert np.abs(res.radii[live] - m.radii[live]).max(initial=0.0) <= atol * scale
     live = ~m.empty
     assert _wrapped_diff(res.centers[live], m.centers[live], dom) <= 1e-9 * scale
 
@@ -76,8 +77,11 @@ def test_mic_matches_linprog_on_every_cell(solvers, case):
     scale = max(dom.width, dom.height)
     for i in range(len(pts)):
         r = ref.chebyshev_ref(pts, w, dom, i)
-        assert abs(res.radii[i] - r.radius) <= 1e-9 * scale, (i, res.radii[i], r.radius)
         assert res.empty[i] == (r.radius < 0)
+        # (an empty cell's negative LP value on a torus depends on how many
+        # periodic images enter: only its sign means anything there)
+        if r.radius >= 0 or not dom.periodic:
+            assert abs(res.radii[i] - r.radius) <= 1e-9 * scale, (i, res.radii[i], r.radius)
         if r.unique and r.radius > 0:
             assert _wrapped_diff(res.centers[i], r.center, dom) <= 1e-6 * scale
 

@@ -38,8 +38,12 @@ def _check_against_linprog(dom, pts, w, mic):
     scale = max(dom.width, dom.height)
     for i in range(len(pts)):
         r = ref.chebyshev_ref(pts, w, dom, i)
-        assert abs(mic.radii[i] - r.radius) <= RTOL * scale, (i, mic.radii[i], r.radius)
         assert mic.empty[i] == (r.radius < 0), i
+        # an empty cell's LP value (how far below zero) depends, on a torus,
+        # on how many periodic images enter (the reference takes 3 x 3, the
+        # solver those within its margin); only its sign means anything
+        if r.radius >= 0 or not dom.periodic:
+            assert abs(mic.radii[i] - r.radius) <= RTOL * scale, (i, mic.radii[i], r.radius)
         if r.radius < 0:
             X = dom.wrap(pts) if dom.periodic else pts
             assert np.array_equal(mic.centers[i], X[i])
