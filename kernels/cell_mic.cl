@@ -159,14 +159,13 @@ static double cutter_reach(const double *z, double wi, double wmax, double near_
     return *Rp + sqrt(fmax(*reach2 + wmax, 0.0));
 }
 
-/* Add site (xj + shift) as a constraint of cell i, unless it is the site itself. */
-static int push_site(clist *L, double ax, double ay, double wj, double wi, int code)
+/* Add site (xj + shift) as a constraint of cell i, unless it coincides with
+ * the site (no bisector).  The callers make sure the list has room. */
+static void push_site(clist *L, double ax, double ay, double wj, double wi, int code)
 {
     const double len2 = ax * ax + ay * ay;
-    if (len2 == 0.0) return 0;                 /* coincident: no bisector */
-    if (L->m >= MAXC) return F_LIST_FULL;
+    if (len2 == 0.0) return;
     set_site(L, L->m++, ax, ay, len2, wj, wi, code);
-    return 0;
 }
 
 static int site_code(int j, int qx, int qy, int *flag)
