@@ -39,6 +39,7 @@ CHUNK = 1 << 17  # work items per enqueue: each wait lets Ctrl-C through
 # on one thread's stack; 16 also balances small sets over the cores (n = 1024:
 # kernel 0.44 ms against 0.76 ms with 64; no difference measured at 20k, 200k).
 GROUP = 16
+_MAX_WINDOW = 8  # widest weight window of the proof scan, in buckets (CellMIC._local_wmax)
 
 #: Flag bits of the kernel (``kernels/cell_mic.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
@@ -220,6 +221,26 @@ class CellMIC:
         bwmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
         return order, start, bwmax, (nbx, nby, bw, bh)
 
+    def _local_wmax(self, bwmax, grid, wmax):
+        """Largest weight within ``win`` buckets of each bucket, and ``win``.
+
+        The kernel's proof scan reaches as far as the heaviest site could
+        cut; with the weights of a stippling (100x apart) the global maximum
+        would send every cell's scan several spacings out, where the local
+        one keeps it at its neighbours.  The window is wide enough for the
+        global maximum's reach to fit in it, so the kernel can use the local
+        value wherever no site outside the window can reach.
+        """
+        nbx, nby, bw, bh = grid
+        if wmax == 0.0:
+            return bwmax, 0
+        from scipy.ndimage import maximum_filter
+
+        win = min(_MAX_WINDOW, int(np.ceil(np.sqrt(wmax) / min(bw, bh))) + 2)
+        mode = "wrap" if self.domain.periodic else "constant"
+        loc = maximum_filter(bwmax.reshape(nby, nbx), size=2 * win + 1, mode=mode, cval=0.0)
+        return loc.ravel(), win
+
     # -- work --------------------------------------------------------------
     def solve(self, points, weights=None):
         """MIC of every power cell, certified as by :func:`exact_mic`.
@@ -274,9 +295,10 @@ class CellMIC:
         nbx, nby, bw, bh = grid
         dom = self.domain
         scale = max(dom.width, dom.height)
+        bwloc, win = self._local_wmax(bwmax, grid, ws.max())
         up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
-              "bwmax": bwmax}
-        b_site, b_w, b_start, b_wmax = (self._upload(k, v) for k, v in up.items())
+              "bwmax": bwmax, "bwloc": bwloc}
+        b_site, b_w, b_start, b_wmax, b_wloc = (self._upload(k, v) for k, v in up.items())
         # two output arrays, so two readbacks (each enqueue costs on small sets)
         outs = {"mic": np.empty((n, 4)), "codes": np.empty((n, 4 + MAXNEAR), np.int32)}
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
@@ -285,7 +307,7 @@ class CellMIC:
         for off in range(0, n, CHUNK):
             size = -(-min(CHUNK, n - off) // self.group) * self.group
             events.append(self._kernel(
-                self.queue, (size,), (self.group,), b_site, b_w, b_start, b_wmax,
+                self.queue, (size,), (self.group,), b_site, b_w, b_start, b_wmax, b_wloc, np.int32(win),
                 np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
                 np.float64(dom.width), np.float64(dom.height), np.float64(ws.max()),
                 np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),

@@ -18,8 +18,14 @@
  *      solution if it lies within the cutter radius of the centre (derived
  *      from the power distance; per-bucket weight maxima prune the scan).
  *      When that ball lies inside the gathered rings, nothing is left to
- *      check; otherwise the buckets it touches are scanned, and violated or
- *      near-tight sites join the list and the solve continues (warm start);
+ *      check; otherwise the buckets it touches are scanned (outside the
+ *      gathered rings, whose sites the list already holds), and violated or
+ *      near-tight sites join the list and the solve continues (warm start).
+ *      The scan covers at most a box that doubles each round it finds
+ *      nothing: a cell that its gathered sites left unbounded on one side
+ *      has a huge cutter radius at first, which the first sites found there
+ *      shrink, so scanning that whole ball at once would cost thousands of
+ *      buckets;
  *   4. writes, in sorted order (sequential writes), the centre, the radius, the three basic (active) constraints,
  *      the other near-tight ones, the nearest-neighbour distance of the site
  *      and a flag word, non-zero where it could not prove its answer.
@@ -45,7 +51,7 @@
 #define RMAX 6           /* most bucket rings gathered up front */
 #define RMAX_GROW 12     /* most rings gathered while the cell reaches past them */
 #define MAX_PIVOTS 96
-#define MAX_ROUNDS 16
+#define MAX_ROUNDS 32     /* scan rounds: solves plus doublings of the scan box */
 #define MAX_SCAN 256     /* widest verification scan on a torus, in buckets per side */
 #define GATHER_CAP (MAXC - 16)  /* list room kept for the sites step 3 adds */
 
@@ -159,6 +165,18 @@ static double cutter_reach(const double *z, double wi, double wmax, double near_
     return *Rp + sqrt(fmax(*reach2 + wmax, 0.0));
 }
 
+/* The cutter radius `rad` (from the global weight maximum) narrowed to the
+ * weight maximum `wloc` of the window of buckets around the home bucket
+ * (corners `win`, unbounded lattice coordinates), when the ball of radius
+ * `rad` around the centre (cx, cy) lies inside the window: no site outside
+ * it can then reach, and none inside is heavier than `wloc`. */
+static double local_reach(double rad, double Rp, double reach2, double wloc,
+                          double cx, double cy, double4 win)
+{
+    const double inside = fmin(fmin(cx - win.x, win.z - cx), fmin(cy - win.y, win.w - cy));
+    return rad <= inside ? fmin(rad, Rp + sqrt(fmax(reach2 + wloc, 0.0))) : rad;
+}
+
 /* Add site (xj + shift) as a constraint of cell i, unless it coincides with
  * the site (no bisector).  The callers make sure the list has room. */
 static void push_site(clist *L, double ax, double ay, double wj, double wi, int code)
@@ -241,6 +259,8 @@ __kernel void cell_mic(
     __global const double *weight,   /* their weights, shifted so that min = 0 */
     __global const int *bstart,      /* bucket b holds sorted sites bstart[b] .. bstart[b+1]-1 */
     __global const double *bwmax,    /* largest weight in each bucket */
+    __global const double *bwloc,    /* largest weight in the window of +-win buckets around each */
+    const int win,
     const int n,                     /* number of sites */
     const int nbx, const int nby,    /* bucket grid */
     const double bw, const double bh,/* bucket size */
@@ -294,9 +314,9 @@ __kernel void cell_mic(
     /* 2. more rings while the cell is unbounded by the list, or its disk
      *    reaches past what the rings cover; no replacements once solved
      *    (the basis indexes the list), so this stops at the first dropped site */
-    double Rp, qn, reach2, rad, G;
+    double Rp, qn, reach2, G;
     for (;;) {
-        rad = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
+        cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
         /* every site within G of x_i is in the list: the rings cover their
          * width, and a full list kept the nearest, none dropped closer */
         G = fmin(ring * fmin(bw, bh), dropped);
@@ -312,13 +332,23 @@ __kernel void cell_mic(
 
     /* 3. prove it by scanning the buckets the proof ball touches */
     int round = 0;
+    /* the list holds every site of the gathered rings until one is dropped
+     * or evicted: the scan can skip those buckets */
+    int inner = dropped == INFINITY;
+    double box = 2.0 * (ring + 1) * fmax(bw, bh);   /* half-width of the scan box */
+    const double wloc = bwloc[hy * nbx + hx];
+    const double4 window = (double4)((hx - win) * bw, (hy - win) * bh,
+                                     (hx + win + 1) * bw, (hy + win + 1) * bh);
     for (; round < MAX_ROUNDS && !(flag & (F_PIVOTS | F_LIST_FULL)); ++round) {
-        if (round > 0) rad = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
-        if (qn + rad <= G) break;
         const double cxp = xi.x + z[0], cyp = xi.y + z[1];
+        const double rad = local_reach(cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2), Rp, reach2,
+                          wloc, cxp, cyp, window);
+        if (qn + rad <= G) break;
+        const int partial = rad > box;
+        const double reach = partial ? box : rad;
         /* (clamped before the conversion: a huge ball must not overflow int) */
-        int x0 = (int)floor(fmax((cxp - rad) / bw, -1e8)), x1 = (int)floor(fmin((cxp + rad) / bw, 1e8));
-        int y0 = (int)floor(fmax((cyp - rad) / bh, -1e8)), y1 = (int)floor(fmin((cyp + rad) / bh, 1e8));
+        int x0 = (int)floor(fmax((cxp - reach) / bw, -1e8)), x1 = (int)floor(fmin((cxp + reach) / bw, 1e8));
+        int y0 = (int)floor(fmax((cyp - reach) / bh, -1e8)), y1 = (int)floor(fmin((cyp + reach) / bh, 1e8));
 #if PERIODIC
         /* past one period the images repeat: the scan would only grow */
         if (x1 - x0 > MAX_SCAN || y1 - y0 > MAX_SCAN) { flag |= F_SCAN_WIDE; break; }
@@ -329,6 +359,7 @@ __kernel void cell_mic(
         int added = 0, waiting = 0;
         for (int by = y0; by <= y1; ++by) {
             for (int bx = x0; bx <= x1; ++bx) {
+                if (inner && abs(bx - hx) <= ring && abs(by - hy) <= ring) continue;
                 int cx = bx, cy = by, qx, qy;
                 if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
                 const int bb = cy * nbx + cx;
@@ -354,10 +385,12 @@ __kernel void cell_mic(
                     /* a full list takes a violated site in place of a slack one;
                      * one that finds no place waits for the next round */
                     int placed = 1;
-                    if (L.m < MAXC)
+                    if (L.m < MAXC) {
                         push_site(&L, ax, ay, weight[t], wi, code);
-                    else
+                    } else {
                         placed = replace_slackest(&L, b, z, sl, ax, ay, len2, weight[t], wi, code);
+                        inner = 0;
+                    }
                     added += placed && sl < -tol;
                     waiting += !placed && sl < -tol;
                 }
@@ -365,7 +398,9 @@ __kernel void cell_mic(
         }
         if (!added) {
             if (waiting) flag |= F_LIST_FULL;
-            break;
+            if (waiting || !partial) break;
+            box *= 2.0;   /* nothing cuts within the box: look further */
+            continue;
         }
         flag |= dual_simplex(&L, b, z, tol);
     }
