@@ -478,6 +478,9 @@ def _add_stipple(subparsers):
     g.add_argument("--verify", action="store_true",
                    help="check every MIC step against scipy (exact_mic); slow, for testing "
                         "(single inputs)")
+    g.add_argument("--profile", action="store_true",
+                   help="time the OpenCL kernels with events (--json timings.kernel: their "
+                        "device seconds; single inputs)")
     g.add_argument("--seed", type=int, default=0,
                    help="seed of the error-diffusion start (default 0; same seed, same result)")
     g.add_argument("--invert", action="store_true",
@@ -710,7 +713,7 @@ def _run_stipple(args):
     callback, close = _stipple_progress(args, sum(ph[1] for ph in phases))
     try:
         res = stipple(gray, n, seed=args.seed, device=args.device, callback=callback,
-                      verify=args.verify, **_stipple_options(args))
+                      verify=args.verify, profile=args.profile, **_stipple_options(args))
     finally:
         close()
     if not getattr(res.certificate, "valid", False):
@@ -880,11 +883,21 @@ def _run_analyze(args):
 # -------------------------------------------------------------------- batches
 
 def _batch_mode(args, inputs, outputs):
-    """Whether the command is a batch (else it runs exactly as for one input)."""
-    return (len(inputs) > 1 or any(os.path.isdir(x) for x in inputs)
-            or any("{" in str(o) for o in outputs) or "," in (args.device or "")
-            or any(getattr(args, k, None) for k in ("jobs", "manifest", "overwrite",
-                                                     "scheduler", "collect", "count")))
+    """Whether the command is a batch (else it runs exactly as for one input).
+
+    Raises _UsageError for a batch with --verify or --profile, which apply
+    to one input.
+    """
+    batch = (len(inputs) > 1 or any(os.path.isdir(x) for x in inputs)
+             or any("{" in str(o) for o in outputs) or "," in (args.device or "")
+             or any(getattr(args, k, None) for k in ("jobs", "manifest", "overwrite",
+                                                      "scheduler", "collect", "count")))
+    single = [f"--{k}" for k in ("verify", "profile") if getattr(args, k, False)]
+    if batch and single:
+        verb = "apply" if len(single) > 1 else "applies"
+        raise _UsageError(f"{' and '.join(single)} {verb} to one input; this command is a batch "
+                          "(several inputs, a folder, a template or a batch option)")
+    return batch
 
 
 def _batch_run(args):

@@ -101,7 +101,7 @@ class StippleResult:
         One entry per iteration: ``kind`` ("pack", "mix" or "lloyd"),
         ``iteration``, ``k``, ``empty`` (empty power cells), ``moved`` (mean
         displacement, px), ``seconds`` and per-stage seconds (``raster_s``,
-        ``exact_s``, ``centroids_s``).
+        ``exact_s``, ``centroids_s``; with ``profile``, ``kernel_s``).
     width, height : int
         Image size in pixels.
     timings : dict
@@ -185,6 +185,8 @@ def _add_timings(entry, seconds, names):
     for name in names:
         if name in seconds:
             entry[f"{name}_s"] = seconds[name]
+    if "kernel" in seconds:   # profiled: device seconds, summed over the step's calls
+        entry["kernel_s"] = entry.get("kernel_s", 0.0) + seconds["kernel"]
 
 
 def pack_step(state, stage, blend=0.0):
@@ -212,7 +214,8 @@ def pack_step(state, stage, blend=0.0):
         else:
             a = blend + (1.0 - blend) * field_at(stage.blend_weight, x[okc])
             newx[okc] += a[:, None] * (cen[okc] - newx[okc])
-        entry["centroids_s"] = sum(seconds.values())
+        entry["centroids_s"] = seconds.get("raster", 0.0) + seconds.get("centroids", 0.0)
+        _add_timings(entry, seconds, ())
     entry["moved"] = _moved(x, newx)
     k = state.k
     if np.any(ok):
@@ -249,7 +252,7 @@ def lloyd_step(state, stage, new_k=True):
 def _run(state, stage, callback):
     """Every phase of the schedule; returns (final state, history, seconds per stage)."""
     history = []
-    totals = Stopwatch(["raster", "exact", "centroids"])
+    totals = Stopwatch(["raster", "exact", "centroids"] + (["kernel"] if stage.engine.profile else []))
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
@@ -296,7 +299,7 @@ def _centroid_density(darkness, opt):
 
 
 def stipple(image, n, *, start=None, callback=None, device=None, backend="auto", verify=False,
-            **options):
+            profile=False, **options):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
     Parameters
@@ -323,6 +326,10 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
         Check every MIC step against :func:`diskpack_cl.exact_mic` (radii
         to 1e-9 of the image size, the same empty cells); RuntimeError on a
         mismatch.  Slow: for testing.
+    profile : bool, optional
+        Time the OpenCL kernels with events: each history entry then has
+        ``kernel_s`` (device seconds of the step's kernels) and
+        ``timings["kernel"]`` their total.  No effect on the result.
     **options
         The options of :meth:`diskpack_cl.schedule.StippleOptions.resolve`,
         listed under Other Parameters; all are checked before any device work.
@@ -430,7 +437,7 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     t0 = time.perf_counter()
     x = _start_points(gray, opt, start)
     timings["start"] = time.perf_counter() - t0
-    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
+    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device, profile)
     if verify:
         engine = VerifiedEngine(engine)
     weight = None

@@ -75,22 +75,32 @@ class OpenCLStippleEngine:
         Where the MICs come from: the per-cell kernel (``cells``), the
         raster estimate refined exactly (``raster``); ``auto``: cells on
         devices with float64.
+    profile : bool
+        Time the kernels with OpenCL events: every answer's timings then
+        hold ``kernel``, the device seconds of its kernels.
     """
 
     name = "opencl"
 
-    def __init__(self, domain, shape, device=None, route="auto"):
+    def __init__(self, domain, shape, device=None, route="auto", profile=False):
         from .cells import CellMIC, has_fp64
         from .raster import PowerRaster
 
         self.domain = domain
-        self.raster = PowerRaster(domain, shape=shape, device=device)
+        self.profile = profile
+        self.raster = PowerRaster(domain, shape=shape, device=device, profile=profile)
         self.device = self.raster.device_name
         self._labelled = None   # (points, weights, raster result) of the last labels
         # exact MICs from the float64 per-cell kernel where the device has
         # float64; else (or route="raster") the raster estimate refined by exact_mic
         use_cells = route == "cells" or (route == "auto" and has_fp64(self.raster.ctx))
-        self.cells = CellMIC(domain, device=self.raster.ctx) if use_cells else None
+        self.cells = CellMIC(domain, device=self.raster.ctx, profile=profile) if use_cells else None
+
+    def _raster_kernel(self, before, seconds):
+        """With profiling, add the raster's device seconds since `before` to `seconds`."""
+        if self.profile:
+            seconds["kernel"] = seconds.get("kernel", 0.0) + sum(self.raster.kernel_seconds.values()) - before
+        return seconds
 
     def _label(self, points, weights, distance):
         est = self.raster.compute(points, weights, distance=distance)
@@ -103,24 +113,30 @@ class OpenCLStippleEngine:
         if exact and self.cells is not None:
             with watch("exact"):
                 r = self.cells.solve(points, weights)
-            return CellMICs(r.centers, r.radii, r.empty | ~np.isfinite(r.radii), watch.seconds)
+            seconds = dict(watch.seconds, **({"kernel": r.timings["kernel"]} if self.profile else {}))
+            return CellMICs(r.centers, r.radii, r.empty | ~np.isfinite(r.radii), seconds)
+        before = sum(self.raster.kernel_seconds.values())
         with watch("raster"):
             est = self._label(points, weights, True)
         if exact:
-            return _exact(points, weights, self.domain, (est.centers, est.radii), watch)
-        R = np.asarray(est.radii)
-        return CellMICs(np.asarray(est.centers), R, ~(R > 0), watch.seconds)
+            mic = _exact(points, weights, self.domain, (est.centers, est.radii), watch)
+        else:
+            R = np.asarray(est.radii)
+            mic = CellMICs(np.asarray(est.centers), R, ~(R > 0), watch.seconds)
+        mic.timings = self._raster_kernel(before, dict(mic.timings))
+        return mic
 
     def centroids(self, points, weights, density):
         """``(centroids, mass, timings)`` of the power cells (labels reused from :meth:`mic`)."""
         watch = Stopwatch()
         last = self._labelled
+        before = sum(self.raster.kernel_seconds.values())
         with watch("raster"):
             if last is None or not (np.array_equal(last[0], points) and np.array_equal(last[1], weights)):
                 last = (None, None, self._label(points, weights, False))
         with watch("centroids"):
             c, mass = last[2].centroids(density)
-        return np.asarray(c), np.asarray(mass), watch.seconds
+        return np.asarray(c), np.asarray(mass), self._raster_kernel(before, dict(watch.seconds))
 
 
 class ExactStippleEngine:
@@ -139,6 +155,7 @@ class ExactStippleEngine:
 
     name = "exact"
     device = "cpu (scipy)"
+    profile = False   # no kernels to time
 
     def __init__(self, domain, shape):
         self.domain = domain
@@ -166,6 +183,7 @@ class VerifiedEngine:
         self.engine = engine
         self.name, self.device = engine.name, engine.device
         self.fallback = engine.fallback
+        self.profile = engine.profile
 
     def mic(self, points, weights, *, exact=True):
         m = self.engine.mic(points, weights, exact=exact)
@@ -177,12 +195,13 @@ class VerifiedEngine:
         return self.engine.centroids(points, weights, density)
 
 
-def make_stipple_engine(domain, shape, backend="auto", device=None):
+def make_stipple_engine(domain, shape, backend="auto", device=None, profile=False):
     """The stippling engine for `backend` (``opencl``, ``exact`` or ``auto``).
 
     ``auto`` takes the exact engine when no OpenCL device exists, unless a
     `device` was asked for (then the :class:`diskpack_cl.NoOpenCLError` is
     raised).  The engine's ``fallback`` is None or why ``auto`` chose exact.
+    `profile` times the OpenCL engine's kernels (the exact engine has none).
 
     Examples
     --------
@@ -199,7 +218,7 @@ def make_stipple_engine(domain, shape, backend="auto", device=None):
         engine = ExactStippleEngine(domain, shape)
     else:
         try:
-            engine = OpenCLStippleEngine(domain, shape, device=device)
+            engine = OpenCLStippleEngine(domain, shape, device=device, profile=profile)
         except NoOpenCLError as exc:
             if backend == "opencl" or device is not None:
                 raise

@@ -346,3 +346,19 @@ def test_item_identity_follows_the_input(tmp_path):
     before = item.identity()
     os.utime(p, ns=(1, 1))
     assert item.identity() != before
+
+
+@pytest.mark.parametrize("flags", [["--verify"], ["--profile"], ["--verify", "--profile"]])
+def test_single_input_switches_refused_on_a_batch(tmp_path, capsys, flags):
+    """--verify and --profile check or time one run; a batch says so instead
+    of ignoring them, before any work."""
+    a = tmp_path / "a"
+    _photos(a)
+    out = tmp_path / "out"
+    rc, _, err = _cli(["stipple", a, "-n", 50, "-o", f"{out}/{{stem}}.svg", *flags], capsys)
+    assert rc == 2
+    assert " and ".join(flags) in err and "one input" in err
+    assert not out.exists()
+    rc, _, err = _cli(["relax", tmp_path / "x.npz", tmp_path / "y.npz", "-o", f"{out}/{{stem}}.npz",
+                       *flags], capsys)
+    assert rc == 2 and "one input" in err

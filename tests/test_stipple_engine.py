@@ -113,3 +113,17 @@ def test_make_stipple_engine_checks_the_backend():
     assert eng.name == "exact" and eng.fallback is None
     with pytest.raises(ValueError, match=r"backend must be one of \('opencl', 'exact', 'auto'\), got 'gpu'"):
         make_stipple_engine(Domain.rect(8, 8), (8, 8), "gpu")
+
+
+def test_profiled_stippling_reports_kernel_time_and_the_same_result(ctx):
+    """profile=True adds the device seconds of every step's kernels (MIC
+    kernel, labels, centroid sums) and changes nothing else."""
+    g = np.tile(np.linspace(0.1, 0.9, 64), (48, 1))
+    kw = dict(schedule=[("mix", 2, 0.5), ("lloyd", 1), ("pack", 1)], device=ctx)
+    plain = stipple(g, 300, **kw)
+    prof = stipple(g, 300, profile=True, **kw)
+    np.testing.assert_array_equal(plain.points, prof.points)
+    assert all("kernel_s" not in h for h in plain.history) and "kernel" not in plain.timings
+    for h in prof.history:
+        assert 0.0 < h["kernel_s"] <= h["seconds"]
+    assert prof.timings["kernel"] == pytest.approx(sum(h["kernel_s"] for h in prof.history))
