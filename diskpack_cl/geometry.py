@@ -257,7 +257,8 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     scale = max(domain.width, domain.height)
     wmax = w.max() if n else 0.0
     spacing = np.sqrt(domain.area / max(n, 1))
-    margin = min(8 * spacing + np.sqrt(wmax), 2.0 * scale) if domain.periodic else 0.0
+    full = _full_margin(domain, wmax)
+    margin = min(8 * spacing + np.sqrt(wmax), full) if domain.periodic else 0.0
     while True:
         try:
             problem = _CellProblem.build(X, w, q0, r_est, domain, margin, tol=1e-11 * scale)
@@ -265,7 +266,7 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
             break
         except _MarginTooSmall as exc:
             # a cell reaches past the periodic images in the tree: add more
-            margin = max(1.25 * exc.needed, 2 * margin)
+            margin = min(max(1.25 * exc.needed, 2 * margin), full)
     stats["margin"] = margin
     X, q, R, c_est, r_est = X[todo], q[todo], R[todo], c_est[todo], r_est[todo]
     empty = R < 0
@@ -337,6 +338,20 @@ class _MarginTooSmall(Exception):
 
     def __init__(self, needed):
         self.needed = float(needed)
+
+
+def _full_margin(domain, wmax):
+    """Margin of periodic images beyond which no image can bound any power cell.
+
+    A site's own images bound its cell to the period box around it, whose
+    points lie within ``rb = hypot(W, H) / 2`` of the site; an image at
+    distance ``D`` has its power bisector at least ``D/2 - wmax/(2D)`` away,
+    outside the box once ``D >= 2 rb + sqrt(wmax)``.  With every image
+    within that margin in the tree, the LP over the tree is the LP over all
+    images, so no cell needs more (a cell's intermediate disk may reach
+    further; far images cannot cut the optimum).
+    """
+    return float(np.hypot(domain.width, domain.height) + np.sqrt(wmax))
 
 
 def _overhang(centers, radius, domain, margin):
@@ -518,7 +533,7 @@ def _violations(P, S, q, R, ok, stats):
     unsure = rows[rad + shift > S.reach[rows] * (1 - _COVER_RTOL)]
     stats["queried"] += len(unsure)
     cu = S.cells[unsure]
-    if len(unsure) and P.domain.periodic:
+    if len(unsure) and P.domain.periodic and P.margin < _full_margin(P.domain, P.wmax):
         over = _overhang(P.X[cu] + q[cu], P.cutter_radius(cu, q[cu], R[cu]), P.domain, P.margin)
         if over.max() > 0:
             raise _MarginTooSmall(P.margin + over.max())
@@ -653,7 +668,8 @@ def _linprog_cell(P, c):
     try:
         return chebyshev_center_linprog(N[keep], B[keep])
     except RuntimeError:
-        if P.domain.periodic:   # unbounded: the cell needs images from further away
+        if P.domain.periodic and P.margin < _full_margin(P.domain, P.wmax):
+            # unbounded: the cell needs images from further away (its own)
             raise _MarginTooSmall(max(2 * P.margin, max(P.domain.width, P.domain.height)))
         raise
 

@@ -301,3 +301,20 @@ def test_certify_disks_against_all_pairs(seed, periodic, n, spread):
         assert cert.min_gap == pytest.approx(gap, abs=1e-12)
     else:
         assert cert.min_gap >= gap - 1e-12
+
+
+def test_torus_with_a_large_empty_region_is_solved_exactly():
+    """Sites in one quarter of the torus and two alone in the rest: the cells
+    on the cluster's rim reach across most of a period. The images needed
+    are bounded (no cell is bounded by images further than the diagonal of
+    a period plus sqrt(wmax)), so the solve finishes (it once grew its image
+    margin without bound and stalled in linprog) and agrees with linprog on
+    every image of the 3 x 3 periods."""
+    rng = np.random.default_rng(3)
+    tor = Domain.torus()
+    pts = np.vstack([0.5 * rng.random((600, 2)), [[0.75, 0.75], [0.8, 0.6]]])
+    m = exact_mic(pts, None, tor)
+    assert m.stats["margin"] <= np.sqrt(2) + 1e-12
+    for i in [600, 601, *np.argsort(-m.radii)[2:6]]:
+        want = ref.chebyshev_ref(pts, None, tor, i)
+        assert m.radii[i] == pytest.approx(want.radius, abs=1e-12)
