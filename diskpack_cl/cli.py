@@ -449,6 +449,11 @@ def _add_stipple(subparsers):
     g.add_argument("--blend", type=_unit_closed, default=None,
                    help="mix phases move to MIC + BLEND * (centroid - MIC) (default: the "
                         "schedule's)")
+    g.add_argument("--features", choices=("none", "detail"), default=None,
+                   help="detail: feature-aware mix steps, where the image holds detail finer "
+                        "than the dot spacing dots move further towards their cell's centroid "
+                        "and the radii follow the detail (more tone, slightly less even "
+                        "spacing); default: the schedule's (detail for --schedule detail)")
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
@@ -676,7 +681,8 @@ def _stipple_options(args):
     return dict(gamma=args.gamma, floor=args.floor, schedule=args.schedule, beta=args.beta,
                 lloyd=args.lloyd, rounds=args.rounds, supersample=args.supersample,
                 method=args.method, invert=args.invert, refine_every=args.refine_every,
-                radii=args.radii, blend=args.blend, k_quantile=args.k_quantile)
+                radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
+                features=args.features)
 
 
 def _run_stipple(args):

@@ -397,14 +397,15 @@ def fake_stipple(monkeypatch):
 def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):   # --device pocl is probed
     rc = cli.main(["stipple", "sample", "-n", "77", "-o", str(tmp_path / "a.svg"), "--gamma", "2",
                    "--floor", "0.2", "--schedule", "paper", "--supersample", "3", "--seed", "5",
-                   "--invert", "--refine-every", "2", "--device", "pocl"])
+                   "--invert", "--refine-every", "2", "--device", "pocl", "--features", "detail",
+                   "--profile"])
     assert rc == 1 and "fake stipple stops here" in capsys.readouterr().err
     (call,) = fake_stipple
     assert call["image"].shape == (512, 512) and call["n"] == 77
     assert {k: call[k] for k in ("gamma", "floor", "schedule", "supersample", "seed", "method",
-                                 "invert", "refine_every", "device")} == dict(
+                                 "invert", "refine_every", "device", "features", "profile")} == dict(
         gamma=2.0, floor=0.2, schedule="paper", supersample=3, seed=5, method="diskpack",
-        invert=True, refine_every=2, device="pocl")
+        invert=True, refine_every=2, device="pocl", features="detail", profile=True)
     assert os.listdir(tmp_path) == []
 
 
