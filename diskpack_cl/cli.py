@@ -484,8 +484,8 @@ def _add_stipple(subparsers):
                    help="check every MIC step against scipy (exact_mic); slow, for testing "
                         "(single inputs)")
     g.add_argument("--profile", action="store_true",
-                   help="time the OpenCL kernels with events (--json timings.kernel: their "
-                        "device seconds; single inputs)")
+                   help="time the OpenCL kernels with events (--json timings.kernel and "
+                        "timings.kernel_<name>: device seconds, all and per kernel; single inputs)")
     g.add_argument("--seed", type=int, default=0,
                    help="seed of the error-diffusion start (default 0; same seed, same result)")
     g.add_argument("--invert", action="store_true",

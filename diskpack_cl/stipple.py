@@ -185,8 +185,9 @@ def _add_timings(entry, seconds, names):
     for name in names:
         if name in seconds:
             entry[f"{name}_s"] = seconds[name]
-    if "kernel" in seconds:   # profiled: device seconds, summed over the step's calls
-        entry["kernel_s"] = entry.get("kernel_s", 0.0) + seconds["kernel"]
+    for name, secs in seconds.items():   # profiled: device seconds, all and per kernel
+        if name.startswith("kernel"):
+            entry[f"{name}_s"] = entry.get(f"{name}_s", 0.0) + secs
 
 
 def pack_step(state, stage, blend=0.0):
@@ -252,7 +253,8 @@ def lloyd_step(state, stage, new_k=True):
 def _run(state, stage, callback):
     """Every phase of the schedule; returns (final state, history, seconds per stage)."""
     history = []
-    totals = Stopwatch(["raster", "exact", "centroids"] + (["kernel"] if stage.engine.profile else []))
+    stages = ["raster", "exact", "centroids"] + (["kernel"] if stage.engine.profile else [])
+    totals = Stopwatch(stages)
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
@@ -265,8 +267,11 @@ def _run(state, stage, callback):
                 state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
             entry = {"kind": kind, "iteration": len(history), **step, "k": float(state.k)}
             entry["seconds"] = time.perf_counter() - t0
-            for name in totals.seconds:
+            for name in stages:
                 totals.add(name, entry.get(f"{name}_s", 0.0))
+            for key in entry:   # per kernel, when profiled
+                if key.startswith("kernel_") and key.endswith("_s") and key != "kernel_s":
+                    totals.add(key[:-2], entry[key])
             history.append(entry)
             if callback is not None:
                 callback(entry)
@@ -329,7 +334,8 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     profile : bool, optional
         Time the OpenCL kernels with events: each history entry then has
         ``kernel_s`` (device seconds of the step's kernels) and
-        ``timings["kernel"]`` their total.  No effect on the result.
+        ``kernel_<name>_s`` per kernel, and ``timings`` their totals
+        (``kernel``, ``kernel_<name>``).  No effect on the result.
     **options
         The options of :meth:`diskpack_cl.schedule.StippleOptions.resolve`,
         listed under Other Parameters; all are checked before any device work.

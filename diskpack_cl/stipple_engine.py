@@ -53,6 +53,12 @@ class CellMICs:
     timings: dict = field(default_factory=dict)
 
 
+def _add_kernel(seconds, name, secs):
+    """Add the device seconds of kernel `name` to ``seconds["kernel_<name>"]`` and ``["kernel"]``."""
+    for key in ("kernel", f"kernel_{name}"):
+        seconds[key] = seconds.get(key, 0.0) + secs
+
+
 def _exact(points, weights, domain, estimate, watch):
     with watch("exact"):
         mic = exact_mic(points, weights, domain, estimate=estimate)
@@ -97,9 +103,13 @@ class OpenCLStippleEngine:
         self.cells = CellMIC(domain, device=self.raster.ctx, profile=profile) if use_cells else None
 
     def _raster_kernel(self, before, seconds):
-        """With profiling, add the raster's device seconds since `before` to `seconds`."""
+        """With profiling, add the raster's device seconds per kernel since
+        `before` (a copy of its ``kernel_seconds``) to `seconds`: ``kernel``
+        the total, ``kernel_<name>`` each kernel's."""
         if self.profile:
-            seconds["kernel"] = seconds.get("kernel", 0.0) + sum(self.raster.kernel_seconds.values()) - before
+            for name, secs in self.raster.kernel_seconds.items():
+                if secs > before.get(name, 0.0):   # ran during this call
+                    _add_kernel(seconds, name, secs - before.get(name, 0.0))
         return seconds
 
     def _label(self, points, weights, distance):
@@ -113,9 +123,11 @@ class OpenCLStippleEngine:
         if exact and self.cells is not None:
             with watch("exact"):
                 r = self.cells.solve(points, weights)
-            seconds = dict(watch.seconds, **({"kernel": r.timings["kernel"]} if self.profile else {}))
+            seconds = dict(watch.seconds)
+            if self.profile:
+                _add_kernel(seconds, "cell_mic", r.timings["kernel"])
             return CellMICs(r.centers, r.radii, r.empty | ~np.isfinite(r.radii), seconds)
-        before = sum(self.raster.kernel_seconds.values())
+        before = dict(self.raster.kernel_seconds)
         with watch("raster"):
             est = self._label(points, weights, True)
         if exact:
@@ -130,7 +142,7 @@ class OpenCLStippleEngine:
         """``(centroids, mass, timings)`` of the power cells (labels reused from :meth:`mic`)."""
         watch = Stopwatch()
         last = self._labelled
-        before = sum(self.raster.kernel_seconds.values())
+        before = dict(self.raster.kernel_seconds)
         with watch("raster"):
             if last is None or not (np.array_equal(last[0], points) and np.array_equal(last[1], weights)):
                 last = (None, None, self._label(points, weights, False))

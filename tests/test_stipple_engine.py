@@ -126,4 +126,11 @@ def test_profiled_stippling_reports_kernel_time_and_the_same_result(ctx):
     assert all("kernel_s" not in h for h in plain.history) and "kernel" not in plain.timings
     for h in prof.history:
         assert 0.0 < h["kernel_s"] <= h["seconds"]
+        per = {k: v for k, v in h.items() if k.startswith("kernel_") and k != "kernel_s"}
+        assert per and sum(per.values()) == pytest.approx(h["kernel_s"])
+        assert ("kernel_cell_mic_s" in per) == (h["kind"] != "lloyd")
     assert prof.timings["kernel"] == pytest.approx(sum(h["kernel_s"] for h in prof.history))
+    names = {k for k in prof.timings if k.startswith("kernel_")}
+    assert "kernel_cell_mic" in names and len(names) >= 3   # MICs, labels, centroid sums
+    for name in names:
+        assert prof.timings[name] == pytest.approx(sum(h.get(f"{name}_s", 0.0) for h in prof.history))
