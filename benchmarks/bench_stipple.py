@@ -9,7 +9,10 @@ schedule's step: disk packing blended with power-cell centroids, with the
 default's options) and ``lloyd``.
 
     python benchmarks/bench_stipple.py [--n 5000 20000 50000] [--sizes 512 2048]
-        [--iters 5] [--device pocl] [--json out.json]
+        [--iters 5] [--device pocl] [--json out.json] [--profile]
+
+``--profile`` adds the device seconds of the kernels per iteration (OpenCL
+events): all of them (``kernel``) and, in the JSON, per kernel.
 
 With ``--end-to-end N``: whole runs at N dots on the sample instead, the
 default schedule and the paper's Fig. 8 schedule (180 disk-packing and 30
@@ -55,11 +58,13 @@ def main(argv=None):
     ap.add_argument("--device")
     ap.add_argument("--json")
     ap.add_argument("--end-to-end", type=int, metavar="N")
+    ap.add_argument("--profile", action="store_true", help="device seconds of the kernels")
     a = ap.parse_args(argv)
     if a.end_to_end:
         return end_to_end(a.end_to_end, a.device)
     rows = []
     hdr = f"{'size':>5s} {'n':>7s} {'method':8s} {'start':>7s} {'s/iter':>7s} {'raster':>7s} {'exact':>7s} {'centr':>7s}"
+    hdr += f" {'kernel':>7s}" if a.profile else ""
     print(hdr)
     for size in a.sizes:
         g = image(size)
@@ -74,16 +79,19 @@ def main(argv=None):
                     kw = dict(SCHEDULE_OPTIONS["default"], schedule=sched)
                 else:
                     kw = dict(schedule=sched) if sched else dict(method="lloyd", lloyd=a.iters + 1)
-                res = stipple(g, n, seed=0, device=a.device, **kw)
+                res = stipple(g, n, seed=0, device=a.device, profile=a.profile, **kw)
                 hist = res.history[1:]  # the first iteration includes kernel builds
                 row = {"size": size, "n": n, "method": method, "start_s": t_start,
                        "s_per_iter": med(hist, "seconds"), "raster_s": med(hist, "raster_s"),
                        "exact_s": med(hist, "exact_s"), "centroids_s": med(hist, "centroids_s"),
                        "first_iter_s": res.history[0]["seconds"], "certify_s": res.timings["certify"],
                        "supersample": res.params["supersample"]}
+                kernels = sorted({k for h in hist for k in h if k.startswith("kernel")})
+                row.update({k: med(hist, k) for k in kernels})
                 rows.append(row)
                 print(f"{size:5d} {n:7d} {method:8s} {t_start:7.3f} {row['s_per_iter']:7.3f} "
-                      f"{row['raster_s']:7.3f} {row['exact_s']:7.3f} {row['centroids_s']:7.3f}", flush=True)
+                      f"{row['raster_s']:7.3f} {row['exact_s']:7.3f} {row['centroids_s']:7.3f}"
+                      + (f" {row['kernel_s']:7.3f}" if a.profile else ""), flush=True)
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh, indent=1)
