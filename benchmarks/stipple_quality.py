@@ -72,23 +72,37 @@ CONFIGS = {
     "paper": dict(schedule="paper"),
     # disk packing only, 60 iterations (gray radii)
     "pack": dict(schedule="pack"),
-    # the default (see schedule.SCHEDULE_OPTIONS["default"])
+    # the default: its phases and options follow the dot spacing
+    # (schedule.SPACING_BANDS; the spacing rule of issue 11)
     "default": dict(schedule="default"),
-    # the default with feature-aware mix steps (radii.detail_fields; issue 11)
-    "detail": dict(schedule="default", features="detail"),
+    # the default before the spacing bands: 35 + 12 mix steps, radius blur 3 px
+    # (rows measured before the change are stored under this name)
+    "classic": dict(schedule="classic"),
+    # classic with feature-aware mix steps (radii.detail_fields; issue 11)
+    "detail": dict(schedule="classic", features="detail"),
     # the "detail" schedule: 18 + 7 mix steps with features="detail" (issue 11)
     "detail-schedule": dict(schedule="detail"),
-    # ablations of the default (one change each)
-    "default-gray": dict(schedule="default", radii="gray", floor=0.1),
-    "default-pack": dict(schedule="default", blend=0.0,
+    # ablations of classic (one change each)
+    "default-gray": dict(schedule="classic", radii="gray", floor=0.1),
+    "default-pack": dict(schedule="classic", blend=0.0,
                          schedule_override=[("pack", 47)]),
-    "default-lloyd-end": dict(schedule="default", schedule_override=[("mix", 35, 0.5), ("mix", 12, 0.5)]),
-    "mix-voronoi": dict(schedule="default", blend_cell="voronoi"),
+    "default-lloyd-end": dict(schedule="classic", schedule_override=[("mix", 35, 0.5), ("mix", 12, 0.5)]),
+    "mix-voronoi": dict(schedule="classic", blend_cell="voronoi"),
     # a candidate for dense stipplings (issue 11, tuned at n = 50000 on 512 px
     # photographs): 12 mix steps for the tone, then 3 disk-packing steps,
     # which restore the spacing and lower |psi6|; radii blurred by 1 px
-    "mix-pack": dict(schedule="default", schedule_override=[("mix", 12, 0.6), ("pack", 3)],
+    "mix-pack": dict(schedule="classic", schedule_override=[("mix", 12, 0.6), ("pack", 3)],
                      radius_sigma=1.0),
+    # the bands of the spacing rule of issue 11 (s = sqrt(W * H / n), the dot
+    # spacing in pixels; tuned on the tuning part, seed 0): s < 2.5
+    # "spacing-dense", 2.5 <= s < 3 "spacing-dense2", 3 <= s < 6
+    # "detail-schedule", s >= 6 "spacing-coarse"
+    "spacing-dense": dict(schedule="classic", schedule_override=[("mix", 16, 0.7), ("pack", 3)],
+                          radius_sigma=1.5),
+    "spacing-dense2": dict(schedule="classic", schedule_override=[("mix", 16, 0.7), ("pack", 2)],
+                           radius_sigma=1.5),
+    "spacing-coarse": dict(schedule="classic", schedule_override=[("mix", 35, 0.6), ("mix", 12, 0.4)],
+                           features="detail", radius_sigma=2.0),
 }
 
 #: Reference configuration of the issue-11 condition.

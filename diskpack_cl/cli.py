@@ -396,8 +396,22 @@ def _phase_text(phase):
     return f"{kind} {it}" + (f" (blend {phase[2]})" if len(phase) > 2 else "")
 
 
+def _default_schedule_text():
+    """The default schedule's bands, for --help."""
+    from diskpack_cl.schedule import SPACING_BANDS
+
+    parts, lo = [], 0.0
+    for bound, phases, options in SPACING_BANDS:
+        where = f"s < {bound:g}" if lo == 0 else (f"s >= {lo:g}" if bound == float("inf")
+                                                  else f"{lo:g} <= s < {bound:g}")
+        extra = ", ".join(f"{k} {v}" for k, v in options.items())
+        parts.append(f"{where}: " + ", ".join(_phase_text(ph) for ph in phases) + f" ({extra})")
+        lo = bound
+    return "default = by the dot spacing s = sqrt(W*H/n) px: " + "; ".join(parts)
+
+
 def _add_stipple(subparsers):
-    from diskpack_cl.schedule import SCHEDULES
+    from diskpack_cl.schedule import SCHEDULE_NAMES, SCHEDULES
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -453,15 +467,18 @@ def _add_stipple(subparsers):
                    help="detail: feature-aware mix steps, where the image holds detail finer "
                         "than the dot spacing dots move further towards their cell's centroid "
                         "and the radii follow the detail (more tone, slightly less even "
-                        "spacing); default: the schedule's (detail for --schedule detail)")
+                        "spacing); default: the schedule's (detail for --schedule detail, and "
+                        "for the default where the dot spacing is 3 px or more)")
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
-    g.add_argument("--schedule", choices=sorted(SCHEDULES), default=None,
+    g.add_argument("--schedule", choices=SCHEDULE_NAMES, default=None,
                    help="named schedule of disk-packing (pack) and Lloyd phases: "
+                        + _default_schedule_text() + "; "
                         + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
                                     for name, phases in sorted(SCHEDULES.items()))
-                        + " (default: default; paper is the paper's loop)")
+                        + " (default: default; classic was the default before the spacing "
+                          "bands; paper is the paper's loop)")
     g.add_argument("--beta", type=_nonnegative_int, default=None,
                    help="beta: disk-packing iterations per round; with --lloyd and --rounds it "
                         "replaces --schedule (missing ones: the paper's beta 40, lloyd 10, "
@@ -689,7 +706,7 @@ def _run_stipple(args):
     from diskpack_cl.batch import dots_for_image, write_stipple_outputs
     from diskpack_cl.export import check_output_path
     from diskpack_cl.image import load_gray
-    from diskpack_cl.schedule import make_schedule
+    from diskpack_cl.schedule import StippleOptions
     from diskpack_cl.stipple import stipple
 
     _resolve_stipple_options(args)
@@ -707,16 +724,17 @@ def _run_stipple(args):
         seen.add(key)
     if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
         raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
-    phases = make_schedule(args.schedule, beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
-                           method=args.method)
     image = _image_path(args.images[0])
     gray = load_gray(image, allow_large=args.allow_large)
     n = dots_for_image(gray.shape[1], gray.shape[0], n=args.n, density=args.density,
                        dots_per_cm2=args.dots_per_cm2, width_mm=args.width_mm,
                        height_mm=args.height_mm, dpi=args.dpi)
     _check_sizes(args, gray.shape[1], gray.shape[0], n, outputs)
+    # the phases (for the progress total) follow n and the image size
+    opt = StippleOptions.resolve(n, gray.shape[1], gray.shape[0], seed=args.seed,
+                                 **_stipple_options(args))
 
-    callback, close = _stipple_progress(args, sum(ph[1] for ph in phases))
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in opt.phases))
     try:
         res = stipple(gray, n, seed=args.seed, device=args.device, callback=callback,
                       verify=args.verify, profile=args.profile, **_stipple_options(args))
@@ -999,12 +1017,9 @@ def _report_batch(args, batch):
 
 def _run_stipple_batch(args):
     from diskpack_cl.batch import stipple_many
-    from diskpack_cl.schedule import make_schedule
 
     if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
         raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
-    make_schedule(args.schedule, beta=args.beta, lloyd=args.lloyd, rounds=args.rounds,
-                  method=args.method)
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
                          n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
                          seed=args.seed, recursive=args.recursive,

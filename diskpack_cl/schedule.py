@@ -17,7 +17,8 @@ from ._checks import check_count
 
 GAMMA_DEFAULT = 3.0   # exponent of the gray radius mapping (the paper's)
 
-__all__ = ["SCHEDULES", "SCHEDULE_OPTIONS", "make_schedule", "StippleOptions"]
+__all__ = ["SCHEDULES", "SCHEDULE_NAMES", "SCHEDULE_OPTIONS", "SPACING_BANDS", "default_band",
+           "make_schedule", "StippleOptions"]
 
 #: Named schedules: lists of (kind, iterations) or ("mix", iterations, blend),
 #: kind "pack", "lloyd" or "mix".
@@ -31,12 +32,51 @@ SCHEDULES = {
 }
 # Disk packing blended with Lloyd (see :func:`stipple`, ``"mix"`` phases):
 # 35 steps of MIC + 0.5 (centroid - MIC), then 12 of MIC + 0.4 (centroid - MIC),
-# with the density-consistent radii. Measured in docs/stipple_quality.md.
-SCHEDULES["default"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
-# The default's steps, shortened to 18 + 7, with features="detail" (issue 11):
+# with the density-consistent radii; the default until the spacing bands
+# below (issue 11). Measured in docs/stipple_quality.md.
+SCHEDULES["classic"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
+# The classic steps, shortened to 18 + 7, with features="detail" (issue 11):
 # fewer packing steps leave the points less hexagonal (lower |psi6|), the
 # feature-aware blend gives the tone back. Measured in docs/stipple_quality.md.
 SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
+
+#: The default schedule follows the dot spacing ``s = sqrt(width * height / n)``
+#: (pixels): rows ``(s below, phases, options over the classic ones)``, the
+#: first row whose bound exceeds ``s``.  Where dots are closer than the 3 px
+#: over which the eye (and the tone measure) blurs, a short mix phase places
+#: them and a few disk-packing steps restore the spacing and undo the
+#: hexagonal order the centroid pulls build; where they are farther apart,
+#: only centroid-pulling mix steps place them well enough, with the
+#: feature-aware blend.  Tuned on the tuning photographs, checked once on
+#: the held-out ones (docs/stipple_quality.md, "spacing rule").
+SPACING_BANDS = (
+    (2.5, [("mix", 16, 0.7), ("pack", 3)], {"radius_sigma": 1.5}),
+    (3.0, [("mix", 16, 0.7), ("pack", 2)], {"radius_sigma": 1.5}),
+    (6.0, SCHEDULES["detail"], {"features": "detail"}),
+    (np.inf, [("mix", 35, 0.6), ("mix", 12, 0.4)], {"features": "detail", "radius_sigma": 2.0}),
+)
+
+#: Every schedule name :func:`make_schedule` takes.
+SCHEDULE_NAMES = ("default", *sorted(SCHEDULES))
+
+
+def default_band(spacing):
+    """Phases and option overrides of the default schedule at dot spacing `spacing` px.
+
+    Examples
+    --------
+    >>> default_band(512 / 50000 ** 0.5)[0]
+    [('mix', 16, 0.7), ('pack', 3)]
+    >>> default_band(512 / 20000 ** 0.5)[1]
+    {'features': 'detail'}
+    """
+    spacing = float(spacing)
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"the dot spacing must be a positive number, got {spacing}")
+    for bound, phases, options in SPACING_BANDS:
+        if spacing < bound:
+            return list(phases), dict(options)
+    raise AssertionError("the last band is unbounded")  # pragma: no cover
 
 #: Option defaults that come with a named schedule; explicit keyword arguments
 #: of :func:`stipple` override them. ``method="lloyd"`` uses ``"lloyd"``'s, and
@@ -47,17 +87,22 @@ SCHEDULE_OPTIONS = {
     "paper": dict(_PAPER_OPTIONS),
     "lloyd": dict(_PAPER_OPTIONS),
     "pack": dict(_PAPER_OPTIONS),
-    "default": {"radii": "density", "floor": 0.01, "blend": 0.5, "radius_sigma": 3.0,
+    "classic": {"radii": "density", "floor": 0.01, "blend": 0.5, "radius_sigma": 3.0,
                 "density_sigma": 0.5, "k_quantile": 0.15},
 }
-SCHEDULE_OPTIONS["detail"] = dict(SCHEDULE_OPTIONS["default"], features="detail")
+SCHEDULE_OPTIONS["detail"] = dict(SCHEDULE_OPTIONS["classic"], features="detail")
+# the default's base options: each spacing band overrides some (SPACING_BANDS)
+SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"])
 
 
 
-def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, method="diskpack"):
+def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, method="diskpack",
+                  spacing=None):
     """The list of phases to run: ``(kind, iterations)`` or ``("mix", iterations, blend)``.
 
-    ``schedule`` is a name in :data:`SCHEDULES` or a list of
+    ``schedule`` is a name in :data:`SCHEDULE_NAMES` (``"default"`` needs
+    the dot `spacing` in pixels, ``sqrt(width * height / n)``, see
+    :data:`SPACING_BANDS`) or a list of
     ``("pack" | "lloyd" | "mix", iterations)`` and ``("mix", iterations,
     blend)`` (a ``"mix"`` phase without its own blend uses the options'
     ``blend``); phases with 0 iterations are dropped. When any of ``beta`` (disk-packing
@@ -71,14 +116,19 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
 
     Examples
     --------
-    >>> make_schedule("default")
+    >>> make_schedule("classic")
     [('mix', 35, 0.5), ('mix', 12, 0.4)]
+    >>> make_schedule("default", spacing=2.0)
+    [('mix', 16, 0.7), ('pack', 3)]
     >>> make_schedule([("mix", 3, 0.2), ("lloyd", 0), ("pack", 2)])
     [('mix', 3, 0.2), ('pack', 2)]
     """
     if method not in ("diskpack", "lloyd"):
         raise ValueError(f"method must be 'diskpack' or 'lloyd', got {method!r}")
-    if method == "diskpack" and (beta is not None or lloyd is not None or rounds is not None):
+    if method == "lloyd":
+        # the baseline: Lloyd only; `lloyd` sets its length, else 50
+        return [("lloyd", n) for n in [50 if lloyd is None else int(lloyd)] if n > 0]
+    if beta is not None or lloyd is not None or rounds is not None:
         beta = 40 if beta is None else int(beta)
         lloyd_n = 10 if lloyd is None else int(lloyd)
         rounds = 3 if rounds is None else int(rounds)
@@ -90,9 +140,14 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
             phases.append(("pack", (beta + 1) // 2 if last and rounds > 1 else beta))
             if not last:
                 phases.append(("lloyd", lloyd_n))
+    elif schedule == "default":
+        if spacing is None:
+            raise ValueError("the default schedule follows the dot spacing: give "
+                             "spacing = sqrt(width * height / n) in pixels")
+        phases = default_band(spacing)[0]
     elif isinstance(schedule, str):
         if schedule not in SCHEDULES:
-            raise ValueError(f"unknown schedule {schedule!r}; choose from {sorted(SCHEDULES)}")
+            raise ValueError(f"unknown schedule {schedule!r}; choose from {list(SCHEDULE_NAMES)}")
         phases = list(SCHEDULES[schedule])
     else:
         phases = []
@@ -110,9 +165,6 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
                 phases.append((kind, it))
             else:
                 raise ValueError(f"bad schedule phase {tuple(ph)!r}: (kind, iterations) or ('mix', iterations, blend)")
-    if method == "lloyd":
-        # the baseline: Lloyd only; `lloyd` sets its length, else 50
-        phases = [("lloyd", 50 if lloyd is None else int(lloyd))]
     return [tuple(p) for p in phases if p[1] > 0]
 
 
@@ -128,13 +180,16 @@ def auto_supersample(n, width, height):
     return int(min(8, max(1, np.ceil(np.sqrt(16.0 * n / (width * height))))))
 
 
-def _schedule_defaults(schedule, beta, lloyd, rounds, method):
-    """The option defaults of the schedule asked for (see :data:`SCHEDULE_OPTIONS`)."""
+def _schedule_defaults(schedule, beta, lloyd, rounds, method, spacing):
+    """The option defaults of the schedule asked for (see :data:`SCHEDULE_OPTIONS`;
+    the default's depend on the dot `spacing`, :data:`SPACING_BANDS`)."""
     if method == "lloyd":
         return dict(SCHEDULE_OPTIONS["lloyd"])
     opts = dict(SCHEDULE_OPTIONS["paper"])
     if beta is None and lloyd is None and rounds is None and isinstance(schedule, str):
         opts.update(SCHEDULE_OPTIONS.get(schedule, {}))
+        if schedule == "default":
+            opts.update(default_band(spacing)[1])
     return opts
 
 
@@ -157,8 +212,8 @@ class StippleOptions:
     Examples
     --------
     >>> opt = StippleOptions.resolve(2000, 512, 512)
-    >>> opt.radii, opt.floor, opt.supersample, opt.phases
-    ('density', 0.01, 1, (('mix', 35, 0.5), ('mix', 12, 0.4)))
+    >>> opt.radii, opt.floor, opt.supersample, opt.phases, opt.features
+    ('density', 0.01, 1, (('mix', 35, 0.6), ('mix', 12, 0.4)), 'detail')
     >>> StippleOptions.resolve(2000, 512, 512, schedule="paper").radii
     'gray'
     >>> StippleOptions.resolve(2000, 512, 512, blend=2)
@@ -209,8 +264,10 @@ class StippleOptions:
             raise ValueError(
                 f"n = {n} is too large for a {width}x{height} image at supersample {s}: at most "
                 f"{(s * width) * (s * height) // 4} points (4 grid cells per point); raise supersample")
-        phases = make_schedule(schedule, beta=beta, lloyd=lloyd, rounds=rounds, method=method)
-        d = _schedule_defaults(schedule, beta, lloyd, rounds, method)
+        spacing = np.sqrt(width * height / n)
+        phases = make_schedule(schedule, beta=beta, lloyd=lloyd, rounds=rounds, method=method,
+                               spacing=spacing)
+        d = _schedule_defaults(schedule, beta, lloyd, rounds, method, spacing)
 
         def pick(name, value):
             return d[name] if value is None else value

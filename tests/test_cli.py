@@ -410,12 +410,12 @@ def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):
 
 
 def test_stipple_schedule_choices_follow_the_library():
-    from diskpack_cl.schedule import SCHEDULES
+    from diskpack_cl.schedule import SCHEDULE_NAMES
 
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if isinstance(a, cli.argparse._SubParsersAction))
     action = next(a for a in sub.choices["stipple"]._actions if a.dest == "schedule")
-    assert set(action.choices) == set(SCHEDULES)
+    assert set(action.choices) == set(SCHEDULE_NAMES)
 
 
 def test_stipple_interrupt_writes_nothing(monkeypatch, tmp_path, capsys):

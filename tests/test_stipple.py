@@ -6,7 +6,7 @@ import pytest
 from diskpack_cl.dithering import _fs_wavefront, error_diffusion
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
-from diskpack_cl.radii import base_radii, field_at, largest_valid_k, radius_field
+from diskpack_cl.radii import base_radii, detail_fields, field_at, largest_valid_k, radius_field
 from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, make_schedule
 from diskpack_cl.stipple import StippleStage, StippleState, lloyd_step, pack_step, stipple
 from diskpack_cl.stipple_engine import ExactStippleEngine
@@ -275,10 +275,12 @@ def test_default_schedule_certified_and_deterministic(ctx):
     np.testing.assert_array_equal(a.points, b.points)
     np.testing.assert_array_equal(a.radii, b.radii)
     assert a.certificate.valid and brute_force_valid(a.points, a.radii, 64, 64)
-    assert [list(p) for p in make_schedule("default")] == a.params["schedule"]
+    assert [list(p) for p in make_schedule("default", spacing=np.sqrt(64 * 64 / 150))] == a.params["schedule"]
     assert a.params["radii"] == SCHEDULE_OPTIONS["default"]["radii"]
     # radii re-sampled from the mapping at the final positions
     f = radius_field(g, radii=a.params["radii"], floor=a.params["floor"], sigma=a.params["radius_sigma"])
+    assert a.params["features"] == "detail"    # s = 5.2 px: the band with feature-aware steps
+    f = detail_fields(g, 150, f)[0]
     row, col = np.floor(a.points[:, 1]).astype(int), np.floor(a.points[:, 0]).astype(int)
     np.testing.assert_array_equal(a.base_radii, f[row, col])
 
@@ -303,6 +305,30 @@ def test_paper_schedule_keeps_the_paper_mapping(ctx):
 def test_stipple_bad_new_options(kwargs, match):
     with pytest.raises(ValueError, match=match):
         stipple(gradient(), 10, **kwargs)
+
+
+def test_default_schedule_follows_the_dot_spacing():
+    """The default's phases and options come from the band of s = sqrt(W H / n)."""
+    from diskpack_cl.schedule import SPACING_BANDS, default_band
+
+    bounds = [b for b, _, _ in SPACING_BANDS]
+    assert bounds == sorted(bounds) and bounds[-1] == np.inf
+    for lo, (hi, phases, extra) in zip([1e-3] + bounds[:-1], SPACING_BANDS):
+        for s in (lo, np.nextafter(min(hi, 1e6), 0)):
+            assert default_band(s) == (list(phases), extra)
+    with pytest.raises(ValueError, match="follows the dot spacing"):
+        make_schedule("default")
+    with pytest.raises(ValueError, match="positive"):
+        default_band(0.0)
+    dense = StippleOptions.resolve(50000, 512, 512)      # s = 2.29 px
+    sparse = StippleOptions.resolve(5000, 512, 512)      # s = 7.24 px
+    assert dense.phases == (("mix", 16, 0.7), ("pack", 3)) and dense.radius_sigma == 1.5
+    assert dense.features == "none"
+    assert sparse.phases == (("mix", 35, 0.6), ("mix", 12, 0.4)) and sparse.features == "detail"
+    assert sparse.radius_sigma == 2.0
+    # an explicit option still overrides the band's
+    assert StippleOptions.resolve(50000, 512, 512, radius_sigma=3.0).radius_sigma == 3.0
+    assert make_schedule(method="lloyd", lloyd=0) == []
 
 
 def test_make_schedule_mix_phases():
