@@ -131,10 +131,19 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5):
     d = 1.0 - np.asarray(gray, dtype=np.float64)
     dark = d[d > 0.05]
     dmed = float(np.median(dark)) if dark.size else float(d.mean())
+    del dark
     ell = float(np.sqrt(d.sum() / (max(int(n), 1) * max(dmed, 1e-3))))
     coarse = ndimage.gaussian_filter(d, ell / 2.0, mode="reflect")
-    sharp = ndimage.gaussian_filter(d, fine, mode="reflect") if fine > 0 else d
-    weight = np.clip(gain * np.abs(sharp - coarse) / np.maximum(coarse, 0.1), 0.0, 1.0)
+    weight = ndimage.gaussian_filter(d, fine, mode="reflect") if fine > 0 else d.copy()
+    del d
+    # clip(gain |sharp - coarse| / max(coarse, 0.1), 0, 1), in place: on a
+    # gigapixel-scale image each temporary would be another full image
+    weight -= coarse
+    np.abs(weight, out=weight)
+    weight *= gain
+    weight /= np.maximum(coarse, 0.1, out=coarse)
+    np.clip(weight, 0.0, 1.0, out=weight)
+    del coarse
     rad = max(1, int(round(ell / 4.0)))
     yy, xx = np.mgrid[-rad:rad + 1, -rad:rad + 1]
     dilated = ndimage.grey_dilation(np.asarray(field, dtype=np.float64),
