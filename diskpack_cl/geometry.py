@@ -468,10 +468,11 @@ def _solve_cells(P, cells, k):
         bad = np.nonzero(~ok)[0]
         stats["grown"] += len(bad)
         if stats["rounds"] >= _MAX_ROUNDS:
-            rest = S.cells[np.union1d(vr, bad)]
-            stats["linprog"] += len(rest)
-            for c in rest:
-                q[c], R[c] = _linprog_cell(P, c)
+            rows = np.union1d(vr, bad)
+            stats["linprog"] += len(rows)
+            for r in rows:
+                c = S.cells[r]
+                q[c], R[c] = _cutting_plane_cell(P, c, S.N[r], S.B[r])
             break
         if not len(vr) and not len(bad):
             break
@@ -562,9 +563,26 @@ def _with_violations(S, vr, vN, vB, q, R):
 
 
 def _regrown_sets(P, S, bad):
-    """Rows with no certified vertex start again from twice as many nearest sites."""
+    """Rows with no certified vertex start again from twice as many nearest
+    sites; on a torus also from the site's own images, which bound the cell
+    (a cell at the rim of a cluster is not bounded by its nearest sites)."""
     size = int(min(P.tree.n, 2 * S.width, _MAX_POOL))
-    return _nearest_sets(P, S.cells[bad], size)
+    G = _nearest_sets(P, S.cells[bad], size)
+    if not P.domain.periodic or not len(bad):
+        return G
+    En, Eb = _own_images(P.domain)
+    k = len(bad)
+    N = np.concatenate([G.N, np.broadcast_to(En, (k, 4, 2))], 1)
+    B = np.concatenate([G.B, np.broadcast_to(Eb, (k, 4))], 1)
+    return _ConstraintSet(G.cells, N, B, G.reach)
+
+
+def _own_images(domain):
+    """The half-planes ``q . n <= beta`` from a torus site's four nearest own
+    images: the period box around the site."""
+    W, H = domain.width, domain.height
+    return (np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]),
+            np.array([W / 2, W / 2, H / 2, H / 2]))
 
 
 def _cutter_radius(q, R, wi, wmax, lifted=False):
@@ -609,10 +627,12 @@ def _query_pairs(tree, centers, radius, k=16):
 
 #: Violated constraints a cell gets per round (the worst ones).
 _VIOLATIONS_PER_ROUND = 3
+_CUTTING_ROUNDS = 20     # linprog rounds of one left-open cell before the LP over every site
 
 
-def _verify(P, tags, q, R, cells):
-    """Violated constraints of each cell's (q, R): the worst few per cell.
+def _verify(P, tags, q, R, cells, per_cell=_VIOLATIONS_PER_ROUND):
+    """Violated constraints of each cell's (q, R): the worst `per_cell` per
+    cell (None: all).
 
     Returns flat arrays (tag, normal, beta), one row per violated
     constraint, sorted by tag; `tags` label the cells in the output.
@@ -634,7 +654,7 @@ def _verify(P, tags, q, R, cells):
     order = np.lexsort((slack, rows))
     rows, Nn, Bb = rows[order], Nn[order], Bb[order]
     rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
-    keep = rank < _VIOLATIONS_PER_ROUND
+    keep = rank < (len(rank) if per_cell is None else per_cell)
     return np.asarray(tags)[rows[keep]], Nn[keep], Bb[keep]
 
 
@@ -658,6 +678,31 @@ def _lp_subset(N, B, tol):
     if okv[0] and np.all(B[keep] - N[keep] @ qv[0] - Rv[0] >= -tol):
         return qv[0], Rv[0], True
     return np.asarray(c), float(R), True
+
+
+def _cutting_plane_cell(P, c, N, B):
+    """One cell that constraint generation left open: linprog on its set,
+    every violated site added, until none is (then the optimum is the LP's
+    over all sites, by the same check as the vectorized rounds); linprog
+    over every site in the tree when the set stays unbounded."""
+    tol = P.tol
+    if P.domain.periodic:
+        En, Eb = _own_images(P.domain)
+        N, B = np.concatenate([N, En]), np.concatenate([B, Eb])
+    for _ in range(_CUTTING_ROUNDS):
+        qc, Rc, ok = _lp_subset(N, B, tol)
+        if not ok:
+            break
+        cells, qv, Rv = np.array([c]), qc[None], np.array([Rc])
+        if P.domain.periodic and P.margin < _full_margin(P.domain, P.wmax):
+            over = _overhang(P.X[cells] + qv, P.cutter_radius(cells, qv, Rv), P.domain, P.margin)
+            if over.max() > 0:
+                raise _MarginTooSmall(P.margin + over.max())
+        _, vN, vB = _verify(P, [0], qv, Rv, cells, per_cell=None)
+        if not len(vB):
+            return qc, Rc
+        N, B = np.concatenate([N, vN]), np.concatenate([B, vB])
+    return _linprog_cell(P, c)
 
 
 def _linprog_cell(P, c):
