@@ -534,11 +534,19 @@ def _violations(P, S, q, R, ok, stats):
     unsure = rows[rad + shift > S.reach[rows] * (1 - _COVER_RTOL)]
     stats["queried"] += len(unsure)
     cu = S.cells[unsure]
-    if len(unsure) and P.domain.periodic and P.margin < _full_margin(P.domain, P.wmax):
-        over = _overhang(P.X[cu] + q[cu], P.cutter_radius(cu, q[cu], R[cu]), P.domain, P.margin)
-        if over.max() > 0:
-            raise _MarginTooSmall(P.margin + over.max())
+    if len(unsure):
+        _check_margin(P, cu, q[cu], R[cu])
     return _verify(P, unsure, q[cu], R[cu], cu)
+
+
+def _check_margin(P, cells, q, R):
+    """Raise _MarginTooSmall when a cell's cutter ball reaches past the
+    periodic images in the tree (never once the tree holds the full margin)."""
+    if not P.domain.periodic or not P.margin < _full_margin(P.domain, P.wmax):
+        return
+    over = _overhang(P.X[cells] + q, P.cutter_radius(cells, q, R), P.domain, P.margin)
+    if over.max() > 0:
+        raise _MarginTooSmall(P.margin + over.max())
 
 
 def _with_violations(S, vr, vN, vB, q, R):
@@ -694,10 +702,7 @@ def _cutting_plane_cell(P, c, N, B):
         if not ok:
             break
         cells, qv, Rv = np.array([c]), qc[None], np.array([Rc])
-        if P.domain.periodic and P.margin < _full_margin(P.domain, P.wmax):
-            over = _overhang(P.X[cells] + qv, P.cutter_radius(cells, qv, Rv), P.domain, P.margin)
-            if over.max() > 0:
-                raise _MarginTooSmall(P.margin + over.max())
+        _check_margin(P, cells, qv, Rv)
         _, vN, vB = _verify(P, [0], qv, Rv, cells, per_cell=None)
         if not len(vB):
             return qc, Rc
