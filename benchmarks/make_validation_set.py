@@ -2,7 +2,9 @@
 
 Every source file ships inside the scikit-image wheel (``skimage/data/``, no
 download) and is public domain or CC0 according to the docstring of its loader
-in ``skimage/data/_fetchers.py`` (quoted in ``tests/data/validation/README.md``).
+in ``skimage/data/_fetchers.py`` (quoted in ``tests/data/validation/README.md``),
+or inside the matplotlib wheel (``mpl-data/sample_data/``: a U.S. Navy
+photograph and a USGS elevation model, works of the U.S. federal government).
 The output is 8-bit grayscale PNG, at most 512 px on the long side.
 
     python benchmarks/make_validation_set.py [--check]
@@ -27,6 +29,23 @@ def _skimage_data():
     import skimage
 
     return Path(skimage.__file__).parent / "data"
+
+
+def _matplotlib_data():
+    import matplotlib
+
+    return Path(matplotlib.get_data_path()) / "sample_data"
+
+
+def _hillshade(src):
+    # the USGS elevation model as a shaded relief (sun from the north-west, 45 degrees)
+    from matplotlib.colors import LightSource
+
+    dem = np.load(src)
+    z = dem["elevation"]
+    dx, dy = float(dem["dx"]), float(dem["dy"])
+    shade = LightSource(azdeg=315, altdeg=45).hillshade(z, vert_exag=1.0, dx=dx, dy=dy)
+    return Image.fromarray(np.round(255 * shade).astype(np.uint8))
 
 
 def _fit(im, long_side=512):
@@ -62,12 +81,24 @@ RECIPES = {
     # optic disc side and macula side of the fundus, disjoint
     "retina_left": ("retina.jpg", lambda p: _retina(p, (0, 256, 512, 768))),
     "retina_right": ("retina.jpg", lambda p: _retina(p, (512, 256, 1024, 768))),
+    # the second held-out part ("heldout2"), added after the first had been
+    # looked at several times: new pixels only
+    "ihc": ("ihc.png", lambda p: Image.open(p).convert("L")),
+    "hopper": ("mpl:grace_hopper.jpg", lambda p: _fit(Image.open(p).convert("L"))),
+    "terrain": ("mpl:jacksboro_fault_dem.npz", _hillshade),
+    # the bottom strip of the deep field, below both hubble crops
+    "hubble_bottom": ("hubble_deep_field.jpg",
+                      lambda p: Image.open(p).convert("L").crop((0, 686, 512, 872))),
+    # the bottom of the fundus, below both retina crops
+    "retina_bottom": ("retina.jpg", lambda p: _retina(p, (256, 768, 768, 1024))),
 }
 
 
 def build(name):
     """The converted image ``name`` (a key of :data:`RECIPES`) as a Pillow image."""
     src, conv = RECIPES[name]
+    if src.startswith("mpl:"):
+        return conv(_matplotlib_data() / src[4:])
     return conv(_skimage_data() / src)
 
 
