@@ -158,8 +158,11 @@ def stipple_kwargs(name, extra):
     return kw
 
 
-def run(image, n, spec, seed=0):
+def run(image, n, spec, seed=0, measure=None):
     """Stipple ``image`` with ``n`` dots under configuration ``spec`` and measure it.
+
+    ``measure(points, darkness)``, when given, returns a dict of more
+    measures for the row.
 
     Returns
     -------
@@ -185,11 +188,13 @@ def run(image, n, spec, seed=0):
     dark = 1.0 - gray
     m = stipple_measures(pts, dark)
     tone15 = tone_ssim(pts, dark, sigma=1.5)
+    more = {} if measure is None else measure(pts, dark)
     return {"image": image, "part": IMAGES.get(image, ("", "file"))[1], "config": spec,
             "n": int(n), "seed": int(seed), "tone": round(m["tone_ssim"], 4),
             "tone15": round(tone15, 4), "p01": round(m["spacing_p01"], 4),
             "psi6": round(m["psi6_mean"], 4), "certified": valid, "iterations": iters,
-            "seconds": round(secs, 2), "measure_seconds": round(time.perf_counter() - t - secs, 2)}
+            "seconds": round(secs, 2), "measure_seconds": round(time.perf_counter() - t - secs, 2),
+            **more}
 
 
 def summarize(rows, reference=REFERENCE):
