@@ -54,13 +54,13 @@ def edge_tail(points, darkness, change=0.25):
     from diskpack_cl.analysis import spacing
 
     sp = spacing(points, darkness)
-    blurred = ndimage.gaussian_filter(darkness, 3.0, mode="reflect")
-    gy, gx = np.gradient(blurred)
+    gy, gx = np.gradient(ndimage.gaussian_filter(darkness, 3.0, mode="reflect"))
     at = [points[:, 1] - 0.5, points[:, 0] - 0.5]
-    d = ndimage.map_coordinates(blurred, at, order=1, mode="nearest")
     grad = ndimage.map_coordinates(np.hypot(gx, gy), at, order=1, mode="nearest")
-    rho = len(points) * np.maximum(d, 1e-9) / darkness.sum()
-    edge = grad / np.maximum(d, 1e-9) / np.sqrt(rho) > change
+    # the blurred darkness at the dots, from the density spacing() read there
+    d = np.maximum(sp.density * darkness.sum() / len(points), 1e-9)
+    rho = len(points) * d / darkness.sum()
+    edge = grad / d / np.sqrt(rho) > change
     tail = sp.values <= sp.p01
     return {"edge_tail": round(float(edge[tail].mean()), 3), "edge_all": round(float(edge.mean()), 3)}
 
@@ -106,7 +106,7 @@ def plot(rows, path):
             ax.annotate(f"{r['blend']:g}", (xi, yi), textcoords="offset points", xytext=(3, 3),
                         fontsize=7, color=color)
         ax.plot(ref["p01"], 0.0, "x", color=color, ms=8)
-    lo, hi = ax.get_ylim()
+    hi = ax.get_ylim()[1]
     right = max(ax.get_xlim()[1], 0.95)
     ax.fill_between([sq.P01_TARGET, right], 0, max(hi, 0.01), color="0.85", zorder=0,
                     label="tone >= Lloyd's, P01 >= 0.85")

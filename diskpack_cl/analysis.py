@@ -698,11 +698,12 @@ def _stipple_inputs(points, darkness):
 
 
 class Spacing(NamedTuple):
-    """Per-point density-normalized spacing and its summary."""
+    """Per-point density-normalized spacing, its summary, and the expected density it used."""
 
     values: np.ndarray
     p01: float
     median: float
+    density: np.ndarray
 
 
 def spacing(points, darkness, *, sigma=3.0):
@@ -720,7 +721,8 @@ def spacing(points, darkness, *, sigma=3.0):
     Returns
     -------
     Spacing
-        ``values`` (n,), ``p01`` (1st percentile) and ``median``.
+        ``values`` (n,), ``p01`` (1st percentile), ``median`` and
+        ``density`` (n,), the expected local density ``rho_i``.
 
     References
     ----------
@@ -743,7 +745,7 @@ def spacing(points, darkness, *, sigma=3.0):
     local = ndimage.map_coordinates(blurred, [p[:, 1] - 0.5, p[:, 0] - 0.5], order=1, mode="nearest")
     density = len(p) * np.maximum(local, 0.0) / d.sum()
     values = nn * np.sqrt(density)
-    return Spacing(values, float(np.percentile(values, 1.0)), float(np.median(values)))
+    return Spacing(values, float(np.percentile(values, 1.0)), float(np.median(values)), density)
 
 
 def stipple_measures(points, darkness, *, sigma=3.0):

@@ -425,9 +425,14 @@ def test_spacing_follows_local_density():
     dark[:, :80] = 0.8
     left = np.stack(np.meshgrid(np.arange(1, 80, 2.0), np.arange(1, 80, 2.0)), -1).reshape(-1, 2)
     right = np.stack(np.meshgrid(np.arange(82, 160, 4.0), np.arange(2, 80, 4.0)), -1).reshape(-1, 2)
-    s = A.spacing(np.concatenate([left, right]), dark)
+    pts = np.concatenate([left, right])
+    s = A.spacing(pts, dark)
     # a square grid gives d * sqrt(1 / d^2) = 1 away from the boundary between halves
     assert s.median == pytest.approx(1.0, abs=0.02)
+    # the expected density it used: n D(x_i) / sum(D), 4x on the dark half away from the step
+    far_left, far_right = pts[:, 0] < 60, pts[:, 0] > 100
+    assert s.density[far_left] == pytest.approx(len(pts) * 0.8 / dark.sum())
+    assert s.density[far_right] == pytest.approx(len(pts) * 0.2 / dark.sum())
 
 
 def test_stipple_measures_and_errors():
