@@ -435,6 +435,51 @@ def test_spacing_follows_local_density():
     assert s.density[far_right] == pytest.approx(len(pts) * 0.2 / dark.sum())
 
 
+def test_pair_spacing_against_brute_force():
+    # random dots on a smooth ramp with a white corner (zero density there)
+    rng = np.random.default_rng(11)
+    yy, xx = np.mgrid[0:60, 0:90]
+    dark = np.clip((xx - 30) / 60.0, 0.0, 1.0)  # white for x < 30: beyond the blur's reach at x = 3
+    pts = rng.random((250, 2)) * [90, 60]
+    pts[:3] = [[3.0, 3.0], [3.5, 3.0], [45.0, 30.0]]
+    pts[3] = pts[2]  # a coincident pair: distance 0 either way
+    s = A.spacing(pts, dark)
+    q = A.spacing(pts, dark, normalize="pair")
+    D = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(D, np.inf)
+    j = D.argmin(1)
+    nn = D[np.arange(len(pts)), j]
+    a, b = np.sqrt(s.density), np.sqrt(s.density[j])
+    with np.errstate(invalid="ignore"):
+        expect = np.where(a + b > 0, nn * 2 * a * b / (a + b), 0.0)
+    np.testing.assert_allclose(s.values, nn * a, rtol=1e-12)
+    np.testing.assert_allclose(q.values, expect, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(q.density, s.density)
+    assert q.values[0] == q.values[1] == 0.0  # in the white corner
+    assert q.values[2] == q.values[3] == 0.0
+    with pytest.raises(ValueError, match="normalize must be 'dot' or 'pair'"):
+        A.spacing(pts, dark, normalize="max")
+
+
+def test_pair_spacing_across_a_tone_edge():
+    # dark left half: grid spacing 4; light right half (1/4 the darkness): spacing 8,
+    # its first column tangent-like at the mean spacing 6 from the last dark column
+    dark = np.full((160, 320), 0.2)
+    dark[:, :160] = 0.8
+    left = np.stack(np.meshgrid(np.arange(2, 160, 4.0), np.arange(2, 160, 4.0)), -1).reshape(-1, 2)
+    right = np.stack(np.meshgrid(np.arange(164, 320, 8.0), np.arange(4, 160, 8.0)), -1).reshape(-1, 2)
+    pts = np.concatenate([left, right])
+    s = A.spacing(pts, dark)
+    q = A.spacing(pts, dark, normalize="pair")
+    inner = (np.abs(pts[:, 0] - 160) > 20) & (pts[:, 0] > 10) & (pts[:, 0] < 310) \
+        & (pts[:, 1] > 10) & (pts[:, 1] < 150)
+    np.testing.assert_allclose(q.values[inner], s.values[inner], rtol=1e-9)
+    light_edge = pts[:, 0] == 164
+    # read against its own spacing the light-side column is cramped; against the pair's it is not
+    assert np.all(s.values[light_edge] < 0.9)
+    assert np.all(q.values[light_edge] > 1.05)
+
+
 def test_stipple_measures_and_errors():
     rng = np.random.default_rng(10)
     dark = np.full((48, 48), 0.3)
