@@ -469,6 +469,11 @@ def _add_stipple(subparsers):
                         "and the radii follow the detail (more tone, slightly less even "
                         "spacing); default: the schedule's (detail for --schedule detail, and "
                         "for the default where the dot spacing is 3 px or more)")
+    g.add_argument("--capacity", type=_unit_closed, default=None, metavar="GAIN",
+                   help="equal ink per dot: after each step every dot's radius is scaled by "
+                        "(mean ink / its power cell's ink)^GAIN, as in capacity-constrained "
+                        "stippling; 0.25 gives clearly more tone, with slightly closer pairs "
+                        "across tone edges (default 0: off)")
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
@@ -699,7 +704,7 @@ def _stipple_options(args):
                 lloyd=args.lloyd, rounds=args.rounds, supersample=args.supersample,
                 method=args.method, invert=args.invert, refine_every=args.refine_every,
                 radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
-                features=args.features)
+                features=args.features, capacity=args.capacity)
 
 
 def _run_stipple(args):

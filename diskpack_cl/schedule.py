@@ -239,12 +239,14 @@ class StippleOptions:
     density_sigma: float
     k0: float
     features: str = "none"
+    capacity: float = 0.0
 
     @classmethod
     def resolve(cls, n, width, height, *, gamma=GAMMA_DEFAULT, floor=None, schedule="default", beta=None,
                 lloyd=None, rounds=None, supersample=None, seed=0, method="diskpack", invert=False,
                 refine_every=1, k0=1e-6, radii=None, radius_sigma=None, blend=None,
-                blend_cell="power", k_quantile=None, density_sigma=None, features=None):
+                blend_cell="power", k_quantile=None, density_sigma=None, features=None,
+                capacity=None):
         """Options for `n` dots on a `width` x `height` image; None: the schedule's default.
 
         Raises
@@ -284,7 +286,8 @@ class StippleOptions:
                    blend=float(pick("blend", blend)), blend_cell=blend_cell,
                    k_quantile=float(pick("k_quantile", k_quantile)),
                    density_sigma=float(pick("density_sigma", density_sigma)), k0=k0,
-                   features=d.get("features", "none") if features is None else features)
+                   features=d.get("features", "none") if features is None else features,
+                   capacity=float(d.get("capacity", 0.0) if capacity is None else capacity))
 
     def __post_init__(self):
         _check_range("floor", self.floor, 0, 1, lo_open=True, text="in (0, 1]")
@@ -298,6 +301,7 @@ class StippleOptions:
             raise ValueError(f"blend_cell must be 'power' or 'voronoi', got {self.blend_cell!r}")
         if self.features not in ("none", "detail"):
             raise ValueError(f"features must be 'none' or 'detail', got {self.features!r}")
+        _check_range("capacity", self.capacity, 0, 1, text="in [0, 1]")
         if not 0.0 <= self.k_quantile < 1.0:
             raise ValueError(f"k_quantile must be in [0, 1), got {self.k_quantile}")
         if not (np.isfinite(self.k0) and self.k0 > 0):
@@ -319,4 +323,5 @@ class StippleOptions:
             "radii": self.radii, "radius_sigma": self.radius_sigma, "blend": self.blend,
             "blend_cell": self.blend_cell, "k_quantile": self.k_quantile,
             "density_sigma": self.density_sigma, "features": self.features,
+            "capacity": self.capacity,
         }
