@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskpack_cl.analysis import stipple_measures, tone_ssim
+from diskpack_cl.analysis import spacing, stipple_measures, tone_ssim
 from diskpack_cl.image import load_gray
 from diskpack_cl.stipple import stipple
 
@@ -110,6 +110,8 @@ CONFIGS = {
                            radius_sigma=1.5),
     "spacing-coarse": dict(schedule="classic", schedule_override=[("mix", 35, 0.6), ("mix", 12, 0.4)],
                            features="detail", radius_sigma=2.0),
+    # the default with equal ink per dot (capacity gain 0.1, chosen on the tuning part)
+    "capacity": dict(schedule="default", capacity=0.1),
 }
 
 #: Reference configuration of the issue-11 condition.
@@ -168,7 +170,8 @@ def run(image, n, spec, seed=0, measure=None):
     -------
     dict
         ``image``, ``part``, ``config`` (the spec), ``n``, ``seed``,
-        ``tone`` (SSIM at sigma 3), ``tone15`` (sigma 1.5), ``p01``, ``psi6``,
+        ``tone`` (SSIM at sigma 3), ``tone15`` (sigma 1.5), ``p01``,
+        ``p01_pair`` (P01 of ``spacing(normalize="pair")``, a diagnostic), ``psi6``,
         ``certified`` (None for the start), ``iterations``, ``seconds``
         (stippling wall time) and ``measure_seconds``.
     """
@@ -188,10 +191,11 @@ def run(image, n, spec, seed=0, measure=None):
     dark = 1.0 - gray
     m = stipple_measures(pts, dark)
     tone15 = tone_ssim(pts, dark, sigma=1.5)
+    pair = spacing(pts, dark, normalize="pair").p01
     more = {} if measure is None else measure(pts, dark)
     return {"image": image, "part": IMAGES.get(image, ("", "file"))[1], "config": spec,
             "n": int(n), "seed": int(seed), "tone": round(m["tone_ssim"], 4),
-            "tone15": round(tone15, 4), "p01": round(m["spacing_p01"], 4),
+            "tone15": round(tone15, 4), "p01": round(m["spacing_p01"], 4), "p01_pair": round(pair, 4),
             "psi6": round(m["psi6_mean"], 4), "certified": valid, "iterations": iters,
             "seconds": round(secs, 2), "measure_seconds": round(time.perf_counter() - t - secs, 2),
             **more}

@@ -469,7 +469,7 @@ def _add_stipple(subparsers):
                         "and the radii follow the detail (more tone, slightly less even "
                         "spacing); default: the schedule's (detail for --schedule detail, and "
                         "for the default where the dot spacing is 3 px or more)")
-    g.add_argument("--capacity", type=_unit_closed, default=None, metavar="GAIN",
+    g.add_argument("--capacity", type=_unit_closed, default=0.0, metavar="GAIN",
                    help="equal ink per dot: after each step every dot's radius is scaled by "
                         "(mean ink / its power cell's ink)^GAIN, as in capacity-constrained "
                         "stippling; 0.25 gives clearly more tone, with slightly closer pairs "
