@@ -8,11 +8,20 @@ Lloyd's run, and measured like ``benchmarks/stipple_quality.py``. The plot
 shows tone minus Lloyd's against P01, one curve per pair: where no point of
 the curve lies in the shaded corner (tone at least Lloyd's, P01 >= 0.85),
 this family of schedules cannot give that photograph both. Filled markers
-have |psi6| below Lloyd's.
+have |psi6| below Lloyd's; the star is the default itself.
+
+``--table`` prints, per pair, the default, the blends that meet the whole
+condition and, where none does, what binds (|psi6|, tone with P01, or tone);
+``--map`` draws the same as one coloured cell per pair. Every row also has
+``p01_pair``, P01 read against the pair's mean spacing
+(``analysis.spacing(normalize="pair")``), and the share of the P01 tail on
+tone edges.
 
     python benchmarks/stipple_tradeoff.py astronaut:5000 camera:5000 astronaut:50000 \\
         --jsonl rows.jsonl -o docs/figures/stipple_tradeoff.png
     python benchmarks/stipple_tradeoff.py --rows rows.jsonl -o plot.png   # plot only
+    python benchmarks/stipple_tradeoff.py --rows docs/stipple_frontier.jsonl --table \\
+        --map docs/figures/stipple_frontier_map.png
 """
 
 from __future__ import annotations
