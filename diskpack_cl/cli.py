@@ -472,8 +472,8 @@ def _add_stipple(subparsers):
     g.add_argument("--capacity", type=_unit_closed, default=0.0, metavar="GAIN",
                    help="equal ink per dot: after each step every dot's radius is scaled by "
                         "(mean ink / its power cell's ink)^GAIN, as in capacity-constrained "
-                        "stippling; 0.25 gives clearly more tone, with slightly closer pairs "
-                        "across tone edges (default 0: off)")
+                        "stippling; 0.1 gives clearly more tone (SSIM +0.02 to +0.04 at "
+                        "5000-20000 dots), with closer pairs across tone edges (default 0: off)")
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
