@@ -763,9 +763,7 @@ def spacing(points, darkness, *, sigma=3.0, normalize="dot"):
     p, d = _stipple_inputs(points, darkness)
     if len(p) < 2:
         raise ValueError("need at least 2 points")
-    X, tree = measures.kdtree(p, _PLANE)
-    dist, index = tree.query(X, k=2)
-    nn, j = dist[:, 1], index[:, 1]
+    nn, j = measures.nearest_neighbors(p, _PLANE)
     blurred = ndimage.gaussian_filter(d, sigma, mode="reflect")
     local = ndimage.map_coordinates(blurred, [p[:, 1] - 0.5, p[:, 0] - 0.5], order=1, mode="nearest")
     density = len(p) * np.maximum(local, 0.0) / d.sum()

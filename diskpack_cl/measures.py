@@ -11,8 +11,8 @@ import numpy as np
 
 from .domain import Domain
 
-__all__ = ["HEXAGONAL_CELL", "hexagonal_radius", "nearest_neighbor_distances", "min_distance",
-           "normalized_radius", "coincident_pairs", "kdtree"]
+__all__ = ["HEXAGONAL_CELL", "hexagonal_radius", "nearest_neighbors", "nearest_neighbor_distances",
+           "min_distance", "normalized_radius", "coincident_pairs", "kdtree"]
 
 #: Area per point of the densest (hexagonal) packing of unit disks, ``2 sqrt(3)``:
 #: n disks of radius r pack at best into area ``2 sqrt(3) n r^2``.
@@ -56,6 +56,22 @@ def kdtree(points, domain):
     return X, cKDTree(X)
 
 
+def nearest_neighbors(points, domain=Domain.torus()):
+    """``(distance, index)`` of each point's nearest other point (n >= 2).
+
+    Examples
+    --------
+    >>> d, j = nearest_neighbors([[0.05, 0.5], [0.95, 0.5], [0.4, 0.5]])
+    >>> d.round(12).tolist(), j.tolist()
+    ([0.1, 0.1, 0.35], [1, 0, 0])
+    """
+    X, tree = kdtree(points, domain)
+    if len(X) < 2:
+        raise ValueError("need at least 2 points")
+    d, j = tree.query(X, k=2)
+    return d[:, 1], j[:, 1]
+
+
 def nearest_neighbor_distances(points, domain=Domain.torus()):
     """Distance from each point to its nearest other point (n >= 2).
 
@@ -64,11 +80,7 @@ def nearest_neighbor_distances(points, domain=Domain.torus()):
     >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]]).round(12).tolist()
     [0.1, 0.1]
     """
-    X, tree = kdtree(points, domain)
-    if len(X) < 2:
-        raise ValueError("need at least 2 points")
-    d, _ = tree.query(X, k=2)
-    return d[:, 1]
+    return nearest_neighbors(points, domain)[0]
 
 
 def min_distance(points, domain=Domain.torus()):
