@@ -119,6 +119,19 @@ REFERENCE = "lloyd"
 P01_TARGET = 0.85
 
 
+def meets_condition(r, ref):
+    """The issue-11 condition: tone at least ``ref``'s, P01 >= 0.85, |psi6| below ``ref``'s.
+
+    ``r`` and ``ref`` are dicts with ``tone``, ``p01`` and ``psi6`` (rows or means).
+
+    Examples
+    --------
+    >>> meets_condition(dict(tone=.91, p01=.86, psi6=.54), dict(tone=.9, psi6=.55))
+    True
+    """
+    return bool(r["tone"] >= ref["tone"] and r["p01"] >= P01_TARGET and r["psi6"] < ref["psi6"])
+
+
 def parse_config(spec):
     """``"name:key=value;key=value"`` -> (name, stipple keyword overrides).
 
@@ -254,7 +267,7 @@ def summarize(rows, reference=REFERENCE):
             s["d_tone"] = s["tone"] - mean("tone", ref)
             s["d_tone15"] = s["tone15"] - mean("tone15", ref)
             s["d_psi6"] = s["psi6"] - mean("psi6", ref)
-            s["meets"] = bool(s["d_tone"] >= 0 and s["p01"] >= P01_TARGET and s["d_psi6"] < 0)
+            s["meets"] = meets_condition(s, {"tone": mean("tone", ref), "psi6": mean("psi6", ref)})
         out.append(s)
     return out
 

@@ -99,10 +99,6 @@ def sweep(pairs, blends=BLENDS, seed=0, jsonl=None):
     return rows
 
 
-def _meets(r, ref):
-    return r["tone"] >= ref["tone"] and r["p01"] >= sq.P01_TARGET and r["psi6"] < ref["psi6"]
-
-
 def frontier(rows):
     """Per (image, n): the default, the blends that meet the condition, and what binds where none does.
 
@@ -132,7 +128,7 @@ def frontier(rows):
         best = max(toned, key=lambda r: r["p01"], default=None)
         binds = "" if meeting else "psi6" if spaced else "tone+P01" if toned else "tone"
         out.append({"image": image, "part": ref["part"], "n": n, "lloyd": ref, "default": dflt,
-                    "default_meets": _meets(dflt, ref), "meeting": meeting,
+                    "default_meets": sq.meets_condition(dflt, ref), "meeting": meeting,
                     "best_p01": None if best is None else best["p01"],
                     "best_p01_blend": None if best is None else best["blend"], "binds": binds})
     return out

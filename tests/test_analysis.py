@@ -419,13 +419,22 @@ def test_spacing_of_a_hexagonal_packing_at_uniform_darkness(level):
     assert A.HEXAGONAL_SPACING == pytest.approx(1.0746, abs=1e-4)
 
 
+def two_density_halves(height, step):
+    """A dark left half (darkness 0.8, square grid of `step`) beside a light right half
+    (0.2, a quarter of the density: grid of 2 `step`), ``(darkness, points)``; the light
+    grid's first column stands `step` px right of the boundary."""
+    dark = np.full((height, 2 * height), 0.2)
+    dark[:, :height] = 0.8
+    half = np.arange(step / 2, height, step)
+    left = np.stack(np.meshgrid(half, half), -1).reshape(-1, 2)
+    right = np.stack(np.meshgrid(np.arange(height + step, 2 * height, 2.0 * step),
+                                 np.arange(step, height, 2.0 * step)), -1).reshape(-1, 2)
+    return dark, np.concatenate([left, right])
+
+
 def test_spacing_follows_local_density():
     # two halves: dark left with 4x the density of the light right, each half a square grid
-    dark = np.full((80, 160), 0.2)
-    dark[:, :80] = 0.8
-    left = np.stack(np.meshgrid(np.arange(1, 80, 2.0), np.arange(1, 80, 2.0)), -1).reshape(-1, 2)
-    right = np.stack(np.meshgrid(np.arange(82, 160, 4.0), np.arange(2, 80, 4.0)), -1).reshape(-1, 2)
-    pts = np.concatenate([left, right])
+    dark, pts = two_density_halves(80, 2.0)
     s = A.spacing(pts, dark)
     # a square grid gives d * sqrt(1 / d^2) = 1 away from the boundary between halves
     assert s.median == pytest.approx(1.0, abs=0.02)
@@ -464,11 +473,7 @@ def test_pair_spacing_against_brute_force():
 def test_pair_spacing_across_a_tone_edge():
     # dark left half: grid spacing 4; light right half (1/4 the darkness): spacing 8,
     # its first column tangent-like at the mean spacing 6 from the last dark column
-    dark = np.full((160, 320), 0.2)
-    dark[:, :160] = 0.8
-    left = np.stack(np.meshgrid(np.arange(2, 160, 4.0), np.arange(2, 160, 4.0)), -1).reshape(-1, 2)
-    right = np.stack(np.meshgrid(np.arange(164, 320, 8.0), np.arange(4, 160, 8.0)), -1).reshape(-1, 2)
-    pts = np.concatenate([left, right])
+    dark, pts = two_density_halves(160, 4.0)
     s = A.spacing(pts, dark)
     q = A.spacing(pts, dark, normalize="pair")
     inner = (np.abs(pts[:, 0] - 160) > 20) & (pts[:, 0] > 10) & (pts[:, 0] < 310) \
