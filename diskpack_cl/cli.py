@@ -549,10 +549,32 @@ def _add_stipple(subparsers):
                    help="print one JSON line on stdout at the end: the result summary "
                         "(n, k, radii, certificate, timings, params), each output's info and "
                         "seconds")
+    _color_options(p)
     _batch_options(p).add_argument("--recursive", "-r", action="store_true",
                                    help="a folder given as IMAGE contributes the images of "
                                         "its subfolders too")
     p.set_defaults(run=_run_stipple)
+
+
+def _color_options(p):
+    c = p.add_argument_group("colour (several pens, one certified packing of all dots)")
+    pens = c.add_mutually_exclusive_group()
+    pens.add_argument("--colors", choices=("cmyk", "cmy"), default=None,
+                      help="separate the image into pen layers: cmyk (black generation "
+                           "K = G (1 - max(R, G, B)) in linear light, the other inks separate "
+                           "the rest) or cmy; one SVG layer per pen")
+    pens.add_argument("--pens", default=None, metavar="NAME=COLOR,...",
+                      help="any set of pens, e.g. black=#000,red=#c00,blue=#06c: coverages by "
+                           "non-negative least squares of the pens' colours mixed side by side "
+                           "(linear RGB)")
+    c.add_argument("--black-generation", type=_unit_closed, default=1.0, metavar="G",
+                   help="cmyk: share of the grey component drawn in black (default 1)")
+    c.add_argument("--clean-black", type=_unit_closed, default=0.0, metavar="T",
+                   help="pixels with R, G, B all within T of black are pure black (default 0)")
+    c.add_argument("--clean-white", type=_unit_closed, default=0.0, metavar="T",
+                   help="pixels with R, G, B all within T of white get no ink (default 0)")
+    c.add_argument("--pen-order", default=None, metavar="NAME,...",
+                   help="SVG layer order (first drawn first; default: lightest pen first)")
 
 
 def _stipple_progress(args, total):
@@ -707,26 +729,88 @@ def _stipple_options(args):
                 features=args.features, capacity=args.capacity)
 
 
-def _run_stipple(args):
-    from diskpack_cl.batch import dots_for_image, write_stipple_outputs
+def _checked_outputs(outputs):
+    """The output paths, each checked writable and none given twice."""
     from diskpack_cl.export import check_output_path
-    from diskpack_cl.image import load_gray
-    from diskpack_cl.schedule import StippleOptions
-    from diskpack_cl.stipple import stipple
 
-    _resolve_stipple_options(args)
-    if _batch_mode(args, args.images, args.output):
-        return _run_stipple_batch(args)
-    t0 = time.perf_counter()
-    # everything that can be refused is refused before the computation
-    outputs = [str(o) for o in args.output]
-    seen = set()
+    outputs, seen = [str(o) for o in outputs], set()
     for out in outputs:
         check_output_path(out)
         key = os.path.realpath(out)
         if key in seen:
             raise ValueError(f"output given twice: {out}")
         seen.add(key)
+    return outputs
+
+
+def _run_stipple_colors(args):
+    """``diskpack stipple --colors/--pens``: one image, every pen's dots in one certified packing."""
+    from diskpack_cl.batch import dots_for_image
+    from diskpack_cl.color import load_rgb
+    from diskpack_cl.export import mm_per_px, write_stipple
+    from diskpack_cl.multipen import stipple_colors
+    from diskpack_cl.schedule import StippleOptions
+
+    if len(args.images) > 1 or os.path.isdir(str(args.images[0])) or "{" in "".join(args.output):
+        raise _UsageError("--colors/--pens stipple one image (batch jobs are mono only)")
+    if args.invert:
+        raise _UsageError("--invert has no meaning with --colors/--pens: the pens draw on white")
+    t0 = time.perf_counter()
+    outputs = _checked_outputs(args.output)
+    rgb = load_rgb(_image_path(args.images[0]))
+    H, W = rgb.shape[:2]
+    n = dots_for_image(W, H, n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
+                       width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi)
+    _check_sizes(args, W, H, n, outputs)
+    opt = StippleOptions.resolve(n, W, H, seed=args.seed, **_stipple_options(args))
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in opt.phases))
+    try:
+        res = stipple_colors(rgb, n, args.pens or args.colors, black_generation=args.black_generation,
+                             clean_black=args.clean_black, clean_white=args.clean_white,
+                             seed=args.seed, device=args.device, callback=callback,
+                             **_stipple_options(args))
+    finally:
+        close()
+    if not res.certificate.valid:
+        raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
+    order = None if args.pen_order is None else [v.strip() for v in args.pen_order.split(",")]
+    scale = mm_per_px(W, H, args.width_mm, args.height_mm, args.dpi)
+    png = dict(scale=args.png_scale, radius_scale=args.radius_scale, dots=args.dots)
+    if args.dot_mm is not None:
+        png["dot_px"] = 0.5 * args.dot_mm / scale * args.png_scale
+    svg = dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi, dot_mm=args.dot_mm,
+               radius_scale=args.radius_scale, pen_path=args.pen_path, pen_mm=args.pen_mm,
+               dots=args.dots, pen_order=order)
+    written = [{"path": out, **write_stipple(out, res, **(svg if out.lower().endswith(".svg") else
+                                                         png if out.lower().endswith(".png") else {}))}
+               for out in outputs]
+    summary = dict(res.summary(), image=str(args.images[0]), outputs=written,
+                   seconds=time.perf_counter() - t0)
+    if not args.quiet:
+        pens = ", ".join(f"{p['name']} {p['n']}" for p in summary["pens"])
+        print(f"{PROG}: {res.n} dots ({pens}) on {W}x{H} px, certified "
+              f"{'valid' if res.certificate.valid else 'INVALID'} over all pens (min gap "
+              f"{res.certificate.min_gap:.3g} px) in {summary['seconds']:.3g} s; wrote "
+              + ", ".join(outputs), file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary, default=json_default), flush=True)
+    return 0
+
+
+def _run_stipple(args):
+    from diskpack_cl.batch import dots_for_image, write_stipple_outputs
+    from diskpack_cl.image import load_gray
+    from diskpack_cl.schedule import StippleOptions
+    from diskpack_cl.stipple import stipple
+
+    _resolve_stipple_options(args)
+    if args.colors or args.pens:
+        return _run_stipple_colors(args)
+    if _batch_mode(args, args.images, args.output):
+        return _run_stipple_batch(args)
+    t0 = time.perf_counter()
+    # everything that can be refused is refused before the computation
+    outputs = _checked_outputs(args.output)
     if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
         raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
     image = _image_path(args.images[0])

@@ -542,15 +542,31 @@ def write_npz(path, result):
     if getattr(result, "params", None):
         data["params"] = np.asarray(json.dumps(result.params, default=str))
     data.update(_certificate_fields(result))
+    data.update(_pen_fields(result))
     with atomic_write(path, "wb") as fh:
         np.savez_compressed(fh, **data)
     return {"n": int(len(p))}
 
 
+def _pen_fields(result):
+    """A colour stippling's ``pen``, ``pen_names``, ``pen_colors``, ``pen_radius`` (else none)."""
+    if getattr(result, "pen", None) is None:
+        return {}
+    return {"pen": np.asarray(result.pen, np.int64), "pen_names": np.asarray(result.names, str),
+            "pen_colors": np.asarray(result.colors, np.float64),
+            "pen_radius": np.asarray(result.pen_radius, np.float64)}
+
+
 def write_csv(path, result):
-    """Write ``x,y,r`` rows (pixel units, 17 significant digits: exact round trip)."""
+    """Write ``x,y,r`` rows (pixel units, 17 significant digits: exact round trip);
+    a colour stippling adds a ``pen`` column (the pen's name)."""
     p, r, _, _ = _arrays(result)
     with atomic_write(path, "w") as fh:
+        if getattr(result, "pen", None) is not None:
+            rows = np.char.mod("%.17g", np.column_stack([p, r])).tolist()
+            pens = np.asarray(result.names)[result.pen].tolist()
+            fh.write("x,y,r,pen\n" + "".join(",".join(row + [q]) + "\n" for row, q in zip(rows, pens)))
+            return {"n": int(len(p))}
         fh.write("x,y,r\n")
         np.savetxt(fh, np.column_stack([p, r]), fmt="%.17g", delimiter=",")
     return {"n": int(len(p))}
@@ -590,7 +606,20 @@ def write_stipple(path, result, **opts):
     writer. Returns the writer's info dict.
     """
     ext = check_output_path(path)
+    if getattr(result, "pen", None) is not None and ext in (".svg", ".png"):
+        from diskpack_cl.color_export import COLOR_WRITERS
+
+        return COLOR_WRITERS[ext](path, result, **opts)
     return WRITERS[ext](path, result, **opts)
+
+
+def _read_pens(z):
+    """A colour stippling's ``pen``, ``names``, ``colors``, ``pen_radius`` from an open .npz."""
+    if "pen" not in z.files:
+        return {}
+    return {"pen": np.asarray(z["pen"], np.int64), "names": tuple(str(v) for v in z["pen_names"]),
+            "colors": np.asarray(z["pen_colors"], np.float64),
+            "pen_radius": np.asarray(z["pen_radius"], np.float64)}
 
 
 def read_stipple(path):
@@ -608,7 +637,9 @@ def read_stipple(path):
         ``width`` and ``height`` (int pixels), ``k`` (float, nan when not
         stored), ``base_radii`` (or None) and ``params`` (a dict, empty when
         not stored or unreadable): a result :func:`write_stipple` writes
-        again. None when the ``.npz`` lacks ``points``, ``radii``, ``width``
+        again; a colour stippling also has ``pen``, ``names``, ``colors``
+        and ``pen_radius`` (see :class:`diskpack_cl.multipen.ColorStippleResult`).
+        None when the ``.npz`` lacks ``points``, ``radii``, ``width``
         or ``height`` (a point set, as :func:`diskpack_cl.io.write_points`
         writes it). The certificate is not read back: check the disks again
         with :func:`diskpack_cl.certify_disks`.
@@ -647,7 +678,7 @@ def read_stipple(path):
                 width=int(z["width"]), height=int(z["height"]),
                 k=float(z["k"]) if "k" in z.files else float("nan"),
                 base_radii=np.asarray(z["base_radii"], np.float64) if "base_radii" in z.files else None,
-                params=params)
+                params=params, **_read_pens(z))
     except FileNotFoundError:
         raise FileNotFoundError(f"{path}: no such file") from None
     except (OSError, ValueError, EOFError) as exc:

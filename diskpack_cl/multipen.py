@@ -1,0 +1,362 @@
+"""Colour stippling: one certified packing of the dots of every pen (multi-class stippling).
+
+:func:`stipple_colors` separates the image into pen layers
+(:func:`diskpack_cl.color.separate`) and places all dots together:
+
+1. **Joint placement.** The mono stippling (:func:`diskpack_cl.stipple`)
+   runs the first half of the schedule's iterations on the *joint* density,
+   the coverage of all pens together: every dot, whatever its pen, is spaced
+   from every other (one power diagram over all dots).
+2. **Pens.** :func:`assign_pens` gives every dot a pen: vector error
+   diffusion along a Hilbert path through the dots, so that along the path
+   (and so in every neighbourhood) each pen gets its layer's share of the
+   local dots, with a penalty on a pen whose nearest dot of the same pen is
+   closer than that pen's own expected spacing (so each pen's dots are well
+   spaced among themselves). Dot counts per pen follow the ink of the
+   layers (:func:`pen_counts`) or are given.
+3. **Class-aware moves.** The rest of the schedule runs on the same power
+   diagram over all dots with the joint radii (the packing keeps every pair
+   apart), but the centroid pull of a mix or Lloyd step takes each dot
+   towards the centroid of *its own pen's layer* over its cell
+   (:class:`PenEngine`), so that each pen's dots follow their layer.
+4. **Certificate.** The final disks of all dots together are certified
+   inside the image and pairwise disjoint (:func:`diskpack_cl.radii.certified_k`),
+   as for one pen.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .analysis import tone_radius
+from .color import pen_tone_radii, separate
+from .domain import Domain
+from .radii import certified_k, detail_fields, field_at, radius_field
+from .schedule import StippleOptions
+from .stipple import StippleStage, StippleState, _centroid_density, _run, dot_radii, stipple
+from .stipple_engine import make_stipple_engine
+
+__all__ = ["ColorStippleResult", "PenEngine", "assign_pens", "pen_counts", "stipple_colors"]
+
+#: Weight of the same-pen crowding penalty in :func:`assign_pens`.
+CROWDING = 2.0
+#: Neighbours looked at per dot in :func:`assign_pens`.
+NEIGHBOURS = 32
+
+
+@dataclass
+class ColorStippleResult:
+    """Result of :func:`stipple_colors`: all dots, each with its pen.
+
+    Attributes
+    ----------
+    points, radii, base_radii, k, certificate, history, width, height,
+    timings, params, engine, tone_radius
+        As :class:`diskpack_cl.StippleResult`, over all dots together (the
+        certificate covers every pair, whatever the pens).
+    pen : (n,) int64
+        Pen index of each dot.
+    names : tuple of str
+        Pen names.
+    colors : (P, 3) float64
+        Pen colours, sRGB in [0, 1].
+    layers : (P, H, W) float64
+        The separated layers (:class:`diskpack_cl.color.Separation`).
+    pen_radius : (P,) float64
+        Drawn dot radius per pen (px): its dots then hold its layer's ink
+        (:func:`diskpack_cl.color.pen_tone_radii`); what the writers draw.
+    """
+
+    points: np.ndarray
+    radii: np.ndarray
+    pen: np.ndarray
+    names: tuple
+    colors: np.ndarray
+    k: float
+    base_radii: np.ndarray
+    certificate: object
+    layers: np.ndarray
+    pen_radius: np.ndarray
+    width: int
+    height: int
+    history: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
+    engine: str = "opencl"
+    tone_radius: float = None
+
+    @property
+    def n(self):
+        return len(self.points)
+
+    @property
+    def counts(self):
+        """Dots per pen."""
+        return np.bincount(self.pen, minlength=len(self.names))
+
+    def summary(self):
+        """A JSON-ready dict: sizes, k, pens and their counts, certificate, timings."""
+        return {
+            "n": int(self.n), "width": int(self.width), "height": int(self.height),
+            "k": float(self.k), "min_radius": float(self.radii.min()),
+            "max_radius": float(self.radii.max()), "iterations": len(self.history),
+            "pens": [{"name": name, "color": hex_color(c), "n": int(m)}
+                     for name, c, m in zip(self.names, self.colors, self.counts)],
+            "certificate": self.certificate.as_dict(),
+            "timings": {k: float(v) for k, v in self.timings.items()},
+            "params": self.params,
+        }
+
+
+def hex_color(rgb):
+    """``#rrggbb`` of an sRGB colour in [0, 1].
+
+    Examples
+    --------
+    >>> hex_color([1.0, 0.8, 0.0])
+    '#ffcc00'
+    """
+    return "#" + "".join(f"{int(round(255 * float(v))):02x}" for v in rgb)
+
+
+def pen_counts(layers, n):
+    """Dots per pen in proportion to the ink of each layer (largest remainders), summing to n.
+
+    Examples
+    --------
+    >>> pen_counts(np.array([np.full((2, 2), 0.1), np.full((2, 2), 0.3)]), 9).tolist()
+    [2, 7]
+    """
+    ink = np.asarray(layers, dtype=np.float64).reshape(len(layers), -1).sum(axis=1)
+    if not ink.sum() > 0:
+        raise ValueError("nothing to stipple: every layer is empty")
+    share = n * ink / ink.sum()
+    counts = np.floor(share).astype(np.int64)
+    counts[np.argsort(counts - share, kind="stable")[: n - counts.sum()]] += 1
+    return counts
+
+
+def _crowding(nbr, dist, pen, q, h, P):
+    """Penalty per pen for a dot: ``(1 - d / s)^2`` where its nearest dot of that
+    pen (among the neighbours already given one) is at ``d`` and the pen's
+    expected spacing there is ``s = h / sqrt(q)``."""
+    near = np.full(P, np.inf)
+    got = pen[nbr] >= 0
+    np.minimum.at(near, pen[nbr[got]], dist[got])
+    s = h / np.sqrt(np.maximum(q, 1e-3))
+    return np.maximum(1.0 - near / s, 0.0) ** 2
+
+
+def assign_pens(points, share, counts):
+    """A pen for every dot: vector error diffusion along a Hilbert path (see the module docstring).
+
+    Parameters
+    ----------
+    points : (n, 2) array_like
+        All dots (well spaced together).
+    share : (n, P) array_like
+        Each pen's share of the ink at each dot (rows summing to 1).
+    counts : (P,) array_like of int
+        Dots per pen, summing to n.
+
+    Returns
+    -------
+    (n,) int64
+        Pen per dot, with exactly ``counts[p]`` dots of pen ``p``.
+
+    Examples
+    --------
+    >>> p = np.random.default_rng(0).random((200, 2)) * 20
+    >>> pen = assign_pens(p, np.tile([0.25, 0.75], (200, 1)), [50, 150])
+    >>> np.bincount(pen).tolist()
+    [50, 150]
+    """
+    from scipy.spatial import cKDTree
+
+    from .export import pen_path_order
+
+    x = np.asarray(points, dtype=np.float64)
+    q = np.asarray(share, dtype=np.float64)
+    left = np.array(counts, dtype=np.int64)
+    n, P = q.shape
+    if left.shape != (P,) or left.sum() != n or np.any(left < 0):
+        raise ValueError(f"counts must be {P} non-negative integers summing to {n}, got {counts}")
+    k = min(NEIGHBOURS, n - 1)
+    dist, nbr = cKDTree(x).query(x, k=k + 1)
+    dist, nbr = dist[:, 1:], nbr[:, 1:]
+    h = np.mean(dist[:, : min(6, k)], axis=1) if k else np.ones(n)
+    pen = np.full(n, -1, dtype=np.int64)
+    err = np.zeros(P)
+    for i in pen_path_order(x, method="hilbert")[0]:
+        v = err + q[i] - CROWDING * _crowding(nbr[i], dist[i], pen, q[i], h[i], P)
+        v[left == 0] = -np.inf
+        c = int(np.argmax(v))
+        pen[i] = c
+        left[c] -= 1
+        err += q[i]
+        err[c] -= 1.0
+    return pen
+
+
+class PenEngine:
+    """A stippling engine whose centroids follow each dot's own pen layer.
+
+    ``centroids(points, weights, density)`` takes `density` as a stack, one
+    layer per pen, and returns for dot ``i`` the centroid and mass of its
+    cell under the layer of ``pen[i]``; the cells are the power cells of all
+    dots together. MICs are the wrapped engine's.
+    """
+
+    def __init__(self, engine, pen):
+        self.engine = engine
+        self.pen = np.asarray(pen)
+        self.name, self.device, self.profile = engine.name, engine.device, engine.profile
+
+    def mic(self, points, weights, *, exact=True):
+        return self.engine.mic(points, weights, exact=exact)
+
+    def centroids(self, points, weights, density):
+        cen = np.empty((len(points), 2))
+        mass = np.empty(len(points))
+        seconds = {}
+        for p in np.unique(self.pen):
+            c, m, secs = self.engine.centroids(points, weights, density[p])
+            mine = self.pen == p
+            cen[mine], mass[mine] = c[mine], m[mine]
+            for key, v in secs.items():
+                seconds[key] = seconds.get(key, 0.0) + v
+        return cen, mass, seconds
+
+
+def _split(phases, first):
+    """The phases cut after `first` iterations: (head, tail)."""
+    head, tail, left = [], [], int(first)
+    for ph in phases:
+        a = min(left, ph[1])
+        if a:
+            head.append((ph[0], a, *ph[2:]))
+        if ph[1] - a:
+            tail.append((ph[0], ph[1] - a, *ph[2:]))
+        left -= a
+    return head, tail
+
+
+def _tail_stage(gray, layers, opt, tail, engine, pen):
+    """The stage of the class-aware phases: joint radii, one centroid density per pen."""
+    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor,
+                          sigma=opt.radius_sigma)
+    weight = None
+    if opt.features == "detail":
+        rfield, weight = detail_fields(gray, opt.n, rfield)
+    dens = np.stack([_centroid_density(a, opt) for a in layers])
+    return StippleStage(PenEngine(engine, pen), replace(opt, phases=tuple(tail)), rfield, dens, weight)
+
+
+def _pen_share(layers, points, sigma):
+    """Each pen's share of the (blurred) ink at each point, (n, P)."""
+    from scipy import ndimage
+
+    blurred = np.stack([ndimage.gaussian_filter(a, sigma, mode="reflect") for a in layers])
+    ink = np.stack([field_at(b, points) for b in blurred], axis=1) + 1e-9
+    return ink / ink.sum(axis=1, keepdims=True)
+
+
+def _offset(callback, first):
+    """`callback` with the iteration numbers of the class-aware phases after the joint ones."""
+    if callback is None:
+        return None
+    return lambda entry: callback({**entry, "iteration": entry["iteration"] + first})
+
+
+def _pen_numbers(counts, P, n, layers):
+    """Dots per pen: given (checked) or from the ink (:func:`pen_counts`)."""
+    if counts is None:
+        return pen_counts(layers, n)
+    c = np.asarray(counts)
+    if c.shape != (P,) or not np.issubdtype(c.dtype, np.integer) or np.any(c < 0) or c.sum() != n:
+        raise ValueError(f"counts must be {P} non-negative integers summing to n = {n}, got {counts}")
+    return c.astype(np.int64)
+
+
+def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0, clean_black=0.0,
+                   clean_white=0.0, joint=0.5, callback=None, device=None, backend="auto",
+                   **options):
+    """Stipple a colour image with ``n`` dots of several pens, all certified disjoint.
+
+    Parameters
+    ----------
+    image : str, os.PathLike, PIL.Image.Image or array_like
+        A colour image (:func:`diskpack_cl.color.load_rgb`).
+    n : int
+        Number of dots of all pens together.
+    colors : str or sequence of (name, colour)
+        ``"cmyk"``, ``"cmy"`` or pens ``"NAME=COLOR,..."``
+        (:func:`diskpack_cl.color.separate`).
+    counts : sequence of int, optional
+        Dots per pen (summing to n); default: in proportion to each layer's ink.
+    black_generation, clean_black, clean_white : float
+        Separation options (:func:`diskpack_cl.color.separate`).
+    joint : float in [0, 1]
+        Share of the schedule's iterations run on all dots as one class
+        before the pens are assigned (default 0.5).
+    callback, device, backend
+        As for :func:`diskpack_cl.stipple`.
+    **options
+        The stippling options of :func:`diskpack_cl.stipple` (schedule,
+        seed, ...), applied to the joint density. ``invert`` is refused.
+
+    Returns
+    -------
+    ColorStippleResult
+
+    Examples
+    --------
+    >>> img = np.zeros((32, 48, 3)); img[..., 0] = np.linspace(0, 1, 48); img[..., 2] = 0.6
+    >>> res = stipple_colors(img, 120, "cmy", schedule=[("mix", 4, 0.5)], backend="exact")
+    >>> res.names, int(res.counts.sum()), res.certificate.valid
+    (('yellow', 'cyan', 'magenta'), 120, True)
+    """
+    t_start = time.perf_counter()
+    if options.get("invert"):
+        raise ValueError("invert has no meaning for colour stippling: the pens draw on white")
+    if not 0.0 <= joint <= 1.0:
+        raise ValueError(f"joint must be in [0, 1], got {joint}")
+    sep = separate(image, colors, black_generation=black_generation, clean_black=clean_black,
+                   clean_white=clean_white)
+    P, H, W = sep.layers.shape
+    gray = 1.0 - sep.darkness
+    if not sep.darkness.max() > 1e-9:
+        raise ValueError("nothing to stipple: the image is white")
+    opt = StippleOptions.resolve(n, W, H, **options)
+    counts = _pen_numbers(counts, P, opt.n, sep.layers)
+    timings = {"separate": time.perf_counter() - t_start}
+    head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
+    kw = dict(opt.params(), schedule=head, method="diskpack")
+    del kw["n"]
+    first = stipple(gray, opt.n, callback=callback, device=device, backend=backend, **kw)
+    t0 = time.perf_counter()
+    share = _pen_share(sep.layers, first.points, 0.5 * np.sqrt(W * H / opt.n))
+    pen = assign_pens(first.points, share, counts)
+    timings["assign"] = time.perf_counter() - t0
+    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
+    stage = _tail_stage(gray, sep.layers, opt, tail, engine, pen)
+    state, history, _ = _run(StippleState(first.points, first.k), stage,
+                             _offset(callback, len(first.history)))
+    t0 = time.perf_counter()
+    r = dot_radii(state, stage, state.points)
+    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    timings.update(joint=first.timings["total"], certify=time.perf_counter() - t0,
+                   total=time.perf_counter() - t_start)
+    history = first.history + [{**e, "iteration": e["iteration"] + len(first.history)} for e in history]
+    params = dict(opt.params(), colors=list(sep.names), black_generation=black_generation,
+                  clean_black=clean_black, clean_white=clean_white, joint=joint,
+                  counts=counts.tolist())
+    return ColorStippleResult(
+        points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
+        base_radii=r, certificate=cert, layers=sep.layers,
+        pen_radius=pen_tone_radii(sep.layers, counts), width=W, height=H, history=history,
+        timings=timings, params=params, engine=engine.name,
+        tone_radius=tone_radius(opt.n, sep.darkness))
