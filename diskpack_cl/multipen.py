@@ -43,8 +43,8 @@ __all__ = ["ColorStippleResult", "PenEngine", "assign_pens", "pen_counts", "stip
 
 #: Weight of the same-pen crowding penalty in :func:`assign_pens`.
 CROWDING = 2.0
-#: Neighbours looked at per dot in :func:`assign_pens`.
-NEIGHBOURS = 32
+#: Neighbours looked at per dot in :func:`assign_pens`, and those its error goes to.
+NEIGHBOURS, DIFFUSE = 32, 6
 
 
 @dataclass
@@ -189,15 +189,23 @@ def assign_pens(points, share, counts):
     dist, nbr = dist[:, 1:], nbr[:, 1:]
     h = np.mean(dist[:, : min(6, k)], axis=1) if k else np.ones(n)
     pen = np.full(n, -1, dtype=np.int64)
-    err = np.zeros(P)
+    err = np.zeros((n, P))
+    carry = np.zeros(P)
     for i in pen_path_order(x, method="hilbert")[0]:
-        v = err + q[i] - CROWDING * _crowding(nbr[i], dist[i], pen, q[i], h[i], P)
+        v = carry + err[i] + q[i] - CROWDING * _crowding(nbr[i], dist[i], pen, q[i], h[i], P)
         v[left == 0] = -np.inf
         c = int(np.argmax(v))
         pen[i] = c
         left[c] -= 1
-        err += q[i]
-        err[c] -= 1.0
+        e = carry + err[i] + q[i]
+        e[c] -= 1.0
+        todo = nbr[i, :DIFFUSE][pen[nbr[i, :DIFFUSE]] < 0]
+        if todo.size:   # to the nearest dots not yet given a pen, as Floyd-Steinberg does
+            w = 1.0 / np.maximum(dist[i, :DIFFUSE][pen[nbr[i, :DIFFUSE]] < 0], 1e-12)
+            err[todo] += np.outer(w / w.sum(), e)
+            carry = np.zeros(P)
+        else:           # along the path
+            carry = e
     return pen
 
 
