@@ -4,7 +4,7 @@
 (:func:`diskpack_cl.color.separate`) and places all dots together:
 
 1. **Joint placement.** The mono stippling (:func:`diskpack_cl.stipple`)
-   runs the first half of the schedule's iterations on the *joint* density,
+   runs the first ``joint`` share (0.3) of the schedule's iterations on the *joint* density,
    the coverage of all pens together: every dot, whatever its pen, is spaced
    from every other (one power diagram over all dots).
 2. **Pens.** :func:`assign_pens` gives every dot a pen: vector error
@@ -14,11 +14,14 @@
    closer than that pen's own expected spacing (so each pen's dots are well
    spaced among themselves). Dot counts per pen follow the ink of the
    layers (:func:`pen_counts`) or are given.
-3. **Class-aware moves.** The rest of the schedule runs on the same power
+3. **Class-aware moves.** The rest of the schedule runs on the power
    diagram over all dots with the joint radii (the packing keeps every pair
-   apart), but the centroid pull of a mix or Lloyd step takes each dot
-   towards the centroid of *its own pen's layer* over its cell
-   (:class:`PenEngine`), so that each pen's dots follow their layer.
+   apart); after each step every dot also moves towards the centroid of its
+   Voronoi cell among *its own pen's* dots, under its pen's layer (a
+   per-class Lloyd move, as in multi-class blue noise, Wei 2010), so that
+   each pen's dots follow their layer and spread among themselves. That
+   pull falls from ``pen_pull`` to 0 over the first :data:`PULL_UNTIL` of
+   these steps; the last ones restore the spacing of all dots together.
 4. **Certificate.** The final disks of all dots together are certified
    inside the image and pairwise disjoint (:func:`diskpack_cl.radii.certified_k`),
    as for one pen.
@@ -36,11 +39,15 @@ from .color import pen_tone_radii, separate
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, radius_field
 from .schedule import StippleOptions
-from .stipple import StippleStage, StippleState, _centroid_density, _run, dot_radii, stipple
+from .stipple import (StippleStage, StippleState, _centroid_density, dot_radii, lloyd_step,
+                      pack_step, stipple)
 from .stipple_engine import make_stipple_engine
 
-__all__ = ["ColorStippleResult", "PenEngine", "assign_pens", "pen_counts", "stipple_colors"]
+__all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
 
+#: Share of the class-aware phases over which the pull towards the pens' own
+#: centroids falls to 0 (the rest restores the spacing of all dots together).
+PULL_UNTIL = 0.7
 #: Weight of the same-pen crowding penalty in :func:`assign_pens`.
 CROWDING = 2.0
 #: Neighbours looked at per dot in :func:`assign_pens`, and those its error goes to.
@@ -209,34 +216,43 @@ def assign_pens(points, share, counts):
     return pen
 
 
-class PenEngine:
-    """A stippling engine whose centroids follow each dot's own pen layer.
+def _pen_centroids(engine, x, pen, dens):
+    """Each dot's centroid in the Voronoi cell of its own pen's dots, under its pen's layer."""
+    c = x.copy()
+    for p in np.unique(pen):
+        m = np.flatnonzero(pen == p)
+        if len(m) > 1:
+            cp, mass, _ = engine.centroids(x[m], np.zeros(len(m)), dens[p])
+            ok = (mass > 0) & np.all(np.isfinite(cp), axis=1)
+            c[m[ok]] = cp[ok]
+    return c
 
-    ``centroids(points, weights, density)`` takes `density` as a stack, one
-    layer per pen, and returns for dot ``i`` the centroid and mass of its
-    cell under the layer of ``pen[i]``; the cells are the power cells of all
-    dots together. MICs are the wrapped engine's.
-    """
 
-    def __init__(self, engine, pen):
-        self.engine = engine
-        self.pen = np.asarray(pen)
-        self.name, self.device, self.profile = engine.name, engine.device, engine.profile
-
-    def mic(self, points, weights, *, exact=True):
-        return self.engine.mic(points, weights, exact=exact)
-
-    def centroids(self, points, weights, density):
-        cen = np.empty((len(points), 2))
-        mass = np.empty(len(points))
-        seconds = {}
-        for p in np.unique(self.pen):
-            c, m, secs = self.engine.centroids(points, weights, density[p])
-            mine = self.pen == p
-            cen[mine], mass[mine] = c[mine], m[mine]
-            for key, v in secs.items():
-                seconds[key] = seconds.get(key, 0.0) + v
-        return cen, mass, seconds
+def _run_pens(state, stage, pen, dens, pull, callback, first):
+    """The class-aware phases: every step of the schedule on all dots, then each dot
+    moved a share of the way to its own pen's centroid (:func:`_pen_centroids`):
+    `pull` at the first step, falling linearly to 0 at :data:`PULL_UNTIL` of the
+    phases, so that the last steps are on all dots alone."""
+    history = []
+    total = sum(ph[1] for ph in stage.options.phases)
+    for phase in stage.options.phases:
+        kind, iters = phase[0], phase[1]
+        blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
+        for it in range(iters):
+            t0 = time.perf_counter()
+            b = pull * max(0.0, 1.0 - len(history) / (PULL_UNTIL * total))
+            c = _pen_centroids(stage.engine, state.points, pen, dens)
+            if kind == "lloyd":
+                state, step = lloyd_step(state, stage, new_k=it == iters - 1)
+            else:
+                state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
+            state = replace(state, points=state.points + b * (c - state.points))
+            entry = {"kind": kind, "iteration": first + len(history), **step, "k": float(state.k),
+                     "seconds": time.perf_counter() - t0}
+            history.append(entry)
+            if callback is not None:
+                callback(entry)
+    return state, history
 
 
 def _split(phases, first):
@@ -252,15 +268,15 @@ def _split(phases, first):
     return head, tail
 
 
-def _tail_stage(gray, layers, opt, tail, engine, pen):
-    """The stage of the class-aware phases: joint radii, one centroid density per pen."""
+def _tail_stage(gray, opt, tail, engine):
+    """The stage of the class-aware phases: radii and centroid density of all pens together."""
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor,
                           sigma=opt.radius_sigma)
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield)
-    dens = np.stack([_centroid_density(a, opt) for a in layers])
-    return StippleStage(PenEngine(engine, pen), replace(opt, phases=tuple(tail)), rfield, dens, weight)
+    return StippleStage(engine, replace(opt, phases=tuple(tail)), rfield,
+                        _centroid_density(1.0 - gray, opt), weight)
 
 
 def _pen_share(layers, points, sigma):
@@ -270,13 +286,6 @@ def _pen_share(layers, points, sigma):
     blurred = np.stack([ndimage.gaussian_filter(a, sigma, mode="reflect") for a in layers])
     ink = np.stack([field_at(b, points) for b in blurred], axis=1) + 1e-9
     return ink / ink.sum(axis=1, keepdims=True)
-
-
-def _offset(callback, first):
-    """`callback` with the iteration numbers of the class-aware phases after the joint ones."""
-    if callback is None:
-        return None
-    return lambda entry: callback({**entry, "iteration": entry["iteration"] + first})
 
 
 def _pen_numbers(counts, P, n, layers):
@@ -290,7 +299,7 @@ def _pen_numbers(counts, P, n, layers):
 
 
 def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0, clean_black=0.0,
-                   clean_white=0.0, joint=0.5, callback=None, device=None, backend="auto",
+                   clean_white=0.0, joint=0.3, pen_pull=1.0, callback=None, device=None, backend="auto",
                    **options):
     """Stipple a colour image with ``n`` dots of several pens, all certified disjoint.
 
@@ -309,7 +318,12 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         Separation options (:func:`diskpack_cl.color.separate`).
     joint : float in [0, 1]
         Share of the schedule's iterations run on all dots as one class
-        before the pens are assigned (default 0.5).
+        before the pens are assigned (default 0.3).
+    pen_pull : float in [0, 1]
+        In the class-aware steps, each dot moves this share of the way to
+        the centroid of its Voronoi cell among its own pen's dots (under its
+        layer), falling to 0 over the first :data:`PULL_UNTIL` of them
+        (default 1).
     callback, device, backend
         As for :func:`diskpack_cl.stipple`.
     **options
@@ -330,8 +344,9 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     t_start = time.perf_counter()
     if options.get("invert"):
         raise ValueError("invert has no meaning for colour stippling: the pens draw on white")
-    if not 0.0 <= joint <= 1.0:
-        raise ValueError(f"joint must be in [0, 1], got {joint}")
+    for name, v in (("joint", joint), ("pen_pull", pen_pull)):
+        if not 0.0 <= v <= 1.0:
+            raise ValueError(f"{name} must be in [0, 1], got {v}")
     sep = separate(image, colors, black_generation=black_generation, clean_black=clean_black,
                    clean_white=clean_white)
     P, H, W = sep.layers.shape
@@ -350,17 +365,18 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     pen = assign_pens(first.points, share, counts)
     timings["assign"] = time.perf_counter() - t0
     engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
-    stage = _tail_stage(gray, sep.layers, opt, tail, engine, pen)
-    state, history, _ = _run(StippleState(first.points, first.k), stage,
-                             _offset(callback, len(first.history)))
+    stage = _tail_stage(gray, opt, tail, engine)
+    dens = [_centroid_density(a, opt) for a in sep.layers]
+    state, history = _run_pens(StippleState(first.points, first.k), stage, pen, dens, pen_pull,
+                               callback, len(first.history))
     t0 = time.perf_counter()
     r = dot_radii(state, stage, state.points)
     k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     timings.update(joint=first.timings["total"], certify=time.perf_counter() - t0,
                    total=time.perf_counter() - t_start)
-    history = first.history + [{**e, "iteration": e["iteration"] + len(first.history)} for e in history]
+    history = first.history + history
     params = dict(opt.params(), colors=list(sep.names), black_generation=black_generation,
-                  clean_black=clean_black, clean_white=clean_white, joint=joint,
+                  clean_black=clean_black, clean_white=clean_white, joint=joint, pen_pull=pen_pull,
                   counts=counts.tolist())
     return ColorStippleResult(
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
