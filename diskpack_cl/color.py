@@ -249,6 +249,7 @@ def _separate_unique(rgb, names, colors, black_generation, model):
         out[:, others] = 1.0 - t[:, [int(np.argmin(pens[p])) for p in others]]
     if black_generation is not None:
         out[:, names.index("black")] = k
+    out[out < 1e-9] = 0.0   # the solver's rounding: no ink
     return np.clip(out, 0.0, 1.0)
 
 

@@ -191,10 +191,11 @@ def assign_pens(points, share, counts):
     n, P = q.shape
     if left.shape != (P,) or left.sum() != n or np.any(left < 0):
         raise ValueError(f"counts must be {P} non-negative integers summing to {n}, got {counts}")
+    if n < 2:
+        return np.repeat(np.arange(P), left)
     k = min(NEIGHBOURS, n - 1)
-    dist, nbr = cKDTree(x).query(x, k=k + 1)
-    dist, nbr = dist[:, 1:], nbr[:, 1:]
-    h = np.mean(dist[:, : min(6, k)], axis=1) if k else np.ones(n)
+    dist, nbr = cKDTree(x).query(x, k=list(range(2, k + 2)))   # without the dot itself
+    h = np.mean(dist[:, : min(6, k)], axis=1)
     pen = np.full(n, -1, dtype=np.int64)
     err = np.zeros((n, P))
     carry = np.zeros(P)
