@@ -8,12 +8,14 @@ reflectance is ``(1 - sum a_p) * white + sum a_p c_p``, linear in the
 coverages. Separation inverts this model per pixel:
 
 * **any set of pens** (``--pens NAME=COLOR,...``): the coverages are the
-  non-negative least-squares solution of ``white + sum a_p (c_p - white) =
-  t`` in linear RGB (``t`` the pixel), with ``sum a_p <= 1`` (the paper
-  left white is a further unknown ``a_0 >= 0`` and a heavily weighted row
-  asks ``a_0 + sum a_p = 1``) and a small ridge term that breaks ties
-  towards less ink (four pens or more can mix the same colour in several
-  ways). Colours outside the pens' gamut go to their least-squares nearest.
+  constrained least-squares solution of ``white + sum a_p (c_p - white) =
+  t`` in linear RGB (``t`` the pixel) with ``a_p >= 0`` and ``sum a_p <=
+  1``: the nearest point to ``t`` of the gamut, the convex hull of paper
+  and pens. It is found exactly, for all colours at once, by projecting
+  onto every face of at most four of those vertices (a point of a 3-D
+  hull is a mix of at most four, Caratheodory) and keeping the nearest
+  feasible one; where several mixes give the colour (four pens or more),
+  the one with the least ink.
 * **CMYK** (``--colors cmyk``): black generation first, then the coloured
   pens. Black covers ``K = g (1 - max(R, G, B))`` (linear RGB; ``g`` the
   black generation, 1 = full grey-component replacement): the largest black
@@ -60,8 +62,8 @@ PALETTES = {
     "cmy": (("yellow", "#ffff00"), ("cyan", "#00ffff"), ("magenta", "#ff00ff")),
 }
 
-# weight of the row sum(a) + a_0 = 1 and of the ridge term in the unmixing
-_SUM_WEIGHT, _RIDGE = 100.0, 1e-8
+# distances (linear RGB) and inks closer than this are ties in the unmixing
+_TIE = 1e-9
 
 
 def srgb_to_linear(v):
@@ -206,23 +208,43 @@ def area_mix(coverage, colors):
     return linear_to_srgb(lin)
 
 
-def _unmix(targets, pens):
-    """Coverages (m, P) of pens (P, 3) mixing the linear colours targets (m, 3); see module doc."""
-    from scipy.optimize import nnls
+def _face(vertices, targets):
+    """Nearest points of the simplex `vertices` (s, 3) to `targets` (m, 3), restricted to
+    its affine hull: ``(barycentric (m, s), distance (m,))``, NaN where degenerate."""
+    v0, B = vertices[0], vertices[1:] - vertices[0]
+    m = len(targets)
+    if len(B) == 0:
+        return np.ones((m, 1)), np.linalg.norm(targets - v0, axis=1)
+    G = B @ B.T
+    if np.linalg.matrix_rank(G) < len(B):
+        return np.full((m, len(vertices)), np.nan), np.full(m, np.inf)
+    mu = np.linalg.solve(G, B @ (targets - v0).T).T                     # (m, s - 1)
+    bary = np.column_stack([1.0 - mu.sum(axis=1), mu])
+    return bary, np.linalg.norm(targets - v0 - mu @ B, axis=1)
 
-    P = len(pens)
-    A = np.zeros((4 + P, P + 1))
-    A[:3, 0] = 1.0
-    A[:3, 1:] = pens.T
-    A[3, :] = _SUM_WEIGHT
-    A[4:, 1:] = np.sqrt(_RIDGE) * np.eye(P)
-    b = np.zeros(4 + P)
-    b[3] = _SUM_WEIGHT
-    out = np.empty((len(targets), P))
-    for i, t in enumerate(targets):
-        b[:3] = t
-        out[i] = nnls(A, b)[0][1:]
-    return out
+
+def _unmix(targets, pens):
+    """Coverages (m, P) of pens (P, 3) mixing the linear colours `targets` (m, 3) side by
+    side on white paper: the nearest mix in the convex hull of paper and pens, the one
+    with the least ink where several are as near (see the module docstring)."""
+    from itertools import combinations
+
+    V = np.vstack([np.ones(3), pens])                                   # paper, then the pens
+    best = np.full(len(targets), np.inf)
+    ink = np.full(len(targets), np.inf)
+    out = np.zeros((len(targets), len(pens)))
+    for s in range(1, min(4, len(V)) + 1):                              # faces of <= 4 vertices
+        for face in combinations(range(len(V)), s):
+            bary, dist = _face(V[list(face)], targets)
+            ok = np.all(bary >= -1e-12, axis=1)
+            used = bary[:, [i for i, f in enumerate(face) if f > 0]].sum(axis=1)
+            better = ok & ((dist < best - _TIE) | ((dist < best + _TIE) & (used < ink - _TIE)))
+            best[better], ink[better] = np.minimum(dist[better], best[better]), used[better]
+            out[better] = 0.0
+            for i, f in enumerate(face):
+                if f > 0:
+                    out[better, f - 1] = bary[better, i]
+    return np.clip(out, 0.0, 1.0)
 
 
 def _black_first(lin, names, black_generation):

@@ -3,17 +3,19 @@
 :func:`stipple_colors` separates the image into pen layers
 (:func:`diskpack_cl.color.separate`) and places all dots together:
 
-1. **Joint placement.** The mono stippling (:func:`diskpack_cl.stipple`)
-   runs the first ``joint`` share (0.3) of the schedule's iterations on the *joint* density,
+1. **Joint placement.** The mono stippling's steps (:func:`diskpack_cl.stipple`:
+   error-diffusion start, the schedule of the dot spacing) run the first
+   ``joint`` share (0.3) of the schedule's iterations on the *joint* density,
    the coverage of all pens together: every dot, whatever its pen, is spaced
    from every other (one power diagram over all dots).
-2. **Pens.** :func:`assign_pens` gives every dot a pen: vector error
-   diffusion along a Hilbert path through the dots, so that along the path
-   (and so in every neighbourhood) each pen gets its layer's share of the
-   local dots, with a penalty on a pen whose nearest dot of the same pen is
-   closer than that pen's own expected spacing (so each pen's dots are well
-   spaced among themselves). Dot counts per pen follow the ink of the
-   layers (:func:`pen_counts`) or are given.
+2. **Pens.** :func:`assign_pens` gives every dot a pen by vector error
+   diffusion on the dots (Floyd-Steinberg on a point set): visited along a
+   Hilbert path, each dot takes the pen most owed there (its layer's share
+   of the local ink plus the error it received), and passes what is left
+   to its nearest dots not yet visited, so that every neighbourhood holds
+   each pen in its layer's share, spread out as error diffusion spreads
+   dots. Dot counts per pen follow the ink of the layers
+   (:func:`pen_counts`) or are given.
 3. **Class-aware moves.** The rest of the schedule runs on the power
    diagram over all dots with the joint radii (the packing keeps every pair
    apart); after each step every dot also moves towards the centroid of its
@@ -39,8 +41,9 @@ from .color import pen_tone_radii, separate
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, radius_field
 from .schedule import StippleOptions
-from .stipple import (StippleStage, StippleState, _centroid_density, dot_radii, lloyd_step,
-                      pack_step, stipple)
+from .dithering import error_diffusion
+from .stipple import (StippleStage, StippleState, _centroid_density, _run, dot_radii, lloyd_step,
+                      pack_step)
 from .stipple_engine import make_stipple_engine
 
 __all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
@@ -48,10 +51,8 @@ __all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
 #: Share of the class-aware phases over which the pull towards the pens' own
 #: centroids falls to 0 (the rest restores the spacing of all dots together).
 PULL_UNTIL = 0.7
-#: Weight of the same-pen crowding penalty in :func:`assign_pens`.
-CROWDING = 2.0
-#: Neighbours looked at per dot in :func:`assign_pens`, and those its error goes to.
-NEIGHBOURS, DIFFUSE = 32, 6
+#: Nearest dots that a dot's error goes to in :func:`assign_pens`.
+DIFFUSE = 6
 
 
 @dataclass
@@ -146,15 +147,30 @@ def pen_counts(layers, n):
     return counts
 
 
-def _crowding(nbr, dist, pen, q, h, P):
-    """Penalty per pen for a dot: ``(1 - d / s)^2`` where its nearest dot of that
-    pen (among the neighbours already given one) is at ``d`` and the pen's
-    expected spacing there is ``s = h / sqrt(q)``."""
-    near = np.full(P, np.inf)
-    got = pen[nbr] >= 0
-    np.minimum.at(near, pen[nbr[got]], dist[got])
-    s = h / np.sqrt(np.maximum(q, 1e-3))
-    return np.maximum(1.0 - near / s, 0.0) ** 2
+def _diffuse(order, nbr, dist, q, left):
+    """The loop of :func:`assign_pens` (plain Python on lists: a few numbers per dot).
+
+    Dot ``i`` takes the pen ``p`` (with dots left) of the largest
+    ``carry + err_ip + q_ip``; the difference between that and the pen it
+    got goes to its :data:`DIFFUSE` nearest dots without a pen (by inverse
+    distance), or along the path when there are none.
+    """
+    P = len(left)
+    pen = [-1] * len(q)
+    err = [[0.0] * P for _ in range(len(q))]
+    carry = [0.0] * P
+    for i in order:
+        e = [a + b + c for a, b, c in zip(carry, err[i], q[i])]
+        c = max((p for p in range(P) if left[p] > 0), key=e.__getitem__)
+        pen[i] = c
+        left[c] -= 1
+        e[c] -= 1.0
+        todo = [(j, 1.0 / max(d, 1e-12)) for j, d in zip(nbr[i], dist[i]) if pen[j] < 0]
+        total = sum(w for _, w in todo)
+        for j, w in todo:   # to the nearest dots without a pen, as Floyd-Steinberg does
+            err[j] = [a + w / total * b for a, b in zip(err[j], e)]
+        carry = [0.0] * P if todo else e
+    return np.array(pen, dtype=np.int64)
 
 
 def assign_pens(points, share, counts):
@@ -193,28 +209,10 @@ def assign_pens(points, share, counts):
         raise ValueError(f"counts must be {P} non-negative integers summing to {n}, got {counts}")
     if n < 2:
         return np.repeat(np.arange(P), left)
-    k = min(NEIGHBOURS, n - 1)
+    k = min(DIFFUSE, n - 1)
     dist, nbr = cKDTree(x).query(x, k=list(range(2, k + 2)))   # without the dot itself
-    h = np.mean(dist[:, : min(6, k)], axis=1)
-    pen = np.full(n, -1, dtype=np.int64)
-    err = np.zeros((n, P))
-    carry = np.zeros(P)
-    for i in pen_path_order(x, method="hilbert")[0]:
-        v = carry + err[i] + q[i] - CROWDING * _crowding(nbr[i], dist[i], pen, q[i], h[i], P)
-        v[left == 0] = -np.inf
-        c = int(np.argmax(v))
-        pen[i] = c
-        left[c] -= 1
-        e = carry + err[i] + q[i]
-        e[c] -= 1.0
-        todo = nbr[i, :DIFFUSE][pen[nbr[i, :DIFFUSE]] < 0]
-        if todo.size:   # to the nearest dots not yet given a pen, as Floyd-Steinberg does
-            w = 1.0 / np.maximum(dist[i, :DIFFUSE][pen[nbr[i, :DIFFUSE]] < 0], 1e-12)
-            err[todo] += np.outer(w / w.sum(), e)
-            carry = np.zeros(P)
-        else:           # along the path
-            carry = e
-    return pen
+    order = pen_path_order(x, method="hilbert")[0]
+    return _diffuse(order.tolist(), nbr.tolist(), dist.tolist(), q.tolist(), left.tolist())
 
 
 def _pen_centroids(engine, x, pen, dens):
@@ -242,12 +240,13 @@ def _run_pens(state, stage, pen, dens, pull, callback, first):
         for it in range(iters):
             t0 = time.perf_counter()
             b = pull * max(0.0, 1.0 - len(history) / (PULL_UNTIL * total))
-            c = _pen_centroids(stage.engine, state.points, pen, dens)
+            c = _pen_centroids(stage.engine, state.points, pen, dens) if b > 0 else None
             if kind == "lloyd":
                 state, step = lloyd_step(state, stage, new_k=it == iters - 1)
             else:
                 state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
-            state = replace(state, points=state.points + b * (c - state.points))
+            if b > 0:
+                state = replace(state, points=state.points + b * (c - state.points))
             entry = {"kind": kind, "iteration": first + len(history), **step, "k": float(state.k),
                      "seconds": time.perf_counter() - t0}
             history.append(entry)
@@ -269,15 +268,19 @@ def _split(phases, first):
     return head, tail
 
 
-def _tail_stage(gray, opt, tail, engine):
-    """The stage of the class-aware phases: radii and centroid density of all pens together."""
+def _stage(gray, opt, engine):
+    """What the steps work against: the radii and centroid density of all pens together."""
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor,
                           sigma=opt.radius_sigma)
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield)
-    return StippleStage(engine, replace(opt, phases=tuple(tail)), rfield,
-                        _centroid_density(1.0 - gray, opt), weight)
+    return StippleStage(engine, opt, rfield, _centroid_density(1.0 - gray, opt), weight)
+
+
+def _phases(stage, phases):
+    """`stage` running `phases` only."""
+    return replace(stage, options=replace(stage.options, phases=tuple(phases)))
 
 
 def _pen_share(layers, points, sigma):
@@ -297,6 +300,20 @@ def _pen_numbers(counts, P, n, layers):
     if c.shape != (P,) or not np.issubdtype(c.dtype, np.integer) or np.any(c < 0) or c.sum() != n:
         raise ValueError(f"counts must be {P} non-negative integers summing to n = {n}, got {counts}")
     return c.astype(np.int64)
+
+
+def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
+    """Check the arguments of :func:`stipple_colors`; the separation, options and counts."""
+    if options.get("invert"):
+        raise ValueError("invert has no meaning for colour stippling: the pens draw on white")
+    for name, v in (("joint", joint), ("pen_pull", pen_pull)):
+        if not 0.0 <= v <= 1.0:
+            raise ValueError(f"{name} must be in [0, 1], got {v}")
+    sep = separate(image, colors, **separation)
+    if not sep.darkness.max() > 1e-9:
+        raise ValueError("nothing to stipple: the image is white")
+    opt = StippleOptions.resolve(n, sep.layers.shape[2], sep.layers.shape[1], **options)
+    return sep, opt, _pen_numbers(counts, len(sep.names), opt.n, sep.layers)
 
 
 def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0, clean_black=0.0,
@@ -343,45 +360,33 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     (('yellow', 'cyan', 'magenta'), 120, True)
     """
     t_start = time.perf_counter()
-    if options.get("invert"):
-        raise ValueError("invert has no meaning for colour stippling: the pens draw on white")
-    for name, v in (("joint", joint), ("pen_pull", pen_pull)):
-        if not 0.0 <= v <= 1.0:
-            raise ValueError(f"{name} must be in [0, 1], got {v}")
-    sep = separate(image, colors, black_generation=black_generation, clean_black=clean_black,
-                   clean_white=clean_white)
+    sep, opt, counts = _separate(image, n, colors, counts, joint, pen_pull, options,
+                                 dict(black_generation=black_generation, clean_black=clean_black,
+                                      clean_white=clean_white))
     P, H, W = sep.layers.shape
     gray = 1.0 - sep.darkness
-    if not sep.darkness.max() > 1e-9:
-        raise ValueError("nothing to stipple: the image is white")
-    opt = StippleOptions.resolve(n, W, H, **options)
-    counts = _pen_numbers(counts, P, opt.n, sep.layers)
     timings = {"separate": time.perf_counter() - t_start}
+    stage = _stage(gray, opt, make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend,
+                                                  device))
     head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
-    kw = dict(opt.params(), schedule=head, method="diskpack")
-    del kw["n"]
-    first = stipple(gray, opt.n, callback=callback, device=device, backend=backend, **kw)
+    start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))
+    state, history, _ = _run(start, _phases(stage, head), callback)
     t0 = time.perf_counter()
-    share = _pen_share(sep.layers, first.points, 0.5 * np.sqrt(W * H / opt.n))
-    pen = assign_pens(first.points, share, counts)
+    pen = assign_pens(state.points, _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)),
+                      counts)
     timings["assign"] = time.perf_counter() - t0
-    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
-    stage = _tail_stage(gray, opt, tail, engine)
     dens = [_centroid_density(a, opt) for a in sep.layers]
-    state, history = _run_pens(StippleState(first.points, first.k), stage, pen, dens, pen_pull,
-                               callback, len(first.history))
+    state, more = _run_pens(state, _phases(stage, tail), pen, dens, pen_pull, callback, len(history))
     t0 = time.perf_counter()
     r = dot_radii(state, stage, state.points)
     k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
-    timings.update(joint=first.timings["total"], certify=time.perf_counter() - t0,
-                   total=time.perf_counter() - t_start)
-    history = first.history + history
+    timings.update(certify=time.perf_counter() - t0, total=time.perf_counter() - t_start)
     params = dict(opt.params(), colors=list(sep.names), black_generation=black_generation,
                   clean_black=clean_black, clean_white=clean_white, joint=joint, pen_pull=pen_pull,
                   counts=counts.tolist())
     return ColorStippleResult(
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
         base_radii=r, certificate=cert, layers=sep.layers,
-        pen_radius=pen_tone_radii(sep.layers, counts), width=W, height=H, history=history,
-        timings=timings, params=params, engine=engine.name,
+        pen_radius=pen_tone_radii(sep.layers, counts), width=W, height=H, history=history + more,
+        timings=timings, params=params, engine=stage.engine.name,
         tone_radius=tone_radius(opt.n, sep.darkness))
