@@ -85,7 +85,7 @@ def crop(name, results, box, out, scale=3):
     sheet.save(out, optimize=True)
 
 
-BOXES = {"astronaut": (60, 20, 96), "coffee": (60, 40, 96), "chelsea": (100, 30, 96)}
+BOXES = {"astronaut": (50, 10, 128), "coffee": (64, 40, 128), "chelsea": (70, 20, 128)}
 
 
 def run(name, palette, n, figures):

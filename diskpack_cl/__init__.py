@@ -18,13 +18,14 @@ from .dithering import error_diffusion
 from .stipple import StippleResult, stipple
 from .export import read_stipple, write_stipple
 from .image import load_gray, sample_image_path
+from .multipen import ColorStippleResult, stipple_colors
 
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
     "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleResult", "error_diffusion", "stipple", "read_stipple", "write_stipple",
-    "load_gray", "sample_image_path",
+    "load_gray", "sample_image_path", "ColorStippleResult", "stipple_colors",
 ]
 
 try:  # the installed distribution's version (pyproject.toml), read once

@@ -369,6 +369,11 @@ def load_rgb(image):
     return np.ascontiguousarray(f)
 
 
+#: Pens with fewer dots get no SSIM or P01 in :func:`color_measures` (a percentile of a
+#: handful of distances says nothing).
+MIN_DOTS = 50
+
+
 def render_pens(points, pen, radii, colors, shape, *, scale=3):
     """Linear-light RGB (H, W, 3) of dots drawn with their pens' inks, overprinting where they overlap.
 
@@ -433,7 +438,8 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         ``ssim``: per pen, :func:`diskpack_cl.analysis.tone_ssim` of its
         dots against its layer; ``p01``: per pen, the spacing P01
         (:func:`diskpack_cl.analysis.spacing`) of its dots against its
-        layer; ``p01_joint``: of all dots against all layers' coverage.
+        layer (both None for a pen of fewer than :data:`MIN_DOTS` dots);
+        ``p01_joint``: of all dots against all layers' coverage.
     """
     from scipy import ndimage
 
@@ -452,8 +458,8 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
     total = layers.sum(axis=0)   # over 1 where overprinting layers add up
     return {
         "delta_e": delta_e(blur(drawn), blur(srgb_to_linear(rgb))),
-        "ssim": [tone_ssim(p[m], a) if c > 1 else None for m, a, c in zip(mine, layers, counts)],
-        "p01": [spacing(p[m], a).p01 if c > 1 else None for m, a, c in zip(mine, layers, counts)],
+        "ssim": [tone_ssim(p[m], a) if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
+        "p01": [spacing(p[m], a).p01 if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
         "p01_joint": spacing(p, total / max(float(total.max()), 1.0)).p01,
         "sigma": sigma,
     }

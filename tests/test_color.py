@@ -127,4 +127,5 @@ def test_color_measures_of_a_perfect_grey():
     m = color.color_measures(pts, pen, sep.layers, sep.colors, rgb)
     assert m["delta_e"] < 1.5
     assert m["p01_joint"] > 0.95
-    assert m["p01"][sep.names.index("cyan")] is None
+    assert m["p01"][sep.names.index("cyan")] is None          # no cyan dots
+    assert m["ssim"][sep.names.index("black")] > 0.9
