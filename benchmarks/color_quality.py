@@ -20,7 +20,8 @@ Measures (:func:`diskpack_cl.color.color_measures`): mean CIELAB Delta E
 after a blur of one dot spacing, tone SSIM per layer, spacing P01 per pen
 and of all dots; the seconds of each run and of a mono run of the same
 total n on the joint density. Rows go to ``docs/color_quality.jsonl``; crops
-(photograph, naive overlay, multi-class) to ``docs/figures/color_crop_*.png``.
+(photograph, naive overlays, multi-class) to ``docs/figures/color_crop_*.png``;
+``--table FILE`` prints the markdown table of ``docs/color.md``.
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def _row(name, palette, n, method, res, rgb, seconds):
             **m}
 
 
-def crop(name, results, box, out, scale=3):
+def crop(name, results, box, out, scale=2):
     """Photograph and each result side by side, box (x, y, size) at `scale`."""
     import tempfile
 
@@ -106,22 +107,44 @@ def run(name, palette, n, figures):
         rows.append(_row(name, palette, n, method, overlays[-1], rgb, time.perf_counter() - t))
     rows.append(dict(_row(name, palette, n, "multi-class", multi, rgb, t_multi), mono_seconds=t_mono))
     if figures:
-        crop(name, overlays + [multi], BOXES[name], ROOT / "docs/figures" / f"color_crop_{name}_{n}.png")
+        crop(name, overlays + [multi], BOXES[name], ROOT / "docs/figures" / f"color_crop_{name}.png")
     return rows
+
+
+def _cells(values):
+    return " / ".join("-" if v is None else f"{v:.2f}" for v in values)
+
+
+def table(path):
+    """Markdown rows of a results file: per image, palette and n, each method's measures."""
+    rows = [json.loads(line) for line in open(path)]
+    out = ["| image | pens | n | method | Delta E | P01 all dots | P01 per pen | SSIM per layer | seconds |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        sec = f"{r['seconds']:.1f}" + (f" (mono {r['mono_seconds']:.1f})" if "mono_seconds" in r else "")
+        out.append(f"| {r['image']} | {'/'.join(r['pens'])} | {r['n']} | {r['method']} | "
+                   f"{r['delta_e']:.1f} | {r['p01_joint']:.3f} | {_cells(r['p01'])} | "
+                   f"{_cells(r['ssim'])} | {sec} |")
+    return "\n".join(out)
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--table", metavar="JSONL", help="print the markdown table of a results file and stop")
     ap.add_argument("--n", type=int, nargs="+", default=[5000, 15000])
     ap.add_argument("--images", nargs="+", default=list(IMAGES))
     ap.add_argument("--out", default=str(ROOT / "docs/color_quality.jsonl"))
     ap.add_argument("--no-figures", action="store_true")
     args = ap.parse_args(argv)
+    if args.table:
+        print(table(args.table))
+        return
     jobs = [(name, "cmyk", n) for name in args.images for n in args.n]
     jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in args.images]
     with open(args.out, "w") as fh:
         for name, palette, n in jobs:
-            for row in run(name, palette, n, not args.no_figures and palette == "cmyk"):
+            figures = not args.no_figures and palette == "cmyk" and n == max(args.n)
+            for row in run(name, palette, n, figures):
                 fh.write(json.dumps(row) + "\n")
                 fh.flush()
                 r = lambda v: "-" if v is None else f"{v:.3f}"   # noqa: E731
