@@ -19,7 +19,8 @@ two ways:
 Measures (:func:`diskpack_cl.color.color_measures`): mean CIELAB Delta E
 after a blur of one dot spacing, tone SSIM per layer, spacing P01 per pen
 and of all dots; the seconds of each run and of a mono run of the same
-total n on the joint density. Rows go to ``docs/color_quality.jsonl``; crops
+total n on the joint density (both after a mono run of that size, so that
+neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality.jsonl``; crops
 (photograph, naive overlays, multi-class) to ``docs/figures/color_crop_*.png``;
 ``--table FILE`` prints the markdown table of ``docs/color.md``.
 """
@@ -92,12 +93,14 @@ BOXES = {"astronaut": (50, 10, 128), "coffee": (64, 40, 128), "chelsea": (70, 20
 def run(name, palette, n, figures):
     path = ROOT / "tests/data/color" / f"{name}.png"
     rgb = load_rgb(path)
+    gray = 1.0 - separate(path, palette).darkness
+    stipple(gray, n)   # OpenCL buffers of this size allocated before either clock
     t = time.perf_counter()
     multi = stipple_colors(path, n, palette)
     t_multi = time.perf_counter() - t
     assert multi.certificate.valid
     t = time.perf_counter()
-    stipple(1.0 - multi.layers.sum(axis=0).clip(0, 1), n)
+    stipple(gray, n)
     t_mono = time.perf_counter() - t
     rows, overlays = [], []
     for model in ("area", "overprint") if palette in PALETTES else ("area",):
