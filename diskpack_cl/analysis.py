@@ -711,10 +711,21 @@ def tone_ssim(points, darkness, *, sigma=3.0):
     True
     """
     p, d = _stipple_inputs(points, darkness)
-    drawing = render_dots(p, tone_radius(len(p), d), d.shape)
-    blur_drawing = ndimage.gaussian_filter(drawing, sigma, mode="reflect")
-    blur_dark = ndimage.gaussian_filter(d, sigma, mode="reflect")
-    return ssim(blur_drawing, blur_dark, data_range=1.0)
+    return _tone(_equal_ink_drawing(p, d), d, sigma)
+
+
+def _equal_ink_drawing(p, d):
+    """The dots drawn with the one radius whose ink equals the darkness (:func:`tone_radius`)."""
+    return render_dots(p, tone_radius(len(p), d), d.shape)
+
+
+def _blurred_pair(drawing, d, sigma):
+    return (ndimage.gaussian_filter(drawing, sigma, mode="reflect"),
+            ndimage.gaussian_filter(d, sigma, mode="reflect"))
+
+
+def _tone(drawing, d, sigma):
+    return ssim(*_blurred_pair(drawing, d, sigma), data_range=1.0)
 
 
 def _stipple_inputs(points, darkness):
@@ -942,6 +953,11 @@ def edge_fidelity(points, darkness, *, sigma=1.0, edge=0.25, band=2.0):
     True
     """
     p, d = _stipple_inputs(points, darkness)
+    return _edge(p, d, None, sigma, edge, band)
+
+
+def _edge(p, d, drawing, sigma, edge, band):
+    """:func:`edge_fidelity` with the equal-ink drawing given (None: drawn here)."""
     edges = strong_edges(d, edge=edge)
     if not edges.any():
         return math.nan
@@ -952,10 +968,8 @@ def edge_fidelity(points, darkness, *, sigma=1.0, edge=0.25, band=2.0):
     mask[:pad], mask[-pad:], mask[:, :pad], mask[:, -pad:] = False, False, False, False
     if not mask.any():
         return math.nan
-    drawing = render_dots(p, tone_radius(len(p), d), d.shape)
-    smap = ssim_map(ndimage.gaussian_filter(drawing, sigma, mode="reflect"),
-                    ndimage.gaussian_filter(d, sigma, mode="reflect"))
-    return float(smap[mask].mean())
+    drawing = _equal_ink_drawing(p, d) if drawing is None else drawing
+    return float(ssim_map(*_blurred_pair(drawing, d, sigma))[mask].mean())
 
 
 class Holes(NamedTuple):
@@ -1048,15 +1062,16 @@ def stipple_measures(points, darkness, *, sigma=3.0):
     """
     p, d = _stipple_inputs(points, darkness)
     sp = spacing(p, d, sigma=sigma)
+    drawing = _equal_ink_drawing(p, d)   # drawn once for the three tone measures
     return {
         "n": int(len(p)),
-        "tone_ssim": tone_ssim(p, d, sigma=sigma),
-        "tone_ssim_fine": tone_ssim(p, d, sigma=sigma / 2),
+        "tone_ssim": _tone(drawing, d, sigma),
+        "tone_ssim_fine": _tone(drawing, d, sigma / 2),
         "spacing_p01": sp.p01,
         "spacing_median": sp.median,
         "spacing_p01_pair": spacing(p, d, sigma=sigma, normalize="pair").p01,
         "psi6_mean": hexatic_order(p, periodic=False).mean,
         "stray_per_10k": stray_dots(p, d).per_10k,
-        "edge_ssim": edge_fidelity(p, d),
+        "edge_ssim": _edge(p, d, drawing, 1.0, 0.25, 2.0),
         "holes_per_10k": holes(p, d, sigma=sigma).per_10k,
     }

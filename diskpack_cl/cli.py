@@ -469,11 +469,19 @@ def _add_stipple(subparsers):
                         "and the radii follow the detail (more tone, slightly less even "
                         "spacing); default: the schedule's (detail for --schedule detail, and "
                         "for the default where the dot spacing is 3 px or more)")
-    g.add_argument("--capacity", type=_unit_closed, default=0.0, metavar="GAIN",
+    g.add_argument("--capacity", type=_unit_closed, default=None, metavar="GAIN",
                    help="equal ink per dot: after each step every dot's radius is scaled by "
                         "(mean ink / its power cell's ink)^GAIN, as in capacity-constrained "
-                        "stippling; 0.1 gives clearly more tone (SSIM +0.02 to +0.04 at "
-                        "5000-20000 dots), with closer pairs across tone edges (default 0: off)")
+                        "stippling; more tone, closer pairs across tone edges (default: the "
+                        "schedule's, 0.1 for default, 0 = off for the others)")
+    g.add_argument("--support", type=_unit_closed, default=None, metavar="S",
+                   help="keep dots on the ink: a dot whose largest empty disk leaves its cell's "
+                        "ink moves towards the cell's centroid instead, by S times how far it "
+                        "left (default: the schedule's, 1 for default, 0 for the others; 0 "
+                        "lets edge dots drift onto white paper)")
+    g.add_argument("--paper-tone", type=_unit_half_open_zero, default=0.0, metavar="T",
+                   help="darkness T added under the whole image, so that white paper gets "
+                        "sparse dots too (default 0: white stays white)")
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
@@ -704,7 +712,8 @@ def _stipple_options(args):
                 lloyd=args.lloyd, rounds=args.rounds, supersample=args.supersample,
                 method=args.method, invert=args.invert, refine_every=args.refine_every,
                 radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
-                features=args.features, capacity=args.capacity)
+                features=args.features, capacity=args.capacity, support=args.support,
+                paper_tone=args.paper_tone)
 
 
 def _run_stipple(args):

@@ -398,15 +398,16 @@ def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):
     rc = cli.main(["stipple", "sample", "-n", "77", "-o", str(tmp_path / "a.svg"), "--gamma", "2",
                    "--floor", "0.2", "--schedule", "paper", "--supersample", "3", "--seed", "5",
                    "--invert", "--refine-every", "2", "--device", "pocl", "--features", "detail",
-                   "--capacity", "0.25", "--profile"])
+                   "--capacity", "0.25", "--support", "0.5", "--paper-tone", "0.05", "--profile"])
     assert rc == 1 and "fake stipple stops here" in capsys.readouterr().err
     (call,) = fake_stipple
     assert call["image"].shape == (512, 512) and call["n"] == 77
     assert {k: call[k] for k in ("gamma", "floor", "schedule", "supersample", "seed", "method",
                                  "invert", "refine_every", "device", "features", "capacity",
-                                 "profile")} == dict(
+                                 "support", "paper_tone", "profile")} == dict(
         gamma=2.0, floor=0.2, schedule="paper", supersample=3, seed=5, method="diskpack",
-        invert=True, refine_every=2, device="pocl", features="detail", capacity=0.25, profile=True)
+        invert=True, refine_every=2, device="pocl", features="detail", capacity=0.25, support=0.5,
+        paper_tone=0.05, profile=True)
     assert os.listdir(tmp_path) == []
 
 
