@@ -116,10 +116,10 @@ CONFIGS = {
                            radius_sigma=1.5),
     "spacing-coarse": dict(schedule="classic", schedule_override=[("mix", 35, 0.6), ("mix", 12, 0.4)],
                            features="detail", radius_sigma=2.0),
-    # the default before issue 17 (its centroid density blurred by 0.5 px, no
-    # support rule, no capacity), and with equal ink per dot (capacity gain 0.1)
-    "before": dict(schedule="default", density_sigma=0.5, support=0.0, capacity=0.0),
-    "capacity": dict(schedule="default", density_sigma=0.5, support=0.0, capacity=0.1),
+    # the default before issue 17 (no support rule, no capacity), and with equal
+    # ink per dot (capacity gain 0.1)
+    "before": dict(schedule="default", support=0.0, capacity=0.0),
+    "capacity": dict(schedule="default", support=0.0, capacity=0.1),
 }
 
 #: Reference configuration of the issue-11 condition.

@@ -92,12 +92,10 @@ SCHEDULE_OPTIONS = {
 }
 SCHEDULE_OPTIONS["detail"] = dict(SCHEDULE_OPTIONS["classic"], features="detail")
 # the default's base options: each spacing band overrides some (SPACING_BANDS).
-# Over classic's: centroids of the darkness itself (no blur: edges stay
-# sharp), a dot whose largest empty disk leaves its cell's ink moves to the
-# centroid instead (support: white paper stays white) and equal ink per dot
-# (capacity). Measured in docs/stipple_quality.md.
-SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"], density_sigma=0.0, support=1.0,
-                                   capacity=0.1)
+# Over classic's: a dot whose largest empty disk leaves its cell's ink moves
+# to the centroid instead (support: white paper stays white, outlines stay
+# sharp) and equal ink per dot (capacity). Measured in docs/stipple_quality.md.
+SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"], support=1.0, capacity=0.1)
 
 
 

@@ -186,7 +186,7 @@ class StippleStage:
     radius_field: np.ndarray
     density: np.ndarray
     blend_weight: object = None  # features="detail": per-pixel weight, see radii.detail_fields
-    ink: np.ndarray = None       # darkness per pixel, blurred as the density (support > 0)
+    ink: np.ndarray = None       # darkness per pixel blurred by INK_SIGMA, for off_support
 
     @property
     def size(self):
@@ -206,6 +206,10 @@ def _add_timings(entry, seconds, names):
         if name.startswith("kernel"):
             entry[f"{name}_s"] = entry.get(f"{name}_s", 0.0) + secs
 
+
+#: Blur (px) of the darkness that :func:`off_support` reads: a thin line's
+#: ink reaches the pixels beside it, where its cell's centroid and centre fall.
+INK_SIGMA = 1.0
 
 #: Bounds of :func:`equal_ink`'s factors: per step (so that a cell whose mass
 #: jumps when a neighbour moves does not make its dot's radius oscillate) and
@@ -270,7 +274,8 @@ def off_support(ink, mic_centers, centroids):
     [1.0, 0.0]
     """
     dm, dc = field_at(ink, mic_centers), field_at(ink, centroids)
-    ratio = np.divide(dm, dc, out=np.ones_like(dm), where=dc > 0)
+    # a centroid off the ink (the cell of a curved thin line): only a centre off the ink too moves
+    ratio = np.divide(dm, dc, out=(dm > 0).astype(np.float64), where=dc > 0)
     return np.clip(1.0 - ratio, 0.0, 1.0)
 
 
@@ -572,7 +577,7 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield)
     stage = StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight,
-                         _blurred(darkness, opt.density_sigma))
+                         _blurred(darkness, INK_SIGMA))
     state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
     t0 = time.perf_counter()
     r = dot_radii(state, stage, state.points)

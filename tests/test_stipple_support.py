@@ -21,15 +21,16 @@ def test_off_support_reads_the_ink_at_centre_and_centroid():
     ink = np.zeros((10, 10))
     ink[:, :5] = 1.0
     ink[:, 5:7] = 0.25
-    m = np.array([[8.0, 1.0], [1.0, 1.0], [5.5, 1.0], [8.0, 1.0]])
-    c = np.array([[2.0, 1.0], [3.0, 4.0], [2.0, 1.0], [9.0, 9.0]])
-    # white paper, the same tone, a quarter of the tone, a cell without ink (no pull)
-    assert off_support(ink, m, c).tolist() == [1.0, 0.0, 0.75, 0.0]
+    m = np.array([[8.0, 1.0], [1.0, 1.0], [5.5, 1.0], [8.0, 1.0], [2.0, 2.0]])
+    c = np.array([[2.0, 1.0], [3.0, 4.0], [2.0, 1.0], [9.0, 9.0], [9.0, 9.0]])
+    # white paper; the same tone; a quarter of the tone; centre and centroid both
+    # off the ink (a curved thin line's cell): all the way; centre on the ink: no pull
+    assert off_support(ink, m, c).tolist() == [1.0, 0.0, 0.75, 1.0, 0.0]
 
 
 def test_support_options_resolved_and_checked():
     opt = StippleOptions.resolve(500, 64, 48)
-    assert (opt.support, opt.density_sigma, opt.paper_tone) == (1.0, 0.0, 0.0)
+    assert (opt.support, opt.capacity, opt.paper_tone) == (1.0, 0.1, 0.0)
     assert StippleOptions.resolve(500, 64, 48, schedule="classic").support == 0.0
     for name, bad, text in (("support", 1.5, r"in \[0, 1\]"), ("support", np.nan, r"in \[0, 1\]"),
                             ("paper_tone", 1.0, r"in \[0, 1\)"), ("paper_tone", -0.1, r"in \[0, 1\)")):
