@@ -50,10 +50,11 @@ SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
 #: feature-aware blend.  Tuned on the tuning photographs, checked once on
 #: the held-out ones (docs/stipple_quality.md, "spacing rule").
 SPACING_BANDS = (
-    (2.5, [("mix", 16, 0.7), ("pack", 3)], {"radius_sigma": 1.5}),
-    (3.0, [("mix", 16, 0.7), ("pack", 2)], {"radius_sigma": 1.5}),
-    (6.0, SCHEDULES["detail"], {"features": "detail"}),
-    (np.inf, [("mix", 35, 0.6), ("mix", 12, 0.4)], {"features": "detail", "radius_sigma": 2.0}),
+    (2.5, [("mix", 16, 0.7), ("pack", 2), ("mix", 1, 1.0)], {"radius_sigma": 1.5}),
+    (3.0, [("mix", 16, 0.7), ("pack", 1), ("mix", 1, 1.0)], {"radius_sigma": 1.5}),
+    (6.0, [("mix", 18, 0.5), ("mix", 6, 0.4), ("mix", 1, 1.0)], {"features": "detail"}),
+    (np.inf, [("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 1.0)],
+     {"features": "detail", "radius_sigma": 2.0}),
 )
 
 #: Every schedule name :func:`make_schedule` takes.
