@@ -415,8 +415,9 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
 
     With ``dots="tone"`` (and no ``dot_mm``) every dot gets one size, chosen
     so that the total ink equals the image's darkness; ``dots="packing"``
-    draws the certified disks. If a write fails (or the run is
-    interrupted), the outputs written so far are removed again.
+    draws the certified disks. The outputs replace their files together
+    (:func:`diskpack_cl.io.atomic_writes`): if a write fails or the run is
+    interrupted, every file that existed before is left as it was.
 
     Parameters
     ----------
@@ -447,6 +448,7 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
     ('svg', True)
     """
     from diskpack_cl.export import check_output_path, mm_per_px, write_stipple
+    from diskpack_cl.io import atomic_writes
 
     scale = mm_per_px(result.width, result.height, width_mm, height_mm, dpi)
     if dot_mm is None and dots == "tone":
@@ -461,17 +463,12 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
     written = []
-    try:
+    with atomic_writes():
         for out in outputs:
             ext = check_output_path(out)
             opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
             info = write_stipple(out, result, **opts)
             written.append({"path": out, "format": ext[1:], **info})
-    except BaseException:
-        for w in written:
-            with contextlib.suppress(OSError):
-                os.unlink(w["path"])
-        raise
     return dot_mm, written
 
 
@@ -725,21 +722,17 @@ def _dask(todo, client, device, collect):
 
 def _write_collected(record):
     """Write the bytes a worker returned (``collect``), atomically; the record updated."""
-    from diskpack_cl.io import atomic_write
+    from diskpack_cl.io import atomic_write, atomic_writes
 
     data = record.pop("data", None)
     if not data:
         return record
-    done = []
     try:
-        for path, blob in data.items():
-            with atomic_write(path, "wb") as fh:
-                fh.write(blob)
-            done.append(path)
+        with atomic_writes():
+            for path, blob in data.items():
+                with atomic_write(path, "wb") as fh:
+                    fh.write(blob)
     except OSError as exc:
-        for path in done:
-            with contextlib.suppress(OSError):
-                os.unlink(path)
         record.update(status="failed", error=f"writing {path}: {exc}")
     return record
 

@@ -16,8 +16,9 @@ Raise ``ValueError``/``OSError`` for user errors: :func:`main` prints
 ``diskpack: error: ...`` and returns 1 (2 for :class:`_UsageError`, 130 on
 Ctrl-C, 143 on SIGTERM, 129 on SIGHUP). Check outputs with
 :func:`diskpack_cl.io.check_writable` before the work and write them with the
-atomic writers of :mod:`diskpack_cl.io` after it, so that a failed or
-interrupted run leaves no output file.
+atomic writers of :mod:`diskpack_cl.io` after it, all in one
+:func:`diskpack_cl.io.atomic_writes`, so that a failed or interrupted run
+writes no output and leaves every earlier file as it was.
 """
 
 from __future__ import annotations
@@ -1114,7 +1115,8 @@ def main(argv=None):
     """Run the CLI; return the exit status.
 
     0 ok, 1 error, 2 usage error, 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (an
-    interrupted run leaves none of its outputs), 141 when stdout was closed.
+    interrupted run writes none of its outputs and leaves earlier files as
+    they were), 141 when stdout was closed.
     """
     import signal
 
