@@ -462,6 +462,8 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
     png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert, dots=dots)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
+    if pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots
+        png_opts["pen_px"] = pen_mm / scale * png_scale
     written = []
     with atomic_writes():
         for out in outputs:
