@@ -232,7 +232,7 @@ def check_outputs(items, check_path):
                 names = [str(x.input if x.input is not None else f"item {x.i}")
                          for x in (other, item)]
                 raise ValueError(f"the output templates map {names[0]} and {names[1]} to "
-                                 f"{out}; add {{parent}} or {{i}} to tell them apart")
+                                 f"{out}; add {_telling_apart(other, item)} to tell them apart")
             owner[key] = item
     for item in items:
         for out in item.outputs:
@@ -240,6 +240,25 @@ def check_outputs(items, check_path):
             if folder:
                 os.makedirs(folder, exist_ok=True)
             check_path(out)
+
+
+def _telling_apart(a, b):
+    """The template fields that differ between two items' inputs, e.g. ``{name} or {i}``.
+
+    Examples
+    --------
+    >>> _telling_apart(Item("stipple", 0, "p/cat.jpg", 0, {}, ()),
+    ...                Item("stipple", 1, "p/cat.png", 0, {}, ()))
+    '{name} or {i}'
+    """
+    fields = []
+    if a.input is not None and b.input is not None:
+        pa, pb = Path(a.input), Path(b.input)
+        if pa.name != pb.name:
+            fields.append("{name}")
+        if pa.resolve().parent.name != pb.resolve().parent.name:
+            fields.append("{parent}")
+    return " or ".join(fields + ["{i}"])
 
 
 def default_manifest(templates):

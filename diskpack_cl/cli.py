@@ -140,6 +140,41 @@ def _batch_options(p):
     return g
 
 
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors add "did you mean" for a mistyped choice or option."""
+
+    def error(self, message):
+        super().error(message + _did_you_mean(self, message))
+
+
+def _did_you_mean(parser, message):
+    """``"; did you mean X?"`` for the closest subcommand/choice or option, else ``""``."""
+    import difflib
+    import re
+
+    choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if choice:
+        words = [choice.group(1)]
+        known = [c.strip(" '") for c in choice.group(2).split(",")]
+    else:
+        extra = re.search(r"unrecognized arguments: (.*)", message)
+        words = [w.split("=")[0] for w in extra.group(1).split() if w.startswith("-")] if extra else []
+        known = _option_strings(parser)
+    close = [m for w in words for m in difflib.get_close_matches(w, known, n=1, cutoff=0.6)]
+    return f"; did you mean {' '.join(close)}?" if close else ""
+
+
+def _option_strings(parser):
+    """Every option string of ``parser`` and of its subcommands."""
+    out = []
+    for action in parser._actions:
+        out += action.option_strings
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                out += _option_strings(sub)
+    return out
+
+
 # --------------------------------------------------------------- shared runs
 
 def _max_iter(args):
@@ -257,7 +292,7 @@ def _add_poisson(subparsers):
                    help="start set: dart throwing (default), uniform random, or a point file")
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
                    help="relative radius of the dart-throwing start (default 0.74)")
-    p.add_argument("--seed", type=int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
+    p.add_argument("--seed", type=_nonnegative_int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
     _output_options(p)
     _relax_options(p)
     g = _batch_options(p)
@@ -416,14 +451,17 @@ def _add_stipple(subparsers):
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
-        description="Stipple an image by unequal disk packing on power diagrams (paper "
-                    "Algorithm 2): an error-diffusion start of N points, then rounds of BETA "
-                    "disk-packing iterations (every point moves to the centre of the maximal "
-                    "inscribed circle of its power cell, weights (k r_i)^2 with "
-                    "r_i = max(gray, FLOOR)^(GAMMA/2)) separated by Lloyd iterations. The output "
-                    "disks are certified inside the image and pairwise disjoint (exact float64). "
-                    "Every output path is checked before the computation; outputs are written "
-                    "atomically after it, so a failed or interrupted run writes nothing.",
+        description="Stipple an image with N dots by unequal disk packing on power diagrams. "
+                    "From an error-diffusion start, the default schedule moves every dot "
+                    "towards the centre of the largest circle inside its power cell (pack) "
+                    "and part-way to the cell's centroid (mix), with radii from the image's "
+                    "density; its phases follow the dot spacing (see --schedule; --schedule "
+                    "paper runs the paper's Algorithm 2 loop). The disks are certified inside "
+                    "the image and pairwise disjoint (exact float64); the outputs draw every "
+                    "dot at one size whose ink equals the image's darkness (--dots), as the "
+                    "plotter's pen draws it with --pen-mm. Every output path is checked before "
+                    "the computation; the outputs are written together after it, so a failed "
+                    "or interrupted run writes nothing and leaves earlier files as they were.",
         epilog="examples:\n"
                "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
                "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
@@ -436,8 +474,8 @@ def _add_stipple(subparsers):
                         "photograph (use ./sample for a file of that name); several files or "
                         "folders make a batch")
     count = p.add_mutually_exclusive_group(required=True)
-    count.add_argument("-n", type=_positive_int, default=None, metavar="N",
-                       help="number of dots")
+    count.add_argument("-n", type=_point_count, default=None, metavar="N",
+                       help="number of dots (at least 2)")
     count.add_argument("--density", type=_positive_float, default=None, metavar="D",
                        help="instead of -n: D dots per megapixel of each image")
     count.add_argument("--dots-per-cm2", type=_positive_float, default=None, metavar="D",
@@ -509,7 +547,7 @@ def _add_stipple(subparsers):
     g.add_argument("--profile", action="store_true",
                    help="time the OpenCL kernels with events (--json timings.kernel and "
                         "timings.kernel_<name>: device seconds, all and per kernel; single inputs)")
-    g.add_argument("--seed", type=int, default=0,
+    g.add_argument("--seed", type=_nonnegative_int, default=0,
                    help="seed of the error-diffusion start (default 0; same seed, same result)")
     g.add_argument("--invert", action="store_true",
                    help="stipple the light parts (light dots on a dark ground)")
@@ -582,7 +620,8 @@ def _resolve_stipple_options(args):
     Raises
     ------
     _UsageError
-        Naming both options: ``--dot-mm`` with ``--dots``, ``--method lloyd``
+        Naming both options: ``--dot-mm`` with ``--dots``, ``--dpi`` with
+        ``--width-mm``/``--height-mm``, ``--method lloyd``
         with ``--schedule`` or ``--beta/--rounds``, ``--schedule`` with
         ``--beta/--lloyd/--rounds``, and ``--gamma`` where the radius mapping
         has no gamma (density radii).
@@ -592,6 +631,9 @@ def _resolve_stipple_options(args):
     if args.dot_mm is not None and args.dots is not None:
         raise _UsageError(f"--dot-mm {args.dot_mm:g} and --dots {args.dots} both set the dot "
                           f"size; give one")
+    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
+        raise _UsageError("give the SVG size either by --width-mm/--height-mm or by --dpi, "
+                          "not both")
     if args.method == "lloyd" and args.schedule is not None:
         raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
                           f"--schedule {args.schedule} would be ignored; give one")
@@ -728,8 +770,6 @@ def _run_stipple(args):
         if key in seen:
             raise ValueError(f"output given twice: {out}")
         seen.add(key)
-    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
-        raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
     image = _image_path(args.images[0])
     gray = load_gray(image, allow_large=args.allow_large)
     n = dots_for_image(gray.shape[1], gray.shape[0], n=args.n, density=args.density,
@@ -1024,8 +1064,6 @@ def _report_batch(args, batch):
 def _run_stipple_batch(args):
     from diskpack_cl.batch import stipple_many
 
-    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
-        raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
                          n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
                          seed=args.seed, recursive=args.recursive,
@@ -1061,7 +1099,7 @@ _SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_analy
 
 def build_parser():
     """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
         from importlib.metadata import version

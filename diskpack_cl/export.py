@@ -623,14 +623,17 @@ def check_output_path(path):
     Raises
     ------
     ValueError
-        Unknown extension (the message lists the supported ones), ``path`` is
-        a folder, or its folder is not writable (a probe file is created
+        ``path`` is a folder, an unknown extension (the message lists the
+        supported ones), or its folder is not writable (a probe file is created
         there and removed, see :func:`diskpack_cl.io.check_writable`).
     FileNotFoundError
         The output directory does not exist.
     """
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder: give a file name in it, such as "
+                         f"{path / 'out.svg'}")
     if ext not in WRITERS:
         raise ValueError(
             f"unknown output extension {ext or '(none)'!r} for {path}; supported: "

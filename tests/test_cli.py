@@ -450,7 +450,7 @@ def test_stipple_failed_writer_removes_earlier_outputs(ctx, monkeypatch, tmp_pat
     ("unknown extension", "unknown output extension '.gif'"),
     ("missing output dir", "output directory does not exist"),
     ("output twice", "output given twice"),
-    ("dpi and mm", "either by --width-mm/--height-mm or by --dpi"),
+    ("output folder", "is a folder: give a file name in it, such as"),
     ("too many points", "too large"),
 ])
 def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
@@ -478,8 +478,8 @@ def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
         out = tmp_path / "no" / "o.svg"
     elif case == "output twice":
         extra = ["-o", str(out)]
-    elif case == "dpi and mm":
-        extra = ["--dpi", "300", "--width-mm", "100"]
+    elif case == "output folder":
+        out = tmp_path
     if case == "too many points":
         extra = ["--supersample", "1", "-n", "100"]  # 4 grid cells per point: at most 64
     _bad(tmp_path, capsys, ["stipple", str(image), "-n", "10", "-o", str(out), *extra], 1, message)
@@ -500,6 +500,35 @@ def test_stipple_usage_errors(tmp_path, capsys, monkeypatch, argv):
     assert cli.main(argv) == 2
     assert "usage: diskpack" in capsys.readouterr().err
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["stipple", "g.png", "-n", "1", "-o", "o.svg"], "argument -n: need at least 2 points, got 1"),
+    (["stipple", "g.png", "-n", "5", "--seed", "-1", "-o", "o.svg"],
+     "argument --seed: must be at least 0, got -1"),
+    (["poisson", "-n", "5", "--seed", "-1", "-o", "o.npz"],
+     "argument --seed: must be at least 0, got -1"),
+    (["stipple", "g.png", "-n", "5", "--dpi", "300", "--width-mm", "100", "-o", "o.svg"],
+     "either by --width-mm/--height-mm or by --dpi, not both"),
+    (["stiple", "g.png"], "invalid choice: 'stiple'"),
+    (["stiple", "g.png"], "; did you mean stipple?"),
+    (["stipple", "g.png", "-n", "5", "--pen-mn", "0.3", "-o", "o.svg"], "did you mean --pen-mm?"),
+    (["stipple", "g.png", "-n", "5", "--schedule", "defualt", "-o", "o.svg"],
+     "did you mean default?"),
+])
+def test_option_faults_are_usage_errors_that_name_the_option(tmp_path, capsys, monkeypatch,
+                                                            argv, message):
+    monkeypatch.chdir(tmp_path)
+    _gradient_png(tmp_path / "g.png", 16)
+    assert cli.main(argv) == 2
+    assert message in capsys.readouterr().err
+    assert os.listdir(tmp_path) == ["g.png"]
+
+
+def test_stipple_help_describes_the_default(capsys):
+    assert cli.main(["stipple", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "the default schedule" in text and "--schedule paper runs the paper's" in text
 
 
 # ------------------------------------------------------------------ analyze
