@@ -107,6 +107,35 @@ def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
     return MM_PER_INCH / dpi
 
 
+#: Long side (px) of the PNG preview when no scale is given.
+PREVIEW_MAX_PX = 4096
+
+
+def preview_scale(width, height, scale=None):
+    """PNG pixels per image pixel: ``scale``, else 2 capped at :data:`PREVIEW_MAX_PX` px.
+
+    Examples
+    --------
+    >>> preview_scale(512, 512), preview_scale(6000, 4000), preview_scale(6000, 4000, 1.0)
+    (2.0, 0.6826666666666666, 1.0)
+    """
+    return float(scale) if scale is not None else min(2.0, PREVIEW_MAX_PX / max(width, height))
+
+
+def tone_dot_count(darkness, scale, dot_mm):
+    """The number of dots ``dot_mm`` wide whose ink equals the image's on paper.
+
+    ``darkness`` is per pixel in [0, 1]; ``scale`` mm per pixel.
+
+    Examples
+    --------
+    >>> tone_dot_count(np.full((100, 100), 0.5), 1.0, 2.0)  # 5000 mm^2 of ink
+    1592
+    """
+    ink_mm2 = float(np.mean(darkness)) * np.size(darkness) * scale * scale
+    return max(2, int(round(ink_mm2 / (0.25 * np.pi * dot_mm * dot_mm))))
+
+
 def _fmt(v):
     return np.char.mod("%.4f", v)
 
@@ -444,13 +473,14 @@ def _inside_page(c, rad, wmm, hmm):
     return inside, rad, moved
 
 
-def _coverage(c, rad, ow, oh, aa):
+def _coverage(c, rad, ow, oh, aa, progress=None):
     """Ink coverage in [0, 1] per output pixel: fraction of aa x aa samples in a disk.
 
     Dots are stamped in windows of their own size (grouped by size, in
     chunks), and the coverages are summed with ``np.add.at``: exact sample
     counts for disjoint disks; overlapping dots (fixed or enlarged dot sizes)
-    are summed and clipped at 1.
+    are summed and clipped at 1. ``progress(k)`` is called after each chunk
+    of ``k`` dots.
     """
     ink = np.zeros(ow * oh)
     sub = (np.arange(aa) + 0.5) / aa
@@ -482,11 +512,13 @@ def _coverage(c, rad, ow, oh, aa):
             gy = np.broadcast_to(py[:, :, None], cov.shape)
             ok = (cov > 0) & (gx >= 0) & (gx < ow) & (gy >= 0) & (gy < oh)
             np.add.at(ink, gy[ok] * ow + gx[ok], cov[ok])
+            if progress is not None:
+                progress(len(i))
     return np.minimum(ink, 1.0).reshape(oh, ow)
 
 
 def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=False, aa=4,
-              dots="tone", pen_px=None):
+              dots="tone", pen_px=None, progress=None):
     """Write an anti-aliased PNG preview (8-bit gray).
 
     Each output pixel's ink is the fraction of its ``aa x aa`` sample
@@ -512,6 +544,8 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         The plotter pen's width in output pixels: show what the pen draws
         (:func:`write_svg` with ``pen_mm``): a dot narrower than the pen as a
         pen touch, a wider one filled (its rings ink the whole disk).
+    progress : callable, optional
+        ``progress(k)`` after each ``k`` dots stamped (a progress bar).
 
     Returns
     -------
@@ -537,7 +571,7 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         if not pen_px > 0:
             raise ValueError(f"pen_px must be > 0, got {pen_px}")
         rad = np.maximum(rad, 0.5 * pen_px)
-    ink = _coverage(p * scale, rad, ow, oh, aa)
+    ink = _coverage(p * scale, rad, ow, oh, aa, progress)
     val = ink if invert else 1.0 - ink
     img = Image.fromarray(np.round(val * 255).astype(np.uint8))
     with atomic_write(path, "wb") as fh:

@@ -257,3 +257,35 @@ def test_tone_dots_need_a_tone_radius(tmp_path, result):
     with pytest.raises(ValueError, match="needs the result's tone_radius"):
         write_svg(tmp_path / "a.svg", result)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("points", ["uniform", "stippled"])
+def test_auto_pen_path_is_shorter_than_either_order(points):
+    from diskpack_cl import error_diffusion
+
+    if points == "uniform":
+        p = np.random.default_rng(1).random((3000, 2)) * 100
+    else:  # dots spread like an image's darkness (a gradient)
+        p = error_diffusion(np.tile(np.linspace(0, 1, 120), (90, 1)), 3000, seed=0)
+    travel = {m: pen_path_order(p, method=m)[2] for m in ("hilbert", "greedy", "auto")}
+    assert travel["auto"] < 0.95 * min(travel["hilbert"], travel["greedy"])
+
+
+def test_two_opt_keeps_a_permutation_never_longer_and_a_zero_budget():
+    from diskpack_cl.pen_path import two_opt
+
+    p = np.random.default_rng(4).random((500, 2))
+    start = np.random.default_rng(5).permutation(500)
+    better = two_opt(p, start)
+    np.testing.assert_array_equal(np.sort(better), np.arange(500))
+    assert path_travel(p, better) < 0.5 * path_travel(p, start)
+    np.testing.assert_array_equal(two_opt(p, start, budget_s=0.0), start)
+
+
+def test_png_preview_progress_and_default_size(tmp_path, result):
+    from diskpack_cl.export import preview_scale
+
+    done = []
+    write_png(tmp_path / "a.png", result, progress=done.append)
+    assert sum(done) == 200
+    assert preview_scale(80, 60) == 2.0 and preview_scale(12000, 8000) * 12000 == 4096
