@@ -523,11 +523,12 @@ def _tone_radius(result, gray, invert):
 
 def _stipple_item(item, device, progress):
     from diskpack_cl import load_gray, stipple
+    from diskpack_cl.image import adjust_tone
 
     params = dict(item.params)
     allow_large = params.pop("allow_large", False)
     count = {k: params.pop(k, None) for k in ("n", "density", "dots_per_cm2")}
-    gray = load_gray(item.input, allow_large=allow_large)
+    gray = adjust_tone(load_gray(item.input, allow_large=allow_large), **params.pop("tone", {}))
     n = dots_for_image(gray.shape[1], gray.shape[0], **count, **_layout(item.write))
     callback = None
     if progress is not None:

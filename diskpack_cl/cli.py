@@ -556,6 +556,15 @@ def _add_stipple(subparsers):
                    help="seed of the error-diffusion start (default 0; same seed, same result)")
     g.add_argument("--invert", action="store_true",
                    help="stipple the light parts (light dots on a dark ground)")
+    t = p.add_argument_group("tone (before stippling, on every schedule; in --json params.tone)")
+    t.add_argument("--black-point", type=_unit_closed, default=0.0, metavar="B",
+                   help="gray levels at or below B (0 black .. 1 white) get full ink "
+                        "(default 0)")
+    t.add_argument("--white-point", type=_unit_closed, default=1.0, metavar="W",
+                   help="gray levels at or above W are blank paper, no dots (default 1)")
+    t.add_argument("--tone-gamma", type=_positive_float, default=1.0, metavar="G",
+                   help="contrast: the levels between the points are raised to G (above 1: "
+                        "darker mid-tones, below 1: lighter; default 1)")
     g.add_argument("--allow-large", action="store_true",
                    help="lift Pillow's decompression-bomb limit (about 89 Mpixel) for trusted "
                         "large images")
@@ -686,6 +695,9 @@ def _resolve_stipple_options(args):
     from diskpack_cl.schedule import SCHEDULE_OPTIONS
 
     _resolve_drawing_options(args)
+    if not args.black_point < args.white_point:
+        raise _UsageError(f"--black-point {args.black_point:g} must be below --white-point "
+                          f"{args.white_point:g}")
     if args.method == "lloyd" and args.schedule is not None:
         raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
                           f"--schedule {args.schedule} would be ignored; give one")
@@ -710,7 +722,8 @@ def _resolve_stipple_options(args):
             f"the {args.schedule or 'default'} schedule's {radii} radii")
         raise _UsageError(f"--gamma has no effect with {which} (r ~ darkness^(-1/2)); it is "
                           f"the exponent of --radii gray, which the paper, pack and lloyd "
-                          f"schedules use (e.g. --schedule paper --gamma {args.gamma:g})")
+                          f"schedules use (e.g. --schedule paper --gamma {args.gamma:g}); "
+                          f"--tone-gamma sets the contrast on every schedule")
     args.gamma = 3.0 if args.gamma is None else args.gamma
     args.schedule = args.schedule or "default"
 
@@ -796,6 +809,11 @@ def _layout_options(args):
     """Where the picture goes on paper: the options of :func:`diskpack_cl.export.svg_layout`."""
     return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi, page=args.page,
                 landscape=args.landscape, margin_mm=args.margin_mm)
+
+
+def _tone(args):
+    """The tone controls of :func:`diskpack_cl.image.adjust_tone` from the arguments."""
+    return dict(black=args.black_point, white=args.white_point, gamma=args.tone_gamma)
 
 
 def _stipple_options(args):
@@ -890,7 +908,7 @@ def _write_and_report(args, res, gray, outputs, summary, t0):
 def _run_stipple(args):
     from diskpack_cl.batch import dots_for_image
     from diskpack_cl.export import preview_scale
-    from diskpack_cl.image import load_gray
+    from diskpack_cl.image import adjust_tone, load_gray
     from diskpack_cl.schedule import StippleOptions
     from diskpack_cl.stipple import stipple
 
@@ -903,7 +921,7 @@ def _run_stipple(args):
     # everything that can be refused is refused before the computation
     outputs = _checked_outputs(args)
     image = _image_path(args.images[0])
-    gray = load_gray(image, allow_large=args.allow_large)
+    gray = adjust_tone(load_gray(image, allow_large=args.allow_large), **_tone(args))
     n, tone_n = _tone_count(args, gray, args.n)
     n = dots_for_image(gray.shape[1], gray.shape[0], n=n, density=args.density,
                        dots_per_cm2=args.dots_per_cm2, **_layout_options(args))
@@ -921,6 +939,7 @@ def _run_stipple(args):
         close()
     if not getattr(res.certificate, "valid", False):
         raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
+    res.params["tone"] = _tone(args)  # recorded in the .npz and the --json params
     summary = res.summary()
     summary.update(image=str(image), tone_n=tone_n)
     tail = _write_and_report(args, res, gray, outputs, summary, t0)
@@ -1230,7 +1249,7 @@ def _run_stipple_batch(args):
                          n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
                          seed=args.seed, recursive=args.recursive,
                          allow_large=args.allow_large, write=_write_options(args),
-                         **_batch_run(args), **_stipple_options(args))
+                         tone=_tone(args), **_batch_run(args), **_stipple_options(args))
     return _report_batch(args, batch)
 
 

@@ -728,3 +728,21 @@ def test_dot_count_from_the_pen(ctx, tmp_path, capsys):
            f"lighter" in err
     assert cli.main(["stipple", str(image), "-n", "tone", "-o", str(tmp_path / "x.svg")]) == 2
     assert "-n tone needs the dot size" in capsys.readouterr().err
+
+
+def test_tone_controls_act_on_the_default_schedule(ctx, tmp_path, capsys):
+    image = _gradient_png(tmp_path / "g.png", 40)   # dark on the left, white on the right
+    out = tmp_path / "o.npz"
+    s, _ = _run_json(["stipple", str(image), "-n", "200", "--white-point", "0.5",
+                      "--black-point", "0.1", "--tone-gamma", "1.5", "--json", "-o", str(out)],
+                     capsys)
+    assert s["params"]["schedule"] != "paper"
+    assert s["params"]["tone"] == {"black": 0.1, "white": 0.5, "gamma": 1.5}
+    with np.load(out) as z:
+        # levels above the white point are blank paper: (almost) no dot right of the
+        # middle, where a quarter of them are without it
+        assert np.mean(z["points"][:, 0] > 20) < 0.05
+        assert json.loads(str(z["params"]))["tone"]["white"] == 0.5
+    assert cli.main(["stipple", str(image), "-n", "8", "--black-point", "0.6",
+                     "--white-point", "0.5", "-o", str(tmp_path / "x.svg")]) == 2
+    assert "--black-point 0.6 must be below --white-point 0.5" in capsys.readouterr().err
