@@ -5,9 +5,12 @@ photograph (:func:`diskpack_cl.error_diffusion`, dots spread like its
 darkness), on a 190 mm wide drawing, the pen starting at the origin as in
 the SVG. Orders: Hilbert curve, greedy nearest neighbour, each improved by
 :func:`diskpack_cl.pen_path.two_opt` within a time budget, and the default
-(``method="auto"``). Each row: travel in mm, its ratio to Hilbert, seconds.
+(``method="auto"``). Each row: travel in mm, its ratio to Hilbert, seconds,
+and the plot time (:func:`diskpack_cl.export.plot_time`, every dot one pen
+touch). ``--markdown`` prints the README's table rows.
 
     python benchmarks/pen_path.py [-n 2000 20000 100000] [--budget 2] [--json out.json]
+        [--markdown]
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import time
 import numpy as np
 
 from diskpack_cl import error_diffusion, load_gray, sample_image_path
+from diskpack_cl.export import plot_time
 from diskpack_cl.pen_path import _greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt
 
 WIDTH_MM = 190.0
@@ -54,16 +58,26 @@ def main(argv=None):
     ap.add_argument("-n", type=int, nargs="+", default=[2000, 20000, 100000])
     ap.add_argument("--budget", type=float, default=2.0, help="2-opt time budget, s")
     ap.add_argument("--json", default=None, help="also write the rows here")
+    ap.add_argument("--markdown", action="store_true", help="print the README's table rows")
     args = ap.parse_args(argv)
-    out = []
+    out, table = [], []
     for n in args.n:
         p = dots(n)
         rows = measure(p, args.budget)
         ref = rows[0][1]
         print(f"n = {n}: unordered {path_travel(p):.0f} mm")
+        cells = {}
         for name, travel, s in rows:
-            print(f"  {name:16s} {travel:10.0f} mm  {travel / ref:6.3f}  {s:7.2f} s")
-            out.append({"n": n, "order": name, "travel_mm": travel, "seconds": s})
+            hours = plot_time(n, 0.01 * n, travel) / 3600
+            print(f"  {name:16s} {travel:10.0f} mm  {travel / ref:6.3f}  {s:7.2f} s  "
+                  f"{hours:6.2f} h plot")
+            out.append({"n": n, "order": name, "travel_mm": travel, "seconds": s,
+                        "plot_hours": hours})
+            cells[name] = f"{travel:.0f} mm, {hours:.2f} h ({s:.2g} s)"
+        table.append(f"| {n} | {cells['greedy']} | {cells['hilbert']} | "
+                     f"{cells['auto (default)']} |")
+    if args.markdown:
+        print("\n".join(table))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=1)
