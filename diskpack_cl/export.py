@@ -331,57 +331,45 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
               plot_speed_mm_s=PLOT_SPEED_MM_S):
     """Write an SVG for pen plotters, vpype and Inkscape.
 
-    The dots are elements of one Inkscape layer (``<g
-    inkscape:groupmode="layer">``), one element per dot, in pen-path order;
-    user units are millimetres. The page is the picture (``width="..px"``,
-    CSS pixels, when its size comes from ``dpi``, else ``..mm``), or with
-    ``page`` the paper, the picture centred on it (:func:`svg_layout`). A
-    ``<metadata>`` element records the layout, so :func:`read_stipple`
-    reads the dots back. A dot that would stick out of the picture is moved
-    inward until it touches the edge, keeping its size.
+    One element per dot, in pen-path order, in one Inkscape layer; user
+    units are millimetres. The page is the picture (``width="..px"``, CSS
+    pixels, for a ``dpi`` size, else ``..mm``) or the ``page`` paper with
+    the picture centred (:func:`svg_layout`). A dot that would stick out of
+    the picture moves inward until it touches the edge. A ``<metadata>``
+    element records the layout for :func:`read_stipple`.
 
-    Plotting: a plotter traces a ``<circle>`` once along its outline, so
-    without ``pen_mm`` (filled circles, for screens or a plotter that fills)
-    a dot comes out a pen width wider. With ``pen_mm=W`` every dot is drawn
-    as the pen draws it: a dot not wider than the pen is one pen touch (a
-    path 0.01 mm long, round caps); a wider one is filled by concentric
-    rings a pen width apart (:func:`_pen_rings`), the outermost of radius
-    ``(dot diameter - W) / 2``, joined into one path per dot.
+    Without ``pen_mm`` the dots are filled circles (a plotter traces their
+    outline, a pen width wider). With ``pen_mm=W`` each dot is drawn as the
+    pen draws it: a dot not wider than the pen is one touch (a 0.01 mm
+    path, round caps), a wider one one path of concentric rings W apart
+    (:func:`_pen_rings`), the outermost of radius ``(diameter - W) / 2``.
 
     Parameters
     ----------
     width_mm, height_mm, dpi : float, optional
-        Picture size (see :func:`mm_per_px`; with ``page``: default, fit
+        Picture size (:func:`mm_per_px`; with ``page``, by default fitted
         inside the margins).
     dot_mm : float, optional
-        Fixed dot diameter in mm, instead of ``dots``.
-    radius_scale : float, optional
-        Factor on the radii of ``dots``.
+        Fixed dot diameter in mm, instead of ``dots`` (``"tone"``: one size,
+        ``result.tone_radius``, ink = the image's darkness; ``"packing"``:
+        the certified disks) times ``radius_scale``.
     pen_path : {"auto", "hilbert", "greedy", "none"}
-        Dot order; see :func:`diskpack_cl.pen_path.pen_path_order`.
+        See :func:`diskpack_cl.pen_path.pen_path_order`.
     invert : bool, optional
-        White dots on black paper: the paper is a black image in its own
-        layer named ``% paper (not plotted)``, which vpype and plotters skip.
-    pen_mm : float, optional
-        The plotter pen's line width in mm (see above).
-    dots : {"tone", "packing"}
-        Dot size (without ``dot_mm``): ``"tone"`` (default) one size for all
-        dots, their ink the image's darkness (``result.tone_radius``);
-        ``"packing"`` each dot its certified packing disk.
-    page : str or None
-        Paper (:func:`paper_size`): ``"a4"``, ``"a3"``, ``"a5"``,
-        ``"letter"`` or ``"WxHmm"``; ``landscape`` turns it, ``margin_mm``
-        keeps the picture that far from its edges.
+        White dots on black paper: a black image in the layer ``% paper
+        (not plotted)``, which vpype and plotters skip.
+    page, landscape, margin_mm : optional
+        The paper (:func:`paper_size`, :func:`svg_layout`).
     plot_speed_mm_s : float
         Speed of the plot-time estimate (:func:`plot_time`).
 
     Returns
     -------
     dict
-        ``width_mm``, ``height_mm`` (the picture), ``page_mm``, ``n``,
-        ``travel_before_mm``, ``travel_after_mm`` (pen-up travel from the
-        origin), ``moved_inside``, ``pen_downs``, ``draw_mm`` (pen-down
-        length), ``plot_seconds`` and, with ``pen_mm``, ``pen_touches``.
+        ``width_mm``, ``height_mm`` (picture), ``page_mm``, ``n``,
+        ``travel_before_mm``, ``travel_after_mm`` (pen-up, from the origin),
+        ``moved_inside``, ``pen_downs``, ``draw_mm``, ``plot_seconds`` and,
+        with ``pen_mm``, ``pen_touches``.
 
     Examples
     --------
@@ -393,8 +381,8 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     >>> info = write_svg(out, res, dpi=25.4, pen_mm=0.5)
     >>> info["moved_inside"], info["pen_touches"]
     (1, 0)
-    >>> [line.strip() for line in Path(out).read_text().splitlines() if "<path" in line][0]
-    '<path d="M 1.7552,8.0000 a 0.7500,0.7500 0 1 0 -1.5000,0 a 0.7500,0.7500 0 1 0 1.5000,0 l -0.5000,0 a 0.2500,0.2500 0 1 0 -0.5000,0 a 0.2500,0.2500 0 1 0 0.5000,0"/>'
+    >>> [line.split()[:5] for line in Path(out).read_text().splitlines() if "<path" in line][0]
+    ['<path', 'd="M', '1.7552,8.0000', 'a', '0.7500,0.7500']
     """
     p, r, W, H = _arrays(result)
     if pen_mm is not None and not pen_mm > 0:

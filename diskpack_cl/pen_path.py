@@ -1,9 +1,9 @@
 """Pen path: the order in which a plotter visits the dots, and its pen-up travel.
 
 Orders: a Hilbert curve (vectorized sort), greedy nearest neighbour
-(cKDTree), and both improved by a windowed 2-opt (segment reversals between
-path positions at most ``window`` apart, all evaluated with numpy each
-round, the best non-overlapping ones applied) within a time budget.
+(cKDTree), and either improved by 2-opt and Or-opt moves towards each dot's
+nearest neighbours (all evaluated with numpy each round, the best ones that
+change disjoint edges applied) within a time budget.
 ``benchmarks/pen_path.py`` measures them on stippled dots; see
 :func:`pen_path_order` for what the default does and why.
 """
@@ -105,41 +105,81 @@ def _greedy_order(p, start):
     return order
 
 
-def _reversal_gains(q, near):
-    """Best 2-opt move per path position ``a`` of the open path ``q``.
+def _reversals(q, edge, i, j):
+    """2-opt moves joining positions ``i`` and ``j`` (near neighbours) of the open path ``q``.
 
     Reversing ``q[a+1 .. b]`` replaces the edges (a, a+1) and (b, b+1) by
-    (a, b) and (a+1, b+1); the last point has no edge after it. The new edge
-    (a, b) joins a point to one of its nearest neighbours: ``near`` holds the
-    path positions of each position's neighbours. Returns (gain, b) per ``a``.
+    (a, b) and (a+1, b+1); the last point has no edge after it. Returns
+    (gain, first edge, last edge, slice start, slice stop, kind 0).
     """
     m = len(q)
-    edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
-    i = np.repeat(np.arange(m), near.shape[1])
-    j = near.ravel()
     a, b = np.minimum(i, j), np.maximum(i, j)
     ok = b >= a + 2
     a, b = a[ok], b[ok]
-    tail = b == m - 1
     bn = np.minimum(b + 1, m - 1)
-    gain = (edge[a] + edge[b] - np.hypot(*(q[a] - q[b]).T)
-            - np.where(tail, 0.0, np.hypot(*(q[a + 1] - q[bn]).T)))
-    best = np.zeros(m)
-    np.maximum.at(best, a, gain)
-    hit = (gain == best[a]) & (gain > 0)
-    best_b = np.zeros(m, dtype=np.int64)
-    best_b[a[hit]] = b[hit]
-    return best, best_b
+    gain = (edge[a] + edge[b] - _dist(q, a, b)
+            - np.where(b == m - 1, 0.0, _dist(q, a + 1, bn)))
+    return gain, a, b, a + 1, b + 1, np.zeros_like(a)
+
+
+# Or-opt moves a dot at most this many path positions (a longer move rotates a
+# long stretch and blocks every other move on it in its round)
+_OR_SPAN = 64
+
+
+def _relocations(q, edge, i, c):
+    """Or-opt moves: the dot at position ``i`` moves next to its near neighbour at ``c``.
+
+    It goes between positions j and j + 1, for j = c and j = c - 1. Returns
+    (gain, first edge, last edge, slice start, slice stop, kind): the slice
+    rotates by -1 (kind 1, i < j) or +1 (kind 2, i > j).
+    """
+    m = len(q)
+    i, j = np.concatenate([i, i]), np.concatenate([c, c - 1])
+    ok = (i >= 1) & (j >= 0) & (j != i) & (j != i - 1) & (np.abs(i - j) <= _OR_SPAN)
+    i, j = i[ok], j[ok]
+    last_i, last_j = i == m - 1, j == m - 1
+    inext, jnext = np.minimum(i + 1, m - 1), np.minimum(j + 1, m - 1)
+    removed = edge[i - 1] + np.where(last_i, 0.0, edge[i] - _dist(q, i - 1, inext))
+    inserted = _dist(q, j, i) + np.where(last_j, 0.0, _dist(q, i, jnext) - edge[j])
+    fwd = i < j
+    return (removed - inserted, np.where(fwd, i - 1, j), np.where(fwd, j, i),
+            np.where(fwd, i, j + 1), np.where(fwd, j + 1, i + 1), np.where(fwd, 1, 2))
+
+
+def _dist(q, a, b):
+    return np.hypot(*(q[a] - q[b]).T)
+
+
+def _apply_moves(moves, arrays, pos, tol):
+    """Apply the best moves that change disjoint edges; return how many."""
+    gain, e0, e1, s0, s1, kind = moves
+    good = np.flatnonzero(gain > tol)
+    good = good[np.lexsort((-gain[good], e0[good]))]
+    good = good[np.diff(e0[good], prepend=-1) != 0]  # the best per first edge
+    used = np.zeros(len(arrays[0]), dtype=bool)
+    done = 0
+    for k in good[np.argsort(-gain[good], kind="stable")]:
+        if used[e0[k] : e1[k] + 1].any():
+            continue
+        used[e0[k] : e1[k] + 1] = True
+        sl = slice(s0[k], s1[k])
+        for arr in arrays:
+            arr[sl] = arr[sl][::-1] if kind[k] == 0 else np.roll(arr[sl], 2 * kind[k] - 3, axis=0)
+        pos[arrays[2][sl]] = np.arange(s0[k], s1[k])
+        done += 1
+    return done
 
 
 def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, budget_s=2.0):
-    """Shorten an open pen path by 2-opt reversals towards near neighbours.
+    """Shorten an open pen path by 2-opt and Or-opt moves towards near neighbours.
 
     Each round evaluates, for every dot and each of its ``neighbors``
-    nearest dots (a k-d tree, once), the reversal that joins them (numpy),
-    applies the best ones that touch disjoint stretches of the path, and
-    stops when none gains or after ``budget_s`` seconds (checked between
-    rounds). The start is fixed.
+    nearest dots (a k-d tree, once), the reversal that joins them (2-opt)
+    and the moves of the dot next to it (Or-opt), all with numpy, applies
+    the best ones that change disjoint edges, and stops when none gains or
+    after ``budget_s`` seconds (checked between rounds): with a budget that
+    stops it, the order depends on the machine's speed. The start is fixed.
 
     Examples
     --------
@@ -155,25 +195,19 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, budget_s=2.0):
     if len(q) <= 3:
         return idx[1:]
     k = min(neighbors, len(q) - 1)
-    near = cKDTree(q).query(q, k=k + 1)[1][:, 1:]  # by position in q, at the start
-    pos = np.arange(len(q))  # pos[point's place in the start q] = its position now
+    near = cKDTree(q).query(q, k=k + 1)[1][:, 1:]  # by place in the starting q
+    place = np.arange(len(q))  # place[position now] = place in the starting q
+    pos = np.arange(len(q))  # its inverse
+    tol = 1e-9 * float(np.ptp(q, axis=0).max())
     deadline = time.perf_counter() + budget_s
     while time.perf_counter() < deadline:
-        place = np.empty_like(pos)
-        place[pos] = np.arange(len(q))  # place[position now] = place in the start q
-        gain, bbest = _reversal_gains(q, pos[near[place]])
-        cand = np.flatnonzero(gain > 1e-9)
-        if cand.size == 0:
+        edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
+        i = np.repeat(np.arange(len(q)), k)
+        j = pos[near[place]].ravel()
+        moves = [np.concatenate(v) for v in zip(_reversals(q, edge, i, j),
+                                                 _relocations(q, edge, i, j))]
+        if not _apply_moves(moves, (q, idx, place), pos, tol):
             break
-        used = np.zeros(len(q), dtype=bool)
-        for a in cand[np.argsort(-gain[cand], kind="stable")]:
-            b = bbest[a]
-            if used[a : b + 1].any():
-                continue
-            used[a : b + 1] = True
-            for arr in (q, idx, place):
-                arr[a + 1 : b + 1] = arr[a + 1 : b + 1][::-1].copy()
-            pos[place[a + 1 : b + 1]] = np.arange(a + 1, b + 1)
     return idx[1:]
 
 
