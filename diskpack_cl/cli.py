@@ -856,7 +856,7 @@ def _tone_count(args, gray, n):
     h, w = gray.shape
     scale = svg_layout(w, h, **_layout_options(args))["scale"]
     tone = tone_dot_count(gray if args.invert else 1.0 - gray, scale, dot)
-    if n != "tone" and not 2 / 3 <= n / tone <= 3 / 2 and not args.quiet:
+    if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and not args.quiet:
         print(f"{PROG}: note: {tone} dots of {dot:g} mm give the image's ink on this paper; "
               f"-n {n} will look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})",
               file=sys.stderr)

@@ -654,7 +654,7 @@ def check_output_path(path):
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     if path.is_dir():
-        raise ValueError(f"{path} is a folder: give a file name in it, such as "
+        raise ValueError(f"{path} is a folder, not a file name: give one in it, such as "
                          f"{path / 'out.svg'}")
     if ext not in WRITERS:
         raise ValueError(
@@ -791,8 +791,11 @@ def _read_svg(path):
     if meta is None:
         raise ValueError("not written by diskpack_cl (no <metadata id=\"diskpack_cl\">)")
     meta = json.loads(meta.text)
-    layer = next(g for g in root.iter(f"{_SVG_NS}g")
-                 if g.get("{http://www.inkscape.org/namespaces/inkscape}label") == meta["layer"])
+    layer = next((g for g in root.iter(f"{_SVG_NS}g")
+                  if g.get("{http://www.inkscape.org/namespaces/inkscape}label") == meta["layer"]),
+                 None)
+    if layer is None:
+        raise ValueError(f"no layer {meta['layer']!r} of dots")
     pen = meta["pen_mm"] or 0.0
     centres, radii = [], []
     for el in layer:

@@ -451,7 +451,7 @@ def test_stipple_failed_writer_removes_earlier_outputs(ctx, monkeypatch, tmp_pat
     ("unknown extension", "unknown output extension '.gif'"),
     ("missing output dir", "output directory does not exist"),
     ("output twice", "output given twice"),
-    ("output folder", "is a folder: give a file name in it, such as"),
+    ("output folder", "is a folder, not a file name: give one in it, such as"),
     ("too many points", "too large"),
 ])
 def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
