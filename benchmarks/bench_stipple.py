@@ -6,7 +6,8 @@ prints the median seconds per iteration and per stage (raster labels + MIC
 estimate, exact MIC refinement, centroids), plus the error-diffusion start.
 Methods: ``diskpack`` (paper disk-packing steps), ``mix`` (the default
 schedule's step: disk packing blended with power-cell centroids, with the
-default's options) and ``lloyd``.
+default's options), ``mix-before`` (the same without ``support`` and
+``capacity``, the default's step before issue 17) and ``lloyd``.
 
     python benchmarks/bench_stipple.py [--n 5000 20000 50000] [--sizes 512 2048]
         [--iters 5] [--device pocl] [--json out.json] [--profile]
@@ -15,7 +16,7 @@ default's options) and ``lloyd``.
 events): all of them (``kernel``) and, in the JSON, per kernel.
 
 With ``--end-to-end N``: whole runs at N dots on the sample instead, the
-default schedule, the default with ``capacity=0.1`` and the paper's Fig. 8
+default schedule, the default as before issue 17 and the paper's Fig. 8
 schedule (180 disk-packing and 30 Lloyd iterations: three rounds of 60 +
 10), seconds from the image to the certified result.
 """
@@ -73,10 +74,14 @@ def main(argv=None):
             error_diffusion(g, n, seed=0)
             t_start = time.perf_counter() - t
             for method, sched in (("diskpack", [("pack", a.iters + 1)]),
-                                  ("mix", [("mix", a.iters + 1)]), ("lloyd", None)):
-                if method == "mix":
+                                  ("mix", [("mix", a.iters + 1)]), ("mix-before", [("mix", a.iters + 1)]),
+                                  ("lloyd", None)):
+                if method.startswith("mix"):
                     # the default schedule's step: packing + power-cell centroids, its options
+                    # (mix-before: as before issue 17, without support and capacity)
                     kw = dict(SCHEDULE_OPTIONS["default"], schedule=sched)
+                    if method == "mix-before":
+                        kw.update(support=0.0, capacity=0.0)
                 else:
                     kw = dict(schedule=sched) if sched else dict(method="lloyd", lloyd=a.iters + 1)
                 res = stipple(g, n, seed=0, device=a.device, profile=a.profile, **kw)
@@ -99,8 +104,9 @@ def main(argv=None):
 
 
 def end_to_end(n, device):
-    """Whole stipplings of the sample: the default schedule, with capacity, and the paper's Fig. 8 one."""
-    runs = (("default", {}), ("default with capacity 0.1", dict(capacity=0.1)),
+    """Whole stipplings of the sample: the default schedule, as before issue 17, and the paper's Fig. 8 one."""
+    runs = (("default", {}), ("default before issue 17 (no support, no capacity)",
+                              dict(support=0.0, capacity=0.0)),
             ("paper Fig. 8 (3 x (60 pack + 10 Lloyd))", dict(schedule=[("pack", 60), ("lloyd", 10)] * 3)))
     for name, kw in runs:
         t = time.perf_counter()

@@ -3,7 +3,8 @@
 Each drawing shows every dot with one radius (the equal-ink radius of
 :func:`diskpack_cl.analysis.tone_radius`, the drawing the tone measure sees),
 rendered at ``--scale`` output pixels per image pixel; the label gives the
-configuration and its tone SSIM (sigma 3) over the whole image.
+configuration and, over the whole image, its tone SSIM (sigma 3), edge
+fidelity and stray dots per 10 000 (:mod:`diskpack_cl.analysis`).
 
     python benchmarks/stipple_crops.py hubble_right -n 20000 --box 100 180 120 120 \\
         --configs default lloyd -o docs/figures/stipple_crop_hubble.png
@@ -21,7 +22,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 import stipple_quality as sq
-from diskpack_cl.analysis import render_dots, tone_radius, tone_ssim
+from diskpack_cl.analysis import edge_fidelity, render_dots, stray_dots, tone_radius, tone_ssim
 
 
 def drawing(points, darkness, box, scale):
@@ -45,8 +46,10 @@ def panel(image, n, configs, box, scale=4, seed=0):
     for spec in configs:
         name, extra = sq.parse_config(spec)
         res = sq.stipple(gray, n, seed=seed, **sq.stipple_kwargs(name, extra))
-        t = tone_ssim(res.points, dark)
-        tiles.append((drawing(res.points, dark, box, scale), f"{spec}  n={n}  tone {t:.3f}"))
+        t, e = tone_ssim(res.points, dark), edge_fidelity(res.points, dark)
+        s = stray_dots(res.points, dark).per_10k
+        label = f"{spec}  n={n}  tone {t:.3f}" + (f"  edge {e:.3f}" if e == e else "") + f"  stray {s:.0f}"
+        tiles.append((drawing(res.points, dark, box, scale), label))
     pad, label = 6, 16
     W = sum(t.size[0] for t, _ in tiles) + pad * (len(tiles) + 1)
     H = h * scale + label + 2 * pad

@@ -1,6 +1,6 @@
 """A large stippling within the machine's memory: n = 1M dots on an 8192 x 8192 image.
 
-Usage: python benchmarks/stipple_large.py [--size 8192] [--n 1000000] [--mix 3] [--full]
+Usage: python benchmarks/stipple_large.py [--size 8192] [--n 1000000] [--mix 3] [--full] [--before]
 
 The image is the bundled sample photograph scaled up (Lanczos).  Runs a few
 iterations of the default schedule's step ("mix", with the default's
@@ -27,6 +27,8 @@ def main():
     ap.add_argument("--n", type=int, default=1_000_000)
     ap.add_argument("--mix", type=int, default=3)
     ap.add_argument("--full", action="store_true", help="the whole default schedule")
+    ap.add_argument("--before", action="store_true",
+                    help="the default as before issue 17: no support rule, no capacity")
     args = ap.parse_args()
     gray = load_gray(sample_image_path())
     img = Image.fromarray((gray * 255).astype(np.uint8)).resize((args.size, args.size), Image.LANCZOS)
@@ -34,6 +36,8 @@ def main():
     del img
     t = time.perf_counter()
     kw = {} if args.full else dict(SCHEDULE_OPTIONS["default"], schedule=[("mix", args.mix)])
+    if args.before:
+        kw.update(support=0.0, capacity=0.0)
     res = stipple(gray, args.n, seed=0, **kw)
     total = time.perf_counter() - t
     peak_gib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20

@@ -61,12 +61,18 @@ IMAGES = {
     "terrain": ("validation/terrain.png", "heldout2"),
     "hubble_bottom": ("validation/hubble_bottom.png", "heldout2"),
     "retina_bottom": ("validation/retina_bottom.png", "heldout2"),
+    # line art and a silhouette (issue 17; benchmarks/make_lineart.py)
+    "shapes": ("lineart/shapes.png", "lineart"),
+    "lines": ("lineart/lines.png", "lineart"),
+    "horse": ("lineart/horse.png", "lineart"),
 }
 SETS = {
     "test": ["astronaut", "coffee", "camera"],
     "tuning": [k for k, v in IMAGES.items() if v[1] == "tuning"],
     "heldout": [k for k, v in IMAGES.items() if v[1] == "heldout"],
     "heldout2": [k for k, v in IMAGES.items() if v[1] == "heldout2"],
+    "lineart": [k for k, v in IMAGES.items() if v[1] == "lineart"],
+    "photos": [k for k, v in IMAGES.items() if v[1] != "lineart"],
     "all": list(IMAGES),
 }
 
@@ -110,8 +116,10 @@ CONFIGS = {
                            radius_sigma=1.5),
     "spacing-coarse": dict(schedule="classic", schedule_override=[("mix", 35, 0.6), ("mix", 12, 0.4)],
                            features="detail", radius_sigma=2.0),
-    # the default with equal ink per dot (capacity gain 0.1, chosen on the tuning part)
-    "capacity": dict(schedule="default", capacity=0.1),
+    # the default before issue 17 (no support rule, no capacity), and with equal
+    # ink per dot (capacity gain 0.1)
+    "before": dict(schedule="default", support=0.0, capacity=0.0),
+    "capacity": dict(schedule="default", support=0.0, capacity=0.1),
 }
 
 #: Reference configuration of the issue-11 condition.
@@ -203,44 +211,92 @@ def run(image, n, spec, seed=0, measure=None):
     secs = time.perf_counter() - t
     dark = 1.0 - gray
     m = stipple_measures(pts, dark)
-    tone15 = tone_ssim(pts, dark, sigma=1.5)
-    pair = spacing(pts, dark, normalize="pair").p01
     more = {} if measure is None else measure(pts, dark)
     return {"image": image, "part": IMAGES.get(image, ("", "file"))[1], "config": spec,
             "n": int(n), "seed": int(seed), "tone": round(m["tone_ssim"], 4),
-            "tone15": round(tone15, 4), "p01": round(m["spacing_p01"], 4), "p01_pair": round(pair, 4),
-            "psi6": round(m["psi6_mean"], 4), "certified": valid, "iterations": iters,
+            "tone15": round(m["tone_ssim_fine"], 4), "p01": round(m["spacing_p01"], 4),
+            "p01_pair": round(m["spacing_p01_pair"], 4), "psi6": round(m["psi6_mean"], 4),
+            "stray": round(m["stray_per_10k"], 2), "edge": _round(m["edge_ssim"]),
+            "holes": round(m["holes_per_10k"], 2), "certified": valid, "iterations": iters,
             "seconds": round(secs, 2), "measure_seconds": round(time.perf_counter() - t - secs, 2),
             **more}
 
 
-def summarize(rows, reference=REFERENCE):
-    """Mean over seeds per (image, n, config), and the issue-11 condition.
+def _round(x):
+    return None if x != x else round(x, 4)   # NaN (no strong edge) as null in JSON
+
+
+#: Measures averaged over seeds in :func:`summarize` (rows without one, from
+#: before it existed, give NaN).
+MEASURES = ("tone", "tone15", "p01", "p01_pair", "psi6", "stray", "edge", "holes",
+            "iterations", "seconds")
+
+#: The picture target (issue 17), against Lloyd (``ref``) and, on
+#: photographs, ``--capacity 0.1`` (``cap``): each check returns True, False,
+#: or None where a side lacks the measure (an image without strong edges).
+TARGET = {
+    "stray": lambda s, ref, cap: s["stray"] <= ref["stray"] + 5.0,
+    "edge": lambda s, ref, cap: None if np.isnan(s["edge"] + ref["edge"]) else s["edge"] >= ref["edge"] - 0.01,
+    "tone": lambda s, ref, cap: s["tone"] >= ref["tone"] and (cap is None or s["tone"] >= cap["tone"]),
+    "p01_pair": lambda s, ref, cap: s["p01_pair"] >= ref["p01_pair"] + 0.05,
+    "psi6": lambda s, ref, cap: s["psi6"] <= ref["psi6"] + 0.01,
+    "certified": lambda s, ref, cap: s["certified"] is not False,
+}
+
+
+def target_misses(s, ref, cap=None):
+    """The names of the :data:`TARGET` checks that summary `s` misses against `ref` (and `cap`).
+
+    Examples
+    --------
+    >>> ref = dict(tone=.9, p01_pair=.8, psi6=.55, stray=0.0, edge=.8, certified=True)
+    >>> s = dict(ref, tone=.91, p01_pair=.86, psi6=.57, stray=3.0, edge=float("nan"))
+    >>> target_misses(s, ref)
+    ['psi6']
+    """
+    return [name for name, check in TARGET.items() if check(s, ref, cap) is False]
+
+
+def _means(by_seed, seeds):
+    out = {}
+    for key in MEASURES:
+        vals = [by_seed[x].get(key) for x in seeds]
+        out[key] = float(np.mean([np.nan if v is None else v for v in vals]))
+    cert = [by_seed[x]["certified"] for x in seeds]
+    out["certified"] = None if any(c is None for c in cert) else all(cert)
+    return out
+
+
+def summarize(rows, reference=REFERENCE, capacity="capacity"):
+    """Mean over seeds per (image, n, config), and the picture target (:data:`TARGET`).
 
     Parameters
     ----------
     rows : list of dict
         Rows of :func:`run`.
     reference : str
-        Configuration whose tone and |psi6| a configuration must beat.
+        The configuration of the target's baseline (Lloyd).
+    capacity : str
+        The configuration whose tone a photograph's result must also reach
+        (not applied to the line art, nor where it was not run).
 
     Returns
     -------
     list of dict
         One per (image, n, config), in first-seen order: the means of
-        ``tone``, ``tone15``, ``p01``, ``psi6``, ``iterations``, ``seconds``,
-        ``seeds`` (how many), ``certified`` (all seeds), and, where the
-        reference was run for the same image and n, ``meets``: tone >= the
-        reference's, P01 >= 0.85 and |psi6| < the reference's (means over the
-        seeds). Seeds missing from either side are left out of the comparison.
+        :data:`MEASURES` over the seeds both sides have, ``seeds``,
+        ``certified`` (all seeds), the differences to the reference
+        (``d_tone``, ``d_p01_pair``, ``d_psi6``, ``d_stray``, ``d_edge``) and
+        ``misses``: the target checks missed (None for the reference itself
+        and where it was not run).
 
     Examples
     --------
-    >>> r = [dict(image="a", n=5, config=c, seed=0, tone=t, tone15=t, p01=p, psi6=s,
-    ...           certified=True, iterations=1, seconds=1.0)
-    ...      for c, t, p, s in [("lloyd", .9, .7, .55), ("default", .91, .86, .54)]]
-    >>> [s["meets"] for s in summarize(r)]
-    [None, True]
+    >>> r = [dict(image="a", n=5, config=c, seed=0, tone=t, tone15=t, p01=p, p01_pair=p, psi6=s,
+    ...           stray=0.0, edge=e, holes=0.0, certified=True, iterations=1, seconds=1.0)
+    ...      for c, t, p, s, e in [("lloyd", .9, .7, .55, .8), ("default", .91, .86, .54, .6)]]
+    >>> [s["misses"] for s in summarize(r)]
+    [None, ['edge']]
     """
     groups = {}
     for r in rows:
@@ -248,65 +304,51 @@ def summarize(rows, reference=REFERENCE):
     out = []
     for (image, n, config), by_seed in groups.items():
         ref = groups.get((image, n, reference)) if config != reference else None
-        seeds = sorted(by_seed) if ref is None else sorted(set(by_seed) & set(ref))
-        if not seeds:
-            seeds = sorted(by_seed)
-            ref = None
-
-        def mean(key, src, seeds=seeds):
-            return float(np.mean([src[s][key] for s in seeds]))
-
+        seeds = sorted(by_seed) if ref is None else sorted(set(by_seed) & set(ref)) or sorted(by_seed)
         s = {"image": image, "part": by_seed[seeds[0]].get("part", ""), "n": n, "config": config,
-             "seeds": len(seeds)}
-        for key in ("tone", "tone15", "p01", "psi6", "iterations", "seconds"):
-            s[key] = mean(key, by_seed)
-        cert = [by_seed[x]["certified"] for x in seeds]
-        s["certified"] = None if any(c is None for c in cert) else all(cert)
-        s["meets"] = None
-        if ref is not None:
-            s["d_tone"] = s["tone"] - mean("tone", ref)
-            s["d_tone15"] = s["tone15"] - mean("tone15", ref)
-            s["d_psi6"] = s["psi6"] - mean("psi6", ref)
-            s["meets"] = meets_condition(s, {"tone": mean("tone", ref), "psi6": mean("psi6", ref)})
+             "seeds": len(seeds), **_means(by_seed, seeds), "misses": None}
+        if ref is not None and set(seeds) <= set(ref):
+            rm = _means(ref, seeds)
+            cap = groups.get((image, n, capacity))
+            cm = _means(cap, seeds) if (cap and config != capacity and s["part"] != "lineart"
+                                        and set(seeds) <= set(cap)) else None
+            for key in ("tone", "p01_pair", "psi6", "stray", "edge"):
+                s[f"d_{key}"] = s[key] - rm[key]
+            s["misses"] = target_misses(s, rm, cm)
         out.append(s)
     return out
 
 
-def print_row(r):
-    print(f"{r['image']:12s} {r['n']:6d} {r['seed']:4d} {r['config']:28s} {r['tone']:7.4f} "
-          f"{r['tone15']:7.4f} {r['p01']:7.4f} {r['psi6']:7.4f} {r['seconds']:7.1f} "
-          f"{r['iterations']:4d} {r['certified']}", flush=True)
-
-
 def print_summary(summary, markdown=False):
-    """Print :func:`summarize` as plain text or as a Markdown table."""
-    def d(s, key):
-        return f"{s[key]:+.4f}" if key in s else ""
-
+    """Print :func:`summarize` as plain text or as a Markdown table, then the target's tally."""
+    cols = ("tone", "tone15", "p01_pair", "psi6", "stray", "edge", "holes")
     if markdown:
-        print("| image | part | n | config | seeds | tone (sigma 3) | tone (sigma 1.5) | P01 | \\|psi6\\| "
-              "| tone - Lloyd | psi6 - Lloyd | meets | iterations |")
-        print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-        for s in summary:
-            meets = {None: "", True: "yes", False: "no"}[s["meets"]]
-            print(f"| {s['image']} | {s['part']} | {s['n']} | {s['config']} | {s['seeds']} | "
-                  f"{s['tone']:.4f} | {s['tone15']:.4f} | {s['p01']:.4f} | {s['psi6']:.4f} | "
-                  f"{d(s, 'd_tone')} | {d(s, 'd_psi6')} | {meets} | {s['iterations']:.0f} |")
-    else:
-        print(f"{'image':12s} {'n':>6s} {'config':28s} {'seeds':>5s} {'tone':>7s} {'tone15':>7s} "
-              f"{'P01':>7s} {'psi6':>7s} {'dtone':>8s} {'dtone15':>8s} {'dpsi6':>8s} meets")
-        for s in summary:
-            print(f"{s['image']:12s} {s['n']:6d} {s['config']:28s} {s['seeds']:5d} {s['tone']:7.4f} "
-                  f"{s['tone15']:7.4f} {s['p01']:7.4f} {s['psi6']:7.4f} {d(s, 'd_tone'):>8s} "
-                  f"{d(s, 'd_tone15'):>8s} {d(s, 'd_psi6'):>8s} {s['meets']}")
-    judged = [s for s in summary if s["meets"] is not None]
+        print("| image | n | config | seeds | tone σ3 | tone σ1.5 | P01 pair | \\|psi6\\| | stray /10k "
+              "| edge SSIM | holes /10k | misses |")
+        print("|" + " --- |" * 12)
+    for s in summary:
+        vals = " | ".join(f"{s[c]:.4f}" if c not in ("stray", "holes") else f"{s[c]:.1f}" for c in cols)
+        miss = "" if s["misses"] is None else (", ".join(s["misses"]) or "none")
+        if markdown:
+            print(f"| {s['image']} | {s['n']} | {s['config']} | {s['seeds']} | {vals} | {miss} |")
+        else:
+            print(f"{s['image']:12s} {s['n']:6d} {s['config']:32s} {s['seeds']:2d} "
+                  f"{vals.replace(' | ', ' ')} {miss}")
     by_config = {}
-    for s in judged:
-        by_config.setdefault(s["config"], []).append(s)
+    for s in summary:
+        if s["misses"] is not None:
+            by_config.setdefault(s["config"], []).append(s)
     for config, ss in by_config.items():
-        fails = [f"{s['image']}@{s['n']}" for s in ss if not s["meets"]]
-        print(f"{config}: meets the condition on {len(ss) - len(fails)} of {len(ss)} (image, n)"
-              + (f"; not on {', '.join(fails)}" if fails else ""))
+        fails = [f"{s['image']}@{s['n']} ({', '.join(s['misses'])})" for s in ss if s["misses"]]
+        print(f"{config}: meets the target on {len(ss) - len(fails)} of {len(ss)} (image, n)"
+              + (f"; not on {'; '.join(fails)}" if fails else ""))
+
+
+def print_row(r):
+    edge = "  nan" if r["edge"] is None else f"{r['edge']:.3f}"
+    print(f"{r['image']:12s} {r['n']:6d} {r['seed']:4d} {r['config']:32s} {r['tone']:7.4f} "
+          f"{r['tone15']:7.4f} {r['p01_pair']:7.4f} {r['psi6']:7.4f} {r['stray']:6.1f} {edge} "
+          f"{r['holes']:6.1f} {r['seconds']:6.1f} {r['iterations']:4d} {r['certified']}", flush=True)
 
 
 def read_rows(paths):
@@ -346,8 +388,8 @@ def main(argv=None):
     if a.jsonl and a.skip_done and Path(a.jsonl).exists():
         done = {(r["image"], r["n"], r["config"], r["seed"]) for r in read_rows([a.jsonl])}
     rows = []
-    print(f"{'image':12s} {'n':>6s} {'seed':>4s} {'config':28s} {'tone':>7s} {'tone15':>7s} "
-          f"{'P01':>7s} {'psi6':>7s} {'sec':>7s} {'it':>4s} cert")
+    print(f"{'image':12s} {'n':>6s} {'seed':>4s} {'config':32s} {'tone':>7s} {'tone15':>7s} "
+          f"{'P01pair':>7s} {'psi6':>7s} {'stray':>6s} {'edge':>5s} {'holes':>6s} {'sec':>6s} {'it':>4s} cert")
     for n in a.n:
         for im in images:
             for seed in a.seeds:

@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy import ndimage
-from scipy.spatial import Delaunay, QhullError
+from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from . import measures
 from .domain import Domain
@@ -43,9 +43,14 @@ from .measures import hexagonal_radius, normalized_radius
 __all__ = [
     "HEXAGONAL_SPACING",
     "HexaticOrder",
+    "Holes",
     "Spacing",
+    "StrayDots",
     "anisotropy",
+    "dot_spacing",
+    "edge_fidelity",
     "hexatic_order",
+    "holes",
     "mean_normalized_radius",
     "nearest_neighbor_distances",
     "normalized_radius",
@@ -54,7 +59,10 @@ __all__ = [
     "render_dots",
     "spacing",
     "ssim",
+    "ssim_map",
     "stipple_measures",
+    "stray_dots",
+    "strong_edges",
     "tone_radius",
     "tone_ssim",
 ]
@@ -510,6 +518,46 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
 # stippling measures
 
 
+def ssim_map(a, b, *, sigma=1.5, data_range=1.0):
+    """Local structural similarity of two images, per pixel (Wang et al. 2004).
+
+    The map whose mean (without a border of the window radius) is
+    :func:`ssim`; see there for the window and constants.
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(4).random((24, 24))
+    >>> m = ssim_map(img, 1.0 - img)
+    >>> m.shape, bool(m.max() < 1.0)
+    ((24, 24), True)
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if a.shape != b.shape or a.ndim != 2:
+        raise ValueError(f"images must be 2-D with equal shapes, got {a.shape} and {b.shape}")
+    pad = _ssim_pad(sigma)
+    if min(a.shape) < 2 * pad + 1:
+        raise ValueError(f"images must be at least {2 * pad + 1} x {2 * pad + 1} pixels, got {a.shape}")
+
+    def filt(x):
+        return ndimage.gaussian_filter(x, sigma, mode="reflect", truncate=_SSIM_TRUNCATE)
+
+    ux, uy = filt(a), filt(b)
+    vx = filt(a * a) - ux * ux
+    vy = filt(b * b) - uy * uy
+    vxy = filt(a * b) - ux * uy
+    c1 = (0.01 * data_range) ** 2
+    c2 = (0.03 * data_range) ** 2
+    return ((2 * ux * uy + c1) * (2 * vxy + c2)) / ((ux * ux + uy * uy + c1) * (vx + vy + c2))
+
+
+_SSIM_TRUNCATE = 3.5
+
+
+def _ssim_pad(sigma):
+    return int(_SSIM_TRUNCATE * sigma + 0.5)
+
+
 def ssim(a, b, *, sigma=1.5, data_range=1.0):
     """Mean structural similarity of two images (Wang et al. 2004).
 
@@ -526,26 +574,8 @@ def ssim(a, b, *, sigma=1.5, data_range=1.0):
     >>> ssim(img, img)
     1.0
     """
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
-    if a.shape != b.shape or a.ndim != 2:
-        raise ValueError(f"images must be 2-D with equal shapes, got {a.shape} and {b.shape}")
-    truncate = 3.5
-    pad = int(truncate * sigma + 0.5)
-    if min(a.shape) < 2 * pad + 1:
-        raise ValueError(f"images must be at least {2 * pad + 1} x {2 * pad + 1} pixels, got {a.shape}")
-
-    def filt(x):
-        return ndimage.gaussian_filter(x, sigma, mode="reflect", truncate=truncate)
-
-    ux, uy = filt(a), filt(b)
-    vx = filt(a * a) - ux * ux
-    vy = filt(b * b) - uy * uy
-    vxy = filt(a * b) - ux * uy
-    c1 = (0.01 * data_range) ** 2
-    c2 = (0.03 * data_range) ** 2
-    s = ((2 * ux * uy + c1) * (2 * vxy + c2)) / ((ux * ux + uy * uy + c1) * (vx + vy + c2))
-    return float(s[pad:-pad, pad:-pad].mean())
+    pad = _ssim_pad(sigma)
+    return float(ssim_map(a, b, sigma=sigma, data_range=data_range)[pad:-pad, pad:-pad].mean())
 
 
 def tone_radius(n, darkness):
@@ -681,10 +711,21 @@ def tone_ssim(points, darkness, *, sigma=3.0):
     True
     """
     p, d = _stipple_inputs(points, darkness)
-    drawing = render_dots(p, tone_radius(len(p), d), d.shape)
-    blur_drawing = ndimage.gaussian_filter(drawing, sigma, mode="reflect")
-    blur_dark = ndimage.gaussian_filter(d, sigma, mode="reflect")
-    return ssim(blur_drawing, blur_dark, data_range=1.0)
+    return _tone(_equal_ink_drawing(p, d), d, sigma)
+
+
+def _equal_ink_drawing(p, d):
+    """The dots drawn with the one radius whose ink equals the darkness (:func:`tone_radius`)."""
+    return render_dots(p, tone_radius(len(p), d), d.shape)
+
+
+def _blurred_pair(drawing, d, sigma):
+    return (ndimage.gaussian_filter(drawing, sigma, mode="reflect"),
+            ndimage.gaussian_filter(d, sigma, mode="reflect"))
+
+
+def _tone(drawing, d, sigma):
+    return ssim(*_blurred_pair(drawing, d, sigma), data_range=1.0)
 
 
 def _stipple_inputs(points, darkness):
@@ -776,8 +817,220 @@ def spacing(points, darkness, *, sigma=3.0, normalize="dot"):
     return Spacing(values, float(np.percentile(values, 1.0)), float(np.median(values)), density)
 
 
+class StrayDots(NamedTuple):
+    """Dots with no ink near them: a mask, their count and their rate per 10 000 dots."""
+
+    mask: np.ndarray
+    count: int
+    per_10k: float
+
+
+def stray_dots(points, darkness, *, threshold=0.02):
+    """Dots farther than half their own spacing from every inked pixel.
+
+    A dot's spacing is the distance ``d_nn`` to its nearest neighbour, so
+    the disk of radius ``d_nn / 2`` around it is the room it has to itself.
+    When no pixel with darkness above `threshold` meets that disk (its
+    square, not only its centre), the dot draws ink on white paper: a plotter inks it, the eye sees
+    it first. Weighted Lloyd stippling leaves none on black-and-white
+    drawings; a tone blur hides them, and a spacing percentile rewards them
+    for being far apart, which is why they need a measure of their own.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2), n >= 2
+        Dots in pixel units.
+    darkness : ndarray, shape (ny, nx)
+        Darkness in [0, 1], 1 = black.
+    threshold : float
+        Darkness above which a pixel counts as inked.
+
+    Returns
+    -------
+    StrayDots
+        ``mask`` (n,) bool, ``count`` and ``per_10k`` (stray dots per 10 000).
+
+    Examples
+    --------
+    >>> dark = np.zeros((20, 20)); dark[:, :10] = 1.0
+    >>> stray_dots([[3.0, 5.0], [5.0, 5.0], [17.0, 12.0]], dark).mask.tolist()
+    [False, False, True]
+    """
+    p, d = _stipple_inputs(points, darkness)
+    if len(p) < 2:
+        raise ValueError("need at least 2 points")
+    nn, _ = measures.nearest_neighbors(p, _PLANE)
+    rows, cols = np.nonzero(d > threshold)
+    mask = np.ones(len(p), dtype=bool)
+    if rows.size:
+        centres = np.column_stack([cols + 0.5, rows + 0.5])
+        mask = _far_from_squares(p, 0.5 * nn, centres)
+    count = int(np.count_nonzero(mask))
+    return StrayDots(mask, count, 1e4 * count / len(p))
+
+
+def _far_from_squares(p, reach, centres):
+    """Whether each point is farther than `reach` from every unit pixel square of `centres`."""
+    tree = cKDTree(centres)
+    dist, _ = tree.query(p, k=1)
+    far = dist > reach   # a square is never farther than its centre
+    idx = np.nonzero(far)[0]
+    # only a square whose centre is within reach + sqrt(2)/2 can be within reach
+    near = tree.query_ball_point(p[idx], reach[idx] + 0.5 * math.sqrt(2.0))
+    for i, cand in zip(idx, near):
+        if cand:
+            gap = np.maximum(np.abs(centres[cand] - p[i]) - 0.5, 0.0)
+            far[i] = bool(np.min(np.hypot(gap[:, 0], gap[:, 1])) > reach[i])
+    return far
+
+
+def dot_spacing(n, darkness, level=1.0):
+    """Spacing (px) of ``n`` dots drawing `darkness` where its value is `level`.
+
+    ``sqrt(sum(darkness) / (n level))``: the dot density follows the
+    darkness, ``n level / sum(darkness)`` dots per pixel at that level.
+
+    Examples
+    --------
+    >>> dot_spacing(100, np.full((20, 20), 0.25))
+    1.0
+    """
+    d = np.asarray(darkness, dtype=np.float64)
+    return math.sqrt(float(d.sum()) / (int(n) * float(level)))
+
+
+def strong_edges(darkness, *, edge=0.25):
+    """Pixels where the darkness changes by at least `edge` per pixel (central differences).
+
+    A black-to-white step gives 0.5 on the two pixels beside it; the
+    gradients of a photograph's soft edges stay below 0.25.
+
+    Examples
+    --------
+    >>> dark = np.zeros((6, 6)); dark[:, 3:] = 1.0
+    >>> strong_edges(dark)[0].astype(int).tolist()
+    [0, 0, 1, 1, 0, 0]
+    """
+    gy, gx = np.gradient(np.asarray(darkness, dtype=np.float64))
+    return np.hypot(gx, gy) >= edge
+
+
+def edge_fidelity(points, darkness, *, sigma=1.0, edge=0.25, band=2.0):
+    """Fine-scale tone near strong edges: SSIM of the rendering inside an edge band.
+
+    The dots are drawn as in :func:`tone_ssim` (equal ink, blur `sigma`
+    px) and compared with the darkness by :func:`ssim_map`; the mean is
+    taken over the pixels within `band` dot spacings of a strong edge
+    (:func:`strong_edges`), the spacing being that of the edges' dark side
+    (:func:`dot_spacing` at the median of the 3x3 maximum darkness on the
+    edge pixels). A ragged or blurred outline, a rounded corner, a broken
+    line all lower it; a tone blur of 3 px forgives them.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        Dots in pixel units.
+    darkness : ndarray, shape (ny, nx)
+        Darkness in [0, 1], 1 = black.
+    sigma : float
+        Blur (px) of drawing and darkness before the comparison.
+    edge : float
+        Gradient threshold of :func:`strong_edges`.
+    band : float
+        Half-width of the band, in dot spacings.
+
+    Returns
+    -------
+    float
+        The mean local SSIM in the band; NaN when the image has no strong edge.
+
+    Examples
+    --------
+    >>> dark = np.zeros((40, 40)); dark[:, :20] = 1.0
+    >>> iy, ix = np.mgrid[0:20, 0:10]
+    >>> pts = np.column_stack([2.0 * ix.ravel() + 1.0, 2.0 * iy.ravel() + 1.0])
+    >>> bool(edge_fidelity(pts, dark) > edge_fidelity(pts + [8.0, 0.0], dark))
+    True
+    """
+    p, d = _stipple_inputs(points, darkness)
+    return _edge(p, d, None, sigma, edge, band)
+
+
+def _edge(p, d, drawing, sigma, edge, band):
+    """:func:`edge_fidelity` with the equal-ink drawing given (None: drawn here)."""
+    edges = strong_edges(d, edge=edge)
+    if not edges.any():
+        return math.nan
+    level = float(np.median(ndimage.maximum_filter(d, size=3)[edges]))
+    width = band * dot_spacing(len(p), d, level)
+    mask = ndimage.distance_transform_edt(~edges) <= width
+    pad = _ssim_pad(1.5)
+    mask[:pad], mask[-pad:], mask[:, :pad], mask[:, -pad:] = False, False, False, False
+    if not mask.any():
+        return math.nan
+    drawing = _equal_ink_drawing(p, d) if drawing is None else drawing
+    return float(ssim_map(*_blurred_pair(drawing, d, sigma))[mask].mean())
+
+
+class Holes(NamedTuple):
+    """Solid-dark pixels far from every dot: a mask, their count and rate per 10 000."""
+
+    mask: np.ndarray
+    count: int
+    per_10k: float
+
+
+def holes(points, darkness, *, solid=0.5, sigma=3.0):
+    """Solid-dark pixels farther than one expected dot spacing from every dot.
+
+    A pixel is solid-dark when its darkness is at least `solid`; its
+    expected spacing is ``1 / sqrt(rho)`` with ``rho`` the expected dot
+    density of :func:`spacing` (darkness blurred by `sigma` px) at its
+    centre. In a hexagonal packing no point is farther than 0.58 spacings
+    from a dot, so a pixel farther than one spacing sits in a hole: a thin
+    line broken up, a dark shape with a gap.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        Dots in pixel units.
+    darkness : ndarray, shape (ny, nx)
+        Darkness in [0, 1], 1 = black.
+    solid : float
+        Darkness from which a pixel is solid-dark.
+    sigma : float
+        Blur (px) of the expected density.
+
+    Returns
+    -------
+    Holes
+        ``mask`` (ny, nx) bool, ``count`` and ``per_10k`` (hole pixels per
+        10 000 solid-dark pixels; 0 when there are none).
+
+    Examples
+    --------
+    >>> dark = np.ones((20, 20))
+    >>> iy, ix = np.mgrid[0:10, 0:10]
+    >>> pts = np.column_stack([2.0 * ix.ravel() + 1.0, 2.0 * iy.ravel() + 1.0])
+    >>> holes(pts, dark).count, holes(pts[pts[:, 0] > 8], dark).count > 0
+    (0, True)
+    """
+    p, d = _stipple_inputs(points, darkness)
+    rows, cols = np.nonzero(d >= solid)
+    mask = np.zeros(d.shape, dtype=bool)
+    if rows.size == 0:
+        return Holes(mask, 0, 0.0)
+    blurred = ndimage.gaussian_filter(d, sigma, mode="reflect")[rows, cols]
+    rho = len(p) * np.maximum(blurred, 1e-12) / d.sum()
+    dist, _ = cKDTree(p).query(np.column_stack([cols + 0.5, rows + 0.5]), k=1)
+    far = dist > 1.0 / np.sqrt(rho)
+    mask[rows[far], cols[far]] = True
+    count = int(np.count_nonzero(far))
+    return Holes(mask, count, 1e4 * count / rows.size)
+
+
 def stipple_measures(points, darkness, *, sigma=3.0):
-    """The stippling measures of the paper's comparison, in one dict.
+    """The stippling measures, in one dict: tone, spacing, order, and what the eye sees first.
 
     Parameters
     ----------
@@ -791,23 +1044,34 @@ def stipple_measures(points, darkness, *, sigma=3.0):
     Returns
     -------
     dict
-        ``n``, ``tone_ssim`` (:func:`tone_ssim`), ``spacing_p01`` and
-        ``spacing_median`` (:func:`spacing`) and ``psi6_mean``
-        (:func:`hexatic_order` in the bounded image, no periodic wrap).
+        ``n``; ``tone_ssim`` (:func:`tone_ssim` at `sigma`) and
+        ``tone_ssim_fine`` (at half of it); ``spacing_p01`` and
+        ``spacing_median`` (:func:`spacing`), ``spacing_p01_pair`` (read with
+        the pair's spacing); ``psi6_mean`` (:func:`hexatic_order` in the
+        bounded image, no periodic wrap); ``stray_per_10k``
+        (:func:`stray_dots`), ``edge_ssim`` (:func:`edge_fidelity`, NaN
+        without strong edges) and ``holes_per_10k`` (:func:`holes`).
 
     Examples
     --------
     >>> dark = np.full((48, 48), 0.3)
     >>> pts = np.random.default_rng(6).random((300, 2)) * 48
-    >>> sorted(stipple_measures(pts, dark))
-    ['n', 'psi6_mean', 'spacing_median', 'spacing_p01', 'tone_ssim']
+    >>> sorted(stipple_measures(pts, dark))  # doctest: +NORMALIZE_WHITESPACE
+    ['edge_ssim', 'holes_per_10k', 'n', 'psi6_mean', 'spacing_median', 'spacing_p01',
+     'spacing_p01_pair', 'stray_per_10k', 'tone_ssim', 'tone_ssim_fine']
     """
     p, d = _stipple_inputs(points, darkness)
     sp = spacing(p, d, sigma=sigma)
+    drawing = _equal_ink_drawing(p, d)   # drawn once for the three tone measures
     return {
         "n": int(len(p)),
-        "tone_ssim": tone_ssim(p, d, sigma=sigma),
+        "tone_ssim": _tone(drawing, d, sigma),
+        "tone_ssim_fine": _tone(drawing, d, sigma / 2),
         "spacing_p01": sp.p01,
         "spacing_median": sp.median,
+        "spacing_p01_pair": spacing(p, d, sigma=sigma, normalize="pair").p01,
         "psi6_mean": hexatic_order(p, periodic=False).mean,
+        "stray_per_10k": stray_dots(p, d).per_10k,
+        "edge_ssim": _edge(p, d, drawing, 1.0, 0.25, 2.0),
+        "holes_per_10k": holes(p, d, sigma=sigma).per_10k,
     }

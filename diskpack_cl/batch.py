@@ -232,7 +232,7 @@ def check_outputs(items, check_path):
                 names = [str(x.input if x.input is not None else f"item {x.i}")
                          for x in (other, item)]
                 raise ValueError(f"the output templates map {names[0]} and {names[1]} to "
-                                 f"{out}; add {{parent}} or {{i}} to tell them apart")
+                                 f"{out}; add {_telling_apart(other, item)} to tell them apart")
             owner[key] = item
     for item in items:
         for out in item.outputs:
@@ -240,6 +240,25 @@ def check_outputs(items, check_path):
             if folder:
                 os.makedirs(folder, exist_ok=True)
             check_path(out)
+
+
+def _telling_apart(a, b):
+    """The template fields that differ between two items' inputs, e.g. ``{name} or {i}``.
+
+    Examples
+    --------
+    >>> _telling_apart(Item("stipple", 0, "p/cat.jpg", 0, {}, ()),
+    ...                Item("stipple", 1, "p/cat.png", 0, {}, ()))
+    '{name} or {i}'
+    """
+    fields = []
+    if a.input is not None and b.input is not None:
+        pa, pb = Path(a.input), Path(b.input)
+        if pa.name != pb.name:
+            fields.append("{name}")
+        if pa.resolve().parent.name != pb.resolve().parent.name:
+            fields.append("{parent}")
+    return " or ".join(fields + ["{i}"])
 
 
 def default_manifest(templates):
@@ -299,12 +318,12 @@ def default_jobs(devices=None):
                else os.cpu_count() or 1)
 
 
-def dots_for_image(width, height, *, n=None, density=None, dots_per_cm2=None,
-                   width_mm=None, height_mm=None, dpi=None):
+def dots_for_image(width, height, *, n=None, density=None, dots_per_cm2=None, **layout):
     """The number of dots: ``n``, or ``density`` per megapixel, or per cm^2 of the print.
 
-    ``dots_per_cm2`` needs the physical size (``width_mm``/``height_mm`` or
-    ``dpi``, as for the SVG).
+    ``dots_per_cm2`` needs the physical size: ``layout`` as for the SVG
+    (:func:`diskpack_cl.export.svg_layout`), with ``width_mm``,
+    ``height_mm``, ``dpi`` or ``page``.
 
     Examples
     --------
@@ -318,12 +337,12 @@ def dots_for_image(width, height, *, n=None, density=None, dots_per_cm2=None,
     if density is not None:
         count = density * width * height / 1e6
     else:
-        from diskpack_cl.export import mm_per_px
+        from diskpack_cl.export import svg_layout
 
-        if width_mm is None and height_mm is None and dpi is None:
-            raise ValueError("--dots-per-cm2 needs the print size: --width-mm, --height-mm "
-                             "or --dpi")
-        cm = mm_per_px(width, height, width_mm, height_mm, dpi) / 10.0
+        if all(layout.get(k) is None for k in ("width_mm", "height_mm", "dpi", "page")):
+            raise ValueError("--dots-per-cm2 needs the print size: --width-mm, --height-mm, "
+                             "--dpi or --page")
+        cm = svg_layout(width, height, **layout)["scale"] / 10.0
         count = dots_per_cm2 * (width * cm) * (height * cm)
     return max(1, int(round(count)))
 
@@ -408,25 +427,40 @@ def _is_done(item, record):
 
 # ----------------------------------------------------------------- one item
 
-def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=None, dpi=None,
-                          dots="tone", dot_mm=None, radius_scale=1.0, pen_path="auto",
-                          png_scale=2.0, invert=False, pen_mm=None):
+def write_stipple_outputs(result, gray, outputs, *, dots="tone", dot_mm=None, radius_scale=1.0,
+                          pen_path="auto", png_scale=None, invert=False, pen_mm=None,
+                          plot_speed_mm_s=None, progress=None, pen_order=None, **layout):
     """Write a stippling to every path of ``outputs``, as ``diskpack stipple`` does.
 
     With ``dots="tone"`` (and no ``dot_mm``) every dot gets one size, chosen
     so that the total ink equals the image's darkness; ``dots="packing"``
-    draws the certified disks. If a write fails (or the run is
-    interrupted), the outputs written so far are removed again.
+    draws the certified disks. The outputs replace their files together
+    (:func:`diskpack_cl.io.atomic_writes`): if a write fails or the run is
+    interrupted, every file that existed before is left as it was.
 
     Parameters
     ----------
     result : StippleResult
-    gray : (H, W) array
-        The gray image that was stippled (before ``invert``).
+        Or a stippling :func:`diskpack_cl.read_stipple` read.
+    gray : (H, W) array or None
+        The gray image that was stippled (before ``invert``); None: the
+        tone dot size is ``result.tone_radius``.
     outputs : list of str
         ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
     pen_mm : float, optional
-        Plotter pen width for the SVG (see :func:`diskpack_cl.export.write_svg`).
+        Plotter pen width for the SVG (see :func:`diskpack_cl.export.write_svg`);
+        the PNG preview shows what the pen draws.
+    png_scale : float, optional
+        See :func:`diskpack_cl.export.preview_scale`.
+    progress : callable, optional
+        ``progress(k)`` after each ``k`` dots a PNG preview stamped.
+    pen_order : list of str, optional
+        A colour stippling's SVG layer order
+        (:func:`diskpack_cl.color_export.write_color_svg`); its tone dots
+        have one size per pen, so no ``dot_mm`` is derived for it.
+    **layout
+        ``width_mm``, ``height_mm``, ``dpi``, ``page``, ``landscape``,
+        ``margin_mm`` of :func:`diskpack_cl.export.svg_layout`.
 
     Returns
     -------
@@ -446,44 +480,61 @@ def write_stipple_outputs(result, gray, outputs, *, width_mm=None, height_mm=Non
     >>> written[0]["format"], round(dot_mm, 3) > 0
     ('svg', True)
     """
-    from diskpack_cl.export import check_output_path, mm_per_px, write_stipple
+    from diskpack_cl.export import (PLOT_SPEED_MM_S, check_output_path, preview_scale,
+                                    svg_layout, write_stipple)
+    from diskpack_cl.io import atomic_writes
 
-    scale = mm_per_px(result.width, result.height, width_mm, height_mm, dpi)
-    if dot_mm is None and dots == "tone":
-        from diskpack_cl.analysis import tone_radius
-
-        darkness = gray if invert else 1.0 - gray
-        dot_mm = 2.0 * tone_radius(result.n, darkness) * radius_scale * scale
-    svg_opts = dict(width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
-                    radius_scale=radius_scale, pen_path=pen_path, invert=invert,
-                    pen_mm=pen_mm, dots=dots)
-    png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert, dots=dots)
+    scale = svg_layout(result.width, result.height, **layout)["scale"]
+    png_scale = preview_scale(result.width, result.height, png_scale)
+    color = getattr(result, "pen", None) is not None
+    if dot_mm is None and dots == "tone" and not color:
+        dot_mm = 2.0 * _tone_radius(result, gray, invert) * radius_scale * scale
+    svg_opts = dict(dot_mm=dot_mm, radius_scale=radius_scale, pen_path=pen_path, invert=invert,
+                    pen_mm=pen_mm, dots=dots, plot_speed_mm_s=plot_speed_mm_s or PLOT_SPEED_MM_S,
+                    **layout, **({"pen_order": pen_order} if color else {}))
+    png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert, dots=dots,
+                    progress=progress)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
+    if pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots
+        png_opts["pen_px"] = pen_mm / scale * png_scale
     written = []
-    try:
+    with atomic_writes():
         for out in outputs:
             ext = check_output_path(out)
             opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
             info = write_stipple(out, result, **opts)
             written.append({"path": out, "format": ext[1:], **info})
-    except BaseException:
-        for w in written:
-            with contextlib.suppress(OSError):
-                os.unlink(w["path"])
-        raise
     return dot_mm, written
+
+
+def _layout(write):
+    """The picture-on-paper options among the write options of an item."""
+    return {k: write.get(k) for k in ("width_mm", "height_mm", "dpi", "page", "landscape",
+                                      "margin_mm") if write.get(k) is not None}
+
+
+def _tone_radius(result, gray, invert):
+    """The equal-ink dot radius (px): from ``gray`` when given, else the result's own."""
+    if gray is None:
+        if getattr(result, "tone_radius", None) is None:
+            raise ValueError("the stippling has no tone_radius (an older file): give the dot "
+                             "size (--dot-mm) or draw the packing disks (--dots packing)")
+        return float(result.tone_radius)
+    from diskpack_cl.analysis import tone_radius
+
+    return tone_radius(len(result.points), gray if invert else 1.0 - gray)
 
 
 def _stipple_item(item, device, progress):
     from diskpack_cl import load_gray, stipple
+    from diskpack_cl.image import adjust_tone
 
     params = dict(item.params)
     allow_large = params.pop("allow_large", False)
     count = {k: params.pop(k, None) for k in ("n", "density", "dots_per_cm2")}
-    gray = load_gray(item.input, allow_large=allow_large)
-    size = {k: item.write.get(k) for k in ("width_mm", "height_mm", "dpi")}
-    n = dots_for_image(gray.shape[1], gray.shape[0], **count, **size)
+    gray = adjust_tone(load_gray(item.input, allow_large=allow_large), **params.pop("tone", {}))
+    n = dots_for_image(gray.shape[1], gray.shape[0], **count, **_layout(item.write))
     callback = None
     if progress is not None:
         def callback(entry):
@@ -725,21 +776,17 @@ def _dask(todo, client, device, collect):
 
 def _write_collected(record):
     """Write the bytes a worker returned (``collect``), atomically; the record updated."""
-    from diskpack_cl.io import atomic_write
+    from diskpack_cl.io import atomic_write, atomic_writes
 
     data = record.pop("data", None)
     if not data:
         return record
-    done = []
     try:
-        for path, blob in data.items():
-            with atomic_write(path, "wb") as fh:
-                fh.write(blob)
-            done.append(path)
+        with atomic_writes():
+            for path, blob in data.items():
+                with atomic_write(path, "wb") as fh:
+                    fh.write(blob)
     except OSError as exc:
-        for path in done:
-            with contextlib.suppress(OSError):
-                os.unlink(path)
         record.update(status="failed", error=f"writing {path}: {exc}")
     return record
 
@@ -832,8 +879,7 @@ def _image_dots(path, count, write):
 
     with Image.open(path) as im:
         width, height = im.size
-    size = {k: write.get(k) for k in ("width_mm", "height_mm", "dpi")}
-    return dots_for_image(width, height, **count, **size)
+    return dots_for_image(width, height, **count, **_layout(write))
 
 
 def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, seed=0,
@@ -867,8 +913,7 @@ def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
     count = {"n": n, "density": density, "dots_per_cm2": dots_per_cm2}
     write = dict(write or {})
     if dots_per_cm2 is not None:  # refused now, not once per image
-        dots_for_image(1, 1, dots_per_cm2=dots_per_cm2,
-                       **{k: write.get(k) for k in ("width_mm", "height_mm", "dpi")})
+        dots_for_image(1, 1, dots_per_cm2=dots_per_cm2, **_layout(write))
     params = {**{k: v for k, v in count.items() if v is not None}, **options}
     if allow_large:
         params["allow_large"] = True

@@ -16,8 +16,9 @@ Raise ``ValueError``/``OSError`` for user errors: :func:`main` prints
 ``diskpack: error: ...`` and returns 1 (2 for :class:`_UsageError`, 130 on
 Ctrl-C, 143 on SIGTERM, 129 on SIGHUP). Check outputs with
 :func:`diskpack_cl.io.check_writable` before the work and write them with the
-atomic writers of :mod:`diskpack_cl.io` after it, so that a failed or
-interrupted run leaves no output file.
+atomic writers of :mod:`diskpack_cl.io` after it, all in one
+:func:`diskpack_cl.io.atomic_writes`, so that a failed or interrupted run
+writes no output and leaves every earlier file as it was.
 """
 
 from __future__ import annotations
@@ -67,6 +68,10 @@ def _point_count(text):
     if value < 2:
         raise argparse.ArgumentTypeError(f"need at least 2 points, got {value}")
     return value
+
+
+def _dot_count(text):
+    return text if text == "tone" else _point_count(text)
 
 
 def _device_options(p):
@@ -137,6 +142,41 @@ def _batch_options(p):
                    help="with --scheduler: workers return the outputs' bytes and this "
                         "command writes them (no shared output folder needed)")
     return g
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors add "did you mean" for a mistyped choice or option."""
+
+    def error(self, message):
+        super().error(message + _did_you_mean(self, message))
+
+
+def _did_you_mean(parser, message):
+    """``"; did you mean X?"`` for the closest subcommand/choice or option, else ``""``."""
+    import difflib
+    import re
+
+    choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if choice:
+        words = [choice.group(1)]
+        known = [c.strip(" '") for c in choice.group(2).split(",")]
+    else:
+        extra = re.search(r"unrecognized arguments: (.*)", message)
+        words = [w.split("=")[0] for w in extra.group(1).split() if w.startswith("-")] if extra else []
+        known = _option_strings(parser)
+    close = [m for w in words for m in difflib.get_close_matches(w, known, n=1, cutoff=0.6)]
+    return f"; did you mean {' '.join(close)}?" if close else ""
+
+
+def _option_strings(parser):
+    """Every option string of ``parser`` and of its subcommands."""
+    out = []
+    for action in parser._actions:
+        out += action.option_strings
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                out += _option_strings(sub)
+    return out
 
 
 # --------------------------------------------------------------- shared runs
@@ -256,7 +296,7 @@ def _add_poisson(subparsers):
                    help="start set: dart throwing (default), uniform random, or a point file")
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
                    help="relative radius of the dart-throwing start (default 0.74)")
-    p.add_argument("--seed", type=int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
+    p.add_argument("--seed", type=_nonnegative_int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
     _output_options(p)
     _relax_options(p)
     g = _batch_options(p)
@@ -415,14 +455,17 @@ def _add_stipple(subparsers):
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
-        description="Stipple an image by unequal disk packing on power diagrams (paper "
-                    "Algorithm 2): an error-diffusion start of N points, then rounds of BETA "
-                    "disk-packing iterations (every point moves to the centre of the maximal "
-                    "inscribed circle of its power cell, weights (k r_i)^2 with "
-                    "r_i = max(gray, FLOOR)^(GAMMA/2)) separated by Lloyd iterations. The output "
-                    "disks are certified inside the image and pairwise disjoint (exact float64). "
-                    "Every output path is checked before the computation; outputs are written "
-                    "atomically after it, so a failed or interrupted run writes nothing.",
+        description="Stipple an image with N dots by unequal disk packing on power diagrams. "
+                    "From an error-diffusion start, the default schedule moves every dot "
+                    "towards the centre of the largest circle inside its power cell (pack) "
+                    "and part-way to the cell's centroid (mix), with radii from the image's "
+                    "density; its phases follow the dot spacing (see --schedule; --schedule "
+                    "paper runs the paper's Algorithm 2 loop). The disks are certified inside "
+                    "the image and pairwise disjoint (exact float64); the outputs draw every "
+                    "dot at one size whose ink equals the image's darkness (--dots), as the "
+                    "plotter's pen draws it with --pen-mm. Every output path is checked before "
+                    "the computation; the outputs are written together after it, so a failed "
+                    "or interrupted run writes nothing and leaves earlier files as they were.",
         epilog="examples:\n"
                "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
                "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
@@ -435,8 +478,9 @@ def _add_stipple(subparsers):
                         "photograph (use ./sample for a file of that name); several files or "
                         "folders make a batch")
     count = p.add_mutually_exclusive_group(required=True)
-    count.add_argument("-n", type=_positive_int, default=None, metavar="N",
-                       help="number of dots")
+    count.add_argument("-n", type=_dot_count, default=None, metavar="N",
+                       help="number of dots (at least 2), or 'tone' with --dot-mm or --pen-mm: "
+                            "as many dots as give the image's ink on the paper")
     count.add_argument("--density", type=_positive_float, default=None, metavar="D",
                        help="instead of -n: D dots per megapixel of each image")
     count.add_argument("--dots-per-cm2", type=_positive_float, default=None, metavar="D",
@@ -469,11 +513,19 @@ def _add_stipple(subparsers):
                         "and the radii follow the detail (more tone, slightly less even "
                         "spacing); default: the schedule's (detail for --schedule detail, and "
                         "for the default where the dot spacing is 3 px or more)")
-    g.add_argument("--capacity", type=_unit_closed, default=0.0, metavar="GAIN",
+    g.add_argument("--capacity", type=_unit_closed, default=None, metavar="GAIN",
                    help="equal ink per dot: after each step every dot's radius is scaled by "
                         "(mean ink / its power cell's ink)^GAIN, as in capacity-constrained "
-                        "stippling; 0.1 gives clearly more tone (SSIM +0.02 to +0.04 at "
-                        "5000-20000 dots), with closer pairs across tone edges (default 0: off)")
+                        "stippling; more tone, closer pairs across tone edges (default: the "
+                        "schedule's, 0.1 for default, 0 = off for the others)")
+    g.add_argument("--support", type=_unit_closed, default=None, metavar="S",
+                   help="keep dots on the ink: a dot whose largest empty disk leaves its cell's "
+                        "ink moves towards the cell's centroid instead, by S times how far it "
+                        "left (default: the schedule's, 1 for default, 0 for the others; 0 "
+                        "lets edge dots drift onto white paper)")
+    g.add_argument("--paper-tone", type=_unit_half_open_zero, default=0.0, metavar="T",
+                   help="darkness T added under the whole image, so that white paper gets "
+                        "sparse dots too (default 0: white stays white)")
     g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
                    help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
                         "minimum; the output always uses the largest certified k)")
@@ -508,47 +560,24 @@ def _add_stipple(subparsers):
     g.add_argument("--profile", action="store_true",
                    help="time the OpenCL kernels with events (--json timings.kernel and "
                         "timings.kernel_<name>: device seconds, all and per kernel; single inputs)")
-    g.add_argument("--seed", type=int, default=0,
+    g.add_argument("--seed", type=_nonnegative_int, default=0,
                    help="seed of the error-diffusion start (default 0; same seed, same result)")
     g.add_argument("--invert", action="store_true",
                    help="stipple the light parts (light dots on a dark ground)")
+    t = p.add_argument_group("tone (before stippling, on every schedule; in --json params.tone)")
+    t.add_argument("--black-point", type=_unit_closed, default=0.0, metavar="B",
+                   help="gray levels at or below B (0 black .. 1 white) get full ink "
+                        "(default 0)")
+    t.add_argument("--white-point", type=_unit_closed, default=1.0, metavar="W",
+                   help="gray levels at or above W are blank paper, no dots (default 1)")
+    t.add_argument("--tone-gamma", type=_positive_float, default=1.0, metavar="G",
+                   help="contrast: the levels between the points are raised to G (above 1: "
+                        "darker mid-tones, below 1: lighter; default 1)")
     g.add_argument("--allow-large", action="store_true",
                    help="lift Pillow's decompression-bomb limit (about 89 Mpixel) for trusted "
                         "large images")
     _device_options(g)
-    o = p.add_argument_group("output")
-    o.add_argument("--width-mm", type=_positive_float, default=None, metavar="MM",
-                   help="SVG width in mm (with --height-mm: fit inside the box)")
-    o.add_argument("--height-mm", type=_positive_float, default=None, metavar="MM",
-                   help="SVG height in mm")
-    o.add_argument("--dpi", type=_positive_float, default=None,
-                   help="SVG size from the image's pixels at DPI (default 96 when no mm size)")
-    o.add_argument("--dots", choices=("tone", "packing"), default=None,
-                   help="dot size in SVG and PNG: tone (default) = one size for all dots, "
-                        "chosen so that the total ink equals the image's total darkness; "
-                        "packing = each dot its certified packing disk (large where the image "
-                        "is light: it shows the packing, not the tone)")
-    o.add_argument("--dot-mm", type=_positive_float, default=None, metavar="MM",
-                   help="fixed dot diameter in mm instead of --dots; the PNG preview shows "
-                        "the same dots")
-    o.add_argument("--pen-mm", type=_positive_float, default=None, metavar="W",
-                   help="plotter pen width in mm: the SVG circles become outlines of width W "
-                        "and radius (dot diameter - W)/2, so that the traced dot has the dot's "
-                        "size; a dot not wider than the pen is one pen touch (default: filled "
-                        "circles, which a plotter traces W wider)")
-    o.add_argument("--radius-scale", type=_positive_float, default=1.0, metavar="F",
-                   help="factor on the dot radii of --dots in SVG and PNG (default 1.0)")
-    o.add_argument("--pen-path", choices=("auto", "greedy", "hilbert", "none"), default="auto",
-                   help="SVG dot order: greedy nearest neighbour, Hilbert curve, none, or auto "
-                        "(greedy up to 100000 dots, else Hilbert; default)")
-    o.add_argument("--png-scale", type=_positive_float, default=2.0, metavar="F",
-                   help="PNG pixels per image pixel (default 2.0)")
-    o.add_argument("--quiet", "-q", action="store_true",
-                   help="no progress bar and no summary on stderr")
-    o.add_argument("--json", action="store_true",
-                   help="print one JSON line on stdout at the end: the result summary "
-                        "(n, k, radii, certificate, timings, params), each output's info and "
-                        "seconds")
+    _drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
     _color_options(p)
     _batch_options(p).add_argument("--recursive", "-r", action="store_true",
                                    help="a folder given as IMAGE contributes the images of "
@@ -562,11 +591,10 @@ def _color_options(p):
     pens.add_argument("--colors", choices=("cmyk", "cmy"), default=None,
                       help="separate the image into pen layers: cmyk (black generation "
                            "K = G (1 - max(R, G, B)) in linear light, the other inks separate "
-                           "the rest) or cmy; one SVG layer per pen")
+                           "the rest side by side) or cmy; one SVG layer per pen")
     pens.add_argument("--pens", default=None, metavar="NAME=COLOR,...",
-                      help="any set of pens, e.g. black=#000,red=#c00,blue=#06c: coverages by "
-                           "non-negative least squares of the pens' colours mixed side by side "
-                           "(linear RGB)")
+                      help="any set of pens, e.g. black=#000,red=#c00,blue=#06c: the nearest "
+                           "mix of paper and pens side by side (linear RGB)")
     c.add_argument("--black-generation", type=_unit_closed, default=1.0, metavar="G",
                    help="cmyk: share of the grey component drawn in black (default 1)")
     c.add_argument("--clean-black", type=_unit_closed, default=0.0, metavar="T",
@@ -575,6 +603,91 @@ def _color_options(p):
                    help="pixels with R, G, B all within T of white get no ink (default 0)")
     c.add_argument("--pen-order", default=None, metavar="NAME,...",
                    help="SVG layer order (first drawn first; default: lightest pen first)")
+
+
+def _page(text):
+    from diskpack_cl.export import paper_size
+
+    try:
+        paper_size(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+_nonnegative_float = _checked(float, lambda v: 0.0 <= v < float("inf"), "a finite number >= 0")
+
+
+def _drawing_options(p, summary):
+    """The options of how the dots are drawn (SVG, PNG), of ``stipple`` and ``export``."""
+    from diskpack_cl.export import DEFAULT_MARGIN_MM, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S
+    from diskpack_cl.pen_path import PEN_PATHS
+
+    o = p.add_argument_group("output")
+    o.add_argument("--width-mm", type=_positive_float, default=None, metavar="MM",
+                   help="picture width in mm (with --height-mm: fit inside the box)")
+    o.add_argument("--height-mm", type=_positive_float, default=None, metavar="MM",
+                   help="picture height in mm")
+    o.add_argument("--dpi", type=_positive_float, default=None,
+                   help="picture size from the image's pixels at DPI (default 96 when no mm "
+                        "size and no --page)")
+    o.add_argument("--page", type=_page, default=None, metavar="PAPER",
+                   help=f"the SVG's page is this paper: {', '.join(PAPERS)} or WxHmm (e.g. "
+                        f"300x200mm), portrait; the picture is centred on it and, without a "
+                        f"size, fitted inside the margins")
+    o.add_argument("--landscape", action="store_true", help="turn the --page paper")
+    o.add_argument("--margin-mm", type=_nonnegative_float, default=None, metavar="MM",
+                   help=f"margin around the picture on the --page paper (default "
+                        f"{DEFAULT_MARGIN_MM:g})")
+    o.add_argument("--dots", choices=("tone", "packing"), default=None,
+                   help="dot size in SVG and PNG: tone (default) = one size for all dots, "
+                        "chosen so that the total ink equals the image's total darkness; "
+                        "packing = each dot its certified packing disk (large where the image "
+                        "is light: it shows the packing, not the tone)")
+    o.add_argument("--dot-mm", type=_positive_float, default=None, metavar="MM",
+                   help="fixed dot diameter in mm instead of --dots; the PNG preview shows "
+                        "the same dots")
+    o.add_argument("--pen-mm", type=_positive_float, default=None, metavar="W",
+                   help="plotter pen width in mm: the SVG draws each dot as the pen draws it, "
+                        "one path per dot: a dot not wider than the pen is one pen touch, a "
+                        "wider one is filled by concentric rings W apart (the outermost of "
+                        "radius (dot diameter - W)/2); the PNG preview shows the same ink "
+                        "(default: filled circles, which a plotter traces W wider)")
+    o.add_argument("--radius-scale", type=_positive_float, default=1.0, metavar="F",
+                   help="factor on the dot radii of --dots in SVG and PNG (default 1.0)")
+    o.add_argument("--pen-path", choices=PEN_PATHS, default="auto",
+                   help="SVG dot order: auto (default) = the shorter of greedy and Hilbert, "
+                        "then 2-opt for at most 2 s (measured shortest, benchmarks/pen_path.py); "
+                        "hilbert = Hilbert curve; greedy = nearest neighbour; none = as computed")
+    o.add_argument("--png-scale", type=_positive_float, default=None, metavar="F",
+                   help="PNG pixels per image pixel (default 2.0, at most "
+                        "a 4096 px long side)")
+    o.add_argument("--plot-speed-mm-s", type=_positive_float, default=PLOT_SPEED_MM_S,
+                   metavar="V", help=f"plot-time estimate: pen speed V mm/s drawing and "
+                                     f"travelling, plus {PEN_LIFT_S:g} s to lower and raise the "
+                                     f"pen per dot (default {PLOT_SPEED_MM_S:g})")
+    o.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress bar and no summary on stderr")
+    o.add_argument("--json", action="store_true",
+                   help=f"print one JSON line on stdout at the end: {summary}each output's "
+                        f"info, plot (pen-down count, pen-up travel before and after the "
+                        f"pen path, plot time) and seconds")
+    return o
+
+
+def _resolve_drawing_options(args):
+    """Refuse contradicting drawing options (:class:`_UsageError`); default --dots."""
+    if args.dot_mm is not None and args.dots is not None:
+        raise _UsageError(f"--dot-mm {args.dot_mm:g} and --dots {args.dots} both set the dot "
+                          f"size; give one")
+    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
+        raise _UsageError("give the SVG size either by --width-mm/--height-mm or by --dpi, "
+                          "not both")
+    for name in ("margin_mm", "landscape"):
+        if getattr(args, name) not in (None, False) and args.page is None:
+            raise _UsageError(f"--{name.replace('_', '-')} is for a --page paper: give --page "
+                              f"too (e.g. --page a4)")
+    args.dots = args.dots or "tone"
 
 
 def _stipple_progress(args, total):
@@ -603,16 +716,17 @@ def _resolve_stipple_options(args):
     Raises
     ------
     _UsageError
-        Naming both options: ``--dot-mm`` with ``--dots``, ``--method lloyd``
+        Naming both options: those of :func:`_resolve_drawing_options`, ``--method lloyd``
         with ``--schedule`` or ``--beta/--rounds``, ``--schedule`` with
         ``--beta/--lloyd/--rounds``, and ``--gamma`` where the radius mapping
         has no gamma (density radii).
     """
     from diskpack_cl.schedule import SCHEDULE_OPTIONS
 
-    if args.dot_mm is not None and args.dots is not None:
-        raise _UsageError(f"--dot-mm {args.dot_mm:g} and --dots {args.dots} both set the dot "
-                          f"size; give one")
+    _resolve_drawing_options(args)
+    if not args.black_point < args.white_point:
+        raise _UsageError(f"--black-point {args.black_point:g} must be below --white-point "
+                          f"{args.white_point:g}")
     if args.method == "lloyd" and args.schedule is not None:
         raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
                           f"--schedule {args.schedule} would be ignored; give one")
@@ -637,10 +751,10 @@ def _resolve_stipple_options(args):
             f"the {args.schedule or 'default'} schedule's {radii} radii")
         raise _UsageError(f"--gamma has no effect with {which} (r ~ darkness^(-1/2)); it is "
                           f"the exponent of --radii gray, which the paper, pack and lloyd "
-                          f"schedules use (e.g. --schedule paper --gamma {args.gamma:g})")
+                          f"schedules use (e.g. --schedule paper --gamma {args.gamma:g}); "
+                          f"--tone-gamma sets the contrast on every schedule")
     args.gamma = 3.0 if args.gamma is None else args.gamma
     args.schedule = args.schedule or "default"
-    args.dots = args.dots or "tone"
 
 
 # Peak memory measured per unit (diskpack stipple, default schedule; PNG writer)
@@ -714,10 +828,23 @@ def _check_sizes(args, width, height, n, outputs):
 
 def _write_options(args):
     """The options of :func:`diskpack_cl.batch.write_stipple_outputs` from the arguments."""
-    return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi,
-                dots=args.dots, dot_mm=args.dot_mm, radius_scale=args.radius_scale,
+    order = getattr(args, "pen_order", None)
+    return dict(dots=args.dots, dot_mm=args.dot_mm, radius_scale=args.radius_scale,
                 pen_path=args.pen_path, png_scale=args.png_scale, invert=args.invert,
-                pen_mm=args.pen_mm)
+                pen_mm=args.pen_mm, plot_speed_mm_s=args.plot_speed_mm_s,
+                pen_order=None if order is None else [v.strip() for v in order.split(",")],
+                **_layout_options(args))
+
+
+def _layout_options(args):
+    """Where the picture goes on paper: the options of :func:`diskpack_cl.export.svg_layout`."""
+    return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi, page=args.page,
+                landscape=args.landscape, margin_mm=args.margin_mm)
+
+
+def _tone(args):
+    """The tone controls of :func:`diskpack_cl.image.adjust_tone` from the arguments."""
+    return dict(black=args.black_point, white=args.white_point, gamma=args.tone_gamma)
 
 
 def _stipple_options(args):
@@ -726,14 +853,16 @@ def _stipple_options(args):
                 lloyd=args.lloyd, rounds=args.rounds, supersample=args.supersample,
                 method=args.method, invert=args.invert, refine_every=args.refine_every,
                 radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
-                features=args.features, capacity=args.capacity)
+                features=args.features, capacity=args.capacity, support=args.support,
+                paper_tone=args.paper_tone)
 
 
-def _checked_outputs(outputs):
-    """The output paths, each checked writable and none given twice."""
+def _checked_outputs(args):
+    """The ``-o`` paths, each checked (extension, folder) and given once, before any work."""
     from diskpack_cl.export import check_output_path
 
-    outputs, seen = [str(o) for o in outputs], set()
+    outputs = [str(o) for o in args.output]
+    seen = set()
     for out in outputs:
         check_output_path(out)
         key = os.path.realpath(out)
@@ -743,24 +872,98 @@ def _checked_outputs(outputs):
     return outputs
 
 
+def _tone_count(args, gray, n):
+    """With --dot-mm/--pen-mm: the dots whose ink is the image's (a note when far from n).
+
+    Returns ``(n, info)``: ``n`` itself unless it is ``"tone"``, and the
+    ``tone_n`` summary (None without a pen or dot size).
+    """
+    from diskpack_cl.export import svg_layout, tone_dot_count
+
+    dot = args.dot_mm or args.pen_mm
+    if dot is None:
+        if n == "tone":
+            raise _UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
+        return n, None
+    h, w = gray.shape
+    scale = svg_layout(w, h, **_layout_options(args))["scale"]
+    tone = tone_dot_count(gray if args.invert else 1.0 - gray, scale, dot)
+    if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and not args.quiet:
+        print(f"{PROG}: note: {tone} dots of {dot:g} mm give the image's ink on this paper; "
+              f"-n {n} will look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})",
+              file=sys.stderr)
+    return (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
+
+
+def _write_bar(args, n, outputs):
+    """Return (callback, close): a bar over the dots the PNG previews stamp."""
+    pngs = sum(o.lower().endswith(".png") for o in outputs)
+    bar = _bar(args, "write", "dot", n * pngs) if pngs else None
+    return (None, lambda: None) if bar is None else (bar.update, bar.close)
+
+
+def _plot_summary(written, speed):
+    """Plot figures of the first SVG output, and their text for the summary line."""
+    svg = next((w for w in written if w["format"] == "svg"), None)
+    if svg is None:
+        return None, ""
+    plot = {k: svg[k] for k in ("pen_downs", "draw_mm", "travel_before_mm", "travel_after_mm",
+                                "plot_seconds")}
+    plot["plot_speed_mm_s"] = speed
+    hours, minutes = divmod(round(plot["plot_seconds"] / 60), 60)
+    return plot, (f"; pen-up travel {plot['travel_before_mm']:.0f} -> "
+                  f"{plot['travel_after_mm']:.0f} mm, plot about {hours} h {minutes:02d} min "
+                  f"at {speed:g} mm/s")
+
+
+def _write_and_report(args, res, gray, outputs, summary, t0):
+    """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
+    print it with --json; return the tail of the summary line."""
+    from diskpack_cl.batch import write_stipple_outputs
+
+    t_write = time.perf_counter()
+    progress, close = _write_bar(args, len(res.points), outputs)
+    try:
+        dot_mm, written = write_stipple_outputs(res, gray, outputs, progress=progress,
+                                                **_write_options(args))
+    finally:
+        close()
+    plot, text = _plot_summary(written, args.plot_speed_mm_s)
+    summary.update(dot_mm=dot_mm, outputs=written, plot=plot,
+                   write_seconds=time.perf_counter() - t_write,
+                   seconds=time.perf_counter() - t0)
+    if args.json:
+        print(json.dumps(summary, default=json_default), flush=True)
+    return f"{text}; wrote " + ", ".join(outputs)
+
+
+#: Options of one-pen stippling (and their defaults) that --colors/--pens refuse.
+ONE_PEN_DEFAULTS = {"invert": False, "paper_tone": 0.0, "black_point": 0.0, "white_point": 1.0,
+                    "tone_gamma": 1.0}
+
+
 def _run_stipple_colors(args):
     """``diskpack stipple --colors/--pens``: one image, every pen's dots in one certified packing."""
     from diskpack_cl.batch import dots_for_image
     from diskpack_cl.color import load_rgb
-    from diskpack_cl.export import mm_per_px, write_stipple
+    from diskpack_cl.export import preview_scale
     from diskpack_cl.multipen import stipple_colors
     from diskpack_cl.schedule import StippleOptions
 
-    if len(args.images) > 1 or os.path.isdir(str(args.images[0])) or "{" in "".join(args.output):
-        raise _UsageError("--colors/--pens stipple one image (batch jobs are mono only)")
-    if args.invert:
-        raise _UsageError("--invert has no meaning with --colors/--pens: the pens draw on white")
+    if _batch_mode(args, args.images, args.output) or args.n == "tone":
+        raise _UsageError("--colors/--pens stipple one image with -n N, --density or "
+                          "--dots-per-cm2 (batch jobs and -n tone are for one pen)")
+    mono = [f"--{k}" for k, v in ONE_PEN_DEFAULTS.items() if getattr(args, k) != v]
+    if mono:
+        raise _UsageError(f"{', '.join(m.replace('_', '-') for m in mono)}: for one pen, not "
+                          f"with --colors/--pens")
     t0 = time.perf_counter()
-    outputs = _checked_outputs(args.output)
+    outputs = _checked_outputs(args)
     rgb = load_rgb(_image_path(args.images[0]))
     H, W = rgb.shape[:2]
     n = dots_for_image(W, H, n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
-                       width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi)
+                       **_layout_options(args))
+    args.png_scale = preview_scale(W, H, args.png_scale)
     _check_sizes(args, W, H, n, outputs)
     opt = StippleOptions.resolve(n, W, H, seed=args.seed, **_stipple_options(args))
     callback, close = _stipple_progress(args, sum(ph[1] for ph in opt.phases))
@@ -773,51 +976,41 @@ def _run_stipple_colors(args):
         close()
     if not res.certificate.valid:
         raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
-    order = None if args.pen_order is None else [v.strip() for v in args.pen_order.split(",")]
-    scale = mm_per_px(W, H, args.width_mm, args.height_mm, args.dpi)
-    png = dict(scale=args.png_scale, radius_scale=args.radius_scale, dots=args.dots)
-    if args.dot_mm is not None:
-        png["dot_px"] = 0.5 * args.dot_mm / scale * args.png_scale
-    svg = dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi, dot_mm=args.dot_mm,
-               radius_scale=args.radius_scale, pen_path=args.pen_path, pen_mm=args.pen_mm,
-               dots=args.dots, pen_order=order)
-    written = [{"path": out, **write_stipple(out, res, **(svg if out.lower().endswith(".svg") else
-                                                         png if out.lower().endswith(".png") else {}))}
-               for out in outputs]
-    summary = dict(res.summary(), image=str(args.images[0]), outputs=written,
-                   seconds=time.perf_counter() - t0)
+    summary = dict(res.summary(), image=str(args.images[0]))
+    tail = _write_and_report(args, res, None, outputs, summary, t0)
     if not args.quiet:
         pens = ", ".join(f"{p['name']} {p['n']}" for p in summary["pens"])
-        print(f"{PROG}: {res.n} dots ({pens}) on {W}x{H} px, certified "
-              f"{'valid' if res.certificate.valid else 'INVALID'} over all pens (min gap "
-              f"{res.certificate.min_gap:.3g} px) in {summary['seconds']:.3g} s; wrote "
-              + ", ".join(outputs), file=sys.stderr)
-    if args.json:
-        print(json.dumps(summary, default=json_default), flush=True)
+        print(f"{PROG}: {res.n} dots ({pens}) on {W}x{H} px, certified valid over all pens "
+              f"(min gap {res.certificate.min_gap:.3g} px), {summary['iterations']} iterations "
+              f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
     return 0
 
 
 def _run_stipple(args):
-    from diskpack_cl.batch import dots_for_image, write_stipple_outputs
-    from diskpack_cl.image import load_gray
+    from diskpack_cl.batch import dots_for_image
+    from diskpack_cl.export import preview_scale
+    from diskpack_cl.image import adjust_tone, load_gray
     from diskpack_cl.schedule import StippleOptions
     from diskpack_cl.stipple import stipple
 
     _resolve_stipple_options(args)
     if args.colors or args.pens:
         return _run_stipple_colors(args)
+    if args.pen_order is not None:
+        raise _UsageError("--pen-order orders the pens of --colors or --pens")
     if _batch_mode(args, args.images, args.output):
+        if args.n == "tone":
+            raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
         return _run_stipple_batch(args)
     t0 = time.perf_counter()
     # everything that can be refused is refused before the computation
-    outputs = _checked_outputs(args.output)
-    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
-        raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
+    outputs = _checked_outputs(args)
     image = _image_path(args.images[0])
-    gray = load_gray(image, allow_large=args.allow_large)
-    n = dots_for_image(gray.shape[1], gray.shape[0], n=args.n, density=args.density,
-                       dots_per_cm2=args.dots_per_cm2, width_mm=args.width_mm,
-                       height_mm=args.height_mm, dpi=args.dpi)
+    gray = adjust_tone(load_gray(image, allow_large=args.allow_large), **_tone(args))
+    n, tone_n = _tone_count(args, gray, args.n)
+    n = dots_for_image(gray.shape[1], gray.shape[0], n=n, density=args.density,
+                       dots_per_cm2=args.dots_per_cm2, **_layout_options(args))
+    args.png_scale = preview_scale(gray.shape[1], gray.shape[0], args.png_scale)
     _check_sizes(args, gray.shape[1], gray.shape[0], n, outputs)
     # the phases (for the progress total) follow n and the image size
     opt = StippleOptions.resolve(n, gray.shape[1], gray.shape[0], seed=args.seed,
@@ -831,32 +1024,62 @@ def _run_stipple(args):
         close()
     if not getattr(res.certificate, "valid", False):
         raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
-
-    t_write = time.perf_counter()
-    dot_mm, written = write_stipple_outputs(res, gray, outputs, **_write_options(args))
-    seconds_write = time.perf_counter() - t_write
-
+    res.params["tone"] = _tone(args)  # recorded in the .npz and the --json params
     summary = res.summary()
-    summary["image"] = str(image)
-    summary["dot_mm"] = dot_mm  # None: the packing radii
-    summary["outputs"] = written
-    summary["write_seconds"] = seconds_write
-    summary["seconds"] = time.perf_counter() - t0
+    summary.update(image=str(image), tone_n=tone_n)
+    tail = _write_and_report(args, res, gray, outputs, summary, t0)
     if res.engine == "exact" and not args.quiet:
         print(f"{PROG}: note: no OpenCL device: stippled with the exact (scipy) engine",
               file=sys.stderr)
     if not args.quiet:
         cert = res.certificate
-        travel = "".join(
-            f"; pen-up travel {w['travel_before_mm']:.0f} -> {w['travel_after_mm']:.0f} mm"
-            for w in written if "travel_after_mm" in w)
         print(f"{PROG}: {res.n} dots on {res.width}x{res.height} px, k = {res.k:.4g}, "
               f"radii {summary['min_radius']:.3g}..{summary['max_radius']:.3g} px, "
               f"certified {'valid' if cert.valid else 'INVALID'} (min gap {cert.min_gap:.3g} px), "
-              f"{summary['iterations']} iterations in {summary['seconds']:.3g} s{travel}; wrote "
-              + ", ".join(outputs), file=sys.stderr)
-    if args.json:
-        print(json.dumps(summary, default=json_default), flush=True)
+              f"{summary['iterations']} iterations in {summary['seconds']:.3g} s{tail}",
+              file=sys.stderr)
+    return 0
+
+
+def _add_export(subparsers):
+    p = subparsers.add_parser(
+        "export", help="draw a finished stippling again, for another paper, pen or dot size",
+        description="Draw a stippling that 'diskpack stipple' wrote (.npz; its .csv and .svg "
+                    "are read too) again without recomputing it: another paper (--page), "
+                    "size, pen (--pen-mm), dot size or pen path. The dots keep the size whose "
+                    "ink equals the image's darkness (stored in the .npz) unless --dot-mm or "
+                    "--dots packing is given.",
+        epilog="examples:\n"
+               "  diskpack export out.npz -o a4.svg --page a4 --pen-mm 0.5\n"
+               "  diskpack export out.npz -o a3.svg -o a3.png --page a3 --landscape "
+               "--margin-mm 20",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("input", metavar="STIPPLING",
+                   help="a stippling written by diskpack stipple (.npz, .csv or .svg)")
+    p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
+                   help="output file; repeat for several: .svg, .png, .npz, .csv")
+    p.add_argument("--invert", action="store_true",
+                   help="light dots on dark paper (default: as the stippling was made)")
+    _drawing_options(p, "n, the input, ")
+    p.set_defaults(run=_run_export)
+
+
+def _run_export(args):
+    from diskpack_cl.export import read_stipple
+
+    _resolve_drawing_options(args)
+    t0 = time.perf_counter()
+    outputs = _checked_outputs(args)
+    res = read_stipple(args.input)
+    if res is None:
+        raise ValueError(f"{args.input} is a point set, not a stippling (no radii, width and "
+                         f"height)")
+    args.invert = args.invert or bool(res.params.get("invert", False))
+    summary = {"n": len(res.points), "width": res.width, "height": res.height,
+               "input": str(args.input)}
+    tail = _write_and_report(args, res, None, outputs, summary, t0)
+    if not args.quiet:
+        print(f"{PROG}: {len(res.points)} dots of {args.input}{tail}", file=sys.stderr)
     return 0
 
 
@@ -1107,13 +1330,11 @@ def _report_batch(args, batch):
 def _run_stipple_batch(args):
     from diskpack_cl.batch import stipple_many
 
-    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
-        raise ValueError("give the SVG size either by --width-mm/--height-mm or by --dpi, not both")
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
                          n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
                          seed=args.seed, recursive=args.recursive,
                          allow_large=args.allow_large, write=_write_options(args),
-                         **_batch_run(args), **_stipple_options(args))
+                         tone=_tone(args), **_batch_run(args), **_stipple_options(args))
     return _report_batch(args, batch)
 
 
@@ -1139,12 +1360,13 @@ def _run_relax_batch(args):
 
 # ----------------------------------------------------------------------- main
 
-_SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_analyze)
+_SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_export,
+                _add_analyze)
 
 
 def build_parser():
     """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
         from importlib.metadata import version
@@ -1198,7 +1420,8 @@ def main(argv=None):
     """Run the CLI; return the exit status.
 
     0 ok, 1 error, 2 usage error, 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (an
-    interrupted run leaves none of its outputs), 141 when stdout was closed.
+    interrupted run writes none of its outputs and leaves earlier files as
+    they were), 141 when stdout was closed.
     """
     import signal
 

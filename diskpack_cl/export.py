@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
 from diskpack_cl.io import atomic_write, check_writable
+from diskpack_cl.pen_path import path_travel, pen_path_order
 
 __all__ = [
     "WRITERS",
@@ -34,139 +36,6 @@ __all__ = [
 ]
 
 MM_PER_INCH = 25.4
-
-
-# --------------------------------------------------------------------------
-# Pen path
-# --------------------------------------------------------------------------
-
-
-def path_travel(points, order=None, *, start=(0.0, 0.0)):
-    """Pen-up travel: from ``start`` through the points in ``order``.
-
-    Examples
-    --------
-    >>> path_travel([[3.0, 4.0], [3.0, 0.0]])
-    9.0
-    """
-    p = np.asarray(points, dtype=np.float64)
-    if order is not None:
-        p = p[np.asarray(order)]
-    if len(p) == 0:
-        return 0.0
-    q = np.vstack([np.asarray(start, dtype=np.float64)[None, :], p])
-    return float(np.sum(np.hypot(*np.diff(q, axis=0).T)))
-
-
-def _hilbert_index(ix, iy, order):
-    """Hilbert-curve index of integer cells (vectorized; cells in [0, 2^order))."""
-    ix = ix.astype(np.int64).copy()
-    iy = iy.astype(np.int64).copy()
-    d = np.zeros_like(ix)
-    s = 1 << (order - 1)
-    while s > 0:
-        rx = (ix & s) > 0
-        ry = (iy & s) > 0
-        d += s * s * ((3 * rx) ^ ry)
-        # rotate the quadrant
-        flip = ~ry
-        swap_x = np.where(flip & rx, s - 1 - ix, ix)
-        swap_y = np.where(flip & rx, s - 1 - iy, iy)
-        ix = np.where(flip, swap_y, swap_x)
-        iy = np.where(flip, swap_x, swap_y)
-        ix &= s - 1
-        iy &= s - 1
-        s >>= 1
-    return d
-
-
-def _hilbert_order(p):
-    lo = p.min(axis=0)
-    span = max(float(np.max(p.max(axis=0) - lo)), 1e-300)
-    order = 16
-    cells = (1 << order) - 1
-    ix = np.floor((p[:, 0] - lo[0]) / span * cells).astype(np.int64)
-    iy = np.floor((p[:, 1] - lo[1]) / span * cells).astype(np.int64)
-    return np.argsort(_hilbert_index(ix, iy, order), kind="stable")
-
-
-def _greedy_order(p, start):
-    """Greedy nearest-neighbour tour with a cKDTree of the unvisited points.
-
-    The tree is rebuilt whenever half of its points have been visited, so a
-    query for the 16 nearest almost always finds an unvisited one.
-    """
-    from scipy.spatial import cKDTree
-
-    n = len(p)
-    visited = np.zeros(n, dtype=bool)
-    order = np.empty(n, dtype=np.int64)
-    alive = np.arange(n)
-    tree = cKDTree(p)
-    cur = np.asarray(start, dtype=np.float64)
-    in_tree = n
-    for step in range(n):
-        if step and (n - step) * 2 < in_tree:
-            alive = np.flatnonzero(~visited)
-            tree = cKDTree(p[alive])
-            in_tree = alive.size
-        kq = min(16, in_tree)
-        while True:
-            _, j = tree.query(cur, k=kq)
-            j = np.atleast_1d(j)
-            cand = alive[j]
-            free = cand[~visited[cand]]
-            if free.size or kq >= in_tree:
-                break
-            kq = min(kq * 4, in_tree)
-        nxt = int(free[0])
-        visited[nxt] = True
-        order[step] = nxt
-        cur = p[nxt]
-    return order
-
-
-def pen_path_order(points, *, method="auto", start=(0.0, 0.0)):
-    """Order the dots along a short pen path.
-
-    Parameters
-    ----------
-    points : (n, 2) array_like
-    method : {"auto", "greedy", "hilbert", "none"}
-        ``"greedy"``: nearest unvisited dot next (cKDTree), about 10% shorter
-        than a Hilbert order on uniform points but a Python loop (about 40 us per dot);
-        ``"hilbert"``: sort along a Hilbert curve (vectorized);
-        ``"auto"``: greedy up to 100 000 dots, else Hilbert.
-    start : (2,) array_like
-        Where the pen starts (the SVG origin by default).
-
-    Returns
-    -------
-    order : (n,) int64
-        A permutation of ``range(n)``.
-    travel_before, travel_after : float
-        Pen-up travel (same units as ``points``) in the given order and in
-        the new order, both from ``start``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> p = np.random.default_rng(0).random((500, 2))
-    >>> order, before, after = pen_path_order(p)
-    >>> sorted(order) == list(range(500)), after < before
-    (True, True)
-    """
-    p = np.asarray(points, dtype=np.float64)
-    n = len(p)
-    if method not in ("auto", "greedy", "hilbert", "none"):
-        raise ValueError(f"pen path method must be auto, greedy, hilbert or none, got {method!r}")
-    before = path_travel(p, start=start)
-    if n < 2 or method == "none":
-        return np.arange(n), before, before
-    if method == "auto":
-        method = "greedy" if n <= 100_000 else "hilbert"
-    order = _greedy_order(p, start) if method == "greedy" else _hilbert_order(p)
-    return order, before, path_travel(p, order, start=start)
 
 
 # --------------------------------------------------------------------------
@@ -238,82 +107,273 @@ def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
     return MM_PER_INCH / dpi
 
 
+#: Long side (px) of the PNG preview when no scale is given.
+PREVIEW_MAX_PX = 4096
+
+
+def preview_scale(width, height, scale=None):
+    """PNG pixels per image pixel: ``scale``, else 2 capped at :data:`PREVIEW_MAX_PX` px.
+
+    Examples
+    --------
+    >>> preview_scale(512, 512), preview_scale(6000, 4000), preview_scale(6000, 4000, 1.0)
+    (2.0, 0.6826666666666666, 1.0)
+    """
+    return float(scale) if scale is not None else min(2.0, PREVIEW_MAX_PX / max(width, height))
+
+
+def tone_dot_count(darkness, scale, dot_mm):
+    """The number of dots ``dot_mm`` wide whose ink equals the image's on paper.
+
+    ``darkness`` is per pixel in [0, 1]; ``scale`` mm per pixel.
+
+    Examples
+    --------
+    >>> tone_dot_count(np.full((100, 100), 0.5), 1.0, 2.0)  # 5000 mm^2 of ink
+    1592
+    """
+    ink_mm2 = float(np.mean(darkness)) * np.size(darkness) * scale * scale
+    return max(2, int(round(ink_mm2 / (0.25 * np.pi * dot_mm * dot_mm))))
+
+
 def _fmt(v):
     return np.char.mod("%.4f", v)
 
 
-def write_svg(
-    path,
-    result,
-    *,
-    width_mm=None,
-    height_mm=None,
-    dpi=None,
-    dot_mm=None,
-    radius_scale=1.0,
-    pen_path="auto",
-    layer="stipples",
-    invert=False,
-    pen_mm=None,
-    dots="tone",
-):
-    """Write an SVG for pen plotters and Inkscape.
+#: Paper sizes (portrait, mm) of ``page=``; ``"WxH"`` or ``"WxHmm"`` gives any other.
+PAPERS = {"a3": (297.0, 420.0), "a4": (210.0, 297.0), "a5": (148.0, 210.0),
+          "letter": (215.9, 279.4)}
+#: Margin (mm) around the picture on a page when none is given.
+DEFAULT_MARGIN_MM = 10.0
 
-    The dots are ``<circle>`` elements in one Inkscape layer
-    (``<g inkscape:groupmode="layer">``), user units are millimetres, and
-    the document has the exact physical size of the image: ``width="..px"``
-    (CSS pixels, 1/96 inch) when the size comes from ``dpi``, else
-    ``width="..mm"``.
 
-    Every dot lies inside the page: a dot that would stick out past an edge
-    (its centre closer to the edge than its radius) is moved inward until it
-    touches the edge, keeping its size (a dot wider than the page shrinks to
-    it).  Only border dots move, by less than their radius.
+def paper_size(page, *, landscape=False):
+    """Width and height (mm) of a paper: a name of :data:`PAPERS` or ``"WxH[mm]"``.
 
-    Plotting: a pen plotter traces each ``<circle>`` once along its outline,
-    so a dot drawn with a pen of width W comes out its diameter plus W
-    across.  With ``pen_mm=W`` the circles are outlines (``stroke-width`` W,
-    no fill) of radius ``(dot diameter - W) / 2``, so the traced dot is the
-    dot's size; a dot not wider than the pen becomes one pen touch (a path
-    0.01 mm long, round caps).  Without ``pen_mm`` the circles are filled
-    (for Inkscape and screens, or a plotter set to fill shapes).
+    Examples
+    --------
+    >>> paper_size("a4"), paper_size("A4", landscape=True), paper_size("300x200mm")
+    ((210.0, 297.0), (297.0, 210.0), (300.0, 200.0))
+    """
+    text = str(page).strip().lower()
+    if text in PAPERS:
+        w, h = PAPERS[text]
+    else:
+        try:
+            w, h = (float(v) for v in text.removesuffix("mm").split("x"))
+        except ValueError:
+            raise ValueError(f"page must be {', '.join(PAPERS)} or WxHmm (e.g. 300x200mm), "
+                             f"got {page!r}") from None
+        if not (0 < w < float("inf") and 0 < h < float("inf")):
+            raise ValueError(f"page sides must be > 0 mm, got {page!r}")
+    return (max(w, h), min(w, h)) if landscape else (w, h)
 
-    Parameters
-    ----------
-    width_mm, height_mm : float, optional
-        Physical size; with both, the drawing fits inside the box keeping
-        its aspect ratio.
-    dpi : float, optional
-        Physical size from the image's pixels (default 96 dpi, CSS pixels),
-        when neither width_mm nor height_mm is given.
-    dot_mm : float, optional
-        Fixed dot diameter in mm, instead of ``dots``.
-    radius_scale : float, optional
-        Factor on the radii of ``dots``.
-    pen_path : {"auto", "greedy", "hilbert", "none"}
-        Dot order; see :func:`pen_path_order`.
-    invert : bool, optional
-        White dots on a black background rectangle.
-    pen_mm : float, optional
-        The plotter pen's line width in mm (see above).
-    dots : {"tone", "packing"}
-        Dot size (without ``dot_mm``): ``"tone"`` (default, as ``diskpack
-        stipple`` draws) one size for all dots, chosen so that their ink is
-        the image's darkness (``result.tone_radius``); ``"packing"`` each dot
-        its certified packing disk (large where the image is light: it shows
-        the packing, nearly the inverse of the tone).
+
+def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=None,
+               landscape=False, margin_mm=None):
+    """Where :func:`write_svg` puts a ``width x height`` px picture, all in mm.
+
+    Without ``page`` the page is the picture, sized by :func:`mm_per_px`.
+    With ``page`` (see :func:`paper_size`) the picture is centred on it,
+    sized by ``width_mm``/``height_mm``/``dpi`` when given, else fitted
+    inside the margins (``margin_mm``, default :data:`DEFAULT_MARGIN_MM`).
 
     Returns
     -------
     dict
-        ``width_mm``, ``height_mm``, ``n``, ``travel_before_mm``,
-        ``travel_after_mm`` (pen-up travel from the origin), ``moved_inside``
-        (dots moved inside the page) and, with ``pen_mm``, ``pen_touches``
-        (dots drawn as one touch).
+        ``scale`` (mm per px), ``picture`` and ``page`` ((w, h) mm),
+        ``offset`` ((x, y) mm of the picture's corner on the page).
 
     Examples
     --------
-    >>> import tempfile, os, types, numpy as np
+    >>> lay = svg_layout(400, 300, page="a4", landscape=True, margin_mm=20)
+    >>> [round(v, 2) for v in (*lay["picture"], *lay["offset"])]
+    [226.67, 170.0, 35.17, 20.0]
+    """
+    if page is None:
+        if margin_mm is not None:
+            raise ValueError("a margin needs a page: give page (e.g. 'a4') too")
+        s = mm_per_px(width, height, width_mm, height_mm, dpi)
+        return {"scale": s, "picture": (width * s, height * s),
+                "page": (width * s, height * s), "offset": (0.0, 0.0)}
+    pw, ph = paper_size(page, landscape=landscape)
+    margin = DEFAULT_MARGIN_MM if margin_mm is None else float(margin_mm)
+    if not 0 <= margin < 0.5 * min(pw, ph):
+        raise ValueError(f"margin_mm must be in [0, {0.5 * min(pw, ph):g}) on a "
+                         f"{pw:g}x{ph:g} mm page, got {margin_mm}")
+    if width_mm is None and height_mm is None and dpi is None:
+        s = mm_per_px(width, height, pw - 2 * margin, ph - 2 * margin)
+    else:
+        s = mm_per_px(width, height, width_mm, height_mm, dpi)
+    w, h = width * s, height * s
+    if w > pw - 2 * margin + 1e-9 or h > ph - 2 * margin + 1e-9:
+        raise ValueError(f"the picture ({w:.1f}x{h:.1f} mm) does not fit inside the "
+                         f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page")
+    return {"scale": s, "picture": (w, h), "page": (pw, ph),
+            "offset": (0.5 * (pw - w), 0.5 * (ph - h))}
+
+
+#: Plot-time model of :func:`plot_time`: pen-down and pen-up speed (mm/s)
+#: and seconds to lower and raise the pen once per dot (AxiDraw-like).
+PLOT_SPEED_MM_S = 50.0
+PEN_LIFT_S = 0.3
+
+
+def plot_time(pen_downs, draw_mm, travel_mm, *, speed_mm_s=PLOT_SPEED_MM_S,
+              pen_lift_s=PEN_LIFT_S):
+    """Estimated plot time in seconds: all lines at ``speed_mm_s``, plus a pen lift per dot.
+
+    Examples
+    --------
+    >>> plot_time(100, 400.0, 600.0)
+    50.0
+    """
+    if not speed_mm_s > 0:
+        raise ValueError(f"plot speed must be > 0 mm/s, got {speed_mm_s}")
+    return (draw_mm + travel_mm) / speed_mm_s + pen_downs * pen_lift_s
+
+
+def _pen_rings(rad, pen):
+    """Ring radii (mm) that fill dots of radius ``rad`` with a pen ``pen`` wide.
+
+    A ring of radius rho inks [rho - pen/2, rho + pen/2]: the outermost is
+    at ``rad - pen/2``, each next one a pen width further in, the innermost
+    at least ``pen/2`` (it inks the centre). Returns an (n, m) array, nan
+    where a dot has fewer rings; a dot not wider than the pen has none (it
+    is one pen touch).
+    """
+    m = np.where(2 * rad <= pen, 0, np.ceil(rad / pen - 1e-9)).astype(np.int64)
+    j = np.arange(max(int(m.max(initial=0)), 1))
+    outer = np.round(rad - 0.5 * pen, 4)  # as written: the rings follow from it when read back
+    rho = np.maximum(outer[:, None] - j[None, :] * pen, 0.5 * pen)
+    return np.where(j[None, :] < m[:, None], rho, np.nan)
+
+
+def _svg_dots(c, rad, pen):
+    """SVG lines of the dots, one element each, and their pen-down length (mm).
+
+    Without a pen: filled ``<circle>``s. With a pen ``pen`` mm wide (see
+    :func:`write_svg`): a ``<circle>`` outline for a one-ring dot, one
+    ``<path>`` of concentric rings joined by short radial lines for a wider
+    dot, a 0.01 mm ``<path>`` (a pen touch) for a dot not wider than the pen.
+    """
+    x, y = c[:, 0], c[:, 1]
+    if pen is None:
+        circles = _join('    <circle cx="', _fmt(x), '" cy="', _fmt(y), '" r="', _fmt(rad), '"/>\n')
+        return "".join(circles.tolist()), float(2 * np.pi * rad.sum())
+    rho = _pen_rings(rad, pen)
+    m = np.count_nonzero(~np.isnan(rho), axis=1)
+    lines = np.empty(len(c), dtype=object)
+    touch = m == 0
+    lines[touch] = _join('    <path d="M ', _fmt(x[touch] - 0.5 * _TOUCH_MM), ',', _fmt(y[touch]),
+                         f' h {_TOUCH_MM}"/>\n')
+    one = m == 1
+    lines[one] = _join('    <circle cx="', _fmt(x[one]), '" cy="', _fmt(y[one]), '" r="',
+                       _fmt(rho[one, 0]), '"/>\n')
+    for k in np.unique(m[m > 1]):  # M to the outer ring, then relative arcs and steps in
+        sel = np.flatnonzero(m == k)
+        d = _join('    <path d="M ', _fmt(x[sel] + rho[sel, 0]), ",", _fmt(y[sel]))
+        for j in range(k):
+            r = _fmt(rho[sel, j])
+            if j:
+                d = _join(d, " l ", _fmt(rho[sel, j] - rho[sel, j - 1]), ",0")
+            d = _join(d, " a ", r, ",", r, " 0 1 0 ", _fmt(-2 * rho[sel, j]), ",0 a ", r, ",",
+                      r, " 0 1 0 ", _fmt(2 * rho[sel, j]), ",0")
+        lines[sel] = _join(d, '"/>\n')
+    rings = np.nan_to_num(rho)
+    draw = (2 * np.pi * rings.sum() + np.sum(rings[:, :-1] - rings[:, 1:], where=rings[:, 1:] > 0)
+            + _TOUCH_MM * np.count_nonzero(touch))
+    return "".join(lines.tolist()), float(draw)
+
+
+def _join(*parts):
+    out = parts[0]
+    for part in parts[1:]:
+        out = np.char.add(np.asarray(out, dtype=str), part)
+    return out
+
+
+# the paper, for --invert: a black 1x1 PNG stretched over the page. vpype and
+# plotters ignore raster images, so the plot and its path count hold the dots only
+_BLACK_PNG = ("data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklE"
+              "QVR4nGNgAAAAAgABSK+kcQAAAABJRU5ErkJggg==")
+#: Label of the layer of the dots in :func:`write_svg`.
+LAYER = "stipples"
+
+
+def _svg_head(lay, size, meta, paint, invert):
+    """Everything of the SVG before the dots: page, metadata, background, the dots' layer."""
+    pw, ph = lay["page"]
+    head = [
+        '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
+        '<svg xmlns="http://www.w3.org/2000/svg"',
+        '     xmlns:xlink="http://www.w3.org/1999/xlink"',
+        '     xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"',
+        '     xmlns:sodipodi="http://sodipodi.sourceforge.net/DTD/sodipodi-0.dtd"',
+        f'     {size} viewBox="0 0 {pw:.10g} {ph:.10g}"',
+        '     version="1.1">',
+        '  <sodipodi:namedview inkscape:document-units="mm"/>',
+        f'  <metadata id="diskpack_cl">{json.dumps(meta)}</metadata>',
+    ]
+    if invert:  # the black paper, in a layer that plotters skip (AxiDraw: a name with %)
+        head += ['  <g inkscape:groupmode="layer" inkscape:label="% paper (not plotted)" '
+                 'id="paper" sodipodi:insensitive="true">',
+                 f'    <image x="0" y="0" width="{pw:.10g}" height="{ph:.10g}" '
+                 f'preserveAspectRatio="none" xlink:href="{_BLACK_PNG}"/>', '  </g>']
+    head.append(f'  <g inkscape:groupmode="layer" inkscape:label="{meta["layer"]}" '
+                f'id="layer1" {paint}>')
+    return "\n".join(head) + "\n"
+
+
+def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
+              radius_scale=1.0, pen_path="auto", layer=LAYER, invert=False, pen_mm=None,
+              dots="tone", page=None, landscape=False, margin_mm=None,
+              plot_speed_mm_s=PLOT_SPEED_MM_S):
+    """Write an SVG for pen plotters, vpype and Inkscape.
+
+    One element per dot, in pen-path order, in one Inkscape layer; user
+    units are millimetres. The page is the picture (``width="..px"``, CSS
+    pixels, for a ``dpi`` size, else ``..mm``) or the ``page`` paper with
+    the picture centred (:func:`svg_layout`). A dot that would stick out of
+    the picture moves inward until it touches the edge. A ``<metadata>``
+    element records the layout for :func:`read_stipple`.
+
+    Without ``pen_mm`` the dots are filled circles (a plotter traces their
+    outline, a pen width wider). With ``pen_mm=W`` each dot is drawn as the
+    pen draws it: a dot not wider than the pen is one touch (a 0.01 mm
+    path, round caps), a wider one one path of concentric rings W apart
+    (:func:`_pen_rings`), the outermost of radius ``(diameter - W) / 2``.
+
+    Parameters
+    ----------
+    width_mm, height_mm, dpi : float, optional
+        Picture size (:func:`mm_per_px`; with ``page``, by default fitted
+        inside the margins).
+    dot_mm : float, optional
+        Fixed dot diameter in mm, instead of ``dots`` (``"tone"``: one size,
+        ``result.tone_radius``, ink = the image's darkness; ``"packing"``:
+        the certified disks) times ``radius_scale``.
+    pen_path : {"auto", "hilbert", "greedy", "none"}
+        See :func:`diskpack_cl.pen_path.pen_path_order`.
+    invert : bool, optional
+        White dots on black paper: a black image in the layer ``% paper
+        (not plotted)``, which vpype and plotters skip.
+    page, landscape, margin_mm : optional
+        The paper (:func:`paper_size`, :func:`svg_layout`).
+    plot_speed_mm_s : float
+        Speed of the plot-time estimate (:func:`plot_time`).
+
+    Returns
+    -------
+    dict
+        ``width_mm``, ``height_mm`` (picture), ``page_mm``, ``n``,
+        ``travel_before_mm``, ``travel_after_mm`` (pen-up, from the origin),
+        ``moved_inside``, ``pen_downs``, ``draw_mm``, ``plot_seconds`` and,
+        with ``pen_mm``, ``pen_touches``.
+
+    Examples
+    --------
+    >>> import tempfile, os, types
     >>> res = types.SimpleNamespace(points=np.array([[0.0, 8.0], [8.0, 8.0]]),
     ...                             radii=np.array([1.0, 1.0]), width=16, height=16,
     ...                             tone_radius=1.0)
@@ -321,63 +381,69 @@ def write_svg(
     >>> info = write_svg(out, res, dpi=25.4, pen_mm=0.5)
     >>> info["moved_inside"], info["pen_touches"]
     (1, 0)
-    >>> [line.strip() for line in Path(out).read_text().splitlines() if "<circle" in line][0]
-    '<circle cx="1.0052" cy="8.0000" r="0.7500"/>'
+    >>> [line.split()[:5] for line in Path(out).read_text().splitlines() if "<path" in line][0]
+    ['<path', 'd="M', '1.7552,8.0000', 'a', '0.7500,0.7500']
     """
     p, r, W, H = _arrays(result)
     if pen_mm is not None and not pen_mm > 0:
         raise ValueError(f"pen_mm must be > 0, got {pen_mm}")
-    s = mm_per_px(W, H, width_mm, height_mm, dpi)
-    if dot_mm is not None:
-        if not dot_mm > 0:
-            raise ValueError(f"dot_mm must be > 0, got {dot_mm}")
-        rad = np.full(len(p), 0.5 * float(dot_mm))
-    else:
-        rad = _dot_radii(result, r, s, dots, radius_scale)
-    wmm, hmm = W * s, H * s
-    pm, rad, moved = _inside_page(p * s, rad, wmm, hmm)
+    lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
+                     landscape=landscape, margin_mm=margin_mm)
+    rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
+    pm, rad, moved = _inside_page(p * lay["scale"], rad, *lay["picture"])
+    pm += lay["offset"]
     order, before, after = pen_path_order(pm, method=pen_path)
-    fg, bg = ("white", "black") if invert else ("black", None)
-    if width_mm is None and height_mm is None:  # exact in CSS pixels (1/96 in)
-        size = f'width="{W * s / MM_PER_INCH * 96:.10g}px" height="{H * s / MM_PER_INCH * 96:.10g}px"'
-    else:
-        size = f'width="{wmm:.10g}mm" height="{hmm:.10g}mm"'
-    head = [
-        '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-        '<svg xmlns="http://www.w3.org/2000/svg"',
-        '     xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"',
-        '     xmlns:sodipodi="http://sodipodi.sourceforge.net/DTD/sodipodi-0.dtd"',
-        f'     {size} viewBox="0 0 {wmm:.10g} {hmm:.10g}"',
-        '     version="1.1">',
-        '  <sodipodi:namedview inkscape:document-units="mm"/>',
-    ]
-    if bg:
-        head.append(f'  <rect x="0" y="0" width="{wmm:.10g}" height="{hmm:.10g}" fill="{bg}"/>')
-    paint = (f'fill="{fg}" stroke="none"' if pen_mm is None else
-             f'fill="none" stroke="{fg}" stroke-width="{pen_mm:.4f}" stroke-linecap="round"')
-    head.append(
-        f'  <g inkscape:groupmode="layer" inkscape:label="{layer}" id="layer1" {paint}>'
-    )
-    touch = np.zeros(len(p), bool) if pen_mm is None else 2.0 * rad <= pen_mm
-    drawn = rad if pen_mm is None else rad - 0.5 * pen_mm
+    meta = _svg_meta(result, lay, rad, pen_mm, invert, layer)
+    paint = (f'fill="{"white" if invert else "black"}" stroke="none"' if pen_mm is None else
+             f'fill="none" stroke="{"white" if invert else "black"}" '
+             f'stroke-width="{pen_mm:.4f}" stroke-linecap="round" stroke-linejoin="round"')
+    draw = 0.0
     with atomic_write(path, "w") as fh:
-        fh.write("\n".join(head) + "\n")
-        chunk = 100_000
-        for a in range(0, len(order), chunk):
-            o = order[a : a + chunk]
-            fh.write(_svg_dots(pm[o], drawn[o], touch[o]))
+        fh.write(_svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta, paint,
+                           invert))
+        for a in range(0, len(order), 100_000):
+            text, length = _svg_dots(pm[order[a : a + 100_000]], rad[order[a : a + 100_000]],
+                                     pen_mm)
+            fh.write(text)
+            draw += length
         fh.write("  </g>\n</svg>\n")
-    info = {
-        "width_mm": wmm,
-        "height_mm": hmm,
-        "n": int(len(p)),
-        "travel_before_mm": before,
-        "travel_after_mm": after,
-        "moved_inside": moved,
-    }
+    info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
+            "page_mm": list(lay["page"]), "n": int(len(p)), "travel_before_mm": before,
+            "travel_after_mm": after, "moved_inside": moved, "pen_downs": int(len(p)),
+            "draw_mm": draw,
+            "plot_seconds": plot_time(len(p), draw, after, speed_mm_s=plot_speed_mm_s)}
     if pen_mm is not None:
-        info["pen_touches"] = int(touch.sum())
+        info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info
+
+
+def _svg_radii(result, radii, scale, dot_mm, dots, radius_scale):
+    """Drawn radius per dot in mm: ``dot_mm / 2``, else :func:`_dot_radii`."""
+    if dot_mm is None:
+        return _dot_radii(result, radii, scale, dots, radius_scale)
+    if not dot_mm > 0:
+        raise ValueError(f"dot_mm must be > 0, got {dot_mm}")
+    return np.full(len(radii), 0.5 * float(dot_mm))
+
+
+def _svg_size(lay, W, H, width_mm, height_mm, page):
+    """The ``width``/``height`` attributes: CSS pixels (exact) for a dpi size, else mm."""
+    if page is None and width_mm is None and height_mm is None:
+        s = lay["scale"] / MM_PER_INCH * 96
+        return f'width="{W * s:.10g}px" height="{H * s:.10g}px"'
+    return f'width="{lay["page"][0]:.10g}mm" height="{lay["page"][1]:.10g}mm"'
+
+
+def _svg_meta(result, lay, rad, pen_mm, invert, layer):
+    """What :func:`read_stipple` needs to read the dots back (JSON in ``<metadata>``)."""
+    same = len(rad) > 0 and bool(np.all(rad == rad[0]))
+    tone = getattr(result, "tone_radius", None)
+    k = float(getattr(result, "k", np.nan))
+    return {"width": int(result.width), "height": int(result.height), "mm_per_px": lay["scale"],
+            "offset_mm": list(lay["offset"]), "pen_mm": pen_mm,
+            "dot_mm": 2 * float(rad[0]) if same else None,
+            "tone_radius": None if tone is None else float(tone),
+            "k": None if np.isnan(k) else k, "invert": bool(invert), "layer": layer}
 
 
 # coordinates are written with 4 decimals: keep dots this far inside the page
@@ -395,29 +461,14 @@ def _inside_page(c, rad, wmm, hmm):
     return inside, rad, moved
 
 
-def _svg_dots(c, r, touch):
-    """``<circle>`` lines, and for ``touch`` dots a 0.01 mm path (one pen touch)."""
-    x, y = c[:, 0], c[:, 1]
-    circles = _join('    <circle cx="', _fmt(x), '" cy="', _fmt(y), '" r="', _fmt(r), '"/>\n')
-    touches = _join('    <path d="M ', _fmt(x - 0.5 * _TOUCH_MM), ',', _fmt(y),
-                    f' h {_TOUCH_MM}"/>\n')
-    return "".join(np.where(touch, touches, circles).tolist())
-
-
-def _join(*parts):
-    out = parts[0]
-    for part in parts[1:]:
-        out = np.char.add(out, part)
-    return out
-
-
-def _coverage(c, rad, ow, oh, aa):
+def _coverage(c, rad, ow, oh, aa, progress=None):
     """Ink coverage in [0, 1] per output pixel: fraction of aa x aa samples in a disk.
 
     Dots are stamped in windows of their own size (grouped by size, in
     chunks), and the coverages are summed with ``np.add.at``: exact sample
     counts for disjoint disks; overlapping dots (fixed or enlarged dot sizes)
-    are summed and clipped at 1.
+    are summed and clipped at 1. ``progress(k)`` is called after each chunk
+    of ``k`` dots.
     """
     ink = np.zeros(ow * oh)
     sub = (np.arange(aa) + 0.5) / aa
@@ -449,11 +500,13 @@ def _coverage(c, rad, ow, oh, aa):
             gy = np.broadcast_to(py[:, :, None], cov.shape)
             ok = (cov > 0) & (gx >= 0) & (gx < ow) & (gy >= 0) & (gy < oh)
             np.add.at(ink, gy[ok] * ow + gx[ok], cov[ok])
+            if progress is not None:
+                progress(len(i))
     return np.minimum(ink, 1.0).reshape(oh, ow)
 
 
 def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=False, aa=4,
-              dots="tone"):
+              dots="tone", pen_px=None, progress=None):
     """Write an anti-aliased PNG preview (8-bit gray).
 
     Each output pixel's ink is the fraction of its ``aa x aa`` sample
@@ -475,6 +528,12 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
     dots : {"tone", "packing"}
         As for :func:`write_svg`: equal-ink dots by default (what ``diskpack
         stipple`` draws), or the packing disks.
+    pen_px : float, optional
+        The plotter pen's width in output pixels: show what the pen draws
+        (:func:`write_svg` with ``pen_mm``): a dot narrower than the pen as a
+        pen touch, a wider one filled (its rings ink the whole disk).
+    progress : callable, optional
+        ``progress(k)`` after each ``k`` dots stamped (a progress bar).
 
     Returns
     -------
@@ -496,7 +555,11 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         rad = np.full(len(p), float(dot_px))
     else:
         rad = _dot_radii(result, r, scale, dots, radius_scale)
-    ink = _coverage(p * scale, rad, ow, oh, aa)
+    if pen_px is not None:
+        if not pen_px > 0:
+            raise ValueError(f"pen_px must be > 0, got {pen_px}")
+        rad = np.maximum(rad, 0.5 * pen_px)
+    ink = _coverage(p * scale, rad, ow, oh, aa, progress)
     val = ink if invert else 1.0 - ink
     img = Image.fromarray(np.round(val * 255).astype(np.uint8))
     with atomic_write(path, "wb") as fh:
@@ -526,8 +589,9 @@ def _certificate_fields(result):
 def write_npz(path, result):
     """Write ``points``, ``radii``, ``k``, ``width``, ``height`` (+ certificate fields).
 
-    Also ``base_radii`` and a JSON ``params`` string when the result has them,
-    and ``certificate_<field>`` for each scalar field of the certificate.
+    Also ``base_radii``, ``tone_radius`` and a JSON ``params`` string when
+    the result has them, and ``certificate_<field>`` for each scalar field
+    of the certificate.
     """
     p, r, W, H = _arrays(result)
     data = {
@@ -539,6 +603,8 @@ def write_npz(path, result):
     }
     if getattr(result, "base_radii", None) is not None:
         data["base_radii"] = np.asarray(result.base_radii, dtype=np.float64)
+    if getattr(result, "tone_radius", None) is not None:
+        data["tone_radius"] = np.asarray(float(result.tone_radius))
     if getattr(result, "params", None):
         data["params"] = np.asarray(json.dumps(result.params, default=str))
     data.update(_certificate_fields(result))
@@ -557,19 +623,42 @@ def _pen_fields(result):
             "pen_radius": np.asarray(result.pen_radius, np.float64)}
 
 
+#: The first line of a stippling CSV starts with this (then ``key=value`` fields).
+CSV_TAG = "# diskpack_cl stippling "
+
+
 def write_csv(path, result):
-    """Write ``x,y,r`` rows (pixel units, 17 significant digits: exact round trip);
-    a colour stippling adds a ``pen`` column (the pen's name)."""
-    p, r, _, _ = _arrays(result)
+    """Write ``x,y,r`` rows (pixel units, 17 significant digits: exact round trip).
+
+    The first line is a ``#`` comment without commas (:data:`CSV_TAG`,
+    then ``width=W height=H`` and, when known, ``k=`` and ``tone_radius=``),
+    so that :func:`read_stipple` reads the stippling back; CSV readers skip
+    it with ``comment="#"`` (numpy, pandas).
+    """
+    p, r, W, H = _arrays(result)
+    tone = getattr(result, "tone_radius", None)
+    meta = {"width": int(W), "height": int(H), "k": float(getattr(result, "k", np.nan)),
+            "tone_radius": None if tone is None else float(tone)}
+    tag = " ".join(f"{key}={v!r}" for key, v in meta.items() if v is not None and v == v)
     with atomic_write(path, "w") as fh:
         if getattr(result, "pen", None) is not None:
-            rows = np.char.mod("%.17g", np.column_stack([p, r])).tolist()
-            pens = np.asarray(result.names)[result.pen].tolist()
-            fh.write("x,y,r,pen\n" + "".join(",".join(row + [q]) + "\n" for row, q in zip(rows, pens)))
+            _write_pen_csv(fh, f"{CSV_TAG}{tag}", p, r, result)
             return {"n": int(len(p))}
-        fh.write("x,y,r\n")
+        fh.write(f"{CSV_TAG}{tag}\nx,y,r\n")
         np.savetxt(fh, np.column_stack([p, r]), fmt="%.17g", delimiter=",")
     return {"n": int(len(p))}
+
+
+def _write_pen_csv(fh, tag, p, r, result):
+    """A colour stippling's CSV: the tag line with ``pens=NAME:#rrggbb;...``, then
+    ``x,y,r,pen`` rows (the pen's name)."""
+    from diskpack_cl.multipen import hex_color
+
+    pens = ";".join(f"{name}:{hex_color(c)}" for name, c in zip(result.names, result.colors))
+    rows = np.char.mod("%.17g", np.column_stack([p, r])).tolist()
+    names = np.asarray(result.names)[np.asarray(result.pen)].tolist()
+    fh.write(f"{tag} pens={pens}\nx,y,r,pen\n"
+             + "".join(",".join(row + [q]) + "\n" for row, q in zip(rows, names)))
 
 
 WRITERS = {".svg": write_svg, ".png": write_png, ".npz": write_npz, ".csv": write_csv}
@@ -581,14 +670,17 @@ def check_output_path(path):
     Raises
     ------
     ValueError
-        Unknown extension (the message lists the supported ones), ``path`` is
-        a folder, or its folder is not writable (a probe file is created
+        ``path`` is a folder, an unknown extension (the message lists the
+        supported ones), or its folder is not writable (a probe file is created
         there and removed, see :func:`diskpack_cl.io.check_writable`).
     FileNotFoundError
         The output directory does not exist.
     """
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder, not a file name: give one in it, such as "
+                         f"{path / 'out.svg'}")
     if ext not in WRITERS:
         raise ValueError(
             f"unknown output extension {ext or '(none)'!r} for {path}; supported: "
@@ -613,6 +705,96 @@ def write_stipple(path, result, **opts):
     return WRITERS[ext](path, result, **opts)
 
 
+def read_stipple(path):
+    """Read a stippling written by :func:`write_stipple`: ``.npz``, ``.csv`` or ``.svg``.
+
+    A result read back writes again identically: :func:`write_stipple` with
+    the same format and options gives the same file (the same arrays for
+    ``.npz``, whose zip entries carry a time stamp). What each format holds:
+
+    - ``.npz``: everything (the certificate's scalar fields as a namespace);
+    - ``.csv``: ``points``, ``radii``, ``width``, ``height``, ``k``,
+      ``tone_radius`` (from the first line; a CSV without it gets the
+      smallest size holding its dots);
+    - ``.svg``: the drawing in pen-path order: ``points`` (from the mm
+      coordinates, 4 decimals), ``radii`` the drawn dot radii (a pen touch:
+      half the pen, unless all dots have one size), ``tone_radius`` (the
+      result's, else the dots' one size); the layout comes from its
+      ``<metadata>``.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    types.SimpleNamespace or None
+        ``points`` ((n, 2) float64, pixels), ``radii`` ((n,) float64),
+        ``width`` and ``height`` (int pixels), ``k`` (float, nan when not
+        stored), ``tone_radius``, ``base_radii`` and ``certificate`` (or
+        None) and ``params`` (a dict, empty when not stored). None for a
+        ``.npz`` point set without ``radii``, ``width`` or ``height`` (as
+        :func:`diskpack_cl.io.write_points` writes it).
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    ValueError
+        Another extension (a ``.png`` preview holds no dots), or a file
+        that is not a readable stippling of its format.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> res = SimpleNamespace(points=np.array([[2.0, 3.0]]), radii=np.array([1.0]),
+    ...                       width=8, height=6)
+    >>> out = os.path.join(tempfile.mkdtemp(), "s.csv")
+    >>> write_stipple(out, res)
+    {'n': 1}
+    >>> back = read_stipple(out)
+    >>> back.points.tolist(), back.width, back.height
+    ([[2.0, 3.0]], 8, 6)
+    """
+    ext = Path(os.fspath(path)).suffix.lower()
+    readers = {".npz": _read_npz, ".csv": _read_csv, ".svg": _read_svg}
+    if ext not in readers:
+        raise ValueError(f"{path}: read_stipple reads {', '.join(readers)} files"
+                         + ("; a .png preview holds no dots" if ext == ".png" else ""))
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"{path}: no such file")
+    try:
+        return readers[ext](path)
+    except (OSError, ValueError, KeyError, IndexError, EOFError, SyntaxError) as exc:
+        raise ValueError(f"{path}: unreadable {ext} file: {exc}") from None
+
+
+def _stippling(points, radii, width, height, **extra):
+    """The namespace :func:`read_stipple` returns."""
+    fields = dict(k=float("nan"), tone_radius=None, base_radii=None, certificate=None, params={})
+    fields.update({key: v for key, v in extra.items() if v is not None})
+    return SimpleNamespace(points=np.asarray(points, np.float64).reshape(-1, 2),
+                           radii=np.asarray(radii, np.float64).ravel(),
+                           width=int(width), height=int(height), **fields)
+
+
+def _read_npz(path):
+    with np.load(path, allow_pickle=False) as z:
+        if not {"points", "radii", "width", "height"} <= set(z.files):
+            return None
+        try:
+            params = json.loads(str(z["params"])) if "params" in z.files else {}
+        except ValueError:
+            params = {}
+        cert = {k[len("certificate_"):]: z[k].item() for k in z.files
+                if k.startswith("certificate_")}
+        opt = {k: (np.asarray(z[k], np.float64) if k == "base_radii" else float(z[k]))
+               for k in ("k", "tone_radius", "base_radii") if k in z.files}
+        return _stippling(z["points"], z["radii"], z["width"], z["height"], params=params,
+                          certificate=SimpleNamespace(**cert) if cert else None, **opt,
+                          **_read_pens(z))
+
+
 def _read_pens(z):
     """A colour stippling's ``pen``, ``names``, ``colors``, ``pen_radius`` from an open .npz."""
     if "pen" not in z.files:
@@ -622,64 +804,83 @@ def _read_pens(z):
             "pen_radius": np.asarray(z["pen_radius"], np.float64)}
 
 
-def read_stipple(path):
-    """Read a stippling ``.npz`` written by :func:`write_stipple` (:func:`write_npz`).
+def _read_csv(path):
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    tag = lines.pop(0)[len(CSV_TAG):] if lines and lines[0].startswith(CSV_TAG) else ""
+    meta = dict(f.split("=", 1) for f in tag.split())
+    pens = meta.pop("pens", None)
+    meta = {key: float(v) for key, v in meta.items()}
+    if pens is not None:
+        return _read_pen_csv(lines, pens, meta)
+    if not lines or lines[0].replace(" ", "").lower() != "x,y,r":
+        raise ValueError("the header line must be x,y,r")
+    data = np.loadtxt(lines[1:], delimiter=",", ndmin=2, comments="#").reshape(-1, 3)
+    ext = data[:, :2] + data[:, 2:]
+    width = meta.get("width") or int(np.ceil(ext[:, 0].max(initial=1)))
+    height = meta.get("height") or int(np.ceil(ext[:, 1].max(initial=1)))
+    return _stippling(data[:, :2], data[:, 2], width, height, k=meta.get("k"),
+                      tone_radius=meta.get("tone_radius"))
 
-    Parameters
-    ----------
-    path : str or Path
-        A ``.npz`` file.
 
-    Returns
-    -------
-    types.SimpleNamespace or None
-        ``points`` ((n, 2) float64, pixels), ``radii`` ((n,) float64),
-        ``width`` and ``height`` (int pixels), ``k`` (float, nan when not
-        stored), ``base_radii`` (or None) and ``params`` (a dict, empty when
-        not stored or unreadable): a result :func:`write_stipple` writes
-        again; a colour stippling also has ``pen``, ``names``, ``colors``
-        and ``pen_radius`` (see :class:`diskpack_cl.multipen.ColorStippleResult`).
-        None when the ``.npz`` lacks ``points``, ``radii``, ``width``
-        or ``height`` (a point set, as :func:`diskpack_cl.io.write_points`
-        writes it). The certificate is not read back: check the disks again
-        with :func:`diskpack_cl.certify_disks`.
+def _read_pen_csv(lines, pens, meta):
+    """A colour stippling's CSV (:func:`_write_pen_csv`): dots, pens, their colours."""
+    from diskpack_cl.color import parse_pens
 
-    Raises
-    ------
-    FileNotFoundError
-        ``path`` does not exist.
-    ValueError
-        ``path`` is not a readable ``.npz`` file.
+    names, colors = parse_pens(pens.replace(":", "=").replace(";", ","))
+    if not lines or lines[0].replace(" ", "").lower() != "x,y,r,pen":
+        raise ValueError("the header line of a colour stippling must be x,y,r,pen")
+    rows = [line.split(",") for line in lines[1:] if line.strip()]
+    data = np.array([row[:3] for row in rows], np.float64).reshape(-1, 3)
+    pen = np.array([names.index(row[3]) for row in rows], np.int64)
+    return _stippling(data[:, :2], data[:, 2], meta["width"], meta["height"], k=meta.get("k"),
+                      tone_radius=meta.get("tone_radius"), pen=pen, names=names, colors=colors)
 
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> res = SimpleNamespace(points=np.array([[2.0, 3.0]]), radii=np.array([1.0]),
-    ...                       width=8, height=6)
-    >>> out = os.path.join(tempfile.mkdtemp(), "s.npz")
-    >>> write_stipple(out, res)
-    {'n': 1}
-    >>> back = read_stipple(out)
-    >>> back.points.tolist(), back.width, back.height
-    ([[2.0, 3.0]], 8, 6)
-    """
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if not {"points", "radii", "width", "height"} <= set(z.files):
-                return None
-            params = {}
-            if "params" in z.files:
-                try:
-                    params = json.loads(str(z["params"]))
-                except ValueError:
-                    params = {}
-            return SimpleNamespace(
-                points=np.asarray(z["points"], np.float64), radii=np.asarray(z["radii"], np.float64),
-                width=int(z["width"]), height=int(z["height"]),
-                k=float(z["k"]) if "k" in z.files else float("nan"),
-                base_radii=np.asarray(z["base_radii"], np.float64) if "base_radii" in z.files else None,
-                params=params, **_read_pens(z))
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such file") from None
-    except (OSError, ValueError, EOFError) as exc:
-        raise ValueError(f"{path}: unreadable .npz file: {exc}") from None
+
+_SVG_NS = "{http://www.w3.org/2000/svg}"
+_NUMBER = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+
+
+def _read_svg(path):
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    meta = root.find(f"{_SVG_NS}metadata[@id='diskpack_cl']")
+    if meta is None:
+        raise ValueError("not written by diskpack_cl (no <metadata id=\"diskpack_cl\">)")
+    meta = json.loads(meta.text)
+    layers = {g.get("{http://www.inkscape.org/namespaces/inkscape}label"): g
+              for g in root.iter(f"{_SVG_NS}g")}
+    names = meta.get("pens", [meta["layer"]])   # a colour stippling: one layer per pen
+    missing = [name for name in names if name not in layers]
+    if missing:
+        raise ValueError(f"no layer {missing[0]!r} of dots")
+    pen = meta["pen_mm"] or 0.0
+    centres, radii, pens = [], [], []
+    for i, name in enumerate(names):
+        got = _svg_layer_dots(layers[name], pen, centres, radii)
+        pens += [i] * got
+    s = meta["mm_per_px"]
+    points = (np.array(centres).reshape(-1, 2) - meta["offset_mm"]) / s
+    radii = np.full(len(radii), 0.5 * meta["dot_mm"]) if meta["dot_mm"] else np.array(radii)
+    tone = meta["tone_radius"] or (0.5 * meta["dot_mm"] / s if meta["dot_mm"] else None)
+    extra = {} if "pens" not in meta else {
+        "pen": np.array(pens, np.int64), "names": tuple(names),
+        "colors": np.array([[int(layers[n].get("stroke")[k:k + 2], 16) / 255 for k in (1, 3, 5)]
+                            for n in names])}
+    return _stippling(points, radii / s, meta["width"], meta["height"], k=meta["k"],
+                      tone_radius=tone, params={"invert": meta["invert"]}, **extra)
+
+
+def _svg_layer_dots(layer, pen, centres, radii):
+    """Append the centres and radii (mm) of one layer's dots; return how many."""
+    before = len(centres)
+    for el in layer:
+        if el.tag == f"{_SVG_NS}circle":
+            centres.append((float(el.get("cx")), float(el.get("cy"))))
+            radii.append(float(el.get("r")) + 0.5 * pen)
+        elif el.tag == f"{_SVG_NS}path":
+            x, y, third = (float(v) for v in _NUMBER.findall(el.get("d"))[:3])
+            touch = " h " in el.get("d")
+            centres.append((x + 0.5 * third if touch else x - third, y))
+            radii.append(0.5 * pen if touch else third + 0.5 * pen)
+    return len(centres) - before

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["load_gray", "to_gray", "sample_image_path", "LUMA_601"]
+__all__ = ["adjust_tone", "load_gray", "to_gray", "sample_image_path", "LUMA_601"]
 
 #: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
 LUMA_601 = (0.299, 0.587, 0.114)
@@ -264,3 +264,27 @@ def to_gray(image, *, invert=False, allow_large=False):
         pass
     g = _array_to_gray(image)
     return 1.0 - g if invert else g
+
+
+def adjust_tone(gray, *, black=0.0, white=1.0, gamma=1.0):
+    """Tone controls before stippling, for every schedule: black and white point, gamma.
+
+    Gray levels at or below ``black`` become 0 (full ink), at or above
+    ``white`` 1 (blank paper: no dots there), linear in between, then raised
+    to ``gamma`` (above 1: darker mid-tones, more dots; below 1: lighter).
+    The input is not modified.
+
+    Examples
+    --------
+    >>> adjust_tone(np.array([0.1, 0.5, 0.95]), black=0.1, white=0.9)
+    array([0. , 0.5, 1. ])
+    >>> adjust_tone(np.array([0.25, 1.0]), gamma=0.5)
+    array([0.5, 1. ])
+    """
+    if not 0.0 <= black < white <= 1.0:
+        raise ValueError(f"the tone needs 0 <= black point < white point <= 1, got black "
+                         f"{black:g} and white {white:g}")
+    if not 0.0 < gamma < float("inf"):
+        raise ValueError(f"the tone gamma must be a finite number > 0, got {gamma:g}")
+    g = np.clip((np.asarray(gray, dtype=np.float64) - black) / (white - black), 0.0, 1.0)
+    return g if gamma == 1.0 else g**gamma

@@ -24,8 +24,10 @@ round-trip exactly.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import io as _stdio
 import os
+import signal
 import tempfile
 import warnings
 import zipfile
@@ -36,6 +38,7 @@ import numpy as np
 __all__ = [
     "POINT_FORMATS",
     "atomic_write",
+    "atomic_writes",
     "check_points_path",
     "check_writable",
     "read_points",
@@ -45,6 +48,9 @@ __all__ = [
 
 #: Extensions understood by :func:`read_points` and :func:`write_points`.
 POINT_FORMATS = (".npz", ".npy", ".csv", ".txt", ".xy")
+
+# (temporary, target) pairs of the innermost atomic_writes(), or None outside one
+_PENDING = contextvars.ContextVar("diskpack_cl_pending_writes", default=None)
 
 
 @contextlib.contextmanager
@@ -88,13 +94,72 @@ def atomic_write(path, mode="wb"):
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        pending = _PENDING.get()
+        if pending is None:
+            os.replace(tmp, path)
+        else:  # renamed with the others at the end of atomic_writes()
+            pending.append((tmp, path))
     except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         if isinstance(exc, OSError) and exc.errno and exc.filename in (None, tmp):
             raise _named(exc, path) from exc
         raise
+
+
+@contextlib.contextmanager
+def atomic_writes():
+    """Several :func:`atomic_write` calls that replace their files together, or not at all.
+
+    Inside the block every :func:`atomic_write` leaves its finished
+    temporary file beside its target; when the block ends normally all of
+    them are renamed onto their targets (with Ctrl-C, SIGTERM and SIGHUP held
+    back for those few renames). When the block raises, or is interrupted,
+    only the temporaries are removed: every file that existed before is left
+    as it was, and no new one appears.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> with atomic_writes():
+    ...     for name in ("a.txt", "b.txt"):
+    ...         with atomic_write(os.path.join(d, name), "w") as f:
+    ...             _ = f.write(name)
+    ...     os.path.exists(os.path.join(d, "a.txt"))
+    False
+    >>> sorted(os.listdir(d))
+    ['a.txt', 'b.txt']
+    """
+    pending = []
+    token = _PENDING.set(pending)
+    try:
+        yield
+    except BaseException:
+        for tmp, _ in pending:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+        raise
+    finally:
+        _PENDING.reset(token)
+    with _signals_held():
+        for tmp, path in pending:
+            os.replace(tmp, path)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Hold back SIGINT, SIGTERM and SIGHUP in the block (a few renames): POSIX only."""
+    held = {signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", signal.SIGTERM)}
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    except (AttributeError, OSError, ValueError):  # pragma: no cover - not POSIX
+        old = None
+    try:
+        yield
+    finally:
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _named(exc, path):

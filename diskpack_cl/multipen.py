@@ -39,11 +39,10 @@ import numpy as np
 from .analysis import tone_radius
 from .color import pen_tone_radii, separate
 from .domain import Domain
-from .radii import certified_k, detail_fields, field_at, radius_field
+from .radii import certified_k, field_at
 from .schedule import StippleOptions
 from .dithering import error_diffusion
-from .stipple import (StippleStage, StippleState, _centroid_density, _run, dot_radii, lloyd_step,
-                      pack_step)
+from .stipple import StippleState, _centroid_density, _make_stage, _run, dot_radii, lloyd_step, pack_step
 from .stipple_engine import make_stipple_engine
 
 __all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
@@ -199,7 +198,7 @@ def assign_pens(points, share, counts):
     """
     from scipy.spatial import cKDTree
 
-    from .export import pen_path_order
+    from .pen_path import pen_path_order
 
     x = np.asarray(points, dtype=np.float64)
     q = np.asarray(share, dtype=np.float64)
@@ -268,16 +267,6 @@ def _split(phases, first):
     return head, tail
 
 
-def _stage(gray, opt, engine):
-    """What the steps work against: the radii and centroid density of all pens together."""
-    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor,
-                          sigma=opt.radius_sigma)
-    weight = None
-    if opt.features == "detail":
-        rfield, weight = detail_fields(gray, opt.n, rfield)
-    return StippleStage(engine, opt, rfield, _centroid_density(1.0 - gray, opt), weight)
-
-
 def _phases(stage, phases):
     """`stage` running `phases` only."""
     return replace(stage, options=replace(stage.options, phases=tuple(phases)))
@@ -304,8 +293,9 @@ def _pen_numbers(counts, P, n, layers):
 
 def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
     """Check the arguments of :func:`stipple_colors`; the separation, options and counts."""
-    if options.get("invert"):
-        raise ValueError("invert has no meaning for colour stippling: the pens draw on white")
+    for name in ("invert", "paper_tone"):
+        if options.get(name):
+            raise ValueError(f"{name} is for one pen: colour stippling draws the pens on white")
     for name, v in (("joint", joint), ("pen_pull", pen_pull)):
         if not 0.0 <= v <= 1.0:
             raise ValueError(f"{name} must be in [0, 1], got {v}")
@@ -346,7 +336,8 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         As for :func:`diskpack_cl.stipple`.
     **options
         The stippling options of :func:`diskpack_cl.stipple` (schedule,
-        seed, ...), applied to the joint density. ``invert`` is refused.
+        seed, ...), applied to the joint density. ``invert`` and
+        ``paper_tone`` are refused.
 
     Returns
     -------
@@ -366,7 +357,7 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     P, H, W = sep.layers.shape
     gray = 1.0 - sep.darkness
     timings = {"separate": time.perf_counter() - t_start}
-    stage = _stage(gray, opt, make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend,
+    stage = _make_stage(gray, opt, make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend,
                                                   device))
     head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
     start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))

@@ -50,10 +50,11 @@ SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
 #: feature-aware blend.  Tuned on the tuning photographs, checked once on
 #: the held-out ones (docs/stipple_quality.md, "spacing rule").
 SPACING_BANDS = (
-    (2.5, [("mix", 16, 0.7), ("pack", 3)], {"radius_sigma": 1.5}),
-    (3.0, [("mix", 16, 0.7), ("pack", 2)], {"radius_sigma": 1.5}),
-    (6.0, SCHEDULES["detail"], {"features": "detail"}),
-    (np.inf, [("mix", 35, 0.6), ("mix", 12, 0.4)], {"features": "detail", "radius_sigma": 2.0}),
+    (2.5, [("mix", 16, 0.7), ("pack", 2), ("mix", 1, 1.0)], {"radius_sigma": 1.5}),
+    (3.0, [("mix", 16, 0.7), ("pack", 1), ("mix", 1, 1.0)], {"radius_sigma": 1.5}),
+    (6.0, [("mix", 18, 0.5), ("mix", 6, 0.4), ("mix", 1, 1.0)], {"features": "detail"}),
+    (np.inf, [("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 1.0)],
+     {"features": "detail", "radius_sigma": 2.0}),
 )
 
 #: Every schedule name :func:`make_schedule` takes.
@@ -91,8 +92,11 @@ SCHEDULE_OPTIONS = {
                 "density_sigma": 0.5, "k_quantile": 0.15},
 }
 SCHEDULE_OPTIONS["detail"] = dict(SCHEDULE_OPTIONS["classic"], features="detail")
-# the default's base options: each spacing band overrides some (SPACING_BANDS)
-SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"])
+# the default's base options: each spacing band overrides some (SPACING_BANDS).
+# Over classic's: a dot whose largest empty disk leaves its cell's ink moves
+# to the centroid instead (support: white paper stays white, outlines stay
+# sharp) and equal ink per dot (capacity). Measured in docs/stipple_quality.md.
+SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"], support=1.0, capacity=0.1)
 
 
 
@@ -240,13 +244,15 @@ class StippleOptions:
     k0: float
     features: str = "none"
     capacity: float = 0.0
+    support: float = 0.0
+    paper_tone: float = 0.0
 
     @classmethod
     def resolve(cls, n, width, height, *, gamma=GAMMA_DEFAULT, floor=None, schedule="default", beta=None,
                 lloyd=None, rounds=None, supersample=None, seed=0, method="diskpack", invert=False,
                 refine_every=1, k0=1e-6, radii=None, radius_sigma=None, blend=None,
                 blend_cell="power", k_quantile=None, density_sigma=None, features=None,
-                capacity=None):
+                capacity=None, support=None, paper_tone=0.0):
         """Options for `n` dots on a `width` x `height` image; None: the schedule's default.
 
         Raises
@@ -287,7 +293,9 @@ class StippleOptions:
                    k_quantile=float(pick("k_quantile", k_quantile)),
                    density_sigma=float(pick("density_sigma", density_sigma)), k0=k0,
                    features=d.get("features", "none") if features is None else features,
-                   capacity=float(d.get("capacity", 0.0) if capacity is None else capacity))
+                   capacity=float(d.get("capacity", 0.0) if capacity is None else capacity),
+                   support=float(d.get("support", 0.0) if support is None else support),
+                   paper_tone=float(paper_tone))
 
     def __post_init__(self):
         _check_range("floor", self.floor, 0, 1, lo_open=True, text="in (0, 1]")
@@ -302,6 +310,8 @@ class StippleOptions:
         if self.features not in ("none", "detail"):
             raise ValueError(f"features must be 'none' or 'detail', got {self.features!r}")
         _check_range("capacity", self.capacity, 0, 1, text="in [0, 1]")
+        _check_range("support", self.support, 0, 1, text="in [0, 1]")
+        _check_range("paper_tone", self.paper_tone, 0, 1, hi_open=True, text="in [0, 1)")
         if not 0.0 <= self.k_quantile < 1.0:
             raise ValueError(f"k_quantile must be in [0, 1), got {self.k_quantile}")
         if not (np.isfinite(self.k0) and self.k0 > 0):
@@ -323,5 +333,6 @@ class StippleOptions:
             "radii": self.radii, "radius_sigma": self.radius_sigma, "blend": self.blend,
             "blend_cell": self.blend_cell, "k_quantile": self.k_quantile,
             "density_sigma": self.density_sigma, "features": self.features,
-            "capacity": self.capacity,
+            "capacity": self.capacity, "support": self.support,
+            "paper_tone": self.paper_tone,
         }

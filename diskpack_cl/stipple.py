@@ -87,7 +87,7 @@ from .schedule import StippleOptions
 from .stipple_engine import VerifiedEngine, make_stipple_engine
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
-           "equal_ink"]
+           "equal_ink", "off_support"]
 
 
 @dataclass
@@ -186,6 +186,7 @@ class StippleStage:
     radius_field: np.ndarray
     density: np.ndarray
     blend_weight: object = None  # features="detail": per-pixel weight, see radii.detail_fields
+    ink: np.ndarray = None       # darkness per pixel blurred by INK_SIGMA, for off_support
 
     @property
     def size(self):
@@ -205,6 +206,10 @@ def _add_timings(entry, seconds, names):
         if name.startswith("kernel"):
             entry[f"{name}_s"] = entry.get(f"{name}_s", 0.0) + secs
 
+
+#: Blur (px) of the darkness that :func:`off_support` reads: a thin line's
+#: ink reaches the pixels beside it, where its cell's centroid and centre fall.
+INK_SIGMA = 1.0
 
 #: Bounds of :func:`equal_ink`'s factors: per step (so that a cell whose mass
 #: jumps when a neighbour moves does not make its dot's radius oscillate) and
@@ -252,11 +257,45 @@ def _cell_centroids(stage, x, w, entry):
     return cen, mass
 
 
+def off_support(ink, mic_centers, centroids):
+    """How far each MIC centre has left the ink of its cell, in [0, 1].
+
+    ``1 - D(m) / D(c)`` clipped to [0, 1], ``D`` the darkness field `ink`
+    at the MIC centre ``m`` and at the cell's density-weighted centroid
+    ``c``: 0 where the centre lies in the tone of the cell's ink, 1 where it
+    lies on white paper. A power cell that straddles the outline of a dark
+    shape has its largest empty disk on the white side, where nothing
+    bounds it; its centroid stays on the ink.
+
+    Examples
+    --------
+    >>> ink = np.zeros((4, 8)); ink[:, :4] = 1.0
+    >>> off_support(ink, np.array([[6.0, 2.0], [1.0, 2.0]]), np.array([[2.0, 2.0], [2.0, 1.0]])).tolist()
+    [1.0, 0.0]
+    """
+    dm, dc = field_at(ink, mic_centers), field_at(ink, centroids)
+    # a centroid off the ink (the cell of a curved thin line): only a centre off the ink too moves
+    ratio = np.divide(dm, dc, out=(dm > 0).astype(np.float64), where=dc > 0)
+    return np.clip(1.0 - ratio, 0.0, 1.0)
+
+
+def _blend_weights(stage, x, mic_centers, cen, blend):
+    """Per-dot move ``a`` of ``m + a (c - m)``: the blend, raised by detail and by leaving the ink."""
+    a = np.full(len(x), float(blend))
+    if blend > 0 and stage.blend_weight is not None:
+        a = blend + (1.0 - blend) * field_at(stage.blend_weight, x)
+    if stage.options.support > 0:
+        a = np.maximum(a, stage.options.support * off_support(stage.ink, mic_centers, cen))
+    return a
+
+
 def pack_step(state, stage, blend=0.0):
     """One disk-packing step, blended towards the power-cell centroids when ``blend > 0`` (mix).
 
-    Returns ``(state, entry)``: the next state and this step's measurements
-    (``moved``, ``empty``, stage seconds); see the module docstring.
+    With ``support > 0`` a dot whose MIC centre leaves its cell's ink moves
+    towards the centroid instead (:func:`off_support`). Returns ``(state,
+    entry)``: the next state and this step's measurements (``moved``,
+    ``empty``, stage seconds); see the module docstring.
     """
     x, opt = state.points, stage.options
     r = dot_radii(state, stage, x)
@@ -268,21 +307,18 @@ def pack_step(state, stage, blend=0.0):
     ok = ~mic.empty & np.all(np.isfinite(mic.centers), axis=1)
     newx = x.copy()
     newx[ok] = mic.centers[ok]
-    power = None   # the power cells' centroids and masses, for capacity and for the blend
-    if opt.capacity > 0 or (blend > 0 and opt.blend_cell == "power"):
-        power = _cell_centroids(stage, x, w, entry)
+    need_power = opt.capacity > 0 or opt.support > 0 or (blend > 0 and opt.blend_cell == "power")
+    power = _cell_centroids(stage, x, w, entry) if need_power else None
     ink = state.ink
     if opt.capacity > 0:
         ink = equal_ink(ink, power[1], opt.capacity)
         entry["ink_spread"] = float(np.std(power[1]) / np.mean(power[1]))
-    if blend > 0:
-        cen, mass = power if opt.blend_cell == "power" else _cell_centroids(stage, x, np.zeros(len(x)), entry)
+    if blend > 0 or opt.support > 0:
+        cen, mass = power if opt.blend_cell == "power" or blend == 0 else \
+            _cell_centroids(stage, x, np.zeros(len(x)), entry)
         okc = ok & (mass > 0) & np.all(np.isfinite(cen), axis=1)
-        if stage.blend_weight is None:
-            newx[okc] += blend * (cen[okc] - newx[okc])
-        else:
-            a = blend + (1.0 - blend) * field_at(stage.blend_weight, x[okc])
-            newx[okc] += a[:, None] * (cen[okc] - newx[okc])
+        a = _blend_weights(stage, x[okc], newx[okc], cen[okc], blend)
+        newx[okc] += a[:, None] * (cen[okc] - newx[okc])
     entry["moved"] = _moved(x, newx)
     k = state.k
     if np.any(ok):
@@ -357,16 +393,30 @@ def _start_points(gray, opt, start):
     return x
 
 
-def _centroid_density(darkness, opt):
-    """Density of the centroid integrals per grid cell: blurred darkness, upsampled."""
-    d = darkness
-    if opt.density_sigma > 0:
+def _blurred(darkness, sigma):
+    if sigma > 0:
         from scipy import ndimage
 
-        d = ndimage.gaussian_filter(darkness, float(opt.density_sigma), mode="reflect")
-    d = np.maximum(d, 1e-6)
+        return ndimage.gaussian_filter(darkness, float(sigma), mode="reflect")
+    return darkness
+
+
+def _centroid_density(darkness, opt):
+    """Density of the centroid integrals per grid cell: blurred darkness, upsampled."""
+    d = np.maximum(_blurred(darkness, opt.density_sigma), 1e-6)
     s = opt.supersample
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
+
+
+def _make_stage(gray, opt, engine):
+    """The :class:`StippleStage` of a gray image: radius field, centroid density, ink."""
+    darkness = 1.0 - gray
+    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
+    weight = None
+    if opt.features == "detail":
+        rfield, weight = detail_fields(gray, opt.n, rfield)
+    return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight,
+                        _blurred(darkness, INK_SIGMA))
 
 
 def stipple(image, n, *, start=None, callback=None, device=None, backend="auto", verify=False,
@@ -483,10 +533,18 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
         mix step each dot's radius factor is multiplied by ``(mean mass /
         mass of its power cell) ** capacity``, so that the cells, and the
         dots, come to hold the same darkness, as in capacity-constrained
-        stippling. 0 (the default) is off. On the validation photographs
-        0.1 (chosen on the tuning part) raises tone SSIM (sigma 3) by 0.02
-        to 0.04 at 5000 and 20 000 dots and lowers P01 by up to 0.018, the
-        pairs across tone edges coming closer (``docs/stipple_quality.md``).
+        stippling; 0 is off. Default: the schedule's (0.1 for
+        ``"default"``, 0 for the others).
+    support : float in [0, 1], optional
+        Keep dots on the ink (:func:`off_support`): a packing or mix step
+        moves a dot ``m + a (c - m)`` with ``a`` at least ``support`` times
+        how far its MIC centre ``m`` has left its cell's ink, so a dot whose
+        largest empty disk lies on white paper goes to its cell's centroid
+        ``c`` instead. Default: the schedule's (1 for ``"default"``, 0 for
+        the others, which then let outline dots drift onto white paper).
+    paper_tone : float in [0, 1), optional
+        Darkness added under the whole image: white paper then gets sparse
+        dots too (default 0: pure white gets none).
 
     Returns
     -------
@@ -513,10 +571,11 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     gray = to_gray(image, invert=options.get("invert", False))
     H, W = gray.shape
     opt = StippleOptions.resolve(n, W, H, **options)
+    if opt.paper_tone > 0:
+        gray = gray * (1.0 - opt.paper_tone)
     darkness = 1.0 - gray
     if not darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
-    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
     timings = {"load": time.perf_counter() - t_start}
     t0 = time.perf_counter()
     x = _start_points(gray, opt, start)
@@ -524,10 +583,7 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device, profile)
     if verify:
         engine = VerifiedEngine(engine)
-    weight = None
-    if opt.features == "detail":
-        rfield, weight = detail_fields(gray, opt.n, rfield)
-    stage = StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight)
+    stage = _make_stage(gray, opt, engine)
     state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
     t0 = time.perf_counter()
     r = dot_radii(state, stage, state.points)

@@ -492,7 +492,13 @@ def test_stipple_measures_and_errors():
     before = pts.copy()
     m = A.stipple_measures(pts, dark)
     np.testing.assert_array_equal(pts, before)
-    assert set(m) == {"n", "tone_ssim", "spacing_p01", "spacing_median", "psi6_mean"}
+    assert set(m) == {"n", "tone_ssim", "tone_ssim_fine", "spacing_p01", "spacing_median",
+                      "spacing_p01_pair", "psi6_mean", "stray_per_10k", "edge_ssim", "holes_per_10k"}
+    assert np.isnan(m["edge_ssim"])      # a flat gray has no strong edge
+    assert m["stray_per_10k"] == 0       # every pixel is inked
+    assert m["holes_per_10k"] == 0       # no pixel is solid-dark (0.3 < 0.5)
+    # uniform random points leave gaps wider than a spacing in a solid-dark region
+    assert A.holes(pts, np.full((48, 48), 0.6)).per_10k > 0
     assert m["n"] == 300
     assert 0 < m["spacing_p01"] < m["spacing_median"] < A.HEXAGONAL_SPACING
     assert 0.2 < m["psi6_mean"] < 0.5

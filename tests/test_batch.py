@@ -362,3 +362,12 @@ def test_single_input_switches_refused_on_a_batch(tmp_path, capsys, flags):
     rc, _, err = _cli(["relax", tmp_path / "x.npz", tmp_path / "y.npz", "-o", f"{out}/{{stem}}.npz",
                        *flags], capsys)
     assert rc == 2 and "one input" in err
+
+
+def test_collision_hint_names_the_field_that_differs(tmp_path):
+    from diskpack_cl.batch import check_outputs
+
+    a = Item("stipple", 0, str(tmp_path / "cat.jpg"), 0, {}, (str(tmp_path / "cat.svg"),))
+    b = Item("stipple", 1, str(tmp_path / "cat.png"), 0, {}, (str(tmp_path / "cat.svg"),))
+    with pytest.raises(ValueError, match=r"add \{name\} or \{i\} to tell them apart"):
+        check_outputs([a, b], lambda p: None)

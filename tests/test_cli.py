@@ -334,7 +334,8 @@ def test_stipple_writes_every_format(stippled):
         assert {"points", "radii", "k", "width", "height"} <= set(z.files)
         assert z["points"].shape == (150, 2) and int(z["width"]) == 48
     lines = outs["csv"].read_text().splitlines()
-    assert lines[0] == "x,y,r" and len(lines) == 151
+    assert lines[0].startswith("# diskpack_cl stippling width=48 height=48 ")
+    assert lines[1] == "x,y,r" and len(lines) == 152
     assert "150 dots on 48x48 px" in stippled.err and "certified valid" in stippled.err
 
 
@@ -398,15 +399,16 @@ def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):
     rc = cli.main(["stipple", "sample", "-n", "77", "-o", str(tmp_path / "a.svg"), "--gamma", "2",
                    "--floor", "0.2", "--schedule", "paper", "--supersample", "3", "--seed", "5",
                    "--invert", "--refine-every", "2", "--device", "pocl", "--features", "detail",
-                   "--capacity", "0.25", "--profile"])
+                   "--capacity", "0.25", "--support", "0.5", "--paper-tone", "0.05", "--profile"])
     assert rc == 1 and "fake stipple stops here" in capsys.readouterr().err
     (call,) = fake_stipple
     assert call["image"].shape == (512, 512) and call["n"] == 77
     assert {k: call[k] for k in ("gamma", "floor", "schedule", "supersample", "seed", "method",
                                  "invert", "refine_every", "device", "features", "capacity",
-                                 "profile")} == dict(
+                                 "support", "paper_tone", "profile")} == dict(
         gamma=2.0, floor=0.2, schedule="paper", supersample=3, seed=5, method="diskpack",
-        invert=True, refine_every=2, device="pocl", features="detail", capacity=0.25, profile=True)
+        invert=True, refine_every=2, device="pocl", features="detail", capacity=0.25, support=0.5,
+        paper_tone=0.05, profile=True)
     assert os.listdir(tmp_path) == []
 
 
@@ -450,7 +452,7 @@ def test_stipple_failed_writer_removes_earlier_outputs(ctx, monkeypatch, tmp_pat
     ("unknown extension", "unknown output extension '.gif'"),
     ("missing output dir", "output directory does not exist"),
     ("output twice", "output given twice"),
-    ("dpi and mm", "either by --width-mm/--height-mm or by --dpi"),
+    ("output folder", "is a folder, not a file name: give one in it, such as"),
     ("too many points", "too large"),
 ])
 def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
@@ -478,8 +480,8 @@ def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
         out = tmp_path / "no" / "o.svg"
     elif case == "output twice":
         extra = ["-o", str(out)]
-    elif case == "dpi and mm":
-        extra = ["--dpi", "300", "--width-mm", "100"]
+    elif case == "output folder":
+        out = tmp_path
     if case == "too many points":
         extra = ["--supersample", "1", "-n", "100"]  # 4 grid cells per point: at most 64
     _bad(tmp_path, capsys, ["stipple", str(image), "-n", "10", "-o", str(out), *extra], 1, message)
@@ -500,6 +502,35 @@ def test_stipple_usage_errors(tmp_path, capsys, monkeypatch, argv):
     assert cli.main(argv) == 2
     assert "usage: diskpack" in capsys.readouterr().err
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["stipple", "g.png", "-n", "1", "-o", "o.svg"], "argument -n: need at least 2 points, got 1"),
+    (["stipple", "g.png", "-n", "5", "--seed", "-1", "-o", "o.svg"],
+     "argument --seed: must be at least 0, got -1"),
+    (["poisson", "-n", "5", "--seed", "-1", "-o", "o.npz"],
+     "argument --seed: must be at least 0, got -1"),
+    (["stipple", "g.png", "-n", "5", "--dpi", "300", "--width-mm", "100", "-o", "o.svg"],
+     "either by --width-mm/--height-mm or by --dpi, not both"),
+    (["stiple", "g.png"], "invalid choice: 'stiple'"),
+    (["stiple", "g.png"], "; did you mean stipple?"),
+    (["stipple", "g.png", "-n", "5", "--pen-mn", "0.3", "-o", "o.svg"], "did you mean --pen-mm?"),
+    (["stipple", "g.png", "-n", "5", "--schedule", "defualt", "-o", "o.svg"],
+     "did you mean default?"),
+])
+def test_option_faults_are_usage_errors_that_name_the_option(tmp_path, capsys, monkeypatch,
+                                                            argv, message):
+    monkeypatch.chdir(tmp_path)
+    _gradient_png(tmp_path / "g.png", 16)
+    assert cli.main(argv) == 2
+    assert message in capsys.readouterr().err
+    assert os.listdir(tmp_path) == ["g.png"]
+
+
+def test_stipple_help_describes_the_default(capsys):
+    assert cli.main(["stipple", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "the default schedule" in text and "--schedule paper runs the paper's" in text
 
 
 # ------------------------------------------------------------------ analyze
@@ -637,3 +668,82 @@ def test_opencl_failure_is_an_error_message(monkeypatch, tmp_path, capsys):
     image = _gradient_png(tmp_path / "g.png", 16)
     _bad(tmp_path, capsys, ["stipple", str(image), "-n", "10", "-o", str(tmp_path / "o.svg")], 1,
          "diskpack: error: OpenCL failed (LogicError")
+
+
+# ------------------------------------------------------------------- export
+
+def _run_json(argv, capsys):
+    rc = cli.main(argv)
+    out, err = capsys.readouterr()
+    assert rc == 0, err
+    return _json_line(out), err
+
+
+def test_stipple_json_has_the_plot(stippled):
+    plot = stippled.summary["plot"]
+    svg = stippled.summary["outputs"][0]
+    assert plot["pen_downs"] == 150 and plot["plot_speed_mm_s"] == 50.0
+    assert plot["travel_after_mm"] == svg["travel_after_mm"] < plot["travel_before_mm"]
+    assert plot["plot_seconds"] == pytest.approx(
+        (plot["draw_mm"] + plot["travel_after_mm"]) / 50.0 + 150 * 0.3)
+    assert "plot about 0 h 0" in stippled.err
+
+
+def test_export_draws_the_stippling_again_without_recomputing(stippled, tmp_path, capsys):
+    again = tmp_path / "again.svg"
+    s, err = _run_json(["export", str(stippled.outs["npz"]), "-o", str(again), "--json"], capsys)
+    assert again.read_bytes() == stippled.outs["svg"].read_bytes()
+    assert s["n"] == 150 and s["plot"]["pen_downs"] == 150 and "150 dots of" in err
+    # another paper, pen and speed; the .svg it wrote reads back too
+    a4 = tmp_path / "a4.svg"
+    s, _ = _run_json(["export", str(stippled.outs["svg"]), "-o", str(a4), "-o",
+                      str(tmp_path / "a4.png"), "--page", "a4", "--landscape", "--margin-mm",
+                      "20", "--pen-mm", "0.3", "--plot-speed-mm-s", "25", "--json"], capsys)
+    assert s["outputs"][0]["page_mm"] == [297.0, 210.0]
+    assert s["outputs"][0]["height_mm"] == pytest.approx(170.0)  # fitted inside the margins
+    assert s["plot"]["plot_speed_mm_s"] == 25.0
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--margin-mm", "10"], "--margin-mm is for a --page paper"),
+    (["--landscape"], "--landscape is for a --page paper"),
+    (["--page", "b4"], "argument --page: page must be a3, a4, a5, letter or WxHmm"),
+])
+def test_page_options_need_a_page(stippled, tmp_path, capsys, argv, message):
+    rc = cli.main(["export", str(stippled.outs["npz"]), "-o", str(tmp_path / "x.svg"), *argv])
+    assert rc == 2 and message in capsys.readouterr().err
+    assert os.listdir(tmp_path) == []
+
+
+def test_dot_count_from_the_pen(ctx, tmp_path, capsys):
+    image = _gradient_png(tmp_path / "g.png", 24)
+    base = ["stipple", str(image), "--width-mm", "60", "--dot-mm", "2", "--schedule", "pack",
+            "--json", "-o", str(tmp_path / "o.svg")]
+    s, err = _run_json([*base, "-n", "tone"], capsys)
+    # mean darkness 1/2 of 60 x 60 mm, dots of pi mm^2
+    tone = s["tone_n"]["n"]
+    assert s["n"] == tone == pytest.approx(0.5 * 3600 / np.pi, rel=0.01) and "note" not in err
+    s, err = _run_json([*base, "-n", "100"], capsys)
+    assert s["n"] == 100 and s["tone_n"] == {"n": tone, "dot_mm": 2.0}
+    assert f"{tone} dots of 2 mm give the image's ink on this paper; -n 100 will look " \
+           f"lighter" in err
+    assert cli.main(["stipple", str(image), "-n", "tone", "-o", str(tmp_path / "x.svg")]) == 2
+    assert "-n tone needs the dot size" in capsys.readouterr().err
+
+
+def test_tone_controls_act_on_the_default_schedule(ctx, tmp_path, capsys):
+    image = _gradient_png(tmp_path / "g.png", 40)   # dark on the left, white on the right
+    out = tmp_path / "o.npz"
+    s, _ = _run_json(["stipple", str(image), "-n", "200", "--white-point", "0.5",
+                      "--black-point", "0.1", "--tone-gamma", "1.5", "--json", "-o", str(out)],
+                     capsys)
+    assert s["params"]["schedule"] != "paper"
+    assert s["params"]["tone"] == {"black": 0.1, "white": 0.5, "gamma": 1.5}
+    with np.load(out) as z:
+        # levels above the white point are blank paper: (almost) no dot right of the
+        # middle, where a quarter of them are without it
+        assert np.mean(z["points"][:, 0] > 20) < 0.05
+        assert json.loads(str(z["params"]))["tone"]["white"] == 0.5
+    assert cli.main(["stipple", str(image), "-n", "8", "--black-point", "0.6",
+                     "--white-point", "0.5", "-o", str(tmp_path / "x.svg")]) == 2
+    assert "--black-point 0.6 must be below --white-point 0.5" in capsys.readouterr().err

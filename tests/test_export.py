@@ -125,9 +125,41 @@ def test_read_stipple_round_trips_write_stipple(tmp_path, result):
     again = tmp_path / "b.npz"   # what it reads, write_stipple writes again
     write_stipple(again, back)
     with np.load(out) as z1, np.load(again) as z2:
-        assert set(z2.files) == set(z1.files) - {k for k in z1.files if k.startswith("certificate_")}
+        assert set(z2.files) == set(z1.files)
         for name in z2.files:
             np.testing.assert_array_equal(z2[name], z1[name])
+
+
+@pytest.mark.parametrize("ext, opts", [
+    ("npz", {}), ("csv", {}), ("svg", {}), ("svg", dict(pen_mm=0.5, width_mm=100)),
+    ("svg", dict(dots="packing", pen_mm=0.3, page="a5", margin_mm=15)),
+    ("svg", dict(dot_mm=0.7, invert=True, page="a4", landscape=True)),
+])
+def test_every_format_reads_back_and_writes_again_identically(tmp_path, result, ext, opts):
+    out, again = tmp_path / f"a.{ext}", tmp_path / f"b.{ext}"
+    write_stipple(out, result, **opts)
+    back = read_stipple(out)
+    assert (back.width, back.height, back.k) == (80, 60, 0.5)
+    key = lambda a: a[np.lexsort(a.T)]   # the SVG holds the dots in pen-path order
+    np.testing.assert_allclose(key(back.points), key(result.points), atol=1e-3)
+    write_stipple(again, back, **opts)
+    if ext == "npz":
+        with np.load(out) as z1, np.load(again) as z2:
+            assert set(z1.files) == set(z2.files)
+            for name in z1.files:
+                np.testing.assert_array_equal(z2[name], z1[name])
+    else:
+        assert again.read_text() == out.read_text()
+
+
+def test_read_stipple_formats_without_dots(tmp_path, result):
+    write_png(tmp_path / "a.png", result)
+    with pytest.raises(ValueError, match=r"reads \.npz, \.csv, \.svg files; a \.png preview "
+                                         r"holds no dots"):
+        read_stipple(tmp_path / "a.png")
+    (tmp_path / "other.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg"/>')
+    with pytest.raises(ValueError, match="not written by diskpack_cl"):
+        read_stipple(tmp_path / "other.svg")
 
 
 def test_read_stipple_of_a_point_set_or_a_bad_file(tmp_path):
@@ -147,8 +179,9 @@ def test_csv_round_trip(tmp_path, result):
     write_csv(out, result)
     with open(out, newline="") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["x", "y", "r"]
-    a = np.array(rows[1:], dtype=float)
+    assert rows[0] == ["# diskpack_cl stippling width=80 height=60 k=0.5 tone_radius=0.6"]
+    assert rows[1] == ["x", "y", "r"]
+    a = np.array(rows[2:], dtype=float)
     np.testing.assert_array_equal(a[:, :2], result.points)
     np.testing.assert_array_equal(a[:, 2], result.radii)
 
@@ -224,3 +257,35 @@ def test_tone_dots_need_a_tone_radius(tmp_path, result):
     with pytest.raises(ValueError, match="needs the result's tone_radius"):
         write_svg(tmp_path / "a.svg", result)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("points", ["uniform", "stippled"])
+def test_auto_pen_path_is_shorter_than_either_order(points):
+    from diskpack_cl import error_diffusion
+
+    if points == "uniform":
+        p = np.random.default_rng(1).random((3000, 2)) * 100
+    else:  # dots spread like an image's darkness (a gradient)
+        p = error_diffusion(np.tile(np.linspace(0, 1, 120), (90, 1)), 3000, seed=0)
+    travel = {m: pen_path_order(p, method=m)[2] for m in ("hilbert", "greedy", "auto")}
+    assert travel["auto"] < 0.95 * min(travel["hilbert"], travel["greedy"])
+
+
+def test_two_opt_keeps_a_permutation_never_longer_and_a_zero_budget():
+    from diskpack_cl.pen_path import two_opt
+
+    p = np.random.default_rng(4).random((500, 2))
+    start = np.random.default_rng(5).permutation(500)
+    better = two_opt(p, start)
+    np.testing.assert_array_equal(np.sort(better), np.arange(500))
+    assert path_travel(p, better) < 0.5 * path_travel(p, start)
+    np.testing.assert_array_equal(two_opt(p, start, budget_s=0.0), start)
+
+
+def test_png_preview_progress_and_default_size(tmp_path, result):
+    from diskpack_cl.export import preview_scale
+
+    done = []
+    write_png(tmp_path / "a.png", result, progress=done.append)
+    assert sum(done) == 200
+    assert preview_scale(80, 60) == 2.0 and preview_scale(12000, 8000) * 12000 == 4096

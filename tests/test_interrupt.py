@@ -89,3 +89,45 @@ def test_labels_in_bands_equal_labels_in_one_enqueue(ctx, monkeypatch, max_group
     np.testing.assert_array_equal(banded.radii, one.radii)
     rows_per_band = max(1, max_groups // 8)
     assert len(waits) == -(-6 // rows_per_band)  # one bounded enqueue per band of tile rows
+
+
+# `diskpack stipple` whose PNG writer stops (after the SVG is written) until a
+# signal arrives: the run is interrupted while its outputs are being written.
+WRITING_CHILD = textwrap.dedent("""
+    import sys, time
+    import numpy as np
+    from PIL import Image
+    from diskpack_cl import cli, export
+
+    folder = sys.argv[1]
+    Image.fromarray(np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)).save(
+        folder + "/g.png")
+
+    def stuck(path, result, **opts):
+        print("writing", path, flush=True)
+        time.sleep(120)
+
+    export.WRITERS[".png"] = stuck
+    sys.exit(cli.main(["stipple", folder + "/g.png", "-n", "30", "--schedule", "pack", "-q",
+                       "-o", folder + "/a.svg", "-o", folder + "/a.png"]))
+""")
+
+
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_writing_keeps_every_earlier_file(ctx, tmp_path, sig, status):
+    (tmp_path / "a.svg").write_text("OLD svg")
+    (tmp_path / "a.png").write_text("OLD png")
+    child = subprocess.Popen([sys.executable, "-c", WRITING_CHILD, str(tmp_path)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = child.stdout.readline()
+        assert line.startswith("writing") and line.rstrip().endswith("a.png"), \
+            line + child.stderr.read()
+        child.send_signal(sig)
+        _, err = child.communicate(timeout=120)
+    finally:
+        child.kill()
+    assert child.returncode == status, err
+    assert (tmp_path / "a.svg").read_text() == "OLD svg"
+    assert (tmp_path / "a.png").read_text() == "OLD png"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "a.svg", "g.png"]

@@ -279,3 +279,23 @@ def test_atomic_write_permissions(tmp_path):
         assert path.stat().st_mode & 0o777 == 0o600
     finally:
         os.umask(old)
+
+
+def test_atomic_writes_replace_all_files_together_or_none(tmp_path):
+    from diskpack_cl.io import atomic_writes
+
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("old a")
+    with pytest.raises(RuntimeError, match="disk full"):
+        with atomic_writes():
+            with atomic_write(a, "w") as fh:
+                fh.write("new a")
+            with atomic_write(b, "w") as fh:
+                raise RuntimeError("disk full")
+    assert sorted(os.listdir(tmp_path)) == ["a.txt"] and a.read_text() == "old a"
+    with atomic_writes():
+        for path in (a, b):
+            with atomic_write(path, "w") as fh:
+                fh.write("new")
+        assert a.read_text() == "old a" and not b.exists()   # renamed at the end, together
+    assert a.read_text() == b.read_text() == "new" and len(os.listdir(tmp_path)) == 2

@@ -58,8 +58,10 @@ def test_given_counts_and_errors():
     assert res.counts.tolist() == [50, 100, 50] and res.certificate.valid
     with pytest.raises(ValueError, match="counts must be 3 non-negative integers summing to n = 200"):
         stipple_colors(_image(), 200, PENS3, counts=[50, 100, 49])
-    with pytest.raises(ValueError, match="invert has no meaning"):
+    with pytest.raises(ValueError, match="invert is for one pen"):
         stipple_colors(_image(), 200, invert=True)
+    with pytest.raises(ValueError, match="paper_tone is for one pen"):
+        stipple_colors(_image(), 200, paper_tone=0.1)
     with pytest.raises(ValueError, match="nothing to stipple"):
         stipple_colors(np.ones((8, 8, 3)), 10)
 
@@ -84,9 +86,14 @@ def test_npz_csv_round_trip(tmp_path, result):
     write_stipple(tmp_path / "again.svg", back)          # what was read writes again
     write_stipple(tmp_path / "c.csv", result)
     with open(tmp_path / "c.csv") as fh:
+        assert fh.readline().startswith("# diskpack_cl stippling ")
         rows = list(csv.DictReader(fh))
     assert [r["pen"] for r in rows] == [result.names[p] for p in result.pen]
     assert np.array_equal([float(r["x"]) for r in rows], result.points[:, 0])
+    back = read_stipple(tmp_path / "c.csv")
+    assert np.array_equal(back.pen, result.pen) and back.names == result.names
+    assert np.array_equal(back.points, result.points) and np.allclose(back.colors, result.colors)
+    write_stipple(tmp_path / "again.png", back)          # one tone size for all pens
 
 
 def test_svg_one_layer_per_pen(tmp_path, result):
@@ -101,6 +108,12 @@ def test_svg_one_layer_per_pen(tmp_path, result):
     doc = vpype.read_multilayer_svg(str(tmp_path / "c.svg"), 0.05)
     assert len(doc.layers) == np.count_nonzero(result.counts)   # vpype drops an empty layer
     assert sum(len(lc) for lc in doc.layers.values()) == 300
+    back = read_stipple(tmp_path / "c.svg")            # the dots of every layer, with their pens
+    assert back.names == result.names and np.allclose(back.colors, result.colors)
+    assert np.bincount(back.pen, minlength=4).tolist() == result.counts.tolist()
+    # border dots move inside the page by less than their drawn radius
+    reach = result.pen_radius.max() + 1e-3
+    assert np.allclose(np.sort(back.points[:, 0]), np.sort(result.points[:, 0]), atol=reach)
     write_stipple(tmp_path / "o.svg", result, pen_order=["black", "cyan", "magenta", "yellow"])
     root = ET.parse(tmp_path / "o.svg").getroot()
     assert [g.get(INK + "label") for g in root.iter(SVG + "g")][0] == "black"

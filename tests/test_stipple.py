@@ -8,7 +8,7 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.radii import base_radii, detail_fields, field_at, largest_valid_k, radius_field
 from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, make_schedule
-from diskpack_cl.stipple import StippleStage, StippleState, lloyd_step, pack_step, stipple
+from diskpack_cl.stipple import INK_RANGE, StippleStage, StippleState, lloyd_step, pack_step, stipple
 from diskpack_cl.stipple_engine import ExactStippleEngine
 
 SHORT = [("pack", 6), ("lloyd", 3), ("pack", 4)]
@@ -282,7 +282,13 @@ def test_default_schedule_certified_and_deterministic(ctx):
     assert a.params["features"] == "detail"    # s = 5.2 px: the band with feature-aware steps
     f = detail_fields(g, 150, f)[0]
     row, col = np.floor(a.points[:, 1]).astype(int), np.floor(a.points[:, 0]).astype(int)
-    np.testing.assert_array_equal(a.base_radii, f[row, col])
+    # the default's equal-ink factors (capacity 0.1) scale the field within their bounds
+    factor = a.base_radii / f[row, col]
+    assert a.params["capacity"] == 0.1 and np.ptp(factor) > 0
+    assert np.all((factor >= 1 / INK_RANGE) & (factor <= INK_RANGE))
+    c = stipple(g, 150, seed=5, capacity=0.0)
+    row, col = np.floor(c.points[:, 1]).astype(int), np.floor(c.points[:, 0]).astype(int)
+    np.testing.assert_array_equal(c.base_radii, f[row, col])
 
 
 def test_paper_schedule_keeps_the_paper_mapping(ctx):

@@ -47,7 +47,8 @@ def test_equal_ink_grows_empty_cells():
 
 
 def test_capacity_option_resolved_and_checked():
-    assert StippleOptions.resolve(500, 64, 48).capacity == 0.0
+    assert StippleOptions.resolve(500, 64, 48).capacity == 0.1           # the default's
+    assert StippleOptions.resolve(500, 64, 48, schedule="classic").capacity == 0.0
     opt = StippleOptions.resolve(500, 64, 48, capacity=0.25)
     assert opt.capacity == 0.25 and opt.params()["capacity"] == 0.25
     for bad in (-0.1, 1.5, np.nan):

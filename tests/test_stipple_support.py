@@ -1,0 +1,75 @@
+"""support: dots stay on the ink (white paper stays white, outlines stay sharp); paper_tone."""
+
+import numpy as np
+import pytest
+
+from diskpack_cl.analysis import edge_fidelity, stray_dots
+from diskpack_cl.schedule import StippleOptions
+from diskpack_cl.stipple import off_support, stipple
+
+
+def drawing():
+    """A black disc and a black square on white paper, 96x96."""
+    g = np.ones((96, 96))
+    yy, xx = np.mgrid[0:96, 0:96] + 0.5
+    g[np.hypot(xx - 28, yy - 30) < 18] = 0.0
+    g[52:84, 50:86] = 0.0
+    return g
+
+
+def test_off_support_reads_the_ink_at_centre_and_centroid():
+    ink = np.zeros((10, 10))
+    ink[:, :5] = 1.0
+    ink[:, 5:7] = 0.25
+    m = np.array([[8.0, 1.0], [1.0, 1.0], [5.5, 1.0], [8.0, 1.0], [2.0, 2.0]])
+    c = np.array([[2.0, 1.0], [3.0, 4.0], [2.0, 1.0], [9.0, 9.0], [9.0, 9.0]])
+    # white paper; the same tone; a quarter of the tone; centre and centroid both
+    # off the ink (a curved thin line's cell): all the way; centre on the ink: no pull
+    assert off_support(ink, m, c).tolist() == [1.0, 0.0, 0.75, 1.0, 0.0]
+
+
+def test_support_options_resolved_and_checked():
+    opt = StippleOptions.resolve(500, 64, 48)
+    assert (opt.support, opt.capacity, opt.paper_tone) == (1.0, 0.1, 0.0)
+    assert StippleOptions.resolve(500, 64, 48, schedule="classic").support == 0.0
+    for name, bad, text in (("support", 1.5, r"in \[0, 1\]"), ("support", np.nan, r"in \[0, 1\]"),
+                            ("paper_tone", 1.0, r"in \[0, 1\)"), ("paper_tone", -0.1, r"in \[0, 1\)")):
+        with pytest.raises(ValueError, match=f"{name} must be {text}"):
+            StippleOptions.resolve(500, 64, 48, **{name: bad})
+
+
+@pytest.fixture(scope="module")
+def runs():
+    g = drawing()
+    return g, {s: stipple(g, 400, seed=1, support=s) for s in (0.0, 1.0)}
+
+
+def test_default_keeps_white_paper_white(runs):
+    g, res = runs
+    dark = 1.0 - g
+    assert res[1.0].certificate.valid
+    assert stray_dots(res[1.0].points, dark).count == 0
+    # without the rule, outline dots drift out to the middle of the paper
+    assert stray_dots(res[0.0].points, dark).count >= 3
+
+
+def test_default_keeps_outlines_sharp(runs):
+    g, res = runs
+    dark = 1.0 - g
+    lloyd = stipple(g, 400, seed=1, method="lloyd")
+    sharp = edge_fidelity(res[1.0].points, dark)
+    assert sharp >= edge_fidelity(lloyd.points, dark) - 0.01
+    assert sharp > edge_fidelity(res[0.0].points, dark) + 0.03
+
+
+def test_paper_tone_puts_sparse_dots_on_white():
+    g = drawing()
+    white = g > 0.5
+    res = stipple(g, 400, seed=1, paper_tone=0.1)
+    col = np.clip(res.points.astype(int), 0, 95)
+    on_white = white[col[:, 1], col[:, 0]].sum()
+    # 0.1 of darkness over the white 73% of the page: about a fifth of the dots
+    assert 0.1 * 400 < on_white < 0.35 * 400
+    assert res.certificate.valid and res.params["paper_tone"] == 0.1
+    blank = stipple(np.ones((40, 40)), 50, seed=0, paper_tone=0.2)
+    assert blank.n == 50 and blank.certificate.valid
