@@ -19,7 +19,7 @@ two ways:
 Measures (:func:`diskpack_cl.color.color_measures`): mean CIELAB Delta E
 after a blur of one dot spacing, tone SSIM per layer, spacing P01 per pen
 and of all dots; the seconds of each run and of a mono run of the same
-total n on the joint density (both after a mono run of that size, so that
+total n on the joint density (and that run's P01) (both after a mono run of that size, so that
 neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality.jsonl``; crops
 (photograph, naive overlays, multi-class) to ``docs/figures/color_crop_*.png``;
 ``--table FILE`` prints the markdown table of ``docs/color.md``.
@@ -36,6 +36,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from diskpack_cl import stipple
+from diskpack_cl.analysis import spacing
 from diskpack_cl.color import PALETTES, color_measures, load_rgb, pen_tone_radii, separate
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.multipen import stipple_colors
@@ -100,7 +101,7 @@ def run(name, palette, n, figures):
     t_multi = time.perf_counter() - t
     assert multi.certificate.valid
     t = time.perf_counter()
-    stipple(gray, n)
+    mono = stipple(gray, n)
     t_mono = time.perf_counter() - t
     rows, overlays = [], []
     for model in ("area", "overprint") if palette in PALETTES else ("area",):
@@ -108,7 +109,8 @@ def run(name, palette, n, figures):
         overlays.append(naive(path, palette, multi.counts, model))
         method = "naive" if model == "area" else "naive-overprint"
         rows.append(_row(name, palette, n, method, overlays[-1], rgb, time.perf_counter() - t))
-    rows.append(dict(_row(name, palette, n, "multi-class", multi, rgb, t_multi), mono_seconds=t_mono))
+    rows.append(dict(_row(name, palette, n, "multi-class", multi, rgb, t_multi), mono_seconds=t_mono,
+                     mono_p01=spacing(mono.points, 1.0 - gray).p01))
     if figures:
         crop(name, overlays + [multi], BOXES[name], ROOT / "docs/figures" / f"color_crop_{name}.png")
     return rows
@@ -125,8 +127,9 @@ def table(path):
            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in rows:
         sec = f"{r['seconds']:.1f}" + (f" (mono {r['mono_seconds']:.1f})" if "mono_seconds" in r else "")
+        joint = f"{r['p01_joint']:.3f}" + (f" (mono {r['mono_p01']:.3f})" if "mono_p01" in r else "")
         out.append(f"| {r['image']} | {'/'.join(r['pens'])} | {r['n']} | {r['method']} | "
-                   f"{r['delta_e']:.1f} | {r['p01_joint']:.3f} | {_cells(r['p01'])} | "
+                   f"{r['delta_e']:.1f} | {joint} | {_cells(r['p01'])} | "
                    f"{_cells(r['ssim'])} | {sec} |")
     return "\n".join(out)
 
