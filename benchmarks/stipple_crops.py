@@ -42,7 +42,7 @@ def panel(image, n, configs, box, scale=4, seed=0):
     dark = 1.0 - gray
     x0, y0, w, h = box
     crop = Image.fromarray((255 * gray[y0:y0 + h, x0:x0 + w]).astype(np.uint8))
-    tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{image} (photograph)")]
+    tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{image} (input)")]
     for spec in configs:
         name, extra = sq.parse_config(spec)
         kw = sq.stipple_kwargs(name, extra, (gray.shape[1], gray.shape[0], n))
