@@ -18,8 +18,7 @@ from __future__ import annotations
 import os
 
 __all__ = ["NoOpenCLError", "get_context", "list_devices", "describe", "wait_for", "device_kind",
-           "kernel_group_limit", "group_size",
-           "preferred_multiple", "padded"]
+           "kernel_group_limit", "group_size", "preferred_multiple", "padded"]
 
 _CONTEXTS: dict = {}
 _KINDS = ("GPU", "CPU", "ACCELERATOR")
@@ -143,8 +142,8 @@ def _pick(spec):
         return _default(pairs)
     plat, colon, dev = spec.partition(":")
     kind = spec.strip().upper()
-    if not colon and kind in ("GPU", "CPU") and _of_kind(pairs, kind):
-        return _of_kind(pairs, kind)
+    if not colon and kind in ("GPU", "CPU") and (found := _of_kind(pairs, kind)) is not None:
+        return found
     for ip, idev, p, d in pairs:
         if colon:
             hit = _matches(plat, ip, p.name, p.vendor) and _matches(dev or "0", idev, d.name)
