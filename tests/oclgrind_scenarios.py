@@ -122,6 +122,30 @@ def refused(ctx):
     return out
 
 
+def bad_labels(ctx):
+    """cell_max and cell_sums given labels that name no site (INT_MAX, -2):
+    those grid cells must touch no per-site buffer."""
+    import pyopencl as cl
+
+    from diskpack_cl.raster import INT_MAX, PowerRaster
+
+    pr = PowerRaster(Domain.rect(8.0, 4.0), (4, 8), device=ctx)
+    est = pr.compute(np.array([[2.0, 2.0], [6.0, 2.0]]))
+    lab = est.labels.copy()
+    lab[:, 2] = INT_MAX
+    lab[:, 5] = -2
+    b_lab = pr._maps["label"]   # the device map the result reads
+    cl.enqueue_copy(pr.queue, b_lab, lab)
+    est._maps["label"] = (b_lab, np.int32)
+    _, mass = est.centroids(np.ones((4, 8)))
+    n, npix = np.int32(2), np.int32(lab.size)
+    rbits = np.full(2, -1, np.int32)
+    b_r = cl.Buffer(pr.ctx, cl.mem_flags.READ_WRITE | cl.mem_flags.COPY_HOST_PTR, hostbuf=rbits)
+    pr._k_max(pr.queue, (npix,), None, b_lab, pr._maps["dist"], npix, n, b_r)
+    cl.enqueue_copy(pr.queue, rbits, b_r)
+    return {"mass": mass, "rbits": rbits}
+
+
 def unowned(ctx):
     """NaN weights past the host check: the kernels' own guards keep every
     access in bounds and every ring search finite, and the host refuses."""
@@ -144,7 +168,7 @@ def unowned(ctx):
 
 
 SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, cells_rect, cells_torus, cells_full,
-                                     end_to_end, refused, unowned)}
+                                     end_to_end, refused, bad_labels, unowned)}
 
 
 def main(argv):
