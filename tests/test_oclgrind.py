@@ -18,14 +18,16 @@ simulator.  Locally::
 Known false positives
 ---------------------
 ``clGetDeviceInfo`` / ``CL_INVALID_VALUE`` / ``'param_name'`` (API check):
-pyopencl's source cache asks the device for an OpenCL 2.x/3.0 property that
-Oclgrind (OpenCL 1.2) does not know, and handles the error itself.  Minimal
-reproduction, with ``OCLGRIND_CHECK_API=1`` and pyopencl's cache on::
+before a build through its source cache, pyopencl asks whether the device
+is an NVIDIA GPU (``pyopencl.characterize.nv_compute_capability`` reads
+``CL_DEVICE_COMPUTE_CAPABILITY_MAJOR_NV``, a property of an NVIDIA
+extension that Oclgrind does not have) and catches the error itself.
+Minimal reproduction, with ``OCLGRIND_CHECK_API=1``::
 
-    ctx = cl.Context(oclgrind_platform.get_devices())
-    cl.Program(ctx, "kernel void k(global int *a) { a[0] = 1; }").build()
+    from pyopencl.characterize import nv_compute_capability
+    nv_compute_capability(oclgrind_device)     # one report; returns None
 
-It reports once per build and never with ``PYOPENCL_NO_CACHE=1``.
+It reports once per program build, and never with ``PYOPENCL_NO_CACHE=1``.
 """
 
 import os
@@ -83,6 +85,22 @@ def test_reports_keep_errors_and_drop_only_the_known_false_positives():
            "\tKernel: k\n\n" + FALSE_POSITIVES[0].replace("param_name", "device") + "\n")
     got = reports(log)
     assert len(got) == 2 and got[0].startswith("Invalid write") and "'device'" in got[1]
+
+
+_REPRODUCTION = """
+import pyopencl as cl
+from pyopencl.characterize import nv_compute_capability
+dev = [p for p in cl.get_platforms() if p.name == "Oclgrind"][0].get_devices()[0]
+assert nv_compute_capability(dev) is None
+"""
+
+
+def test_the_false_positive_is_what_its_reproduction_reports(icd_dir):
+    env = dict(os.environ, OCL_ICD_VENDORS=str(icd_dir), OCLGRIND_CHECK_API="1")
+    proc = subprocess.run([sys.executable, "-c", _REPRODUCTION], env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.strip("\n") == FALSE_POSITIVES[0] and reports(proc.stderr) == []
 
 
 def _run_on_oclgrind(name, settings, icd_dir, tmp_path):
