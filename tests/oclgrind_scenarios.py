@@ -55,6 +55,17 @@ def raster_torus(ctx):
     return _raster(ctx, Domain.torus(), (17, 20), 24, 0.0)
 
 
+def raster_streamed(ctx):
+    """A raster so coarse that one tile has more candidates than the local
+    list holds (CAP = 256): they stream through it in chunks."""
+    from diskpack_cl.raster import PowerRaster
+
+    dom = Domain.rect(10.0, 10.0)
+    pts, w = _sites(dom, 600, 5, 0.3)
+    est = PowerRaster(dom, (5, 6), device=ctx, layout="item").compute(pts, w)
+    return {"label": est.labels.copy(), "dist": est.dist.copy(), "radii": est.radii}
+
+
 def _cells(ctx, dom, n, heavy):
     from diskpack_cl import cells
 
@@ -167,8 +178,9 @@ def unowned(ctx):
     return out
 
 
-SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, cells_rect, cells_torus, cells_full,
-                                     end_to_end, refused, bad_labels, unowned)}
+SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
+                                     cells_torus, cells_full, end_to_end, refused, bad_labels,
+                                     unowned)}
 
 
 def main(argv):

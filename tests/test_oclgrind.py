@@ -1,7 +1,8 @@
 """Every kernel on the Oclgrind simulator: memory, data races, API use (the Oclgrind pass).
 
 Each scenario of ``tests/oclgrind_scenarios.py`` runs in a child process on
-Oclgrind with its memory check (always on), data-race check and API check;
+Oclgrind with its memory check (always on), data-race check (uniform
+writes included: several work items writing one value count too) and API check;
 any report fails the test, except the simulator's known false positives
 below, matched by their exact text.  The child's arrays must equal those of
 the same scenario on the test's own device (integers exactly, floats to
@@ -106,7 +107,8 @@ def test_the_false_positive_is_what_its_reproduction_reports(icd_dir):
 def _run_on_oclgrind(name, settings, icd_dir, tmp_path):
     log, out = tmp_path / "oclgrind.log", tmp_path / "out.npz"
     env = dict(os.environ, OCL_ICD_VENDORS=str(icd_dir), DISKPACK_DEVICE="oclgrind",
-               OCLGRIND_CHECK_API="1", OCLGRIND_DATA_RACES="1", OCLGRIND_LOG=str(log), **settings)
+               OCLGRIND_CHECK_API="1", OCLGRIND_DATA_RACES="1", OCLGRIND_UNIFORM_WRITES="1",
+               OCLGRIND_LOG=str(log), **settings)
     script = Path(oclgrind_scenarios.__file__)
     proc = subprocess.run([sys.executable, str(script), name, str(out)], env=env,
                           capture_output=True, text=True, timeout=600)
