@@ -27,6 +27,7 @@ except ImportError:  # pragma: no cover - hypothesis is in the test extra
 OPENCL_DOCTESTS = {
     "diskpack_cl._device.get_context",
     "diskpack_cl._device.describe",
+    "diskpack_cl._device.group_size",
     "diskpack_cl.raster.PowerRaster",
     "diskpack_cl.cells.CellMIC",
 }

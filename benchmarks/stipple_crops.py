@@ -42,10 +42,11 @@ def panel(image, n, configs, box, scale=4, seed=0):
     dark = 1.0 - gray
     x0, y0, w, h = box
     crop = Image.fromarray((255 * gray[y0:y0 + h, x0:x0 + w]).astype(np.uint8))
-    tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{image} (photograph)")]
+    tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{image} (input)")]
     for spec in configs:
         name, extra = sq.parse_config(spec)
-        res = sq.stipple(gray, n, seed=seed, **sq.stipple_kwargs(name, extra))
+        kw = sq.stipple_kwargs(name, extra, (gray.shape[1], gray.shape[0], n))
+        res = sq.stipple(gray, n, seed=seed, **kw)
         t, e = tone_ssim(res.points, dark), edge_fidelity(res.points, dark)
         s = stray_dots(res.points, dark).per_10k
         label = f"{spec}  n={n}  tone {t:.3f}" + (f"  edge {e:.3f}" if e == e else "") + f"  stray {s:.0f}"

@@ -116,11 +116,33 @@ CONFIGS = {
                            radius_sigma=1.5),
     "spacing-coarse": dict(schedule="classic", schedule_override=[("mix", 35, 0.6), ("mix", 12, 0.4)],
                            features="detail", radius_sigma=2.0),
-    # the default before issue 17 (no support rule, no capacity), and with equal
-    # ink per dot (capacity gain 0.1)
-    "before": dict(schedule="default", support=0.0, capacity=0.0),
-    "capacity": dict(schedule="default", support=0.0, capacity=0.1),
+    # the default before issue 17 (its spacing bands, BANDS_BEFORE, no support
+    # rule, no capacity), and with equal ink per dot (capacity gain 0.1)
+    "before": dict(schedule="before", support=0.0, capacity=0.0),
+    "capacity": dict(schedule="before", support=0.0, capacity=0.1),
 }
+
+#: The default's spacing bands before issue 17 (``schedule.SPACING_BANDS``
+#: then): configurations with ``schedule="before"`` run the band of the dot
+#: spacing with classic's options, as the default did.
+BANDS_BEFORE = (
+    (2.5, [("mix", 16, 0.7), ("pack", 3)], {"radius_sigma": 1.5}),
+    (3.0, [("mix", 16, 0.7), ("pack", 2)], {"radius_sigma": 1.5}),
+    (6.0, [("mix", 18, 0.5), ("mix", 7, 0.4)], {"features": "detail"}),
+    (np.inf, [("mix", 35, 0.6), ("mix", 12, 0.4)], {"features": "detail", "radius_sigma": 2.0}),
+)
+
+
+def before_band(kw, width, height, n):
+    """`kw` with ``schedule="before"`` replaced by the pre-issue-17 band's phases and options."""
+    from diskpack_cl.schedule import SCHEDULE_OPTIONS
+
+    spacing = np.sqrt(width * height / n)
+    phases, options = next((ph, op) for bound, ph, op in BANDS_BEFORE if spacing < bound)
+    out = dict(SCHEDULE_OPTIONS["classic"], **options)
+    out.update({k: v for k, v in kw.items() if k != "schedule"})
+    return dict(out, schedule=phases)
+
 
 #: Reference configuration of the issue-11 condition.
 REFERENCE = "lloyd"
@@ -166,8 +188,12 @@ def load(image):
     return load_gray(path)
 
 
-def stipple_kwargs(name, extra):
-    """Keyword arguments of ``stipple`` for configuration ``name`` with ``extra`` overrides."""
+def stipple_kwargs(name, extra, size=None):
+    """Keyword arguments of ``stipple`` for configuration ``name`` with ``extra`` overrides.
+
+    ``size = (width, height, n)`` picks the band of ``schedule="before"``
+    (:func:`before_band`).
+    """
     kw = dict(CONFIGS[name])
     kw.update(extra)
     override = kw.pop("schedule_override", None)
@@ -178,6 +204,8 @@ def stipple_kwargs(name, extra):
         opts = dict(SCHEDULE_OPTIONS[kw.pop("schedule")])
         opts.update(kw)
         kw = dict(opts, schedule=override)
+    if kw.get("schedule") == "before":
+        kw = before_band(kw, *size)
     return kw
 
 
@@ -198,7 +226,7 @@ def run(image, n, spec, seed=0, measure=None):
     """
     name, extra = parse_config(spec)
     gray = load(image)
-    kw = stipple_kwargs(name, extra)
+    kw = stipple_kwargs(name, extra, (gray.shape[1], gray.shape[0], n))
     t = time.perf_counter()
     if kw.get("schedule") == []:
         from diskpack_cl.dithering import error_diffusion

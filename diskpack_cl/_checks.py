@@ -22,3 +22,61 @@ def check_count(n, minimum=1, name="n"):
     if n < minimum:
         raise ValueError(f"{name} must be at least {minimum}, got {n}")
     return int(n)
+
+
+#: Widest spread of power weights the engines accept: the raster kernels
+#: compute power distances in float32 (largest finite value about 3.4e38).
+WEIGHT_SPREAD = 1e30
+
+
+def check_sites(points, weights, domain, minimum=1):
+    """Sites and weights as float64 copies, checked as every engine checks them.
+
+    Parameters
+    ----------
+    points : (n, 2) array_like
+        Sites; wrapped into the domain when it is a torus.
+    weights : (n,) array_like or None
+        Power weights (zeros when None).
+    domain : Domain
+    minimum : int
+        Fewest sites accepted.
+
+    Returns
+    -------
+    X : (n, 2) float64
+    w : (n,) float64
+        Not shifted.
+
+    Raises
+    ------
+    ValueError
+        A wrong shape, fewer than `minimum` sites, NaN or infinite
+        coordinates or weights, or weights spread wider than
+        :data:`WEIGHT_SPREAD`.  A kernel given such sites would leave grid
+        cells without an owner, or never end its ring search.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> check_sites([[0.5, 0.5]], [np.nan], Domain.torus())
+    Traceback (most recent call last):
+    ...
+    ValueError: weights must be n finite numbers
+    """
+    X = np.array(points, dtype=np.float64)
+    n = len(X)
+    if X.ndim != 2 or X.shape[1] != 2:
+        raise ValueError(f"points must have shape (n, 2), got {X.shape}")
+    if n < minimum:
+        raise ValueError(f"need at least {minimum} point(s), got {n}")
+    if not np.all(np.isfinite(X)):
+        raise ValueError("points contain NaN or infinite coordinates")
+    if domain.periodic:
+        X = domain.wrap(X)
+    w = np.zeros(n) if weights is None else np.array(weights, dtype=np.float64)
+    if w.shape != (n,) or not np.all(np.isfinite(w)):
+        raise ValueError("weights must be n finite numbers")
+    if n and not np.ptp(w) < WEIGHT_SPREAD:
+        raise ValueError(f"weights must span less than {WEIGHT_SPREAD:g}, got {np.ptp(w):g}")
+    return X, w

@@ -2,7 +2,10 @@
 
 Order of choice: the explicit ``device`` argument, then the environment
 variable ``DISKPACK_DEVICE``, then ``PYOPENCL_CTX``, then the first GPU, then
-the first CPU device (PoCL, installed from pip on Linux x86-64).
+the first CPU device (PoCL, installed from pip on Linux x86-64).  A device
+that reports several kinds at once (the Oclgrind simulator says GPU, CPU and
+accelerator) is named so (:func:`device_kind`), and a device of one kind
+wins over it, for the default and for ``"gpu"`` and ``"cpu"``.
 
 A device string is ``"P"`` or ``"P:D"`` (platform and device, each an index
 or a case-insensitive name substring, as pyopencl reads ``PYOPENCL_CTX``:
@@ -14,9 +17,11 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["NoOpenCLError", "get_context", "list_devices", "describe", "wait_for"]
+__all__ = ["NoOpenCLError", "get_context", "list_devices", "describe", "wait_for", "device_kind",
+           "kernel_group_limit", "group_size", "preferred_multiple", "padded"]
 
 _CONTEXTS: dict = {}
+_KINDS = ("GPU", "CPU", "ACCELERATOR")
 
 _FIX = (
     "install an OpenCL driver: on Linux x86-64 `pip install pocl-binary-distribution` "
@@ -43,8 +48,32 @@ def _platforms():
     return platforms
 
 
+def _kinds(device):
+    """The kinds among GPU, CPU and ACCELERATOR whose bits `device` reports."""
+    import pyopencl as cl
+
+    return [k for k in _KINDS if device.type & getattr(cl.device_type, k)]
+
+
+def device_kind(device):
+    """The kind of an OpenCL device: ``"GPU"``, ``"CPU"``, ``"ACCELERATOR"``, ...
+
+    Only those bits count (``DEFAULT`` and ``ALL`` say nothing of the
+    device; pyopencl's ``to_string`` prints PoCL's CPU as "ALL | CPU").  A
+    device that reports several kinds is named by all of them, joined by
+    ``" | "`` (Oclgrind: ``"GPU | CPU | ACCELERATOR"``); one with none, by
+    pyopencl's name of its bits.
+    """
+    import pyopencl as cl
+
+    kinds = _kinds(device)
+    return " | ".join(kinds) if kinds else cl.device_type.to_string(device.type)
+
+
 def list_devices():
-    """Return ``[(index_string, platform_name, device_name, type_name), ...]``.
+    """Return ``[(index_string, platform_name, device_name, kind), ...]``.
+
+    ``kind`` is :func:`device_kind`'s name.
 
     Raises
     ------
@@ -60,8 +89,7 @@ def list_devices():
         except cl.Error:
             continue
         for idev, d in enumerate(devices):
-            rows.append((f"{ip}:{idev}", p.name.strip(), d.name.strip(),
-                         cl.device_type.to_string(d.type)))
+            rows.append((f"{ip}:{idev}", p.name.strip(), d.name.strip(), device_kind(d)))
     return rows
 
 
@@ -77,13 +105,27 @@ def _matches(part, index, *names):
     return any(part.lower() in name.lower() for name in names)
 
 
+def _of_kind(pairs, kind, mixed=True):
+    """The first device of `kind` alone; else (with `mixed`) the first that reports it among others."""
+    found = [d for *_, d in pairs if _kinds(d) == [kind]]
+    if mixed:
+        found += [d for *_, d in pairs if kind in _kinds(d)]
+    return found[0] if found else None
+
+
+def _default(pairs):
+    """The first GPU, else the first CPU, of one kind each; else the first device."""
+    return _of_kind(pairs, "GPU", False) or _of_kind(pairs, "CPU", False) or pairs[0][3]
+
+
 def _pick(spec):
-    """The device a device string names, or the default one (first GPU, else first device).
+    """The device a device string names, or the default one (see :func:`_default`).
 
     ``"P:D"``: platform P (index or name substring) and its device D (index
     or name substring; empty: 0), as pyopencl reads ``PYOPENCL_CTX``
     (``"portable:0"``, ``"0:1"``).  Without a colon: ``"P"`` (index: that
-    platform's first device), ``"gpu"``/``"cpu"``, or a substring of a
+    platform's first device), ``"gpu"``/``"cpu"`` (a device of that kind
+    alone wins over one that reports several kinds), or a substring of a
     device or platform name.
     """
     import pyopencl as cl
@@ -97,17 +139,18 @@ def _pick(spec):
     if not pairs:
         raise NoOpenCLError(f"OpenCL platforms exist but have no devices; {_FIX}")
     if not spec:
-        return next((q[3] for q in pairs if q[3].type & cl.device_type.GPU), pairs[0][3])
+        return _default(pairs)
     plat, colon, dev = spec.partition(":")
-    kinds = {"gpu": cl.device_type.GPU, "cpu": cl.device_type.CPU}
+    kind = spec.strip().upper()
+    if not colon and kind in ("GPU", "CPU") and (found := _of_kind(pairs, kind)) is not None:
+        return found
     for ip, idev, p, d in pairs:
         if colon:
             hit = _matches(plat, ip, p.name, p.vendor) and _matches(dev or "0", idev, d.name)
         elif spec.strip().isdigit():
             hit = int(spec) == ip and idev == 0
         else:
-            s = spec.strip().lower()
-            hit = (s in kinds and d.type & kinds[s]) or _matches(s, -1, d.name, p.name, p.vendor)
+            hit = _matches(spec, -1, d.name, p.name, p.vendor)
         if hit:
             return d
     raise NoOpenCLError(f"no OpenCL device matches {spec!r}; available: {_available(pairs)}")
@@ -187,3 +230,55 @@ def describe(ctx):
     """
     d = ctx.devices[0]
     return f"{d.name.strip()} ({d.platform.name.strip()})"
+
+
+def kernel_group_limit(kernel, device):
+    """The largest work-group `kernel` may run in on `device`.
+
+    The smaller of the kernel's ``CL_KERNEL_WORK_GROUP_SIZE`` (what its
+    registers and local memory allow) and the device's maximum.  Tests
+    replace this function to force a small GPU's limits on any device.
+    """
+    import pyopencl as cl
+
+    info = cl.kernel_work_group_info.WORK_GROUP_SIZE
+    return min(kernel.get_work_group_info(info, device), device.max_work_group_size)
+
+
+def group_size(kernel, device, want):
+    """Work-group size for a 1-D launch of `kernel`: at most `want` and the limit.
+
+    Rounded down to a multiple of the kernel's preferred work-group size
+    multiple (a GPU's warp or wavefront) where the limit leaves one.
+
+    Examples
+    --------
+    >>> ctx = get_context()
+    >>> from diskpack_cl._kernels import build_program
+    >>> k = build_program(ctx, "inscribed_circle", {"PERIODIC": 1})["cell_max"]
+    >>> g = group_size(k, ctx.devices[0], 256)
+    >>> 1 <= g <= 256
+    True
+    """
+    limit = max(1, min(int(want), kernel_group_limit(kernel, device)))
+    multiple = preferred_multiple(kernel, device)
+    return limit // multiple * multiple if limit >= multiple else limit
+
+
+def preferred_multiple(kernel, device):
+    """The kernel's preferred work-group size multiple on `device` (a GPU's warp)."""
+    import pyopencl as cl
+
+    info = cl.kernel_work_group_info.PREFERRED_WORK_GROUP_SIZE_MULTIPLE
+    return kernel.get_work_group_info(info, device)
+
+
+def padded(size, group):
+    """`size` rounded up to a multiple of `group` (a launch's global size).
+
+    Examples
+    --------
+    >>> padded(100, 32), padded(64, 32)
+    (128, 64)
+    """
+    return -(-int(size) // group) * group

@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._device import describe, get_context
+from ._checks import check_sites
+from ._device import describe, get_context, group_size, padded, preferred_multiple
 from ._kernels import build_program
 from .domain import Domain
 from .geometry import _cramer, _vertex, exact_mic
@@ -33,11 +34,13 @@ __all__ = ["CellMIC", "CellResult", "has_fp64", "FLAGS"]
 MAXC = 64        # constraint list capacity per work item
 MAXNEAR = 8      # near-tight constraints reported besides the basis
 NO_CODE = -9     # empty slot of the near-tight list
-CHUNK = 1 << 17  # work items per enqueue: each wait lets Ctrl-C through
-# Work-group size (at most the device's): each work item keeps a ~2.3 KB
-# constraint list in private memory, and PoCL lays a whole work-group's out
-# on one thread's stack; 16 also balances small sets over the cores (n = 1024:
-# kernel 0.44 ms against 0.76 ms with 64; no difference measured at 20k, 200k).
+CHUNK = 1 << 17  # work items per enqueue (rounded down to whole groups): each wait lets Ctrl-C through
+# Work-group size asked for (at least the kernel's preferred multiple, a
+# GPU's warp; at most the kernel's and the device's limits): each work item
+# keeps a ~2.3 KB constraint list in private memory, and PoCL lays a whole
+# work-group's out on one thread's stack; 16 also balances small sets over
+# the cores (n = 1024: kernel 0.44 ms against 0.76 ms with 64; no difference
+# measured at 20k, 200k).
 GROUP = 16
 _MAX_WINDOW = 8  # widest weight window of the proof scan, in buckets (CellMIC._local_wmax)
 
@@ -160,11 +163,14 @@ class CellMIC:
         self.device_name = describe(self.ctx)
         props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
         self.queue = cl.CommandQueue(self.ctx, properties=props)
-        self.group = min(GROUP, self.ctx.devices[0].max_work_group_size)
         self.profile = profile
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
         self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
+        dev = self.ctx.devices[0]
+        self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
+        # whole groups per enqueue: the last group of one must not reach into the next
+        self.chunk = CHUNK - CHUNK % self.group
         self._bufs = {}
         self._order = None
         _keep_freed_memory()
@@ -256,18 +262,14 @@ class CellMIC:
         Returns
         -------
         CellResult
+
+        Raises
+        ------
+        ValueError
+            Fewer than two sites, or sites or weights that
+            :func:`diskpack_cl._checks.check_sites` refuses.
         """
-        X = np.array(points, dtype=np.float64)
-        n = len(X)
-        if X.ndim != 2 or X.shape[1] != 2 or n < 2:
-            raise ValueError(f"points must have shape (n, 2) with n >= 2, got {X.shape}")
-        if not np.all(np.isfinite(X)):
-            raise ValueError("points contain NaN or infinite coordinates")
-        if self.domain.periodic:
-            X = self.domain.wrap(X)
-        w = np.zeros(n) if weights is None else np.asarray(weights, np.float64).copy()
-        if w.shape != (n,) or not np.all(np.isfinite(w)):
-            raise ValueError("weights must be n finite numbers")
+        X, w = check_sites(points, weights, self.domain, minimum=2)
         w -= w.min()   # as exact_mic: the diagram ignores a common shift
         timings = {}
         t0 = time.perf_counter()
@@ -304,10 +306,9 @@ class CellMIC:
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
         near_tol = 1e-7 * np.sqrt(dom.area / n)
         events = []
-        for off in range(0, n, CHUNK):
-            size = -(-min(CHUNK, n - off) // self.group) * self.group
+        for off in range(0, n, self.chunk):
             events.append(self._kernel(
-                self.queue, (size,), (self.group,), b_site, b_w, b_start, b_wmax, b_wloc, np.int32(win),
+                self.queue, (padded(min(self.chunk, n - off), self.group),), (self.group,), b_site, b_w, b_start, b_wmax, b_wloc, np.int32(win),
                 np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
                 np.float64(dom.width), np.float64(dom.height), np.float64(ws.max()),
                 np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),

@@ -17,6 +17,9 @@ engine     how
 
 All three return the same MICs (to rounding, and exactly the same vertex
 where the MIC is unique): every answer is an LP optimum certified in float64.
+Every engine checks its sites first (:func:`diskpack_cl._checks.check_sites`:
+a ValueError for no sites, NaN or infinite points or weights, weights out
+of range), so that no kernel sees sites it cannot bound its work on.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._checks import check_sites
 from .geometry import exact_mic
 
 __all__ = ["BACKENDS", "ROUTES", "MICStep", "make_engine", "check_against_exact", "ExactEngine",
@@ -83,6 +87,7 @@ class ExactEngine:
 
     def mic(self, points, weights=None):
         t0 = time.perf_counter()
+        check_sites(points, weights, self.domain)
         m = exact_mic(points, weights, self.domain)
         stats = {k: m.stats[k] for k in ("widened", "grown", "linprog")}
         return MICStep(m.centers, m.radii, m.empty, None, stats, {"exact": time.perf_counter() - t0})

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._checks import check_sites
 from .domain import Domain
 from .measures import kdtree
 
@@ -282,18 +283,8 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
 
 def _checked_sites(points, weights, domain):
     """Points (wrapped on a torus) and weights shifted to min 0, as float64 copies."""
-    X = np.array(points, dtype=np.float64)
-    n = len(X)
-    if X.ndim != 2 or X.shape[1] != 2:
-        raise ValueError(f"points must have shape (n, 2), got {X.shape}")
-    if not np.all(np.isfinite(X)):
-        raise ValueError("points contain NaN or infinite coordinates")
-    if domain.periodic:
-        X = domain.wrap(X)
-    w = np.zeros(n) if weights is None else np.asarray(weights, np.float64).copy()
-    if w.shape != (n,) or not np.all(np.isfinite(w)):
-        raise ValueError("weights must be n finite numbers")
-    if n:
+    X, w = check_sites(points, weights, domain, minimum=0)
+    if len(X):
         w -= w.min()   # the diagram ignores a common shift; bounds below want w >= 0
     return X, w
 

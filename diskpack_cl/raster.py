@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._device import describe, get_context, wait_for
+from . import _device
+from ._checks import check_sites
+from ._device import describe, get_context, group_size, padded, wait_for
 from ._kernels import build_program
 from .domain import Domain
 from .labels import cell_centroids
@@ -23,10 +25,16 @@ from .labels import cell_centroids
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
-TILE = 8   # work-group side of power_labels (kernels/power_diagram.cl)
+TILE = 8   # widest work-group side of power_labels (kernels/power_diagram.cl)
 CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of kernels/cell_sums.cl
 TILE_W, TILE_H = 8, 16   # grid cells per work item of power_labels_tile (TW, TH there)
-MAX_GROUPS = 4096   # work-groups per enqueue of power_labels (about 0.26 M grid cells)
+MAX_GROUPS = 4096   # 8 x 8 work-groups per enqueue of power_labels (about 0.26 M grid cells)
+# work items per group of cell_max, cell_argmax and cell_sums, at most (the
+# kernel and device limits may give fewer); their atomics make the result
+# independent of the group size
+REDUCE_GROUP = 256
+#: Status bits of kernels/power_diagram.cl (ST_* in common.h): why a labelling is refused.
+STATUS = {"ring_limit": 1, "no_owner": 2}
 
 
 def auto_grid(n, domain, cells_per_site=16):
@@ -156,10 +164,19 @@ class PowerRaster:
         Profile the kernels with OpenCL events: device seconds per kernel
         accumulate in :attr:`kernel_seconds` (off by default).
     max_groups : int
-        Work-groups (8 x 8 grid cells each) per enqueue of the labelling
-        kernel: the raster is labelled in bands of tile rows, each waited for
-        in a way that lets Ctrl-C through, so that stage timings are exact and
-        an interrupt is answered between bands, even on huge rasters.
+        Grid cells per enqueue of the labelling kernel, in units of 8 x 8:
+        the raster is labelled in bands of tile rows, each waited for in a
+        way that lets Ctrl-C through, so that stage timings are exact and an
+        interrupt is answered between bands, even on huge rasters.
+
+    Notes
+    -----
+    Work-group sizes come from the device and the kernels
+    (:func:`diskpack_cl._device.group_size`): ``power_labels`` runs in
+    square tiles of 8 x 8 grid cells where the kernel may run 64 work items
+    in a group, else 4 x 4, 2 x 2 or 1 (:attr:`tile`), with the same labels
+    and distances; the reductions run in groups of up to 256, launches
+    padded to whole groups.
 
     Examples
     --------
@@ -190,7 +207,7 @@ class PowerRaster:
         if self.max_groups < 1:
             raise ValueError(f"max_groups must be at least 1, got {max_groups}")
         periodic = int(domain.periodic)
-        prg = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": TILE})
+        prg, self.tile = self._labels_program(periodic)
         self._k_labels, self._k_tile = prg["power_labels"], prg["power_labels_tile"]
         # labels-only layout: vector tiles on CPUs, one work item per grid cell elsewhere
         if layout is None:
@@ -209,10 +226,31 @@ class PowerRaster:
         self._density = None
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
+        self._groups = {name: group_size(k[name], dev, REDUCE_GROUP) for name in k}
+        if self._k_sums is not None:
+            # cell_sums runs (segments, rows) with groups along the rows
+            self._groups["cell_sums"] = min(group_size(self._k_sums, dev, REDUCE_GROUP),
+                                            dev.max_work_item_sizes[1])
         self._site_bufs = {}
         self._maps = {}
         self._generation = 0
         self._warm()
+
+    def _labels_program(self, periodic):
+        """The labelling program with the widest tile the device and kernel allow.
+
+        Returns the program and its tile side: 8, or a smaller power of two
+        where the device's or ``power_labels``' work-group limit is below
+        8 x 8 (the kernel requires a square group of the tile's size).
+        """
+        dev = self.ctx.devices[0]
+        tile = TILE
+        while True:
+            if tile * tile <= dev.max_work_group_size and tile <= min(dev.max_work_item_sizes[:2]):
+                prg = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": tile})
+                if tile == 1 or tile * tile <= _device.kernel_group_limit(prg["power_labels"], dev):
+                    return prg, tile
+            tile //= 2
 
     def _warm(self):
         """Run every kernel once on one grid cell, so that PoCL's lazy
@@ -277,12 +315,11 @@ class PowerRaster:
         np.cumsum(counts, out=start[1:])
         wmax = np.zeros(nbx * nby, np.float32)
         nonempty = counts > 0
-        if n:
-            wmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+        wmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
         return order, start, wmax, (nbx, nby, bw, bh)
 
     # -- work --------------------------------------------------------------
-    def _label_tiles(self, b_site, b_w, b_id, b_start, b_wmax, grid, wmax, b_label):
+    def _label_tiles(self, b_site, b_w, b_id, b_start, b_wmax, grid, wmax, b_label, b_status):
         """Labels only with the CPU layout (power_labels_tile, TW x TH grid cells a
         work item), in bands of tile rows waited for one at a time."""
         nbx, nby, bw, bh = grid
@@ -295,7 +332,8 @@ class PowerRaster:
                 self.queue, (tx, min(band, ty - y0)), (1, 1), b_site, b_w, b_id, b_start, b_wmax,
                 np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
-                np.int32(nx), np.int32(ny), b_label, global_offset=(0, y0)), "power_labels_tile")
+                np.int32(nx), np.int32(ny), b_label, b_status, global_offset=(0, y0)),
+                "power_labels_tile")
 
     def compute(self, points, weights=None, distance=True, neighbors=False):
         """Label the raster and estimate every power cell's inscribed circle.
@@ -317,18 +355,25 @@ class PowerRaster:
         Returns
         -------
         RasterResult
+
+        Raises
+        ------
+        ValueError
+            No sites, or sites or weights that
+            :func:`diskpack_cl._checks.check_sites` refuses (the kernels
+            would leave grid cells without an owner).
+        RuntimeError
+            The labelling kernel reported a ring search at its limit or a
+            grid cell without an owner (:data:`STATUS`).
         """
         import pyopencl as cl
 
         t0 = time.perf_counter()
-        pts = np.asarray(points, np.float64)
+        pts, w = check_sites(points, weights, self.domain)
         n = len(pts)
-        if self.domain.periodic:
-            pts = self.domain.wrap(pts)
-        w = np.zeros(n) if weights is None else np.asarray(weights, np.float64)
         # Float32 kernels: only relative power distances matter, and the
         # largest weight shifts all of them equally, so subtract it.
-        w32 = (w - (w.max() if n else 0.0)).astype(np.float32)
+        w32 = (w - w.max()).astype(np.float32)
         order, start, wmax_b, (nbx, nby, bw, bh) = self._buckets(pts, w32)
         sites = np.ascontiguousarray(pts[order], np.float32)
         ids = order.astype(np.int32)
@@ -348,22 +393,8 @@ class PowerRaster:
                 "dist": (self._map_buffer("dist", 4 * npix), np.float32),
                 "nbr": (self._map_buffer("nbr", 4 * npix), np.int32)}
         self._generation += 1
-        if not distance and self.layout == "tile":
-            self._label_tiles(b_site, b_w, b_id, b_start, b_wmax, (nbx, nby, bw, bh),
-                              float(wmax_b.max() if n else 0), maps["label"][0])
-        gx, gy = -(-nx // TILE) * TILE, -(-ny // TILE) * TILE
-        # bands of tile rows, at most max_groups work-groups each, one at a
-        # time: a signal (Ctrl-C, SIGTERM) is answered between them
-        band = max(1, self.max_groups // (gx // TILE)) * TILE
-        for y0 in range(0, gy if distance or self.layout == "item" else 0, band):
-            ev = self._k_labels(
-                self.queue, (gx, min(band, gy - y0)), (TILE, TILE), b_site, b_w, b_id,
-                b_start, b_wmax, np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
-                np.float32(dom.width), np.float32(dom.height),
-                np.float32(wmax_b.max() if n else 0), np.int32(nx), np.int32(ny),
-                np.int32(bool(distance)), maps["label"][0], maps["dist"][0], maps["nbr"][0],
-                global_offset=(0, y0))
-            self._wait(ev, "power_labels")
+        self._label(distance, (b_site, b_w, b_id, b_start, b_wmax), (nbx, nby, bw, bh),
+                    float(wmax_b.max()), maps)
         t1 = time.perf_counter()
         if not (distance and neighbors):
             del maps["nbr"]     # the kernel writes it with the distances; kept on request
@@ -378,8 +409,11 @@ class PowerRaster:
         b_r = self._site_buffer("rbits", rbits)
         b_a = self._site_buffer("argpix", argpix)
         lab, dist = maps["label"][0], maps["dist"][0]
-        self._k_max(self.queue, (npix,), None, lab, dist, np.int32(npix), b_r)
-        self._k_argmax(self.queue, (npix,), None, lab, dist, np.int32(npix), b_r, b_a)
+        g = self._groups
+        self._k_max(self.queue, (padded(npix, g["cell_max"]),), (g["cell_max"],), lab, dist,
+                    np.int32(npix), np.int32(n), b_r)
+        self._k_argmax(self.queue, (padded(npix, g["cell_argmax"]),), (g["cell_argmax"],), lab,
+                       dist, np.int32(npix), np.int32(n), b_r, b_a)
         cl.enqueue_copy(self.queue, rbits, b_r)
         cl.enqueue_copy(self.queue, argpix, b_a)
         has = rbits >= 0
@@ -394,6 +428,36 @@ class PowerRaster:
         return RasterResult(centers, radii, self.shape, (hx, hy),
                                   {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps,
                                   self._generation, pts)
+
+    def _label(self, distance, bufs, grid, wmax, maps):
+        """Run the labelling kernel in bands (see `max_groups`) into `maps`,
+        and refuse the result if the kernel set a status bit."""
+        import pyopencl as cl
+
+        ny, nx = self.shape
+        dom = self.domain
+        b_status = self._site_buffer("status", np.zeros(1, np.int32))
+        if not distance and self.layout == "tile":
+            self._label_tiles(*bufs, grid, wmax, maps["label"][0], b_status)
+        t = self.tile
+        gx, gy = padded(nx, t), padded(ny, t)
+        # bands of tile rows, at most max_groups * 64 grid cells each, one at
+        # a time: a signal (Ctrl-C, SIGTERM) is answered between them
+        band = max(1, self.max_groups * TILE * TILE // (gx * t)) * t
+        for y0 in range(0, gy if distance or self.layout == "item" else 0, band):
+            ev = self._k_labels(
+                self.queue, (gx, min(band, gy - y0)), (t, t), *bufs, np.int32(grid[0]),
+                np.int32(grid[1]), np.float32(grid[2]), np.float32(grid[3]),
+                np.float32(dom.width), np.float32(dom.height), np.float32(wmax), np.int32(nx),
+                np.int32(ny), np.int32(bool(distance)), maps["label"][0], maps["dist"][0],
+                maps["nbr"][0], b_status, global_offset=(0, y0))
+            self._wait(ev, "power_labels")
+        status = np.zeros(1, np.int32)
+        cl.enqueue_copy(self.queue, status, b_status)
+        if status[0]:
+            why = [name for name, bit in STATUS.items() if status[0] & bit]
+            raise RuntimeError(f"the labelling kernel refused its result ({', '.join(why)}): "
+                               "sites the host checks should have refused")
 
     def _device_centroids(self, label_buf, sites, density):
         """Centroids from the device reduction (kernels/cell_sums.cl): the label
@@ -416,11 +480,14 @@ class PowerRaster:
         acc = np.zeros((n, 3), np.int64)
         b_acc = self._site_buffer("sums", acc)
         seg = -(-nx // CELL_SUMS_SEG)
-        band = max(1, (self.max_groups * TILE * TILE) // (seg * CELL_SUMS_SEG))
+        g = self._groups["cell_sums"]
+        # whole groups of rows per band, so that only the last band's padding
+        # passes the raster (those work items return); bands never overlap
+        band = padded(max(1, (self.max_groups * TILE * TILE) // (seg * CELL_SUMS_SEG)), g)
         for y0 in range(0, ny, band):
-            self._wait(self._k_sums(self.queue, (seg, min(band, ny - y0)), None,
-                                  label_buf, self._density[1], b_pts,
-                                  np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
+            self._wait(self._k_sums(self.queue, (seg, padded(min(band, ny - y0), g)), (1, g),
+                                    label_buf, self._density[1], b_pts, np.int32(n),
+                                    np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
         cl.enqueue_copy(self.queue, acc, b_acc)
         sums = acc / CELL_SUMS_FIX
         mass = sums[:, 0]

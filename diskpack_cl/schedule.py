@@ -47,12 +47,14 @@ SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
 #: them and a few disk-packing steps restore the spacing and undo the
 #: hexagonal order the centroid pulls build; where they are farther apart,
 #: only centroid-pulling mix steps place them well enough, with the
-#: feature-aware blend.  Tuned on the tuning photographs, checked once on
-#: the held-out ones (docs/stipple_quality.md, "spacing rule").
+#: feature-aware blend.  Every band ends with one step that leans on the
+#: centroids (blend 0.5, 1 where dots are sparse): it puts the dots of an
+#: outline back on the outline, which the packing steps round off.
+#: Measured in docs/stipple_quality.md.
 SPACING_BANDS = (
-    (2.5, [("mix", 16, 0.7), ("pack", 2), ("mix", 1, 1.0)], {"radius_sigma": 1.5}),
-    (3.0, [("mix", 16, 0.7), ("pack", 1), ("mix", 1, 1.0)], {"radius_sigma": 1.5}),
-    (6.0, [("mix", 18, 0.5), ("mix", 6, 0.4), ("mix", 1, 1.0)], {"features": "detail"}),
+    (2.5, [("mix", 16, 0.7), ("pack", 2), ("mix", 1, 0.5)], {"radius_sigma": 1.5}),
+    (3.0, [("mix", 16, 0.7), ("pack", 1), ("mix", 1, 0.5)], {"radius_sigma": 1.5}),
+    (6.0, [("mix", 18, 0.5), ("mix", 6, 0.4), ("mix", 1, 0.5)], {"features": "detail"}),
     (np.inf, [("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 1.0)],
      {"features": "detail", "radius_sigma": 2.0}),
 )
@@ -67,7 +69,7 @@ def default_band(spacing):
     Examples
     --------
     >>> default_band(512 / 50000 ** 0.5)[0]
-    [('mix', 16, 0.7), ('pack', 3)]
+    [('mix', 16, 0.7), ('pack', 2), ('mix', 1, 0.5)]
     >>> default_band(512 / 20000 ** 0.5)[1]
     {'features': 'detail'}
     """
@@ -123,7 +125,7 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
     >>> make_schedule("classic")
     [('mix', 35, 0.5), ('mix', 12, 0.4)]
     >>> make_schedule("default", spacing=2.0)
-    [('mix', 16, 0.7), ('pack', 3)]
+    [('mix', 16, 0.7), ('pack', 2), ('mix', 1, 0.5)]
     >>> make_schedule([("mix", 3, 0.2), ("lloyd", 0), ("pack", 2)])
     [('mix', 3, 0.2), ('pack', 2)]
     """
@@ -217,7 +219,7 @@ class StippleOptions:
     --------
     >>> opt = StippleOptions.resolve(2000, 512, 512)
     >>> opt.radii, opt.floor, opt.supersample, opt.phases, opt.features
-    ('density', 0.01, 1, (('mix', 35, 0.6), ('mix', 12, 0.4)), 'detail')
+    ('density', 0.01, 1, (('mix', 20, 0.6), ('mix', 6, 0.4), ('mix', 1, 1.0)), 'detail')
     >>> StippleOptions.resolve(2000, 512, 512, schedule="paper").radii
     'gray'
     >>> StippleOptions.resolve(2000, 512, 512, blend=2)

@@ -22,7 +22,8 @@ backend     engine
 ==========  ================================================================
 
 Both give the same MICs (certified LP optima) and the same centroids except
-at grid cells where the float32 raster labels tie.
+at grid cells where the float32 raster labels tie.  Both check their sites
+first, as :func:`diskpack_cl._checks.check_sites` does (ValueError).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._checks import check_sites
 from ._timing import Stopwatch
 from .engine import BACKENDS, check_against_exact
 from .geometry import exact_mic
@@ -175,10 +177,12 @@ class ExactStippleEngine:
 
     def mic(self, points, weights, *, exact=True):
         """Exact MICs (``exact`` is ignored: there is no estimate to stop at)."""
+        check_sites(points, weights, self.domain)
         return _exact(points, weights, self.domain, None, Stopwatch())
 
     def centroids(self, points, weights, density):
         """``(centroids, mass, timings)`` of the power cells on the grid."""
+        check_sites(points, weights, self.domain)
         watch = Stopwatch()
         with watch("raster"):
             lab = grid_power_labels(points, weights, self.domain, self.shape)

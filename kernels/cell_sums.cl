@@ -8,7 +8,8 @@
  * per unit), which are exact and order-independent: the sums do not depend
  * on the schedule, so results are reproducible.  On a torus, offsets take
  * the nearest periodic image, so a cell crossing the seam averages its own
- * contiguous piece.
+ * contiguous piece.  A grid cell whose label names no site (only possible
+ * for sites the host refuses) adds nothing and reads no site.
  *
  * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1).
  */
@@ -26,17 +27,32 @@ typedef float real;
 #define FIX 16777216.0f   /* 2^24: totals stay below 2^63 for densities <= 1 and
                              compact cells of up to about 2^26 grid cells */
 
-inline void add_run(__global long *acc, int l, real m, real mx, real my)
+inline void add_run(__global long *acc, int l, int nsite, real m, real mx, real my)
 {
+    if (!owned(l, nsite)) return;
     atom_add(&acc[3 * l], (long)rint(m * FIX));
     atom_add(&acc[3 * l + 1], (long)rint(mx * FIX));
     atom_add(&acc[3 * l + 2], (long)rint(my * FIX));
+}
+
+/* Offsets of site l's x and grid row py (periodic: the nearest image);
+ * zero for a label that names no site. */
+inline void site_origin(__global const real *site, int l, int nsite, int ny, real py,
+                        real *sx, real *dy)
+{
+    const int ok = owned(l, nsite);
+    *sx = ok ? site[2 * l] : 0;
+    *dy = ok ? py - site[2 * l + 1] : 0;
+#if PERIODIC
+    *dy -= ny * rint(*dy / ny);
+#endif
 }
 
 __kernel void cell_sums(
     __global const int *label,       /* owning site of each grid cell */
     __global const real *density,    /* density of each grid cell */
     __global const real *site,       /* site positions in grid-cell units, x then y */
+    const int nsite,                 /* sites: labels in [0, nsite) */
     const int nx, const int ny,      /* raster size */
     const int row0,                  /* first row of this enqueue */
     __global long *acc)              /* in/out: per site mass, x moment, y moment (init 0) */
@@ -48,22 +64,15 @@ __kernel void cell_sums(
     const size_t base = (size_t)iy * nx;
     const real py = iy + (real)0.5;
     int cur = label[base + ix0];
-    real m = 0, mx = 0, my = 0;
-    real sx = site[2 * cur], dy = py - site[2 * cur + 1];
-#if PERIODIC
-    dy -= ny * rint(dy / ny);
-#endif
+    real m = 0, mx = 0, my = 0, sx, dy;
+    site_origin(site, cur, nsite, ny, py, &sx, &dy);
     for (int ix = ix0; ix < ix1; ++ix) {
         const int l = label[base + ix];
         if (l != cur) {
-            add_run(acc, cur, m, mx, my);
+            add_run(acc, cur, nsite, m, mx, my);
             cur = l;
             m = mx = my = 0;
-            sx = site[2 * cur];
-            dy = py - site[2 * cur + 1];
-#if PERIODIC
-            dy -= ny * rint(dy / ny);
-#endif
+            site_origin(site, cur, nsite, ny, py, &sx, &dy);
         }
         const real d = density[base + ix];
         real dx = (ix + (real)0.5) - sx;
@@ -74,5 +83,5 @@ __kernel void cell_sums(
         mx += d * dx;
         my += d * dy;
     }
-    add_run(acc, cur, m, mx, my);
+    add_run(acc, cur, nsite, m, mx, my);
 }

@@ -11,6 +11,15 @@
 #error "define PERIODIC to 0 or 1"
 #endif
 
+/* Bits of a kernel's status word (atomic_or), mirrored in diskpack_cl/raster.py:
+ * the host refuses a result that has any. */
+#define ST_RING_LIMIT 1   /* a bucket ring search reached its limit */
+#define ST_NO_OWNER   2   /* a grid cell found no owning site */
+
+/* An index into the per-site buffers: a grid cell that found no owner
+ * (label INT_MAX) must not index them. */
+inline int owned(int label, int nsite) { return label >= 0 && label < nsite; }
+
 /* Squared length of a 2-vector. */
 inline float len2(float dx, float dy) { return dx * dx + dy * dy; }
 

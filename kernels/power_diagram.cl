@@ -30,6 +30,12 @@
  * On a torus, bucket offsets beyond the grid wrap with a shift of one
  * period, so every periodic image of a site (the cell's own images
  * included) is a separate candidate.
+ *
+ * Every ring search stops at a limit from the bucket grid and, when it
+ * reaches it, sets ST_RING_LIMIT in the status word; a grid cell left
+ * without an owner sets ST_NO_OWNER (common.h).  Only sites the host
+ * refuses (NaN weights, none at all) get there: then no search is bounded
+ * by its candidates, and without the limit a torus search would not end.
  */
 #include "common.h"
 
@@ -52,9 +58,25 @@ inline float boxbox(float ax0, float ay0, float ax1, float ay1,
     return sqrt(dx * dx + dy * dy);
 }
 
+/* Rings a gather walks at most.  A rectangle's rings leave the grid after
+ * max(nbx, nby) + 1.  On a torus the bound U (tile_bound) reaches from the
+ * tile's far corner to a runner-up found up to half the grid away, and the
+ * gather's rings start at the tile's bucket block (`span` buckets wide), so
+ * a legitimate search may walk a few more rings than the grid has; twice
+ * that leaves room for the weights' spread. */
+inline int gather_limit(int nbx, int nby, int span)
+{
+#if PERIODIC
+    return 2 * (max(nbx, nby) + span) + 4;
+#else
+    return max(nbx, nby) + 1;
+#endif
+}
+
 /* Walk the buckets in rings around the tile's bucket block and copy the
  * sites that pass the test of `mode` into the local list, skipping the first
- * `skip` that pass.  Returns how many pass in total (may exceed CAP).
+ * `skip` that pass.  Returns how many pass in total (may exceed CAP); sets
+ * ST_RING_LIMIT in `status` when the rings reach gather_limit.
  *   GATHER_OWNER: boxdist^2 - w <= bound
  *   GATHER_DIST:  boxdist <= bound + sqrt(bound2 + w)   (bound2 >= -w)
  */
@@ -64,14 +86,16 @@ inline int gather(int mode, float bound, float bound2, int skip,
                   __global const int *site_id, __global const int *bucket_start,
                   __global const float *bucket_wmax,
                   int nbx, int nby, float bw, float bh, float W, float H, float wmax,
-                  __local float2 *cpos, __local float *cw, __local int *cid)
+                  __local float2 *cpos, __local float *cw, __local int *cid,
+                  __global int *status)
 {
     const int bx0 = clamp((int)floor(x0 / bw), -(1 << 20), 1 << 20);
     const int by0 = clamp((int)floor(y0 / bh), -(1 << 20), 1 << 20);
     const int bx1 = (int)floor(x1 / bw), by1 = (int)floor(y1 / bh);
-    const int rmax = PERIODIC ? (1 << 20) : max(nbx, nby) + 1;
+    const int rmax = gather_limit(nbx, nby, max(bx1 - bx0, by1 - by0));
     int total = 0;
-    for (int r = 0; r <= rmax; ++r) {
+    int r = 0;
+    for (; r <= rmax; ++r) {
         if (r > 0) {
             /* distance from the tile to buckets of ring >= r */
             float gl = x0 - (bx0 - r + 1) * bw, gr = (bx1 + r) * bw - x1;
@@ -137,13 +161,17 @@ inline int gather(int mode, float bound, float bound2, int skip,
             }
         }
     }
+    if (r > rmax) atomic_or(status, ST_RING_LIMIT);
     return total;
 }
 
 /* Bound U: the second best "worst corner" power distance over the tile
  * [x0,x1] x [y0,y1] among the sites of the nearest bucket rings.  Two sites
  * have pow <= U everywhere in the tile, so every grid cell finds its owner
- * and a runner-up among the sites with  boxdist^2 - w <= U. */
+ * and a runner-up among the sites with  boxdist^2 - w <= U.  By ring
+ * max(nbx, nby) + 1 every bucket was seen (on a torus, with its images one
+ * period away); U is infinite only when no two candidates exist (no sites,
+ * NaN weights), and then the grid cells find no owner (ST_NO_OWNER). */
 inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
                         __global const float2 *site, __global const float *weight,
                         __global const int *bucket_start,
@@ -152,7 +180,8 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
     const int bx = clamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
     const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
     float U1 = INFINITY, U2 = INFINITY;
-    for (int r = 0; U2 == INFINITY || r <= 1; ++r) {
+    const int rmax = max(nbx, nby) + 1;
+    for (int r = 0; (U2 == INFINITY || r <= 1) && r <= rmax; ++r) {
         /* ring r only (its perimeter), clipped to the grid in a rectangle */
         int dy_lo = -r, dy_hi = r;
 #if !PERIODIC
@@ -179,9 +208,6 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
                 }
             }
         }
-#if !PERIODIC
-        if (r > max(nbx, nby)) break;
-#endif
     }
     return U2 + pad + 1e-5f * fabs(U2);
 }
@@ -201,7 +227,8 @@ void power_labels(
     const int with_dist,                /* 0: labels only (Lloyd needs no distances) */
     __global int *label,                /* out: caller's index of the owning site */
     __global float *dist,               /* out: distance to the power cell boundary */
-    __global int *nbr)                  /* out: site of the nearest boundary line, -1 = domain edge */
+    __global int *nbr,                  /* out: site of the nearest boundary line, -1 = domain edge */
+    __global int *status)               /* in/out: ST_* bits (common.h), init 0 */
 {
     __local float2 cpos[CAP];
     __local float cw[CAP];
@@ -243,7 +270,7 @@ void power_labels(
         if (lid == 0)
             count_l = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
                              site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
-                             cpos, cw, cid);
+                             cpos, cw, cid, status);
         barrier(CLK_LOCAL_MEM_FENCE);
         const int total = count_l;
         const int m = min(total - chunk * CAP, CAP);
@@ -263,6 +290,7 @@ void power_labels(
     }
     const int pix = iy * nx + ix;
     if (valid) label[pix] = best_id;
+    if (valid && best_id == INT_MAX) atomic_or(status, ST_NO_OWNER);
     if (!with_dist) return;
 
     /* pass 2: distance to the nearest bounding line of the owner's cell */
@@ -312,7 +340,7 @@ void power_labels(
         if (lid == 0)
             count_l = gather(GATHER_DIST, g1, g2, chunk * CAP, x0, y0, x1, y1, site, weight,
                              site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
-                             cpos, cw, cid);
+                             cpos, cw, cid, status);
         barrier(CLK_LOCAL_MEM_FENCE);
         const int total = count_l;
         const int m = min(total - chunk * CAP, CAP);
@@ -355,7 +383,8 @@ void power_labels_tile(
     const float W, const float H,       /* domain size */
     const float wmax,                   /* largest weight overall */
     const int nx, const int ny,         /* raster size */
-    __global int *label)                /* out: caller's index of the owning site */
+    __global int *label,                /* out: caller's index of the owning site */
+    __global int *status)               /* in/out: ST_* bits (common.h), init 0 */
 {
     __local float2 cpos[CAP];
     __local float cw[CAP];
@@ -382,7 +411,7 @@ void power_labels_tile(
     for (int chunk = 0; ; ++chunk) {
         const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
                                  site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
-                                 cpos, cw, cid);
+                                 cpos, cw, cid, status);
         const int m = min(total - chunk * CAP, CAP);
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
@@ -402,6 +431,8 @@ void power_labels_tile(
     }
     const int cols = min(TW, nx - gx0);
     for (int r = 0; r < TH && gy0 + r < ny; ++r) {
+        /* (lanes past the raster repeat its last column) */
+        if (any(best_id[r] == (int8)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
         __global int *row = label + (size_t)(gy0 + r) * nx + gx0;
         if (cols == TW) {
             vstore8(best_id[r], 0, row);

@@ -253,3 +253,36 @@ def test_dense_cluster_beside_sparse_sites_keeps_the_basis(solvers):
         res = solvers(dom).solve(pts, w)
         assert res.stats["rejected"] == 0
         _same_as_exact(dom, pts, w, res)
+
+
+@pytest.mark.parametrize("limit", [12, 5, 1])
+def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit):
+    """A kernel that may run only `limit` work items per group: the group
+    follows the limit, every enqueue holds whole groups (a group reaching
+    into the next enqueue would solve its cells twice), and the MICs are the
+    same, bit for bit."""
+    from diskpack_cl import _device
+    from diskpack_cl import cells as cells_mod
+
+    dom = Domain.rect(30.0, 20.0)
+    rng = np.random.default_rng(5)
+    pts = rng.random((700, 2)) * (30.0, 20.0)
+    w = (rng.random(700) * 0.4) ** 2
+    want = CellMIC(dom, device=ctx).solve(pts, w)
+    monkeypatch.setattr(_device, "kernel_group_limit", lambda kernel, device: limit)
+    monkeypatch.setattr(cells_mod, "CHUNK", 100)
+    small = CellMIC(dom, device=ctx)
+    assert small.group <= limit and small.chunk % small.group == 0 and small.chunk <= 100
+    got = small.solve(pts, w)
+    for name in ("centers", "radii", "empty", "nn"):
+        np.testing.assert_array_equal(getattr(want, name), getattr(got, name))
+
+
+@pytest.mark.parametrize("pts, w, match", [
+    (np.zeros((1, 2)), None, r"need at least 2 point\(s\), got 1"),
+    ([[0.1, 0.2], [0.5, np.nan]], None, "points contain NaN or infinite coordinates"),
+    ([[0.1, 0.2], [0.5, 0.5]], [0.0, np.nan], "weights must be n finite numbers"),
+])
+def test_solve_refuses_sites_it_cannot_bound(solvers, pts, w, match):
+    with pytest.raises(ValueError, match=match):
+        solvers(Domain.torus()).solve(pts, w)

@@ -74,3 +74,46 @@ def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
     monkeypatch.setenv("DISKPACK_DEVICE", "1:1")      # ours first
     _device.get_context()
     assert made[-1] == [GPU1]
+
+
+# -- devices that report several kinds (issue 23) ---------------------------
+
+BOTH = cl.device_type.GPU | cl.device_type.CPU | cl.device_type.ACCELERATOR | cl.device_type.DEFAULT
+OCLGRIND = _Dev("Oclgrind Simulator", BOTH)
+SIM = _Plat("Oclgrind", "University of Bristol", [OCLGRIND])
+
+
+@pytest.mark.parametrize("platforms, spec, want", [
+    ([SIM] + PLATFORMS, "", GPU0),          # default: a GPU of one kind wins over the simulator
+    ([SIM] + PLATFORMS, "gpu", GPU0),
+    ([SIM] + PLATFORMS, "cpu", CPU),
+    ([SIM, PLATFORMS[0]], "", CPU),         # no GPU: the CPU, not the device that says GPU too
+    ([SIM, PLATFORMS[0]], "gpu", OCLGRIND),  # the only device that has the GPU bit
+    ([SIM], "", OCLGRIND),
+    ([SIM] + PLATFORMS, "oclgrind", OCLGRIND),
+    ([SIM] + PLATFORMS, "0", OCLGRIND),     # an explicit index always wins
+])
+def test_devices_of_several_kinds(monkeypatch, platforms, spec, want):
+    monkeypatch.setattr(_device, "_platforms", lambda: platforms)
+    assert _device._pick(spec) is want
+
+
+@pytest.mark.parametrize("dev, kind", [
+    (CPU, "CPU"), (GPU0, "GPU"), (OCLGRIND, "GPU | CPU | ACCELERATOR"),
+    (_Dev("pocl", cl.device_type.CPU | cl.device_type.DEFAULT), "CPU"),
+])
+def test_device_kind_names_every_kind_and_nothing_else(dev, kind):
+    assert _device.device_kind(dev) == kind
+
+
+def test_devices_command_names_kinds(monkeypatch, capsys):
+    import diskpack_cl
+    from diskpack_cl import cli
+
+    monkeypatch.setattr(_device, "_platforms", lambda: [SIM] + PLATFORMS)
+    monkeypatch.setattr(diskpack_cl, "get_context", lambda device=None: None)
+    monkeypatch.setattr(diskpack_cl, "describe", lambda ctx: "NVIDIA H200 (NVIDIA CUDA)")
+    assert cli.main(["devices"]) == 0
+    out = capsys.readouterr().out
+    assert "Oclgrind Simulator  [GPU | CPU | ACCELERATOR]" in out
+    assert "pthread-AMD EPYC  [CPU]" in out and "ALL" not in out

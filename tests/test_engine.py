@@ -127,3 +127,28 @@ def test_stipple_cli_verify(ctx, tmp_path):
     assert cli.main(["stipple", "sample", "-n", "300", "--schedule", "pack", "--verify",
                      "-o", str(out), "--quiet"]) == 0
     assert out.exists()
+
+
+def _engine(name, dom, ctx):
+    if name == "exact":
+        return make_engine(dom, 5, "exact")
+    return make_engine(dom, 5, "opencl", device=ctx, route=name)
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("name", ["cells", "raster", "exact"])
+@pytest.mark.parametrize("pts, w, match", [
+    (None, [0.1, np.nan, 0.2, 0.1, 0.3], "weights must be n finite numbers"),
+    (np.full((5, 2), np.inf), None, "points contain NaN or infinite coordinates"),
+    (np.zeros((0, 2)), None, r"need at least \d point\(s\), got 0"),
+    (None, [0.0, -1e31, 0.0, 0.0, 0.0], "weights must span less than 1e"),
+])
+def test_every_engine_refuses_sites_it_cannot_bound(ctx, name, periodic, pts, w, match):
+    """The engine classes are what new features call: each checks its sites
+    (the raster route segfaulted on the NaN weight before, and never ended on
+    a torus)."""
+    dom = Domain.torus() if periodic else Domain.rect(8.0, 8.0)
+    if pts is None:
+        pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
+    with pytest.raises(ValueError, match=match):
+        _engine(name, dom, ctx).mic(pts, w)

@@ -276,7 +276,7 @@ def test_deterministic(ctx, periodic):
         est = PowerRaster(dom, (64, 96), device=ctx).compute(pts, w, neighbors=True)
         out.append((est.labels.copy(), est.dist.copy(), est.neighbor.copy(), est.radii, est.centers))
     for a, b in zip(*out):
-        assert np.array_equal(a, b)
+        np.testing.assert_array_equal(a, b)   # (NaN centroids of empty cells compare equal)
         assert a.tobytes() == b.tobytes()
 
 
@@ -420,3 +420,84 @@ def test_profiling_is_opt_in_and_counts_each_kernel(ctx):
     pr.compute(pts, distance=False).centroids(np.ones((64, 64)))
     assert set(pr.kernel_seconds) >= {"power_labels"}
     assert all(v > 0 for v in pr.kernel_seconds.values())
+
+
+# -- sites the kernels cannot bound their work on (issue 23) ------------------
+
+_NAN_W = [0.1, np.nan, 0.2, 0.1, 0.3]
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("pts, w, match", [
+    (None, _NAN_W, "weights must be n finite numbers"),                   # the issue's reproduction
+    (np.full((5, 2), np.nan), None, "points contain NaN or infinite coordinates"),
+    (np.zeros((0, 2)), None, r"need at least 1 point\(s\), got 0"),
+    (None, [0.0, 1e31, 0.0, 0.0, 0.0], "weights must span less than 1e"),
+    (None, [0.0, 1.0], "weights must be n finite numbers"),               # wrong length
+])
+def test_sites_without_an_owner_for_every_cell_are_refused(ctx, periodic, pts, w, match):
+    """Before: a segfault (rectangle) or a search that never ended (torus)."""
+    from diskpack_cl.raster import PowerRaster
+
+    dom = Domain.torus() if periodic else Domain.rect(8.0, 8.0)
+    if pts is None:
+        pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
+    pr = PowerRaster(dom, (8, 8), device=ctx)
+    with pytest.raises(ValueError, match=match):
+        pr.compute(pts, w, distance=True)
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("layout, distance", [("item", True), ("tile", False), ("item", False)])
+def test_kernels_flag_unowned_cells_that_reach_them(ctx, monkeypatch, periodic, layout, distance):
+    """With the host check bypassed, NaN weights reach the labelling kernel:
+    its ring searches end at their limits and it reports the unowned cells,
+    instead of indexing buffers with them or searching forever."""
+    from diskpack_cl import raster as raster_mod
+
+    dom = Domain.torus() if periodic else Domain.rect(8.0, 8.0)
+    pr = raster_mod.PowerRaster(dom, (19, 21), device=ctx, layout=layout)
+    pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
+    monkeypatch.setattr(raster_mod, "check_sites", lambda p, w, d: (np.asarray(p), np.asarray(w)))
+    with pytest.raises(RuntimeError, match=r"refused its result \(.*no_owner"):
+        pr.compute(pts, np.array(_NAN_W), distance=distance)
+
+
+def test_reductions_skip_labels_that_name_no_site(ctx):
+    """cell_max and cell_sums given labels outside [0, n) (an unowned grid
+    cell): those grid cells touch no per-site buffer (before: a read and an
+    atomic write at rbits + 4 * INT_MAX, a segfault)."""
+    from oclgrind_scenarios import bad_labels
+
+    out = bad_labels(ctx)
+    assert out["mass"].tolist() == [12.0, 12.0] and np.all(out["rbits"] >= 0)
+
+
+def _all_outputs(raster, pts, w):
+    est = raster.compute(pts, w, neighbors=True)
+    out = [est.labels.copy(), est.dist.copy(), est.neighbor.copy(), est.radii, est.centers]
+    out += list(est.centroids(np.random.default_rng(1).random(raster.shape)))
+    return out + [raster.compute(pts, w, distance=False).labels.copy()]
+
+
+@pytest.mark.parametrize("limit", [16, 5, 1])
+@pytest.mark.parametrize("periodic", [False, True])
+def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit, periodic):
+    """A GPU whose kernels may run only `limit` work items per group: the
+    raster picks a smaller tile and smaller reduction groups, and every map
+    and estimate is the same, bit for bit."""
+    from diskpack_cl import _device
+    from diskpack_cl.raster import PowerRaster
+
+    dom = Domain.torus() if periodic else Domain.rect(40.0, 30.0)
+    rng = np.random.default_rng(7)
+    pts = rng.random((300, 2)) * (dom.width, dom.height)
+    w = (rng.random(300) * 2.0) ** 2
+    shape = (53, 75)
+    want = _all_outputs(PowerRaster(dom, shape, device=ctx, layout="item"), pts, w)
+    monkeypatch.setattr(_device, "kernel_group_limit", lambda kernel, device: limit)
+    small = PowerRaster(dom, shape, device=ctx, layout="item", max_groups=3)
+    assert small.tile ** 2 <= limit and small.tile == {16: 4, 5: 2, 1: 1}[limit]
+    assert max(small._groups.values()) <= limit
+    for a, b in zip(want, _all_outputs(small, pts, w)):
+        np.testing.assert_array_equal(a, b)   # (NaN centroids of empty cells compare equal)

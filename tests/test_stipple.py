@@ -328,9 +328,10 @@ def test_default_schedule_follows_the_dot_spacing():
         default_band(0.0)
     dense = StippleOptions.resolve(50000, 512, 512)      # s = 2.29 px
     sparse = StippleOptions.resolve(5000, 512, 512)      # s = 7.24 px
-    assert dense.phases == (("mix", 16, 0.7), ("pack", 3)) and dense.radius_sigma == 1.5
+    assert dense.phases == (("mix", 16, 0.7), ("pack", 2), ("mix", 1, 0.5)) and dense.radius_sigma == 1.5
     assert dense.features == "none"
-    assert sparse.phases == (("mix", 35, 0.6), ("mix", 12, 0.4)) and sparse.features == "detail"
+    assert sparse.phases == (("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 1.0))
+    assert sparse.features == "detail"
     assert sparse.radius_sigma == 2.0
     # an explicit option still overrides the band's
     assert StippleOptions.resolve(50000, 512, 512, radius_sigma=3.0).radius_sigma == 3.0

@@ -134,3 +134,23 @@ def test_profiled_stippling_reports_kernel_time_and_the_same_result(ctx):
     assert "kernel_cell_mic" in names and len(names) >= 3   # MICs, labels, centroid sums
     for name in names:
         assert prof.timings[name] == pytest.approx(sum(h.get(f"{name}_s", 0.0) for h in prof.history))
+
+
+@pytest.mark.parametrize("route", ["exact", "cells", "raster"])
+@pytest.mark.parametrize("method", ["mic", "centroids"])
+@pytest.mark.parametrize("pts, w, match", [
+    (None, [0.1, np.nan, 0.2, 0.1, 0.3], "weights must be n finite numbers"),
+    (np.full((5, 2), np.nan), np.zeros(5), "points contain NaN or infinite coordinates"),
+    (np.zeros((0, 2)), np.zeros(0), r"need at least \d point\(s\), got 0"),
+])
+def test_stipple_engines_refuse_sites_they_cannot_bound(ctx, route, method, pts, w, match):
+    dom = Domain.rect(8.0, 8.0)
+    if route == "exact":
+        eng = ExactStippleEngine(dom, (8, 8))
+    else:
+        eng = OpenCLStippleEngine(dom, (8, 8), device=ctx, route=route)
+    if pts is None:
+        pts = np.random.default_rng(0).random((5, 2)) * 8.0
+    args = (pts, np.asarray(w)) + ((np.ones((8, 8)),) if method == "centroids" else ())
+    with pytest.raises(ValueError, match=match):
+        getattr(eng, method)(*args)

@@ -1,0 +1,197 @@
+"""Small scenarios that run every kernel once, for the Oclgrind pass (tests/test_oclgrind.py).
+
+Each scenario takes a context and returns a dict of arrays.  The test runs
+it twice: in a child process on the Oclgrind simulator, which checks every
+memory access, data races and API calls and logs what it finds, and in the
+test process on the usual device; the results must agree.  Run as a
+script, ``python tests/oclgrind_scenarios.py NAME OUT.npz`` writes one
+scenario's arrays (the child's side).
+
+Sizes are small on purpose: Oclgrind interprets every work item, about
+10^4 times slower than PoCL.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from diskpack_cl.domain import Domain
+
+
+def _sites(dom, n, seed, heavy=0.0):
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    spacing = np.sqrt(dom.area / n)
+    return pts, (heavy * spacing * rng.random(n)) ** 2
+
+
+def _raster(ctx, dom, shape, n, heavy):
+    """power_labels (both passes), power_labels_tile, cell_max, cell_argmax,
+    cell_sums, on a raster with partial tiles."""
+    from diskpack_cl.raster import PowerRaster
+
+    pts, w = _sites(dom, n, 1, heavy)
+    out = {}
+    for layout in ("item", "tile"):
+        pr = PowerRaster(dom, shape, device=ctx, layout=layout, max_groups=2)
+        est = pr.compute(pts, w, neighbors=True)
+        out.update({f"{layout}_label": est.labels.copy(), f"{layout}_dist": est.dist.copy(),
+                    f"{layout}_nbr": est.neighbor.copy(), f"{layout}_radii": est.radii})
+        c, mass = est.centroids(np.random.default_rng(2).random(shape))
+        out.update({f"{layout}_centroids": c, f"{layout}_mass": mass})
+        out[f"{layout}_labels_only"] = pr.compute(pts, w, distance=False).labels.copy()
+    return out
+
+
+def raster_rect(ctx):
+    """A weighted rectangle."""
+    return _raster(ctx, Domain.rect(40.0, 30.0), (19, 21), 30, 0.5)
+
+
+def raster_torus(ctx):
+    """The torus (periodic images, wrapped bucket rings)."""
+    return _raster(ctx, Domain.torus(), (17, 20), 24, 0.0)
+
+
+def raster_streamed(ctx):
+    """A raster so coarse that one tile has more candidates than the local
+    list holds (CAP = 256): they stream through it in chunks."""
+    from diskpack_cl.raster import PowerRaster
+
+    dom = Domain.rect(10.0, 10.0)
+    pts, w = _sites(dom, 600, 5, 0.3)
+    est = PowerRaster(dom, (5, 6), device=ctx, layout="item").compute(pts, w)
+    return {"label": est.labels.copy(), "dist": est.dist.copy(), "radii": est.radii}
+
+
+def _cells(ctx, dom, n, heavy):
+    from diskpack_cl import cells
+
+    pts, w = _sites(dom, n, 3, heavy)
+    solver = cells.CellMIC(dom, device=ctx)
+    # enqueues of a few groups each, so that the chunking is exercised
+    solver.chunk = 2 * solver.group
+    r = solver.solve(pts, w)
+    return {"centers": r.centers, "radii": r.radii, "nn": r.nn}
+
+
+def cells_rect(ctx):
+    """cell_mic on a weighted rectangle, in several enqueues."""
+    return _cells(ctx, Domain.rect(30.0, 20.0), 40, 0.5)
+
+
+def cells_torus(ctx):
+    """cell_mic on the torus."""
+    return _cells(ctx, Domain.torus(), 40, 0.0)
+
+
+def cells_full(ctx):
+    """cell_mic where a cell has 40 tight sides (full constraint list, full
+    near-tight slots) and a site alone beside a cluster (wide rings, scans
+    past one period: the flag paths)."""
+    from diskpack_cl.cells import CellMIC
+
+    t = np.arange(40) * 2 * np.pi / 40
+    ring = np.column_stack([5 + np.cos(t), 5 + np.sin(t)])
+    other = np.random.default_rng(8).random((60, 2)) * 10
+    other = other[np.hypot(*(other - 5).T) > 1.5]
+    a = CellMIC(Domain.rect(10.0, 10.0), device=ctx).solve(np.vstack([[5.0, 5.0], ring, other]))
+    cluster = np.vstack([0.05 * np.random.default_rng(7).random((150, 2)), [[0.55, 0.55]]])
+    b = CellMIC(Domain.torus(), device=ctx).solve(cluster)
+    return {"ring_radii": a.radii, "ring_flagged": np.array(a.stats["flagged"]),
+            "cluster_radii": b.radii, "cluster_nn": b.nn, "cluster_flagged": np.array(b.stats["flagged"])}
+
+
+def end_to_end(ctx):
+    """Relaxation on both engine routes and a short stippling, as the public functions run them."""
+    from diskpack_cl import relax_poisson, stipple
+
+    pts = np.random.default_rng(4).random((48, 2))
+    out = {route: relax_poisson(pts, eps=0.99, max_iter=2, backend="opencl", device=ctx,
+                                route=route).points for route in ("cells", "raster")}
+    gray = np.linspace(0.1, 0.9, 32 * 24).reshape(24, 32)
+    res = stipple(gray, 40, seed=0, device=ctx, backend="opencl",
+                  schedule=[("pack", 2), ("lloyd", 1)])
+    out.update(stipple_points=res.points, stipple_radii=res.radii)
+    return out
+
+
+def refused(ctx):
+    """The issue-23 reproduction and its torus variant: a ValueError, no kernel runs."""
+    from diskpack_cl.raster import PowerRaster
+
+    out = {}
+    for name, dom in (("rect", Domain.rect(8.0, 8.0)), ("torus", Domain.torus())):
+        pr = PowerRaster(dom, (8, 8), device=ctx)
+        pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
+        try:
+            pr.compute(pts, [0.1, np.nan, 0.2, 0.1, 0.3], distance=True)
+        except ValueError as exc:
+            out[name] = np.array(str(exc))
+    return out
+
+
+def bad_labels(ctx):
+    """cell_max and cell_sums given labels that name no site (INT_MAX, -2):
+    those grid cells must touch no per-site buffer."""
+    import pyopencl as cl
+
+    from diskpack_cl.raster import INT_MAX, PowerRaster
+
+    pr = PowerRaster(Domain.rect(8.0, 4.0), (4, 8), device=ctx)
+    est = pr.compute(np.array([[2.0, 2.0], [6.0, 2.0]]))
+    lab = est.labels.copy()
+    lab[:, 2] = INT_MAX
+    lab[:, 5] = -2
+    b_lab = pr._maps["label"]   # the device map the result reads
+    cl.enqueue_copy(pr.queue, b_lab, lab)
+    est._maps["label"] = (b_lab, np.int32)
+    _, mass = est.centroids(np.ones((4, 8)))
+    n, npix = np.int32(2), np.int32(lab.size)
+    rbits = np.full(2, -1, np.int32)
+    b_r = cl.Buffer(pr.ctx, cl.mem_flags.READ_WRITE | cl.mem_flags.COPY_HOST_PTR, hostbuf=rbits)
+    pr._k_max(pr.queue, (npix,), None, b_lab, pr._maps["dist"], npix, n, b_r)
+    cl.enqueue_copy(pr.queue, rbits, b_r)
+    return {"mass": mass, "rbits": rbits}
+
+
+def unowned(ctx):
+    """NaN weights past the host check: the kernels' own guards keep every
+    access in bounds and every ring search finite, and the host refuses."""
+    from diskpack_cl import raster
+
+    out = {}
+    check = raster.check_sites
+    for name, dom in (("rect", Domain.rect(8.0, 8.0)), ("torus", Domain.torus())):
+        pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
+        for layout, distance in (("item", True), ("tile", False)):
+            pr = raster.PowerRaster(dom, (9, 10), device=ctx, layout=layout)
+            raster.check_sites = lambda p, w, d: (np.asarray(p, float), np.asarray(w, float))
+            try:
+                pr.compute(pts, np.array([0.1, np.nan, 0.2, 0.1, 0.3]), distance=distance)
+            except RuntimeError as exc:
+                out[f"{name}_{layout}"] = np.array(str(exc))
+            finally:
+                raster.check_sites = check
+    return out
+
+
+SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
+                                     cells_torus, cells_full, end_to_end, refused, bad_labels,
+                                     unowned)}
+
+
+def main(argv):
+    """Write scenario ``argv[0]``'s arrays, and the device's name as ``device``, to ``argv[1]``."""
+    from diskpack_cl import describe, get_context
+
+    name, path = argv
+    ctx = get_context()
+    np.savez(path, device=np.array(describe(ctx)), **SCENARIOS[name](ctx))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
