@@ -243,7 +243,8 @@ def equal_ink(ink, mass, gain):
     ink = np.ones(len(mass)) if ink is None else ink
     mean = mass.sum() / len(mass)
     # the floor only keeps the ratio finite: the step bound clips it anyway
-    f = np.where(mass > 0, (mean / np.maximum(mass, 1e-12 * mean)) ** gain, INK_STEP)
+    floor = max(1e-12 * mean, np.finfo(float).tiny)   # also where every mass is subnormal
+    f = np.where(mass > 0, (mean / np.maximum(mass, floor)) ** gain, INK_STEP)
     ink = np.clip(ink * np.clip(f, 1 / INK_STEP, INK_STEP), 1 / INK_RANGE, INK_RANGE)
     return ink / np.exp(np.mean(np.log(ink)))
 
