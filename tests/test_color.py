@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
@@ -129,3 +129,22 @@ def test_color_measures_of_a_perfect_grey():
     assert m["p01_joint"] > 0.95
     assert m["p01"][sep.names.index("cyan")] is None          # no cyan dots
     assert m["ssim"][sep.names.index("black")] > 0.9
+
+
+@settings(max_examples=30)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 5))
+def test_unmixing_is_as_near_as_nnls(seed, P):
+    """The face enumeration finds the nearest mix: no farther than scipy's NNLS
+    with the paper as a further pen and a heavily weighted row sum(a) = 1."""
+    from scipy.optimize import nnls
+
+    rng = np.random.default_rng(seed)
+    pens, targets = rng.random((P, 3)), rng.random((20, 3))
+    a = color._unmix(targets, pens)
+    assert np.all(a >= 0) and np.all(a.sum(axis=1) <= 1 + 1e-9)
+    A = np.vstack([np.column_stack([np.ones(3), pens.T]), np.full(P + 1, 1e4)])
+    for t, got in zip(targets, a):
+        ref = nnls(A, np.append(t, 1e4))[0]
+        d_ref = np.linalg.norm(A[:3] @ ref - t)
+        d_got = np.linalg.norm((1 - got.sum()) + pens.T @ got - t)
+        assert d_got <= d_ref + 1e-6
