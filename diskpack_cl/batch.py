@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 import signal
@@ -527,20 +528,30 @@ def _tone_radius(result, gray, invert):
 
 
 def _stipple_item(item, device, progress):
-    from diskpack_cl import load_gray, stipple
     from diskpack_cl.image import adjust_tone
 
     params = dict(item.params)
     allow_large = params.pop("allow_large", False)
     count = {k: params.pop(k, None) for k in ("n", "density", "dots_per_cm2")}
-    gray = adjust_tone(load_gray(item.input, allow_large=allow_large), **params.pop("tone", {}))
-    n = dots_for_image(gray.shape[1], gray.shape[0], **count, **_layout(item.write))
+    tone, color = params.pop("tone", {}), params.pop("color", None)
+    if color is None:
+        from diskpack_cl import load_gray, stipple
+
+        gray = image = adjust_tone(load_gray(item.input, allow_large=allow_large), **tone)
+        run = stipple
+    else:   # several pens: diskpack_cl.stipple_colors with the separation of `color`
+        from diskpack_cl.color import load_rgb
+        from diskpack_cl.multipen import stipple_colors
+
+        gray, image = None, load_rgb(item.input)
+        run = functools.partial(stipple_colors, **color)
+    n = dots_for_image(image.shape[1], image.shape[0], **count, **_layout(item.write))
     callback = None
     if progress is not None:
         def callback(entry):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
-    res = stipple(gray, n, seed=item.seed, device=device, callback=callback, **params)
+    res = run(image, n, seed=item.seed, device=device, callback=callback, **params)
     if not getattr(res.certificate, "valid", False):
         raise ValueError(f"the result failed its certificate ({res.certificate})")
     t = time.perf_counter()
@@ -901,7 +912,10 @@ def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
         Options of :func:`write_stipple_outputs`.
     **options
         Keyword arguments of :func:`diskpack_cl.stipple` (``gamma``,
-        ``schedule``, ...).
+        ``schedule``, ...); ``color``, a dict of the separation arguments
+        of :func:`diskpack_cl.stipple_colors` (``colors``,
+        ``black_generation``, ``clean_black``, ``clean_white``), makes
+        every item a colour stippling.
 
     Raises
     ------

@@ -950,13 +950,14 @@ def _run_stipple_colors(args):
     from diskpack_cl.multipen import stipple_colors
     from diskpack_cl.schedule import StippleOptions
 
-    if _batch_mode(args, args.images, args.output) or args.n == "tone":
-        raise _UsageError("--colors/--pens stipple one image with -n N, --density or "
-                          "--dots-per-cm2 (batch jobs and -n tone are for one pen)")
     mono = [f"--{k}" for k, v in ONE_PEN_DEFAULTS.items() if getattr(args, k) != v]
+    if args.n == "tone":
+        mono.append("-n tone")
     if mono:
         raise _UsageError(f"{', '.join(m.replace('_', '-') for m in mono)}: for one pen, not "
                           f"with --colors/--pens")
+    if _batch_mode(args, args.images, args.output):
+        return _run_stipple_batch(args)
     t0 = time.perf_counter()
     outputs = _checked_outputs(args)
     rgb = load_rgb(_image_path(args.images[0]))
@@ -968,10 +969,8 @@ def _run_stipple_colors(args):
     opt = StippleOptions.resolve(n, W, H, seed=args.seed, **_stipple_options(args))
     callback, close = _stipple_progress(args, sum(ph[1] for ph in opt.phases))
     try:
-        res = stipple_colors(rgb, n, args.pens or args.colors, black_generation=args.black_generation,
-                             clean_black=args.clean_black, clean_white=args.clean_white,
-                             seed=args.seed, device=args.device, callback=callback,
-                             **_stipple_options(args))
+        res = stipple_colors(rgb, n, seed=args.seed, device=args.device, callback=callback,
+                             **_color(args)["color"], **_stipple_options(args))
     finally:
         close()
     if not res.certificate.valid:
@@ -1334,8 +1333,17 @@ def _run_stipple_batch(args):
                          n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
                          seed=args.seed, recursive=args.recursive,
                          allow_large=args.allow_large, write=_write_options(args),
-                         tone=_tone(args), **_batch_run(args), **_stipple_options(args))
+                         tone=_tone(args), **_batch_run(args), **_stipple_options(args),
+                         **_color(args))
     return _report_batch(args, batch)
+
+
+def _color(args):
+    """``{"color": separation arguments}`` for --colors/--pens (else empty)."""
+    if not (args.colors or args.pens):
+        return {}
+    return {"color": dict(colors=args.pens or args.colors, black_generation=args.black_generation,
+                          clean_black=args.clean_black, clean_white=args.clean_white)}
 
 
 def _run_poisson_batch(args):

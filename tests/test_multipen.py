@@ -142,5 +142,48 @@ def test_cli_colors_and_pens(tmp_path, capsys):
                  "--clean-white", "0.05", "-q"]) == 0
     assert main(["stipple", str(tmp_path / "in.png"), "--colors", "cmyk", "-n", "100", "-o", svg,
                  "--invert", "-q"]) == 2
-    assert main(["stipple", str(tmp_path / "in.png"), str(tmp_path / "in.png"), "--colors", "cmyk",
-                 "-n", "100", "-o", svg, "-q"]) == 2
+    assert main(["stipple", str(tmp_path / "in.png"), "--colors", "cmyk", "-n", "tone",
+                 "--dot-mm", "0.5", "-o", svg, "-q"]) == 2
+
+
+def _two_images(folder):
+    folder.mkdir()
+    for name, img in (("a", _image()), ("b", _image()[::-1])):
+        Image.fromarray(np.round(img * 255).astype(np.uint8)).save(folder / f"{name}.png")
+    return folder
+
+
+def test_cli_batch_of_colour_images(tmp_path):
+    images = _two_images(tmp_path / "in")
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["stipple", str(images), "--colors", "cmy", "-n", "120", "--schedule", "classic",
+                 "-o", str(out / "{stem}.svg"), "-o", str(out / "{stem}.npz"), "-q"]) == 0
+    for stem in ("a", "b"):
+        back = read_stipple(out / f"{stem}.npz")
+        assert back.names == ("yellow", "cyan", "magenta") and len(back.pen) == 120
+        assert [len(g) for g in _svg_layers(out / f"{stem}.svg")] == np.bincount(
+            back.pen, minlength=3).tolist()
+
+
+def _svg_layers(path):
+    root = ET.parse(path).getroot()
+    return [g.findall(SVG + "circle") for g in root.iter(SVG + "g")
+            if g.get(INK + "groupmode") == "layer"]
+
+
+def test_dask_colour_batch_matches_one_process(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    from diskpack_cl.batch import stipple_many
+
+    images = [str(p) for p in sorted(_two_images(tmp_path / "in").iterdir())]
+    opts = dict(n=100, color={"colors": PENS3}, schedule=[("mix", 3, 0.5)], manifest=False)
+    local = list(stipple_many(images, [str(tmp_path / "local" / "{stem}.npz")], jobs=1, **opts))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as lc, distributed.Client(lc) as client:
+        dask = list(stipple_many(images, [str(tmp_path / "dask" / "{stem}.npz")], client=client,
+                                 **opts))
+    assert [r["status"] for r in local + dask] == ["ok"] * 4
+    for stem in ("a", "b"):
+        a, b = (read_stipple(tmp_path / d / f"{stem}.npz") for d in ("local", "dask"))
+        assert np.array_equal(a.points, b.points) and np.array_equal(a.pen, b.pen)
