@@ -372,6 +372,27 @@ def print_summary(summary, markdown=False):
               + (f"; not on {'; '.join(fails)}" if fails else ""))
 
 
+def print_comparison(summary, configs):
+    """Markdown tables, one per n: every measure as ``a / b / c`` over `configs`, and the last one's misses."""
+    by = {(s["image"], s["n"], s["config"]): s for s in summary}
+    cols = (("tone", "tone σ3", 3), ("tone15", "tone σ1.5", 3), ("stray", "stray /10k", 0),
+            ("edge", "edge", 3), ("holes", "holes /10k", 0), ("p01_pair", "P01 pair", 3),
+            ("psi6", "\\|psi6\\|", 3))
+    for n in sorted({s["n"] for s in summary}):
+        images = [im for im in dict.fromkeys(s["image"] for s in summary if s["n"] == n)
+                  if all((im, n, c) in by for c in configs)]
+        if not images:
+            continue
+        print(f"\n**n = {n}** ({' / '.join(configs)}; seeds: {by[images[0], n, configs[-1]]['seeds']})\n")
+        print("| image | " + " | ".join(c[1] for c in cols) + f" | {configs[-1]} misses |")
+        print("|" + " --- |" * (len(cols) + 2))
+        for im in images:
+            cells = [" / ".join("–" if by[im, n, c][key] != by[im, n, c][key] else f"{by[im, n, c][key]:.{d}f}"
+                                for c in configs) for key, _, d in cols]
+            miss = by[im, n, configs[-1]]["misses"]
+            print(f"| {im} | " + " | ".join(cells) + f" | {', '.join(miss) if miss else 'none'} |")
+
+
 def print_row(r):
     edge = "  nan" if r["edge"] is None else f"{r['edge']:.3f}"
     print(f"{r['image']:12s} {r['n']:6d} {r['seed']:4d} {r['config']:32s} {r['tone']:7.4f} "
@@ -405,9 +426,16 @@ def main(argv=None):
     ap.add_argument("--summary", nargs="+", metavar="JSONL", help="summarize these files; run nothing")
     ap.add_argument("--reference", default=REFERENCE, help="configuration of the condition (default: lloyd)")
     ap.add_argument("--markdown", action="store_true", help="summary as a Markdown table")
+    ap.add_argument("--compare", nargs="+", metavar="CONFIG",
+                    help="with --summary: Markdown tables of every measure as a / b / c over these "
+                         "configurations, one per n")
     a = ap.parse_args(argv)
     if a.summary:
-        print_summary(summarize(read_rows(a.summary), a.reference), a.markdown)
+        summary = summarize(read_rows(a.summary), a.reference)
+        if a.compare:
+            print_comparison(summary, a.compare)
+        else:
+            print_summary(summary, a.markdown)
         return 0
     for spec in a.configs:
         parse_config(spec)  # fail before any work
