@@ -393,6 +393,19 @@ def print_comparison(summary, configs):
             print(f"| {im} | " + " | ".join(cells) + f" | {', '.join(miss) if miss else 'none'} |")
 
 
+def print_tally(summary, configs):
+    """Markdown: per configuration and n, on how many images each check of :data:`TARGET` holds."""
+    print(f"\n| configuration | n | images | {' | '.join(TARGET)} | all |")
+    print("|" + " --- |" * (len(TARGET) + 4))
+    for config in configs:
+        for n in sorted({s["n"] for s in summary}):
+            ss = [s for s in summary if s["n"] == n and s["config"] == config and s["misses"] is not None]
+            if ss:
+                counts = [sum(name not in s["misses"] for s in ss) for name in TARGET]
+                print(f"| {config} | {n} | {len(ss)} | " + " | ".join(map(str, counts))
+                      + f" | {sum(not s['misses'] for s in ss)} |")
+
+
 def print_row(r):
     edge = "  nan" if r["edge"] is None else f"{r['edge']:.3f}"
     print(f"{r['image']:12s} {r['n']:6d} {r['seed']:4d} {r['config']:32s} {r['tone']:7.4f} "
@@ -434,6 +447,7 @@ def main(argv=None):
         summary = summarize(read_rows(a.summary), a.reference)
         if a.compare:
             print_comparison(summary, a.compare)
+            print_tally(summary, [c for c in a.compare if c != a.reference])
         else:
             print_summary(summary, a.markdown)
         return 0
