@@ -29,7 +29,9 @@ One iteration:
 3. Mix step (the default schedule): a disk-packing step whose move is
    blended with the density-weighted centroid of the *same power cell*:
    ``x <- m + blend * (c - m)``, ``m`` the MIC centre, ``c`` the centroid.
-   ``blend = 0`` is a disk-packing step.
+   ``blend = 0`` is a disk-packing step. With ``support > 0`` the blend of a
+   dot whose MIC centre lies off its cell's ink rises towards 1
+   (:func:`off_support`).
    With ``capacity > 0`` every packing or mix step also moves each dot's
    radius factor towards the same ink (darkness) in every power cell
    (:func:`equal_ink`, capacity-constrained weights).
