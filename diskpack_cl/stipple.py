@@ -29,7 +29,9 @@ One iteration:
 3. Mix step (the default schedule): a disk-packing step whose move is
    blended with the density-weighted centroid of the *same power cell*:
    ``x <- m + blend * (c - m)``, ``m`` the MIC centre, ``c`` the centroid.
-   ``blend = 0`` is a disk-packing step.
+   ``blend = 0`` is a disk-packing step. With ``support > 0`` the blend of a
+   dot whose MIC centre lies off its cell's ink rises towards 1
+   (:func:`off_support`).
    With ``capacity > 0`` every packing or mix step also moves each dot's
    radius factor towards the same ink (darkness) in every power cell
    (:func:`equal_ink`, capacity-constrained weights).
@@ -51,20 +53,18 @@ packing and centroid moves no longer pull the tone curve apart (with gray
 radii and gamma 3 a packing's density goes like ``I^-3``, not ``1 - I``).
 
 The default schedule follows the dot spacing ``s = sqrt(W H / n)`` px
-(:data:`diskpack_cl.schedule.SPACING_BANDS`, measured in
-``docs/stipple_quality.md``): below 3 px, 16 mix steps at blend 0.7 then 2
-or 3 disk-packing steps with radii blurred by 1.5 px (the packing steps
-restore the spacing and undo the hexagonal order the centroid pulls build);
-from 3 to 6 px the ``"detail"`` schedule (18 + 7 mix steps, feature-aware);
-from 6 px on 35 mix steps at blend 0.6 and 12 at 0.4, feature-aware, radii
-blurred by 2 px. All use density radii (floor 0.01), centroid density
-blurred by 0.5 px and ``k`` from the 15% quantile of ``R_i / r_i``. Tuned
-on the tuning photographs of the validation set, it beats 50 Lloyd
-iterations in tone (sigma 3), spacing P01 >= 0.85 and |psi6| on 12 of 24
-held-out (photograph, n) pairs, against 2 for the former default (now
-``"classic"``: 35 + 12 mix steps at blend 0.5 and 0.4, radii blurred by 3
-px). Options that come with a named schedule are in :data:`SCHEDULE_OPTIONS`;
-explicit keyword arguments override them.
+(:data:`diskpack_cl.schedule.SPACING_BANDS`): below 3 px, 16 mix steps at
+blend 0.7, one or two disk-packing steps with radii blurred by 1.5 px, and a
+last step at blend 0.5; from 3 to 6 px 18 + 6 mix steps, feature-aware, and
+a last one at 0.5; from 6 px on 20 + 6 mix steps, feature-aware, radii
+blurred by 2 px, and a last step all the way to the centroids. All use
+density radii (floor 0.01), centroid density blurred by 0.5 px, ``k`` from
+the 15% quantile of ``R_i / r_i``, ``support=1`` (a dot whose largest empty
+disk leaves its cell's ink goes to the centroid: white paper stays white,
+outlines stay sharp) and ``capacity=0.1`` (equal ink per dot). The former
+defaults remain as ``"classic"`` and ``"detail"``. Options that come with a
+named schedule are in :data:`SCHEDULE_OPTIONS`; explicit keyword arguments
+override them. Measured in ``docs/stipple_quality.md``.
 
 Empty power cells (possible with unequal weights) keep their point where it
 is; they are counted in the history (``"empty"``), never produce NaN and
