@@ -57,9 +57,6 @@ def _checked(convert, test, want):
 _positive_int = _checked(int, lambda v: v >= 1, "at least 1")
 _nonnegative_int = _checked(int, lambda v: v >= 0, "at least 0")
 _unit_open = _checked(float, lambda v: 0.0 < v < 1.0, "in (0, 1)")
-_unit_half_open = _checked(float, lambda v: 0.0 < v <= 1.0, "in (0, 1]")
-_unit_closed = _checked(float, lambda v: 0.0 <= v <= 1.0, "in [0, 1]")
-_unit_half_open_zero = _checked(float, lambda v: 0.0 <= v < 1.0, "in [0, 1)")
 _positive_float = _checked(float, lambda v: 0.0 < v < float("inf"), "a finite number > 0")
 
 
@@ -104,16 +101,10 @@ def _output_options(p):
 
 
 def _relax_options(p):
-    p.add_argument("--eps", type=_unit_open, default=0.8,
-                   help="stop when the normalized radius rho reaches EPS (default 0.8)")
-    p.add_argument("--max-iter", type=_nonnegative_int, default=None, metavar="N",
-                   help="iteration cap (default 1000)")
-    p.add_argument("--backend", choices=("auto", "opencl", "exact"), default="auto",
-                   help="opencl: MICs on the OpenCL device, checked in float64; exact: scipy only; "
-                        "auto (default): opencl when a device exists, else exact")
-    p.add_argument("--grid", type=_positive_int, default=None, metavar="G",
-                   help="raster size G x G of the raster route (devices without float64; "
-                        "default: automatic)")
+    from diskpack_cl.options import add_arguments
+    from diskpack_cl.relax import RelaxOptions
+
+    add_arguments(p, RelaxOptions)
     p.add_argument("--verify", action="store_true",
                    help="check every iteration against scipy (exact MICs, KD-tree rho); slow")
     p.add_argument("--profile", action="store_true",
@@ -181,8 +172,12 @@ def _option_strings(parser):
 
 # --------------------------------------------------------------- shared runs
 
-def _max_iter(args):
-    return 1000 if args.max_iter is None else args.max_iter
+def _relax(args):
+    """The :class:`~diskpack_cl.relax.RelaxOptions` of the arguments."""
+    from diskpack_cl.options import from_namespace
+    from diskpack_cl.relax import RelaxOptions
+
+    return from_namespace(RelaxOptions, args)
 
 
 def _bar(args, desc, unit, total=None, *, leave=False):
@@ -197,7 +192,7 @@ def _bar(args, desc, unit, total=None, *, leave=False):
 
 def _progress(args, label):
     """Return (callback, close) feeding a tqdm bar on a terminal, or no-ops."""
-    bar = _bar(args, label, "it", _max_iter(args) or None)
+    bar = _bar(args, label, "it", _relax(args).kwargs()["max_iter"] or None)
     if bar is None:
         return None, lambda: None
 
@@ -215,9 +210,8 @@ def _relax_and_write(points, args, *, extra_summary=None):
 
     callback, close = _progress(args, "relax")
     try:
-        res = relax_poisson(points, args.eps, max_iter=_max_iter(args), backend=args.backend,
-                            grid=args.grid, device=args.device, callback=callback,
-                            verify=args.verify, profile=args.profile)
+        res = relax_poisson(points, **_relax(args).kwargs(), device=args.device,
+                            callback=callback, verify=args.verify, profile=args.profile)
     finally:
         close()
     extra = {}
@@ -450,8 +444,19 @@ def _default_schedule_text():
     return "default = by the dot spacing s = sqrt(W*H/n) px: " + "; ".join(parts)
 
 
+def _schedules_text():
+    """Each schedule's phases, for --help."""
+    from diskpack_cl.schedule import SCHEDULES
+
+    return (_default_schedule_text() + "; "
+            + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
+                        for name, phases in sorted(SCHEDULES.items())))
+
+
 def _add_stipple(subparsers):
-    from diskpack_cl.schedule import SCHEDULE_NAMES, SCHEDULES
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.options import add_arguments
+    from diskpack_cl.schedule import _STIPPLING, StippleOptions
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -466,7 +471,7 @@ def _add_stipple(subparsers):
                     "plotter's pen draws it with --pen-mm. Every output path is checked before "
                     "the computation; the outputs are written together after it, so a failed "
                     "or interrupted run writes nothing and leaves earlier files as they were.",
-        epilog="examples:\n"
+        epilog="schedules (--schedule): " + _schedules_text() + "\n\nexamples:\n"
                "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
                "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
                "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json\n"
@@ -490,92 +495,18 @@ def _add_stipple(subparsers):
                    help="output file; repeat for several: .svg (pen plotters, Inkscape), .png "
                         "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
                         "(x,y,r in pixels)")
-    g = p.add_argument_group("stippling (the paper's parameters)")
-    g.add_argument("--gamma", type=_positive_float, default=None,
-                   help="gamma: contrast exponent of the gray radius mapping, base radius "
-                        "r_i = max(gray, FLOOR)^(gamma/2) (default 3.0); only --radii gray has "
-                        "it (the paper, pack and lloyd schedules), so the default schedule's "
-                        "density radii refuse it")
-    g.add_argument("--floor", type=_unit_half_open, default=None,
-                   help="floor of the radius mapping, so that black (gray) or white (density) "
-                        "regions keep a finite radius (default: the schedule's, 0.1 for paper, "
-                        "pack and lloyd, 0.01 for default)")
-    g.add_argument("--radii", choices=("gray", "density"), default=None,
-                   help="radius mapping: gray = the paper's r_i = max(gray, FLOOR)^(gamma/2); "
-                        "density = r_i ~ darkness^(-1/2), the density Lloyd aims at "
-                        "(default: the schedule's, density for default)")
-    g.add_argument("--blend", type=_unit_closed, default=None,
-                   help="mix phases move to MIC + BLEND * (centroid - MIC) (default: the "
-                        "schedule's)")
-    g.add_argument("--features", choices=("none", "detail"), default=None,
-                   help="detail: feature-aware mix steps, where the image holds detail finer "
-                        "than the dot spacing dots move further towards their cell's centroid "
-                        "and the radii follow the detail (more tone, slightly less even "
-                        "spacing); default: the schedule's (detail for --schedule detail, and "
-                        "for the default where the dot spacing is 3 px or more)")
-    g.add_argument("--capacity", type=_unit_closed, default=None, metavar="GAIN",
-                   help="equal ink per dot: after each step every dot's radius is scaled by "
-                        "(mean ink / its power cell's ink)^GAIN, as in capacity-constrained "
-                        "stippling; more tone, closer pairs across tone edges (default: the "
-                        "schedule's, 0.1 for default, 0 = off for the others)")
-    g.add_argument("--support", type=_unit_closed, default=None, metavar="S",
-                   help="keep dots on the ink: a dot whose largest empty disk leaves its cell's "
-                        "ink moves towards the cell's centroid instead, by S times how far it "
-                        "left (default: the schedule's, 1 for default, 0 for the others; 0 "
-                        "lets edge dots drift onto white paper)")
-    g.add_argument("--paper-tone", type=_unit_half_open_zero, default=0.0, metavar="T",
-                   help="darkness T added under the whole image, so that white paper gets "
-                        "sparse dots too (default 0: white stays white)")
-    g.add_argument("--k-quantile", type=_unit_half_open_zero, default=None,
-                   help="during iterations, k is this quantile of R_i/r_i (0 = the paper's "
-                        "minimum; the output always uses the largest certified k)")
-    g.add_argument("--schedule", choices=SCHEDULE_NAMES, default=None,
-                   help="named schedule of disk-packing (pack) and Lloyd phases: "
-                        + _default_schedule_text() + "; "
-                        + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
-                                    for name, phases in sorted(SCHEDULES.items()))
-                        + " (default: default; classic was the default before the spacing "
-                          "bands; paper is the paper's loop)")
-    g.add_argument("--beta", type=_nonnegative_int, default=None,
-                   help="beta: disk-packing iterations per round; with --lloyd and --rounds it "
-                        "replaces --schedule (missing ones: the paper's beta 40, lloyd 10, "
-                        "rounds 3; the last round is half as long)")
-    g.add_argument("--lloyd", type=_nonnegative_int, default=None, metavar="L",
-                   help="Lloyd iterations between rounds (paper: 10); with --method lloyd: the "
-                        "number of Lloyd iterations (default 50)")
-    g.add_argument("--rounds", type=_positive_int, default=None,
-                   help="number of disk-packing rounds (paper: 3)")
-    g.add_argument("--method", choices=("diskpack", "lloyd"), default="diskpack",
-                   help="diskpack (default): the paper's disk packing; lloyd: weighted Voronoi "
-                        "stippling (Secord 2002), the baseline, from the same start")
-    g.add_argument("--supersample", type=_positive_int, default=None, metavar="S",
-                   help="raster cells per image pixel side (default: automatic, about 16 cells "
-                        "per dot, at most 8)")
-    g.add_argument("--refine-every", type=_nonnegative_int, default=1, metavar="R",
-                   help="refine the raster MIC estimate exactly every R disk-packing iterations "
-                        "(default 1 = always; 0 = never); the output is always certified")
+    groups = add_arguments(p, StippleOptions)
+    g = groups[_STIPPLING]
     g.add_argument("--verify", action="store_true",
                    help="check every MIC step against scipy (exact_mic); slow, for testing "
                         "(single inputs)")
     g.add_argument("--profile", action="store_true",
                    help="time the OpenCL kernels with events (--json timings.kernel and "
                         "timings.kernel_<name>: device seconds, all and per kernel; single inputs)")
-    g.add_argument("--seed", type=_nonnegative_int, default=0,
-                   help="seed of the error-diffusion start (default 0; same seed, same result)")
-    g.add_argument("--invert", action="store_true",
-                   help="stipple the light parts (light dots on a dark ground)")
-    t = p.add_argument_group("tone (before stippling, on every schedule; in --json params.tone)")
-    t.add_argument("--black-point", type=_unit_closed, default=0.0, metavar="B",
-                   help="gray levels at or below B (0 black .. 1 white) get full ink "
-                        "(default 0)")
-    t.add_argument("--white-point", type=_unit_closed, default=1.0, metavar="W",
-                   help="gray levels at or above W are blank paper, no dots (default 1)")
-    t.add_argument("--tone-gamma", type=_positive_float, default=1.0, metavar="G",
-                   help="contrast: the levels between the points are raised to G (above 1: "
-                        "darker mid-tones, below 1: lighter; default 1)")
     g.add_argument("--allow-large", action="store_true",
                    help="lift Pillow's decompression-bomb limit (about 89 Mpixel) for trusted "
                         "large images")
+    add_arguments(p, ToneOptions, groups=groups)
     _device_options(g)
     _drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
     _batch_options(p).add_argument("--recursive", "-r", action="store_true",
@@ -584,67 +515,12 @@ def _add_stipple(subparsers):
     p.set_defaults(run=_run_stipple)
 
 
-def _page(text):
-    from diskpack_cl.export import paper_size
-
-    try:
-        paper_size(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
-
-
-_nonnegative_float = _checked(float, lambda v: 0.0 <= v < float("inf"), "a finite number >= 0")
-
-
 def _drawing_options(p, summary):
     """The options of how the dots are drawn (SVG, PNG), of ``stipple`` and ``export``."""
-    from diskpack_cl.export import DEFAULT_MARGIN_MM, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S
-    from diskpack_cl.pen_path import PEN_PATHS
+    from diskpack_cl.export import WriteOptions
+    from diskpack_cl.options import add_arguments
 
-    o = p.add_argument_group("output")
-    o.add_argument("--width-mm", type=_positive_float, default=None, metavar="MM",
-                   help="picture width in mm (with --height-mm: fit inside the box)")
-    o.add_argument("--height-mm", type=_positive_float, default=None, metavar="MM",
-                   help="picture height in mm")
-    o.add_argument("--dpi", type=_positive_float, default=None,
-                   help="picture size from the image's pixels at DPI (default 96 when no mm "
-                        "size and no --page)")
-    o.add_argument("--page", type=_page, default=None, metavar="PAPER",
-                   help=f"the SVG's page is this paper: {', '.join(PAPERS)} or WxHmm (e.g. "
-                        f"300x200mm), portrait; the picture is centred on it and, without a "
-                        f"size, fitted inside the margins")
-    o.add_argument("--landscape", action="store_true", help="turn the --page paper")
-    o.add_argument("--margin-mm", type=_nonnegative_float, default=None, metavar="MM",
-                   help=f"margin around the picture on the --page paper (default "
-                        f"{DEFAULT_MARGIN_MM:g})")
-    o.add_argument("--dots", choices=("tone", "packing"), default=None,
-                   help="dot size in SVG and PNG: tone (default) = one size for all dots, "
-                        "chosen so that the total ink equals the image's total darkness; "
-                        "packing = each dot its certified packing disk (large where the image "
-                        "is light: it shows the packing, not the tone)")
-    o.add_argument("--dot-mm", type=_positive_float, default=None, metavar="MM",
-                   help="fixed dot diameter in mm instead of --dots; the PNG preview shows "
-                        "the same dots")
-    o.add_argument("--pen-mm", type=_positive_float, default=None, metavar="W",
-                   help="plotter pen width in mm: the SVG draws each dot as the pen draws it, "
-                        "one path per dot: a dot not wider than the pen is one pen touch, a "
-                        "wider one is filled by concentric rings W apart (the outermost of "
-                        "radius (dot diameter - W)/2); the PNG preview shows the same ink "
-                        "(default: filled circles, which a plotter traces W wider)")
-    o.add_argument("--radius-scale", type=_positive_float, default=1.0, metavar="F",
-                   help="factor on the dot radii of --dots in SVG and PNG (default 1.0)")
-    o.add_argument("--pen-path", choices=PEN_PATHS, default="auto",
-                   help="SVG dot order: auto (default) = the shorter of greedy and Hilbert, "
-                        "then 2-opt for at most 2 s (measured shortest, benchmarks/pen_path.py); "
-                        "hilbert = Hilbert curve; greedy = nearest neighbour; none = as computed")
-    o.add_argument("--png-scale", type=_positive_float, default=None, metavar="F",
-                   help="PNG pixels per image pixel (default 2.0, at most "
-                        "a 4096 px long side)")
-    o.add_argument("--plot-speed-mm-s", type=_positive_float, default=PLOT_SPEED_MM_S,
-                   metavar="V", help=f"plot-time estimate: pen speed V mm/s drawing and "
-                                     f"travelling, plus {PEN_LIFT_S:g} s to lower and raise the "
-                                     f"pen per dot (default {PLOT_SPEED_MM_S:g})")
+    o = add_arguments(p, WriteOptions)["output"]
     o.add_argument("--quiet", "-q", action="store_true",
                    help="no progress bar and no summary on stderr")
     o.add_argument("--json", action="store_true",
@@ -652,21 +528,6 @@ def _drawing_options(p, summary):
                         f"info, plot (pen-down count, pen-up travel before and after the "
                         f"pen path, plot time) and seconds")
     return o
-
-
-def _resolve_drawing_options(args):
-    """Refuse contradicting drawing options (:class:`_UsageError`); default --dots."""
-    if args.dot_mm is not None and args.dots is not None:
-        raise _UsageError(f"--dot-mm {args.dot_mm:g} and --dots {args.dots} both set the dot "
-                          f"size; give one")
-    if args.dpi is not None and (args.width_mm is not None or args.height_mm is not None):
-        raise _UsageError("give the SVG size either by --width-mm/--height-mm or by --dpi, "
-                          "not both")
-    for name in ("margin_mm", "landscape"):
-        if getattr(args, name) not in (None, False) and args.page is None:
-            raise _UsageError(f"--{name.replace('_', '-')} is for a --page paper: give --page "
-                              f"too (e.g. --page a4)")
-    args.dots = args.dots or "tone"
 
 
 def _stipple_progress(args, total):
@@ -689,51 +550,19 @@ class _UsageError(ValueError):
     """Options that contradict each other: :func:`main` returns 2, as argparse does."""
 
 
-def _resolve_stipple_options(args):
-    """Refuse contradicting stipple options, then fill in the defaults left open.
+def _stipple_objects(args):
+    """The options of the arguments: ``(StippleOptions, ToneOptions, WriteOptions)``.
 
-    Raises
-    ------
-    _UsageError
-        Naming both options: those of :func:`_resolve_drawing_options`, ``--method lloyd``
-        with ``--schedule`` or ``--beta/--rounds``, ``--schedule`` with
-        ``--beta/--lloyd/--rounds``, and ``--gamma`` where the radius mapping
-        has no gamma (density radii).
+    Raises :class:`~diskpack_cl.options.OptionConflict` (status 2) for options
+    that contradict each other.
     """
-    from diskpack_cl.schedule import SCHEDULE_OPTIONS
+    from diskpack_cl.export import WriteOptions
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.options import from_namespace
+    from diskpack_cl.schedule import StippleOptions
 
-    _resolve_drawing_options(args)
-    if not args.black_point < args.white_point:
-        raise _UsageError(f"--black-point {args.black_point:g} must be below --white-point "
-                          f"{args.white_point:g}")
-    if args.method == "lloyd" and args.schedule is not None:
-        raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
-                          f"--schedule {args.schedule} would be ignored; give one")
-    built = [f"--{k}" for k in ("beta", "rounds") if getattr(args, k) is not None]
-    if args.method == "lloyd" and built:
-        raise _UsageError(f"--method lloyd runs Lloyd iterations only (--lloyd L), so "
-                          f"{'/'.join(built)} would be ignored; give one")
-    if args.method == "diskpack" and args.lloyd is not None:
-        built.append("--lloyd")
-    if built and args.schedule is not None:
-        raise _UsageError(f"{'/'.join(built)} build the schedule the paper's way, so "
-                          f"--schedule {args.schedule} would be ignored; give one")
-    if args.method == "lloyd":
-        radii = SCHEDULE_OPTIONS["lloyd"]["radii"]
-    elif built:
-        radii = SCHEDULE_OPTIONS["paper"]["radii"]
-    else:
-        radii = SCHEDULE_OPTIONS[args.schedule or "default"]["radii"]
-    radii = args.radii or radii
-    if args.gamma is not None and radii != "gray":
-        which = f"--radii {args.radii}" if args.radii else (
-            f"the {args.schedule or 'default'} schedule's {radii} radii")
-        raise _UsageError(f"--gamma has no effect with {which} (r ~ darkness^(-1/2)); it is "
-                          f"the exponent of --radii gray, which the paper, pack and lloyd "
-                          f"schedules use (e.g. --schedule paper --gamma {args.gamma:g}); "
-                          f"--tone-gamma sets the contrast on every schedule")
-    args.gamma = 3.0 if args.gamma is None else args.gamma
-    args.schedule = args.schedule or "default"
+    return (from_namespace(StippleOptions, args), from_namespace(ToneOptions, args),
+            from_namespace(WriteOptions, args, invert=args.invert))
 
 
 # Peak memory measured per unit (diskpack stipple, default schedule; PNG writer)
@@ -757,7 +586,7 @@ def _available_memory():
         return None
 
 
-def _check_sizes(args, width, height, n, outputs):
+def _check_sizes(args, write, width, height, n, outputs):
     """Refuse, before the work, a raster or a PNG that memory cannot hold.
 
     The raster (``--supersample``) is checked against the machine's available
@@ -796,42 +625,13 @@ def _check_sizes(args, width, height, n, outputs):
                              f"({gib(have)}): {lower}")
     if free is None or not any(o.lower().endswith(".png") for o in outputs):
         return
-    pw, ph = max(1, round(width * args.png_scale)), max(1, round(height * args.png_scale))
+    pw, ph = max(1, round(width * write.png_scale)), max(1, round(height * write.png_scale))
     if pw * ph * HOST_BYTES_PER_PNG_PIXEL > free:
         fit = math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (width * height))
-        raise ValueError(f"--png-scale {args.png_scale:g} makes a {pw}x{ph} PNG needing "
+        raise ValueError(f"--png-scale {write.png_scale:g} makes a {pw}x{ph} PNG needing "
                          f"{gib(pw * ph * HOST_BYTES_PER_PNG_PIXEL)}, more than the memory "
                          f"available ({gib(free)}): lower --png-scale (at most "
                          f"{math.floor(fit * 10) / 10:g} here)")
-
-
-def _write_options(args):
-    """The options of :func:`diskpack_cl.batch.write_stipple_outputs` from the arguments."""
-    return dict(dots=args.dots, dot_mm=args.dot_mm, radius_scale=args.radius_scale,
-                pen_path=args.pen_path, png_scale=args.png_scale, invert=args.invert,
-                pen_mm=args.pen_mm, plot_speed_mm_s=args.plot_speed_mm_s,
-                **_layout_options(args))
-
-
-def _layout_options(args):
-    """Where the picture goes on paper: the options of :func:`diskpack_cl.export.svg_layout`."""
-    return dict(width_mm=args.width_mm, height_mm=args.height_mm, dpi=args.dpi, page=args.page,
-                landscape=args.landscape, margin_mm=args.margin_mm)
-
-
-def _tone(args):
-    """The tone controls of :func:`diskpack_cl.image.adjust_tone` from the arguments."""
-    return dict(black=args.black_point, white=args.white_point, gamma=args.tone_gamma)
-
-
-def _stipple_options(args):
-    """The keyword arguments of :func:`diskpack_cl.stipple` from the arguments."""
-    return dict(gamma=args.gamma, floor=args.floor, schedule=args.schedule, beta=args.beta,
-                lloyd=args.lloyd, rounds=args.rounds, supersample=args.supersample,
-                method=args.method, invert=args.invert, refine_every=args.refine_every,
-                radii=args.radii, blend=args.blend, k_quantile=args.k_quantile,
-                features=args.features, capacity=args.capacity, support=args.support,
-                paper_tone=args.paper_tone)
 
 
 def _checked_outputs(args):
@@ -849,22 +649,21 @@ def _checked_outputs(args):
     return outputs
 
 
-def _tone_count(args, gray, n):
+def _tone_count(args, write, gray, n):
     """With --dot-mm/--pen-mm: the dots whose ink is the image's (a note when far from n).
 
     Returns ``(n, info)``: ``n`` itself unless it is ``"tone"``, and the
     ``tone_n`` summary (None without a pen or dot size).
     """
-    from diskpack_cl.export import svg_layout, tone_dot_count
+    from diskpack_cl.export import tone_dot_count
 
-    dot = args.dot_mm or args.pen_mm
+    dot = write.dot_mm or write.pen_mm
     if dot is None:
         if n == "tone":
             raise _UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
         return n, None
     h, w = gray.shape
-    scale = svg_layout(w, h, **_layout_options(args))["scale"]
-    tone = tone_dot_count(gray if args.invert else 1.0 - gray, scale, dot)
+    tone = tone_dot_count(gray if write.invert else 1.0 - gray, write.scale(w, h), dot)
     if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and not args.quiet:
         print(f"{PROG}: note: {tone} dots of {dot:g} mm give the image's ink on this paper; "
               f"-n {n} will look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})",
@@ -893,7 +692,7 @@ def _plot_summary(written, speed):
                   f"at {speed:g} mm/s")
 
 
-def _write_and_report(args, res, gray, outputs, summary, t0):
+def _write_and_report(args, write, res, gray, outputs, summary, t0):
     """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
     print it with --json; return the tail of the summary line."""
     from diskpack_cl.batch import write_stipple_outputs
@@ -901,11 +700,10 @@ def _write_and_report(args, res, gray, outputs, summary, t0):
     t_write = time.perf_counter()
     progress, close = _write_bar(args, len(res.points), outputs)
     try:
-        dot_mm, written = write_stipple_outputs(res, gray, outputs, progress=progress,
-                                                **_write_options(args))
+        dot_mm, written = write_stipple_outputs(res, gray, outputs, write, progress=progress)
     finally:
         close()
-    plot, text = _plot_summary(written, args.plot_speed_mm_s)
+    plot, text = _plot_summary(written, write.plot_speed_mm_s)
     summary.update(dot_mm=dot_mm, outputs=written, plot=plot,
                    write_seconds=time.perf_counter() - t_write,
                    seconds=time.perf_counter() - t0)
@@ -917,41 +715,39 @@ def _write_and_report(args, res, gray, outputs, summary, t0):
 def _run_stipple(args):
     from diskpack_cl.batch import dots_for_image
     from diskpack_cl.export import preview_scale
-    from diskpack_cl.image import adjust_tone, load_gray
-    from diskpack_cl.schedule import StippleOptions
+    from diskpack_cl.image import load_gray
     from diskpack_cl.stipple import stipple
 
-    _resolve_stipple_options(args)
+    options, tone, write = _stipple_objects(args)
     if _batch_mode(args, args.images, args.output):
         if args.n == "tone":
             raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
-        return _run_stipple_batch(args)
+        return _run_stipple_batch(args, options, tone, write)
     t0 = time.perf_counter()
     # everything that can be refused is refused before the computation
     outputs = _checked_outputs(args)
     image = _image_path(args.images[0])
-    gray = adjust_tone(load_gray(image, allow_large=args.allow_large), **_tone(args))
-    n, tone_n = _tone_count(args, gray, args.n)
-    n = dots_for_image(gray.shape[1], gray.shape[0], n=n, density=args.density,
-                       dots_per_cm2=args.dots_per_cm2, **_layout_options(args))
-    args.png_scale = preview_scale(gray.shape[1], gray.shape[0], args.png_scale)
-    _check_sizes(args, gray.shape[1], gray.shape[0], n, outputs)
+    gray = tone.adjust(load_gray(image, allow_large=args.allow_large))
+    h, w = gray.shape
+    n, tone_n = _tone_count(args, write, gray, args.n)
+    n = dots_for_image(w, h, n=n, density=args.density, dots_per_cm2=args.dots_per_cm2,
+                       **write.layout())
+    write = write.replace(png_scale=preview_scale(w, h, write.png_scale))
+    _check_sizes(args, write, w, h, n, outputs)
     # the phases (for the progress total) follow n and the image size
-    opt = StippleOptions.resolve(n, gray.shape[1], gray.shape[0], seed=args.seed,
-                                 **_stipple_options(args))
-
-    callback, close = _stipple_progress(args, sum(ph[1] for ph in opt.phases))
+    plan = options.plan(n, w, h)
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in plan.phases))
     try:
-        res = stipple(gray, n, seed=args.seed, device=args.device, callback=callback,
-                      verify=args.verify, profile=args.profile, **_stipple_options(args))
+        res = stipple(gray, n, options, device=args.device, callback=callback,
+                      verify=args.verify, profile=args.profile)
     finally:
         close()
     if not getattr(res.certificate, "valid", False):
         raise ValueError(f"the result failed its certificate ({res.certificate}); nothing written")
-    res.params["tone"] = _tone(args)  # recorded in the .npz and the --json params
+    res.params["tone"] = tone.params()  # recorded in the .npz and the --json params
     summary = res.summary()
     summary.update(image=str(image), tone_n=tone_n)
-    tail = _write_and_report(args, res, gray, outputs, summary, t0)
+    tail = _write_and_report(args, write, res, gray, outputs, summary, t0)
     if res.engine == "exact" and not args.quiet:
         print(f"{PROG}: note: no OpenCL device: stippled with the exact (scipy) engine",
               file=sys.stderr)
@@ -989,19 +785,20 @@ def _add_export(subparsers):
 
 
 def _run_export(args):
-    from diskpack_cl.export import read_stipple
+    from diskpack_cl.export import WriteOptions, read_stipple
+    from diskpack_cl.options import from_namespace
 
-    _resolve_drawing_options(args)
+    write = from_namespace(WriteOptions, args)
     t0 = time.perf_counter()
     outputs = _checked_outputs(args)
     res = read_stipple(args.input)
     if res is None:
         raise ValueError(f"{args.input} is a point set, not a stippling (no radii, width and "
                          f"height)")
-    args.invert = args.invert or bool(res.params.get("invert", False))
+    write = write.replace(invert=args.invert or bool(res.params.get("invert", False)))
     summary = {"n": len(res.points), "width": res.width, "height": res.height,
                "input": str(args.input)}
-    tail = _write_and_report(args, res, None, outputs, summary, t0)
+    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
     if not args.quiet:
         print(f"{PROG}: {len(res.points)} dots of {args.input}{tail}", file=sys.stderr)
     return 0
@@ -1251,14 +1048,14 @@ def _report_batch(args, batch):
     return 1 if failures else 0
 
 
-def _run_stipple_batch(args):
+def _run_stipple_batch(args, options, tone, write):
     from diskpack_cl.batch import stipple_many
 
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
-                         n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
-                         seed=args.seed, recursive=args.recursive,
-                         allow_large=args.allow_large, write=_write_options(args),
-                         tone=_tone(args), **_batch_run(args), **_stipple_options(args))
+                         options, n=args.n, density=args.density,
+                         dots_per_cm2=args.dots_per_cm2, recursive=args.recursive,
+                         allow_large=args.allow_large, write=write, tone=tone,
+                         **_batch_run(args))
     return _report_batch(args, batch)
 
 
@@ -1268,17 +1065,15 @@ def _run_poisson_batch(args):
     if args.radius is not None:
         raise ValueError("--radius makes one set; it does not combine with --count or a batch")
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
-                         seed=args.seed, init=args.init, dart_radius=args.dart_radius,
-                         eps=args.eps, max_iter=_max_iter(args), backend=args.backend,
-                         grid=args.grid, **_batch_run(args))
+                         _relax(args), seed=args.seed, init=args.init,
+                         dart_radius=args.dart_radius, **_batch_run(args))
     return _report_batch(args, batch)
 
 
 def _run_relax_batch(args):
     from diskpack_cl.batch import relax_many
 
-    batch = relax_many(args.inputs, [args.output], eps=args.eps, max_iter=_max_iter(args),
-                       backend=args.backend, grid=args.grid, **_batch_run(args))
+    batch = relax_many(args.inputs, [args.output], _relax(args), **_batch_run(args))
     return _report_batch(args, batch)
 
 
@@ -1350,6 +1145,7 @@ def main(argv=None):
     import signal
 
     from diskpack_cl import NoOpenCLError
+    from diskpack_cl.options import OptionConflict, flag_name
 
     parser = build_parser()
     try:
@@ -1364,6 +1160,9 @@ def main(argv=None):
 
             get_context(device)
         return int(args.run(args) or 0)
+    except OptionConflict as exc:
+        print(f"{PROG} {args.command}: error: {exc.render(flag_name)}", file=sys.stderr)
+        return 2
     except _UsageError as exc:
         print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
         return 2

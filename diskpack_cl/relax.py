@@ -17,9 +17,43 @@ import numpy as np
 
 from .domain import Domain
 from .engine import BACKENDS, check_against_exact, make_engine
+from .options import check_fields, option
 from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
-__all__ = ["relax_poisson", "RelaxResult", "BACKENDS", "max_points_for_radius", "RadiusResult"]
+__all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
+           "RadiusResult"]
+
+#: Iteration cap of :func:`relax_poisson` when none is given.
+MAX_ITER = 1000
+
+
+@dataclass(frozen=True)
+class RelaxOptions:
+    """The options of :func:`relax_poisson` (``diskpack poisson`` and ``relax``).
+
+    Examples
+    --------
+    >>> RelaxOptions(eps=0.85).kwargs()
+    {'eps': 0.85, 'max_iter': 1000, 'backend': 'auto', 'grid': None}
+    """
+
+    eps: float = option(0.8, "stop when the normalized radius rho reaches EPS (default 0.8)",
+                        lo=0, hi=1, lo_open=True, hi_open=True, metavar="EPS")
+    max_iter: int = option(None, f"iteration cap (default {MAX_ITER})", integer=True, lo=0,
+                           metavar="N")
+    backend: str = option("auto", "opencl: MICs on the OpenCL device, checked in float64; "
+                          "exact: scipy only; auto (default): opencl when a device exists, "
+                          "else exact", choices=BACKENDS)
+    grid: int = option(None, "raster size G x G of the raster route (devices without "
+                       "float64; default: automatic)", integer=True, lo=1, metavar="G")
+
+    def __post_init__(self):
+        check_fields(self)
+
+    def kwargs(self):
+        """The keyword arguments of :func:`relax_poisson`."""
+        return {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
+                "backend": self.backend, "grid": self.grid}
 
 
 @dataclass

@@ -387,8 +387,8 @@ def fake_stipple(monkeypatch):
     """Record stipple()'s arguments, then fail as a user error would."""
     calls = []
 
-    def stipple(image, n, **kwargs):
-        calls.append(dict(image=np.asarray(image), n=n, **kwargs))
+    def stipple(image, n, options=None, **kwargs):
+        calls.append(dict(image=np.asarray(image), n=n, options=options, **kwargs))
         raise ValueError("fake stipple stops here")
 
     monkeypatch.setattr(STIPPLE_MODULE, "stipple", stipple)
@@ -403,6 +403,9 @@ def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):
     assert rc == 1 and "fake stipple stops here" in capsys.readouterr().err
     (call,) = fake_stipple
     assert call["image"].shape == (512, 512) and call["n"] == 77
+    call.update({k: getattr(call["options"], k) for k in (
+        "gamma", "floor", "schedule", "supersample", "seed", "method", "invert", "refine_every",
+        "features", "capacity", "support", "paper_tone")})
     assert {k: call[k] for k in ("gamma", "floor", "schedule", "supersample", "seed", "method",
                                  "invert", "refine_every", "device", "features", "capacity",
                                  "support", "paper_tone", "profile")} == dict(
@@ -747,3 +750,4 @@ def test_tone_controls_act_on_the_default_schedule(ctx, tmp_path, capsys):
     assert cli.main(["stipple", str(image), "-n", "8", "--black-point", "0.6",
                      "--white-point", "0.5", "-o", str(tmp_path / "x.svg")]) == 2
     assert "--black-point 0.6 must be below --white-point 0.5" in capsys.readouterr().err
+

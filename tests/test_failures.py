@@ -197,8 +197,8 @@ def test_contradicting_options_are_usage_errors(tmp_path, no_stipple, capsys, mo
 def test_gamma_is_accepted_where_it_acts(monkeypatch, tmp_path, capsys):
     calls = []
 
-    def fake(image, n, **kwargs):
-        calls.append(kwargs)
+    def fake(image, n, options=None, **kwargs):
+        calls.append({"gamma": options.gamma, **kwargs})
         raise ValueError("stop")
 
     monkeypatch.setattr(STIPPLE_MODULE, "stipple", fake)

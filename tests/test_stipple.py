@@ -292,7 +292,7 @@ def test_default_schedule_certified_and_deterministic(ctx):
 
 
 def test_paper_schedule_keeps_the_paper_mapping(ctx):
-    res = stipple(gradient(), 60, seed=0, schedule="paper", beta=2, lloyd=1, rounds=2)
+    res = stipple(gradient(), 60, seed=0, beta=2, lloyd=1, rounds=2)
     assert res.params["radii"] == "gray" and res.certificate.valid
     assert [h["kind"] for h in res.history] == ["pack", "pack", "lloyd", "pack"]
 
@@ -369,7 +369,7 @@ def test_schedule_options_resolution():
     ({"refine_every": 1.5}, "refine_every must be an integer >= 0, got 1.5"),
     ({"radius_sigma": -1}, "radius_sigma must be >= 0, got -1.0"),
     ({"density_sigma": np.nan}, "density_sigma must be >= 0, got nan"),
-    ({"supersample": 0}, "supersample must be >= 1, got 0"),
+    ({"supersample": 0}, "supersample must be an integer >= 1, got 0"),
 ])
 def test_options_checked_before_any_work(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -466,6 +466,6 @@ def test_gamma_is_refused_where_the_radii_have_no_exponent():
         stipple(gray, 50, gamma=1.0, backend="exact", schedule=[("pack", 1)], radii="density")
     with pytest.raises(ValueError, match="has no effect"):
         stipple(gray, 50, gamma=6.0)
-    a = stipple(gray, 50, gamma=1.0, schedule="paper", backend="exact", beta=2, lloyd=1, rounds=1)
-    b = stipple(gray, 50, gamma=6.0, schedule="paper", backend="exact", beta=2, lloyd=1, rounds=1)
+    a = stipple(gray, 50, gamma=1.0, backend="exact", beta=2, lloyd=1, rounds=1)
+    b = stipple(gray, 50, gamma=6.0, backend="exact", beta=2, lloyd=1, rounds=1)
     assert not np.allclose(a.base_radii, b.base_radii)      # gamma acts on gray radii
