@@ -9,7 +9,7 @@ from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
 from .domain import Domain
-from .geometry import certify_disks, exact_mic
+from .geometry import CertificateError, certify_disks, exact_mic
 from .measures import normalized_radius
 from .relax import RadiusResult, RelaxOptions, RelaxResult, max_points_for_radius, relax_poisson
 from .sampling import dart_throwing, random_points
@@ -21,7 +21,7 @@ from .export import WriteOptions, read_stipple, write_stipple
 from .image import ToneOptions, load_gray, sample_image_path
 
 __all__ = [
-    "Domain", "certify_disks", "exact_mic", "normalized_radius",
+    "Domain", "CertificateError", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
     "RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleOptions", "StippleResult", "error_diffusion", "stipple", "read_stipple",

@@ -331,9 +331,10 @@ class CellMIC:
         flags = out["codes"][:, 3]
         proven = (flags & ~_NN) == 0
         q, R, ok = refine_active(X, w, self.domain, out["codes"][:, :3], out["codes"][:, 4:])
-        # the device and the host solved the same 3 x 3 system
+        # the device and the host solved the same 3 x 3 system: same radius, same centre
         scale = max(self.domain.width, self.domain.height)
-        agree = np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale
+        agree = ((np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale)
+                 & np.all(np.abs(X + q - out["mic"][:, :2]) <= 1e-9 * scale, axis=1))
         good = proven & ok & agree
         t1 = time.perf_counter()
         timings["refine"] = t1 - t_start

@@ -731,6 +731,19 @@ def chebyshev_center_linprog(normals, beta):
     return res.x[:2], res.x[2]
 
 
+class CertificateError(ValueError):
+    """Disks that failed their certificate: no result is returned (or written) for them.
+
+    Attributes
+    ----------
+    certificate : Certificate
+    """
+
+    def __init__(self, message, certificate):
+        super().__init__(f"{message} ({certificate})")
+        self.certificate = certificate
+
+
 @dataclass
 class Certificate:
     """Exact float64 check that disks lie in the domain and are pairwise disjoint."""
