@@ -242,8 +242,12 @@ def equal_ink(ink, mass, gain):
     """
     ink = np.ones(len(mass)) if ink is None else ink
     mean = mass.sum() / len(mass)
-    # the floor only keeps the ratio finite: the step bound clips it anyway
-    f = np.where(mass > 0, (mean / np.maximum(mass, 1e-12 * mean)) ** gain, INK_STEP)
+    # an empty cell grows its dot by the step bound; only non-empty cells divide
+    # (masses may be subnormal). The floor only keeps the ratio finite: the step
+    # bound clips it anyway
+    full = mass > 0
+    f = np.full(len(mass), INK_STEP)
+    f[full] = (mean / np.maximum(mass[full], 1e-12 * mean)) ** gain
     ink = np.clip(ink * np.clip(f, 1 / INK_STEP, INK_STEP), 1 / INK_RANGE, INK_RANGE)
     return ink / np.exp(np.mean(np.log(ink)))
 

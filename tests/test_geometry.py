@@ -318,3 +318,14 @@ def test_torus_with_a_large_empty_region_is_solved_exactly():
     for i in [600, 601, *np.argsort(-m.radii)[2:6]]:
         want = ref.chebyshev_ref(pts, None, tor, i)
         assert m.radii[i] == pytest.approx(want.radius, abs=1e-12)
+
+
+def test_certificate_searches_the_whole_band_of_an_octave():
+    """Two disks of radius 1.9 overlap at distance 3.5; a 1.0 disk shares their octave
+    [1, 2): the pair search must reach r_i + the octave's largest radius, not its smallest."""
+
+    C = np.array([[5.0, 5.0], [8.5, 5.0], [5.0, 12.0]])
+    cert = certify_disks(C, [1.9, 1.9, 1.0], Domain.rect(20.0, 20.0))
+    assert not cert.valid and not cert.disjoint
+    assert cert.min_gap == pytest.approx(3.5 - 3.8)
+    assert certify_disks(C, [1.7, 1.7, 1.0], Domain.rect(20.0, 20.0)).valid
