@@ -29,20 +29,14 @@ import dataclasses
 import math
 
 __all__ = ["option", "check_fields", "describe", "add_arguments", "from_namespace",
-           "OptionConflict", "flag_name", "changed"]
+           "NamedOptionError", "OptionConflict", "flag_name", "changed"]
 
 
-class OptionConflict(ValueError):
-    """Options that contradict each other (the CLI exits with status 2).
+class NamedOptionError(ValueError):
+    """An error about options, named in its message.
 
     The message is a template whose ``{}`` are option names; :meth:`render`
     spells them, as Python names (``str``) or as command-line flags.
-
-    Examples
-    --------
-    >>> exc = OptionConflict("{} must be below {}", "black_point", "white_point")
-    >>> str(exc), exc.render(flag_name)
-    ('black_point must be below white_point', '--black-point must be below --white-point')
     """
 
     def __init__(self, template, *names):
@@ -52,6 +46,17 @@ class OptionConflict(ValueError):
     def render(self, spell):
         """The message with each option name spelled by ``spell(name)``."""
         return self.template.format(*(spell(n) for n in self.names))
+
+
+class OptionConflict(NamedOptionError):
+    """Options that contradict each other (the CLI exits with status 2).
+
+    Examples
+    --------
+    >>> exc = OptionConflict("{} must be below {}", "black_point", "white_point")
+    >>> str(exc), exc.render(flag_name)
+    ('black_point must be below white_point', '--black-point must be below --white-point')
+    """
 
 
 def flag_name(name):

@@ -293,7 +293,7 @@ def test_jobs_two_gives_the_files_of_jobs_one(ctx, tmp_path):
 def cluster():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as lc, \
+                                  dashboard_address=":0") as lc, \
             distributed.Client(lc) as client:
         yield lc, client
 
