@@ -490,19 +490,9 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     pm += lay["offset"]
     order, before, after = pen_path_order(pm, method=pen_path)
     meta = _svg_meta(result, lay, rad, pen_mm, invert, layer)
-    paint = (f'fill="{"white" if invert else "black"}" stroke="none"' if pen_mm is None else
-             f'fill="none" stroke="{"white" if invert else "black"}" '
-             f'stroke-width="{pen_mm:.4f}" stroke-linecap="round" stroke-linejoin="round"')
-    draw = 0.0
-    with atomic_write(path, "w") as fh:
-        fh.write(_svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta, paint,
-                           invert))
-        for a in range(0, len(order), 100_000):
-            text, length = _svg_dots(pm[order[a : a + 100_000]], rad[order[a : a + 100_000]],
-                                     pen_mm)
-            fh.write(text)
-            draw += length
-        fh.write("  </g>\n</svg>\n")
+    head = _svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta,
+                     _svg_paint(pen_mm, invert), invert)
+    draw = _write_svg_file(path, head, pm[order], rad[order], pen_mm)
     info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
             "page_mm": list(lay["page"]), "n": int(len(p)), "travel_before_mm": before,
             "travel_after_mm": after, "moved_inside": moved, "pen_downs": int(len(p)),
@@ -511,6 +501,27 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info
+
+
+def _svg_paint(pen_mm, invert):
+    """The dots' paint: filled circles, or the pen's stroke."""
+    if pen_mm is None:
+        return f'fill="{"white" if invert else "black"}" stroke="none"'
+    return (f'fill="none" stroke="{"white" if invert else "black"}" '
+            f'stroke-width="{pen_mm:.4f}" stroke-linecap="round" stroke-linejoin="round"')
+
+
+def _write_svg_file(path, head, centres, rad, pen_mm):
+    """Write the SVG (atomically) in chunks of dots; the pen-down drawing length (mm)."""
+    draw = 0.0
+    with atomic_write(path, "w") as fh:
+        fh.write(head)
+        for a in range(0, len(centres), 100_000):
+            text, length = _svg_dots(centres[a : a + 100_000], rad[a : a + 100_000], pen_mm)
+            fh.write(text)
+            draw += length
+        fh.write("  </g>\n</svg>\n")
+    return draw
 
 
 def _svg_radii(result, radii, scale, dot_mm, dots, radius_scale):

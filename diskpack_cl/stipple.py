@@ -412,6 +412,42 @@ def _centroid_density(darkness, opt):
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
 
+def _tone_and_radii(gray, opt):
+    """The gray image under the paper tone, its darkness and the radius field."""
+    if opt.paper_tone > 0:
+        gray = gray * (1.0 - opt.paper_tone)
+    darkness = 1.0 - gray
+    if not darkness.max() > 1e-9:
+        raise ValueError("nothing to stipple: the image is white")
+    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor,
+                          sigma=opt.radius_sigma)
+    return gray, darkness, rfield
+
+
+def _stage(engine, opt, gray, darkness, rfield):
+    """What every step works against (:class:`StippleStage`), the detail fields included."""
+    weight = None
+    if opt.features == "detail":
+        rfield, weight = detail_fields(gray, opt.n, rfield)
+    return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight,
+                        _blurred(darkness, INK_SIGMA))
+
+
+def _certified_result(state, stage, history, timings, t_start, darkness):
+    """The :class:`StippleResult` of the final state: radii at the largest certified k."""
+    W, H = stage.size
+    t0 = time.perf_counter()
+    r = dot_radii(state, stage, state.points)
+    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    timings["certify"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t_start
+    return StippleResult(
+        points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
+        history=history, width=W, height=H, timings=timings, params=stage.options.params(),
+        engine=stage.engine.name, tone_radius=tone_radius(len(state.points), darkness),
+    )
+
+
 def stipple(image, n, options=None, *, start=None, callback=None, device=None, backend="auto",
             verify=False, profile=False, **overrides):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
@@ -479,12 +515,7 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     gray = to_gray(image, invert=options.invert)
     H, W = gray.shape
     opt = options.plan(n, W, H)
-    if opt.paper_tone > 0:
-        gray = gray * (1.0 - opt.paper_tone)
-    darkness = 1.0 - gray
-    if not darkness.max() > 1e-9:
-        raise ValueError("nothing to stipple: the image is white")
-    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
+    gray, darkness, rfield = _tone_and_radii(gray, opt)
     timings = {"load": time.perf_counter() - t_start}
     t0 = time.perf_counter()
     x = _start_points(gray, opt, start)
@@ -492,20 +523,7 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device, profile)
     if verify:
         engine = VerifiedEngine(engine)
-    weight = None
-    if opt.features == "detail":
-        rfield, weight = detail_fields(gray, opt.n, rfield)
-    stage = StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight,
-                         _blurred(darkness, INK_SIGMA))
+    stage = _stage(engine, opt, gray, darkness, rfield)
     state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
-    t0 = time.perf_counter()
-    r = dot_radii(state, stage, state.points)
-    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
-    timings["certify"] = time.perf_counter() - t0
     timings.update(stage_seconds)
-    timings["total"] = time.perf_counter() - t_start
-    return StippleResult(
-        points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
-        history=history, width=W, height=H, timings=timings, params=opt.params(), engine=engine.name,
-        tone_radius=tone_radius(len(state.points), darkness),
-    )
+    return _certified_result(state, stage, history, timings, t_start, darkness)
