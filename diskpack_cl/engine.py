@@ -163,8 +163,7 @@ def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
 def _opencl_engine(ctx, domain, n, backend, route, grid, profile):
     """The OpenCL route for `ctx`: the per-cell kernel where the device has
     float64; else the raster route on GPUs, and for ``auto`` on CPUs without
-    float64 the exact engine (measured: the raster route is slower than scipy
-    alone on a CPU)."""
+    float64 the exact engine."""
     import pyopencl as cl
 
     from .cells import has_fp64
@@ -191,8 +190,8 @@ def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="aut
     grid : tuple of int, optional
         Raster shape ``(ny, nx)`` of the ``raster`` route.
     route : {"auto", "cells", "raster"}
-        OpenCL route: ``auto`` takes ``cells`` on devices with float64 (the
-        fastest engine there at every size measured), ``raster`` on GPUs
+        OpenCL route: ``auto`` takes ``cells`` on devices with float64,
+        ``raster`` on GPUs
         without float64, and with ``backend="auto"`` the exact engine on a
         CPU without float64.
     profile : bool

@@ -35,9 +35,9 @@ SCHEDULES = {
 # Disk packing blended with Lloyd (see :func:`stipple`, ``"mix"`` phases):
 # 35 steps of MIC + 0.5 (centroid - MIC), then 12 of MIC + 0.4 (centroid - MIC),
 # with the density-consistent radii; the default until the spacing bands
-# below (issue 11). Measured in docs/stipple_quality.md.
+# below. Measured in docs/stipple_quality.md.
 SCHEDULES["classic"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
-# The classic steps, shortened to 18 + 7, with features="detail" (issue 11):
+# The classic steps, shortened to 18 + 7, with features="detail":
 # fewer packing steps leave the points less hexagonal (lower |psi6|), the
 # feature-aware blend gives the tone back. Measured in docs/stipple_quality.md.
 SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.cells import FLAGS, NO_CODE, CellMIC, refine_active
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic

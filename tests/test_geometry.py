@@ -5,7 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import certify_disks, exact_mic
 
@@ -121,7 +121,7 @@ def test_exact_mic_weight_shift_invariance(case, shift):
 
 _CLUSTERED = """
 import numpy as np
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 rng = np.random.default_rng(2)
