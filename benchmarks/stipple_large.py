@@ -47,7 +47,7 @@ def main():
     print(f"n={args.n} image={args.size}x{args.size} total {total:.1f} s, peak RSS {peak_gib:.2f} GiB, "
           f"certified valid: {res.certificate.valid}")
     for kind, rows in by_kind.items():
-        keys = sorted({k for r in rows for k in r if k.endswith("_s")})
+        keys = ["seconds"] + sorted({k for r in rows for k in r if k.endswith("_s")})
         parts = ", ".join(f"{k} {np.median([r.get(k, 0.0) for r in rows]):.2f}" for k in keys)
         print(f"  {kind}: {len(rows)} iterations, median seconds: {parts}")
     print(f"  timings: { {k: round(v, 2) for k, v in res.timings.items()} }")

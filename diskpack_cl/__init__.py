@@ -19,6 +19,7 @@ from .schedule import StippleOptions
 from .stipple import StippleResult, stipple
 from .export import WriteOptions, read_stipple, write_stipple
 from .image import ToneOptions, load_gray, sample_image_path
+from .multipen import ColorStippleResult, stipple_colors
 
 __all__ = [
     "Domain", "CertificateError", "certify_disks", "exact_mic", "normalized_radius",
@@ -26,6 +27,7 @@ __all__ = [
     "RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleOptions", "StippleResult", "error_diffusion", "stipple", "read_stipple",
     "write_stipple", "WriteOptions", "ToneOptions", "load_gray", "sample_image_path",
+    "ColorStippleResult", "stipple_colors",
 ]
 
 try:  # the installed distribution's version (pyproject.toml), read once

@@ -793,10 +793,11 @@ def stray_dots(points, darkness, *, threshold=0.02):
     A dot's spacing is the distance ``d_nn`` to its nearest neighbour, so
     the disk of radius ``d_nn / 2`` around it is the room it has to itself.
     When no pixel with darkness above `threshold` meets that disk (its
-    square, not only its centre), the dot draws ink on white paper: a plotter inks it, the eye sees
-    it first. Weighted Lloyd stippling leaves none on black-and-white
-    drawings; a tone blur hides them, and a spacing percentile rewards them
-    for being far apart, which is why they need a measure of their own.
+    square, not only its centre), the dot draws ink on white paper: a
+    plotter inks it, the eye sees it first. Weighted Lloyd stippling leaves
+    none on black-and-white drawings; a tone blur hides them, and a spacing
+    percentile rewards them for being far apart, which is why they need a
+    measure of their own.
 
     Parameters
     ----------

@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 import signal
@@ -479,11 +480,13 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     scale = o.scale(result.width, result.height)
     png_scale = preview_scale(result.width, result.height, o.png_scale)
     dot_mm = o.dot_mm
-    if dot_mm is None and dots == "tone":
+    color = getattr(result, "pen", None) is not None   # one tone dot size per pen
+    if dot_mm is None and dots == "tone" and not color:
         dot_mm = 2.0 * _tone_radius(result, gray, o.invert) * o.radius_scale * scale
     svg_opts = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, pen_path=o.pen_path,
                     invert=o.invert, pen_mm=o.pen_mm, dots=dots,
-                    plot_speed_mm_s=o.plot_speed_mm_s, **o.layout())
+                    plot_speed_mm_s=o.plot_speed_mm_s, **o.layout(),
+                    **({"pen_order": o.pen_order} if color else {}))
     png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
                     progress=progress)
     if dot_mm is not None:  # preview the pen's dots
@@ -512,25 +515,37 @@ def _tone_radius(result, gray, invert):
     return tone_radius(len(result.points), gray if invert else 1.0 - gray)
 
 
+def _item_image(path, params):
+    """``(gray, image, run)`` of an item: the toned gray image and :func:`diskpack_cl.stipple`,
+    or (with ``params["color"]``) the colour image and :func:`diskpack_cl.stipple_colors`."""
+    color = params.get("color")
+    if color is None:
+        from diskpack_cl import load_gray, stipple
+        from diskpack_cl.image import ToneOptions
+
+        gray = ToneOptions(**params.get("tone", {})).adjust(
+            load_gray(path, allow_large=params.get("allow_large", False)))
+        return gray, gray, stipple
+    from diskpack_cl.color import load_rgb
+    from diskpack_cl.multipen import stipple_colors
+
+    return None, load_rgb(path), functools.partial(stipple_colors, **color)
+
+
 def _stipple_item(item, device, progress):
-    from diskpack_cl import load_gray, stipple
     from diskpack_cl.export import WriteOptions
-    from diskpack_cl.image import ToneOptions
-    from diskpack_cl.schedule import StippleOptions
 
     params = item.params
     count = {k: params.get(k) for k in ("n", "density", "dots_per_cm2")}
     write = WriteOptions(**item.write)
-    gray = ToneOptions(**params.get("tone", {})).adjust(
-        load_gray(item.input, allow_large=params.get("allow_large", False)))
-    n = dots_for_image(gray.shape[1], gray.shape[0], **count, **write.layout())
+    gray, image, run = _item_image(item.input, params)
+    n = dots_for_image(image.shape[1], image.shape[0], **count, **write.layout())
     callback = None
     if progress is not None:
         def callback(entry):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
-    res = stipple(gray, n, StippleOptions(**params.get("options", {})), device=device,
-                  callback=callback)
+    res = run(image, n, device=device, callback=callback, **params.get("options", {}))
     t = time.perf_counter()
     dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), write)
     summary = res.summary()
@@ -871,7 +886,8 @@ def _image_dots(path, count, write):
 
 
 def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
-                 recursive=False, allow_large=False, write=None, tone=None, **overrides):
+                 recursive=False, allow_large=False, write=None, tone=None, color=None,
+                 **overrides):
     """Items for stippling every image of ``inputs`` (files or folders).
 
     Parameters
@@ -893,6 +909,11 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
     **overrides
         Fields of :class:`~diskpack_cl.schedule.StippleOptions` (``gamma``,
         ``schedule``, ``seed``, ...) replacing those of `options`.
+    color : ColorOptions or dict, optional
+        Several pens: the separation of :func:`diskpack_cl.stipple_colors`
+        (:class:`diskpack_cl.color.ColorOptions`, or a dict of ``colors``,
+        ``black_generation``, ``clean_black``, ``clean_white``) makes every
+        item a colour stippling.
 
     Raises
     ------
@@ -916,6 +937,8 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
               "options": changed(options), "tone": changed(tone or ToneOptions())}
     if allow_large:
         params["allow_large"] = True
+    if color is not None:
+        params["color"] = color if isinstance(color, dict) else color.separation()
     uses_n = any("{n" in t for t in outputs)
     items = []
     for i, path in enumerate(expand_inputs(inputs, recursive=recursive)):
@@ -1004,7 +1027,8 @@ class Batch:
 
 
 def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
-                 recursive=False, allow_large=False, write=None, tone=None, manifest=None,
+                 recursive=False, allow_large=False, write=None, tone=None, color=None,
+                 manifest=None,
                  overwrite=False, jobs=1, devices=None, client=None, collect=False,
                  progress=None, **overrides):
     """Stipple many images: a :class:`Batch` that yields one record per image as it finishes.
@@ -1028,7 +1052,8 @@ def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_pe
     """
     items = plan_stipple(inputs, outputs, options, n=n, density=density,
                          dots_per_cm2=dots_per_cm2, recursive=recursive,
-                         allow_large=allow_large, write=write, tone=tone, **overrides)
+                         allow_large=allow_large, write=write, tone=tone, color=color,
+                         **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 

@@ -223,6 +223,11 @@ PLOT_SPEED_MM_S = 50.0
 PEN_LIFT_S = 0.3
 
 
+def _pen_names(text):
+    """The command line's pen order: ``NAME,...``."""
+    return [v.strip() for v in text.split(",")]
+
+
 def _check_page(page):
     paper_size(page)
 
@@ -286,6 +291,9 @@ class WriteOptions:
         PLOT_SPEED_MM_S, f"plot-time estimate: pen speed V mm/s drawing and travelling, plus "
         f"{PEN_LIFT_S:g} s to lower and raise the pen per dot (default {PLOT_SPEED_MM_S:g})",
         unit="mm/s", lo=0, lo_open=True, metavar="V", group=_OUTPUT)
+    pen_order: object = option(None, "SVG layer order of a colour stippling (--colors, "
+                               "--pens; first drawn first; default: lightest pen first)",
+                               cli_type=_pen_names, metavar="NAME,...", group=_OUTPUT)
     invert: bool = option(False, "light dots on dark paper", cli=False)
 
     def __post_init__(self):
@@ -715,9 +723,19 @@ def write_npz(path, result):
     if getattr(result, "params", None):
         data["params"] = np.asarray(json.dumps(result.params, default=str))
     data.update(_certificate_fields(result))
+    data.update(_pen_fields(result))
     with atomic_write(path, "wb") as fh:
         np.savez_compressed(fh, **data)
     return {"n": int(len(p))}
+
+
+def _pen_fields(result):
+    """A colour stippling's ``pen``, ``pen_names``, ``pen_colors``, ``pen_radius`` (else none)."""
+    if getattr(result, "pen", None) is None:
+        return {}
+    return {"pen": np.asarray(result.pen, np.int64), "pen_names": np.asarray(result.names, str),
+            "pen_colors": np.asarray(result.colors, np.float64),
+            "pen_radius": np.asarray(result.pen_radius, np.float64)}
 
 
 #: The first line of a stippling CSV starts with this (then ``key=value`` fields).
@@ -738,9 +756,24 @@ def write_csv(path, result):
             "tone_radius": None if tone is None else float(tone)}
     tag = " ".join(f"{key}={v!r}" for key, v in meta.items() if v is not None and v == v)
     with atomic_write(path, "w") as fh:
+        if getattr(result, "pen", None) is not None:
+            _write_pen_csv(fh, f"{CSV_TAG}{tag}", p, r, result)
+            return {"n": int(len(p))}
         fh.write(f"{CSV_TAG}{tag}\nx,y,r\n")
         np.savetxt(fh, np.column_stack([p, r]), fmt="%.17g", delimiter=",")
     return {"n": int(len(p))}
+
+
+def _write_pen_csv(fh, tag, p, r, result):
+    """A colour stippling's CSV: the tag line with ``pens=NAME:#rrggbb;...``, then
+    ``x,y,r,pen`` rows (the pen's name)."""
+    from diskpack_cl.multipen import hex_color
+
+    pens = ";".join(f"{name}:{hex_color(c)}" for name, c in zip(result.names, result.colors))
+    rows = np.char.mod("%.17g", np.column_stack([p, r])).tolist()
+    names = np.asarray(result.names)[np.asarray(result.pen)].tolist()
+    fh.write(f"{tag} pens={pens}\nx,y,r,pen\n"
+             + "".join(",".join(row + [q]) + "\n" for row, q in zip(rows, names)))
 
 
 WRITERS = {".svg": write_svg, ".png": write_png, ".npz": write_npz, ".csv": write_csv}
@@ -780,6 +813,10 @@ def write_stipple(path, result, **opts):
     writer. Returns the writer's info dict.
     """
     ext = check_output_path(path)
+    if getattr(result, "pen", None) is not None and ext in (".svg", ".png"):
+        from diskpack_cl.color_export import COLOR_WRITERS
+
+        return COLOR_WRITERS[ext](path, result, **opts)
     return WRITERS[ext](path, result, **opts)
 
 
@@ -869,13 +906,27 @@ def _read_npz(path):
         opt = {k: (np.asarray(z[k], np.float64) if k == "base_radii" else float(z[k]))
                for k in ("k", "tone_radius", "base_radii") if k in z.files}
         return _stippling(z["points"], z["radii"], z["width"], z["height"], params=params,
-                          certificate=SimpleNamespace(**cert) if cert else None, **opt)
+                          certificate=SimpleNamespace(**cert) if cert else None, **opt,
+                          **_read_pens(z))
+
+
+def _read_pens(z):
+    """A colour stippling's ``pen``, ``names``, ``colors``, ``pen_radius`` from an open .npz."""
+    if "pen" not in z.files:
+        return {}
+    return {"pen": np.asarray(z["pen"], np.int64), "names": tuple(str(v) for v in z["pen_names"]),
+            "colors": np.asarray(z["pen_colors"], np.float64),
+            "pen_radius": np.asarray(z["pen_radius"], np.float64)}
 
 
 def _read_csv(path):
     lines = Path(path).read_text(encoding="utf-8").splitlines()
     tag = lines.pop(0)[len(CSV_TAG):] if lines and lines[0].startswith(CSV_TAG) else ""
-    meta = {key: float(v) for key, v in (f.split("=") for f in tag.split())}
+    meta = dict(f.split("=", 1) for f in tag.split())
+    pens = meta.pop("pens", None)
+    meta = {key: float(v) for key, v in meta.items()}
+    if pens is not None:
+        return _read_pen_csv(lines, pens, meta)
     if not lines or lines[0].replace(" ", "").lower() != "x,y,r":
         raise ValueError("the header line must be x,y,r")
     data = np.loadtxt(lines[1:], delimiter=",", ndmin=2, comments="#").reshape(-1, 3)
@@ -884,6 +935,20 @@ def _read_csv(path):
     height = meta.get("height") or int(np.ceil(ext[:, 1].max(initial=1)))
     return _stippling(data[:, :2], data[:, 2], width, height, k=meta.get("k"),
                       tone_radius=meta.get("tone_radius"))
+
+
+def _read_pen_csv(lines, pens, meta):
+    """A colour stippling's CSV (:func:`_write_pen_csv`): dots, pens, their colours."""
+    from diskpack_cl.color import parse_pens
+
+    names, colors = parse_pens(pens.replace(":", "=").replace(";", ","))
+    if not lines or lines[0].replace(" ", "").lower() != "x,y,r,pen":
+        raise ValueError("the header line of a colour stippling must be x,y,r,pen")
+    rows = [line.split(",") for line in lines[1:] if line.strip()]
+    data = np.array([row[:3] for row in rows], np.float64).reshape(-1, 3)
+    pen = np.array([names.index(row[3]) for row in rows], np.int64)
+    return _stippling(data[:, :2], data[:, 2], meta["width"], meta["height"], k=meta.get("k"),
+                      tone_radius=meta.get("tone_radius"), pen=pen, names=names, colors=colors)
 
 
 _SVG_NS = "{http://www.w3.org/2000/svg}"
@@ -898,13 +963,32 @@ def _read_svg(path):
     if meta is None:
         raise ValueError("not written by diskpack_cl (no <metadata id=\"diskpack_cl\">)")
     meta = json.loads(meta.text)
-    layer = next((g for g in root.iter(f"{_SVG_NS}g")
-                  if g.get("{http://www.inkscape.org/namespaces/inkscape}label") == meta["layer"]),
-                 None)
-    if layer is None:
-        raise ValueError(f"no layer {meta['layer']!r} of dots")
+    layers = {g.get("{http://www.inkscape.org/namespaces/inkscape}label"): g
+              for g in root.iter(f"{_SVG_NS}g")}
+    names = meta.get("pens", [meta["layer"]])   # a colour stippling: one layer per pen
+    missing = [name for name in names if name not in layers]
+    if missing:
+        raise ValueError(f"no layer {missing[0]!r} of dots")
     pen = meta["pen_mm"] or 0.0
-    centres, radii = [], []
+    centres, radii, pens = [], [], []
+    for i, name in enumerate(names):
+        got = _svg_layer_dots(layers[name], pen, centres, radii)
+        pens += [i] * got
+    s = meta["mm_per_px"]
+    points = (np.array(centres).reshape(-1, 2) - meta["offset_mm"]) / s
+    radii = np.full(len(radii), 0.5 * meta["dot_mm"]) if meta["dot_mm"] else np.array(radii)
+    tone = meta["tone_radius"] or (0.5 * meta["dot_mm"] / s if meta["dot_mm"] else None)
+    extra = {} if "pens" not in meta else {
+        "pen": np.array(pens, np.int64), "names": tuple(names),
+        "colors": np.array([[int(layers[n].get("stroke")[k:k + 2], 16) / 255 for k in (1, 3, 5)]
+                            for n in names])}
+    return _stippling(points, radii / s, meta["width"], meta["height"], k=meta["k"],
+                      tone_radius=tone, params={"invert": meta["invert"]}, **extra)
+
+
+def _svg_layer_dots(layer, pen, centres, radii):
+    """Append the centres and radii (mm) of one layer's dots; return how many."""
+    before = len(centres)
     for el in layer:
         if el.tag == f"{_SVG_NS}circle":
             centres.append((float(el.get("cx")), float(el.get("cy"))))
@@ -914,9 +998,4 @@ def _read_svg(path):
             touch = " h " in el.get("d")
             centres.append((x + 0.5 * third if touch else x - third, y))
             radii.append(0.5 * pen if touch else third + 0.5 * pen)
-    s = meta["mm_per_px"]
-    points = (np.array(centres).reshape(-1, 2) - meta["offset_mm"]) / s
-    radii = np.full(len(radii), 0.5 * meta["dot_mm"]) if meta["dot_mm"] else np.array(radii)
-    tone = meta["tone_radius"] or (0.5 * meta["dot_mm"] / s if meta["dot_mm"] else None)
-    return _stippling(points, radii / s, meta["width"], meta["height"], k=meta["k"],
-                      tone_radius=tone, params={"invert": meta["invert"]})
+    return len(centres) - before

@@ -29,7 +29,9 @@ One iteration:
 3. Mix step (the default schedule): a disk-packing step whose move is
    blended with the density-weighted centroid of the *same power cell*:
    ``x <- m + blend * (c - m)``, ``m`` the MIC centre, ``c`` the centroid.
-   ``blend = 0`` is a disk-packing step.
+   ``blend = 0`` is a disk-packing step. With ``support > 0`` the blend of a
+   dot whose MIC centre lies off its cell's ink rises towards 1
+   (:func:`off_support`).
    With ``capacity > 0`` every packing or mix step also moves each dot's
    radius factor towards the same ink (darkness) in every power cell
    (:func:`equal_ink`, capacity-constrained weights).
@@ -51,20 +53,18 @@ packing and centroid moves no longer pull the tone curve apart (with gray
 radii and gamma 3 a packing's density goes like ``I^-3``, not ``1 - I``).
 
 The default schedule follows the dot spacing ``s = sqrt(W H / n)`` px
-(:data:`diskpack_cl.schedule.SPACING_BANDS`, measured in
-``docs/stipple_quality.md``): below 3 px, 16 mix steps at blend 0.7 then 2
-or 3 disk-packing steps with radii blurred by 1.5 px (the packing steps
-restore the spacing and undo the hexagonal order the centroid pulls build);
-from 3 to 6 px the ``"detail"`` schedule (18 + 7 mix steps, feature-aware);
-from 6 px on 35 mix steps at blend 0.6 and 12 at 0.4, feature-aware, radii
-blurred by 2 px. All use density radii (floor 0.01), centroid density
-blurred by 0.5 px and ``k`` from the 15% quantile of ``R_i / r_i``. Tuned
-on the tuning photographs of the validation set, it beats 50 Lloyd
-iterations in tone (sigma 3), spacing P01 >= 0.85 and |psi6| on 12 of 24
-held-out (photograph, n) pairs, against 2 for the former default (now
-``"classic"``: 35 + 12 mix steps at blend 0.5 and 0.4, radii blurred by 3
-px). Options that come with a named schedule are in :data:`SCHEDULE_OPTIONS`;
-explicit keyword arguments override them.
+(:data:`diskpack_cl.schedule.SPACING_BANDS`): below 3 px, 16 mix steps at
+blend 0.7, one or two disk-packing steps with radii blurred by 1.5 px, and a
+last step at blend 0.5; from 3 to 6 px 18 + 6 mix steps, feature-aware, and
+a last one at 0.5; from 6 px on 20 + 6 mix steps, feature-aware, radii
+blurred by 2 px, and a last step all the way to the centroids. All use
+density radii (floor 0.01), centroid density blurred by 0.5 px, ``k`` from
+the 15% quantile of ``R_i / r_i``, ``support=1`` (a dot whose largest empty
+disk leaves its cell's ink goes to the centroid: white paper stays white,
+outlines stay sharp) and ``capacity=0.1`` (equal ink per dot). The former
+defaults remain as ``"classic"`` and ``"detail"``. Options that come with a
+named schedule are in :data:`SCHEDULE_OPTIONS`; explicit keyword arguments
+override them. Measured in ``docs/stipple_quality.md``.
 
 Empty power cells (possible with unequal weights) keep their point where it
 is; they are counted in the history (``"empty"``), never produce NaN and
@@ -242,12 +242,9 @@ def equal_ink(ink, mass, gain):
     """
     ink = np.ones(len(mass)) if ink is None else ink
     mean = mass.sum() / len(mass)
-    # an empty cell grows its dot by the step bound; only non-empty cells divide
-    # (masses may be subnormal). The floor only keeps the ratio finite: the step
-    # bound clips it anyway
-    full = mass > 0
-    f = np.full(len(mass), INK_STEP)
-    f[full] = (mean / np.maximum(mass[full], 1e-12 * mean)) ** gain
+    # the floor only keeps the ratio finite: the step bound clips it anyway
+    floor = max(1e-12 * mean, np.finfo(float).tiny)   # also where every mass is subnormal
+    f = np.where(mass > 0, (mean / np.maximum(mass, floor)) ** gain, INK_STEP)
     ink = np.clip(ink * np.clip(f, 1 / INK_STEP, INK_STEP), 1 / INK_RANGE, INK_RANGE)
     return ink / np.exp(np.mean(np.log(ink)))
 
@@ -412,20 +409,20 @@ def _centroid_density(darkness, opt):
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
 
-def _tone_and_radii(gray, opt):
-    """The gray image under the paper tone, its darkness and the radius field."""
+def _toned(gray, opt):
+    """The gray image under the paper tone and its darkness (refused when white)."""
     if opt.paper_tone > 0:
         gray = gray * (1.0 - opt.paper_tone)
     darkness = 1.0 - gray
     if not darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
-    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor,
-                          sigma=opt.radius_sigma)
-    return gray, darkness, rfield
+    return gray, darkness
 
 
-def _stage(engine, opt, gray, darkness, rfield):
-    """What every step works against (:class:`StippleStage`), the detail fields included."""
+def _make_stage(gray, opt, engine):
+    """The :class:`StippleStage` of a gray image: radius field, centroid density, ink."""
+    darkness = 1.0 - gray
+    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield)
@@ -515,7 +512,7 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     gray = to_gray(image, invert=options.invert)
     H, W = gray.shape
     opt = options.plan(n, W, H)
-    gray, darkness, rfield = _tone_and_radii(gray, opt)
+    gray, darkness = _toned(gray, opt)
     timings = {"load": time.perf_counter() - t_start}
     t0 = time.perf_counter()
     x = _start_points(gray, opt, start)
@@ -523,7 +520,7 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device, profile)
     if verify:
         engine = VerifiedEngine(engine)
-    stage = _stage(engine, opt, gray, darkness, rfield)
+    stage = _make_stage(gray, opt, engine)
     state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
     timings.update(stage_seconds)
     return _certified_result(state, stage, history, timings, t_start, darkness)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from diskpack_cl import batch, cli
+from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions, write_npz
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import OptionConflict, describe, flag_name
@@ -17,10 +18,11 @@ from diskpack_cl.stipple import stipple
 STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
 IMAGE_MODULE = importlib.import_module("diskpack_cl.image")
 RELAX_MODULE = importlib.import_module("diskpack_cl.relax")
+MULTIPEN_MODULE = importlib.import_module("diskpack_cl.multipen")
 
 #: Options another option needs to be valid with it.
 COMPANIONS = {"gamma": ["--radii", "gray"], "margin_mm": ["--page", "a4"],
-              "landscape": ["--page", "a4"]}
+              "landscape": ["--page", "a4"], "pen_order": ["--colors", "cmy"]}
 
 
 def _cli_fields(cls):
@@ -37,6 +39,10 @@ def _example(f):
         value = [c for c in choices if c != f.default][-1]
     elif f.name == "page":
         value = "a4"
+    elif f.name == "pens":
+        value = "black=#000,red=#c00"
+    elif f.name == "pen_order":
+        return ["cyan", "yellow", "magenta"], ["--pen-order", "cyan,yellow,magenta"]
     elif f.name == "seed":
         value = 7
     elif m["integer"]:
@@ -122,11 +128,28 @@ def test_every_write_option_reaches_the_writers(f, command, small_result, monkey
 
     monkeypatch.setattr(batch, "write_stipple_outputs", fake)
     monkeypatch.setattr(STIPPLE_MODULE, "stipple", lambda *a, **k: small_result)
+    monkeypatch.setattr(MULTIPEN_MODULE, "stipple_colors", lambda *a, **k: small_result)
     src = tmp_path / "in.npz"
     write_npz(src, small_result)
     head = (["stipple", "sample", "-n", "20"] if command == "stipple" else ["export", str(src)])
-    _run([*head, "-o", str(tmp_path / "o.svg"), *argv, *COMPANIONS.get(f.name, [])])
+    extra = COMPANIONS.get(f.name, []) if command == "stipple" or f.name != "pen_order" else []
+    _run([*head, "-o", str(tmp_path / "o.svg"), *argv, *extra])
     assert getattr(seen["options"], f.name) == value
+
+
+@pytest.mark.parametrize("f", _cases(ColorOptions))
+def test_every_color_option_reaches_stipple_colors(f, monkeypatch, tmp_path):
+    value, argv = _example(f)
+    seen = {}
+
+    def fake(image, n, **kwargs):
+        seen.update(kwargs)
+        raise Stop
+
+    monkeypatch.setattr(MULTIPEN_MODULE, "stipple_colors", fake)
+    pens = [] if f.name in ("colors", "pens") else ["--colors", "cmy"]
+    _run(["stipple", "sample", "-n", "50", "-o", str(tmp_path / "o.svg"), *argv, *pens])
+    assert seen["colors" if f.name == "pens" else f.name] == value
 
 
 @pytest.mark.parametrize("command", ["poisson", "relax"])
@@ -148,7 +171,8 @@ def test_every_relax_option_reaches_relax_poisson(f, command, monkeypatch, tmp_p
     assert seen[f.name] == value
 
 
-@pytest.mark.parametrize("cls", [StippleOptions, ToneOptions, WriteOptions, RelaxOptions])
+@pytest.mark.parametrize("cls", [StippleOptions, ToneOptions, WriteOptions, RelaxOptions,
+                                 ColorOptions])
 def test_every_field_has_help_and_a_checked_default(cls):
     for name, d in describe(cls).items():
         assert d["help"] and not d["help"].endswith(" "), name

@@ -40,6 +40,7 @@ def _schedules_text():
 
 
 def _add_stipple(subparsers):
+    from diskpack_cl.color import ColorOptions
     from diskpack_cl.image import ToneOptions
     from diskpack_cl.options import add_arguments
     from diskpack_cl.schedule import _STIPPLING, StippleOptions
@@ -95,6 +96,7 @@ def _add_stipple(subparsers):
     add_arguments(p, ToneOptions, groups=groups)
     _device_options(g)
     _drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
+    add_arguments(p, ColorOptions)
     _batch_options(p).add_argument("--recursive", "-r", action="store_true",
                                    help="a folder given as IMAGE contributes the images of "
                                         "its subfolders too")
@@ -118,18 +120,20 @@ def _stipple_progress(args, total):
 
 
 def _stipple_objects(args):
-    """The options of the arguments: ``(StippleOptions, ToneOptions, WriteOptions)``.
+    """The options of the arguments: ``(StippleOptions, ToneOptions, WriteOptions, ColorOptions)``.
 
     Raises :class:`~diskpack_cl.options.OptionConflict` (status 2) for options
     that contradict each other.
     """
+    from diskpack_cl.color import ColorOptions
     from diskpack_cl.export import WriteOptions
     from diskpack_cl.image import ToneOptions
     from diskpack_cl.options import from_namespace
     from diskpack_cl.schedule import StippleOptions
 
     return (from_namespace(StippleOptions, args), from_namespace(ToneOptions, args),
-            from_namespace(WriteOptions, args, invert=args.invert))
+            from_namespace(WriteOptions, args, invert=args.invert),
+            from_namespace(ColorOptions, args))
 
 
 def _tone_count(args, write, gray, n):
@@ -161,7 +165,11 @@ def _run_stipple(args):
     from diskpack_cl.memory import check_stipple_memory
     from diskpack_cl.stipple import stipple
 
-    options, tone, write = _stipple_objects(args)
+    options, tone, write, color = _stipple_objects(args)
+    if color.separation() is not None:
+        return _run_stipple_colors(args, options, tone, write, color)
+    if write.pen_order is not None:
+        raise _UsageError("--pen-order orders the pens of --colors or --pens")
     if _batch_mode(args, args.images, args.output):
         if args.n == "tone":
             raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
@@ -203,12 +211,53 @@ def _run_stipple(args):
     return 0
 
 
-def _run_stipple_batch(args, options, tone, write):
+def _run_stipple_colors(args, options, tone, write, color):
+    """``diskpack stipple --colors/--pens``: one image, every pen's dots in one certified packing."""
+    from diskpack_cl.batch import dots_for_image
+    from diskpack_cl.color import load_rgb
+    from diskpack_cl.export import preview_scale
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.memory import check_stipple_memory
+    from diskpack_cl.multipen import stipple_colors
+    from diskpack_cl.options import changed, flag_name
+
+    mono = [flag_name(k) for k in ("invert", "paper_tone") if getattr(options, k)]
+    mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
+    if mono:
+        raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
+    if _batch_mode(args, args.images, args.output):
+        return _run_stipple_batch(args, options, ToneOptions(), write, color.separation())
+    t0 = time.perf_counter()
+    outputs = _checked_outputs(args)
+    rgb = load_rgb(_image_path(args.images[0]))
+    H, W = rgb.shape[:2]
+    n = dots_for_image(W, H, n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
+                       **write.layout())
+    write = write.replace(png_scale=preview_scale(W, H, write.png_scale))
+    check_stipple_memory(W, H, n, supersample=options.supersample, png_scale=write.png_scale,
+                         device=args.device, outputs=outputs)
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in options.plan(n, W, H).phases))
+    try:
+        res = stipple_colors(rgb, n, device=args.device, callback=callback,
+                             **color.separation(), **changed(options))
+    finally:
+        close()
+    summary = dict(res.summary(), image=str(args.images[0]))
+    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
+    if not args.quiet:
+        pens = ", ".join(f"{p['name']} {p['n']}" for p in summary["pens"])
+        print(f"{PROG}: {res.n} dots ({pens}) on {W}x{H} px, certified valid over all pens "
+              f"(min gap {res.certificate.min_gap:.3g} px), {summary['iterations']} iterations "
+              f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
+    return 0
+
+
+def _run_stipple_batch(args, options, tone, write, color=None):
     from diskpack_cl.batch import stipple_many
 
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
                          options, n=args.n, density=args.density,
                          dots_per_cm2=args.dots_per_cm2, recursive=args.recursive,
-                         allow_large=args.allow_large, write=write, tone=tone,
+                         allow_large=args.allow_large, write=write, tone=tone, color=color,
                          **_batch_run(args))
     return _report_batch(args, batch)

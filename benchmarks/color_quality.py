@@ -1,0 +1,164 @@
+"""Colour stippling: one certified packing of all pens' dots against the naive overlay.
+
+``python benchmarks/color_quality.py`` stipples the colour photographs of
+``tests/data/color/`` (astronaut, coffee, chelsea; 256 px, see
+``benchmarks/make_color_set.py``) with CMYK (and astronaut with three pens)
+two ways:
+
+* **multi-class**: :func:`diskpack_cl.multipen.stipple_colors` (area-mix
+  separation, all dots in one packing, certified disjoint);
+* **naive**: every layer stippled alone with the mono default
+  (:func:`diskpack_cl.stipple`, as many dots as the multi-class run gives
+  that pen) and the layers overlaid, from the same (area-mix) separation
+  (``naive``: the same layers, only the placement differs) and, for CMYK,
+  from the textbook overprint separation (``naive-overprint``: what tools
+  that stipple each channel alone do; independent layers overlap at random,
+  so their inks multiply on average, and saturated secondaries such as red
+  come from overlapping magenta and yellow dots).
+
+Measures (:func:`diskpack_cl.color.color_measures`): mean CIELAB Delta E
+after a blur of one dot spacing, tone SSIM per layer, spacing P01 per pen
+and of all dots; the seconds of each run and of a mono run of the same
+total n on the joint density (and that run's P01) (both after a mono run of that size, so that
+neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality.jsonl``; crops
+(photograph, naive overlays, multi-class) to ``docs/figures/color_crop_*.png``;
+``--table FILE`` prints the markdown table of ``docs/color.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from diskpack_cl import stipple
+from diskpack_cl.analysis import spacing
+from diskpack_cl.color import PALETTES, color_measures, load_rgb, pen_tone_radii, separate
+from diskpack_cl.color_export import write_color_png
+from diskpack_cl.multipen import stipple_colors
+
+ROOT = Path(__file__).resolve().parents[1]
+IMAGES = ("astronaut", "coffee", "chelsea")
+PENS = "black=#000,red=#c00,blue=#06c"
+
+
+def naive(image, palette, counts, model, seed=0):
+    """Each layer of `model`'s separation stippled alone (mono default) with ``counts[p]`` dots, overlaid."""
+    sep = separate(image, palette, model=model)
+    pts, pen = [], []
+    for p, (a, c) in enumerate(zip(sep.layers, counts)):
+        if c > 1:   # a layer of 0 or 1 dots is left empty
+            pts.append(stipple(1.0 - a, int(c), seed=seed + p).points)
+            pen.append(np.full(int(c), p))
+    pen = np.concatenate(pen)
+    return SimpleNamespace(points=np.concatenate(pts), pen=pen, names=sep.names, colors=sep.colors,
+                           layers=sep.layers, width=sep.layers.shape[2], height=sep.layers.shape[1],
+                           pen_radius=pen_tone_radii(sep.layers, np.bincount(pen, minlength=len(counts))),
+                           radii=np.ones(len(pen)))
+
+
+def _row(name, palette, n, method, res, rgb, seconds):
+    m = color_measures(res.points, res.pen, res.layers, res.colors, rgb)
+    return {"image": name, "palette": palette, "n": n, "method": method, "seconds": seconds,
+            "pens": list(res.names), "counts": np.bincount(res.pen, minlength=len(res.names)).tolist(),
+            **m}
+
+
+def crop(name, results, box, out, scale=2):
+    """Photograph and each result side by side, box (x, y, size) at `scale`."""
+    import tempfile
+
+    from PIL import Image
+
+    x, y, s = box
+    tiles = [Image.open(ROOT / "tests/data/color" / f"{name}.png").convert("RGB")
+             .crop((x, y, x + s, y + s)).resize((s * scale, s * scale), Image.LANCZOS)]
+    with tempfile.TemporaryDirectory() as tmp:
+        for res in results:
+            write_color_png(Path(tmp) / "t.png", res, scale=scale)
+            tiles.append(Image.open(Path(tmp) / "t.png").crop(
+                (x * scale, y * scale, (x + s) * scale, (y + s) * scale)))
+    sheet = Image.new("RGB", (len(tiles) * s * scale + 8 * (len(tiles) - 1), s * scale), "white")
+    for i, t in enumerate(tiles):
+        sheet.paste(t, (i * (s * scale + 8), 0))
+    sheet.save(out, optimize=True)
+
+
+BOXES = {"astronaut": (50, 10, 128), "coffee": (64, 40, 128), "chelsea": (70, 20, 128)}
+
+
+def run(name, palette, n, figures):
+    path = ROOT / "tests/data/color" / f"{name}.png"
+    rgb = load_rgb(path)
+    gray = 1.0 - separate(path, palette).darkness
+    stipple(gray, n)   # OpenCL buffers of this size allocated before either clock
+    t = time.perf_counter()
+    multi = stipple_colors(path, n, palette)
+    t_multi = time.perf_counter() - t
+    assert multi.certificate.valid
+    t = time.perf_counter()
+    mono = stipple(gray, n)
+    t_mono = time.perf_counter() - t
+    rows, overlays = [], []
+    for model in ("area", "overprint") if palette in PALETTES else ("area",):
+        t = time.perf_counter()
+        overlays.append(naive(path, palette, multi.counts, model))
+        method = "naive" if model == "area" else "naive-overprint"
+        rows.append(_row(name, palette, n, method, overlays[-1], rgb, time.perf_counter() - t))
+    rows.append(dict(_row(name, palette, n, "multi-class", multi, rgb, t_multi), mono_seconds=t_mono,
+                     mono_p01=spacing(mono.points, 1.0 - gray).p01))
+    if figures:
+        crop(name, overlays + [multi], BOXES[name], ROOT / "docs/figures" / f"color_crop_{name}.png")
+    return rows
+
+
+def _cells(values):
+    return " / ".join("-" if v is None else f"{v:.2f}" for v in values)
+
+
+def table(path):
+    """Markdown rows of a results file: per image, palette and n, each method's measures."""
+    rows = [json.loads(line) for line in open(path)]
+    out = ["| image | pens | n | method | Delta E | P01 all dots | P01 per pen | SSIM per layer | seconds |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        sec = f"{r['seconds']:.1f}" + (f" (mono {r['mono_seconds']:.1f})" if "mono_seconds" in r else "")
+        joint = f"{r['p01_joint']:.3f}" + (f" (mono {r['mono_p01']:.3f})" if "mono_p01" in r else "")
+        out.append(f"| {r['image']} | {'/'.join(r['pens'])} | {r['n']} | {r['method']} | "
+                   f"{r['delta_e']:.1f} | {joint} | {_cells(r['p01'])} | "
+                   f"{_cells(r['ssim'])} | {sec} |")
+    return "\n".join(out)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--table", metavar="JSONL", help="print the markdown table of a results file and stop")
+    ap.add_argument("--n", type=int, nargs="+", default=[5000, 15000])
+    ap.add_argument("--images", nargs="+", default=list(IMAGES))
+    ap.add_argument("--out", default=str(ROOT / "docs/color_quality.jsonl"))
+    ap.add_argument("--no-figures", action="store_true")
+    args = ap.parse_args(argv)
+    if args.table:
+        print(table(args.table))
+        return
+    jobs = [(name, "cmyk", n) for name in args.images for n in args.n]
+    jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in args.images]
+    with open(args.out, "w") as fh:
+        for name, palette, n in jobs:
+            figures = not args.no_figures and palette == "cmyk" and n == max(args.n)
+            for row in run(name, palette, n, figures):
+                fh.write(json.dumps(row) + "\n")
+                fh.flush()
+                r = lambda v: "-" if v is None else f"{v:.3f}"   # noqa: E731
+                print(f"{name} {palette} n={n} {row['method']}: dE {row['delta_e']:.2f} "
+                      f"P01 joint {row['p01_joint']:.3f} per pen "
+                      + " ".join(map(r, row["p01"])) + " SSIM " + " ".join(map(r, row["ssim"]))
+                      + f" {row['seconds']:.1f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()

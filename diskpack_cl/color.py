@@ -1,0 +1,511 @@
+"""Colour separation into pen layers, ink compositing and colour measures.
+
+A colour stippling draws every dot with one of a set of pens. The dots of a
+certified packing never overlap, so what the eye sees after blurring is an
+*area mix* (a Neugebauer mix without overprints): with ``a_p`` the fraction
+of the paper that pen ``p`` covers and ``c_p`` its colour in linear RGB, the
+reflectance is ``(1 - sum a_p) * white + sum a_p c_p``, linear in the
+coverages. Separation inverts this model per pixel:
+
+* **any set of pens** (``--pens NAME=COLOR,...``): the coverages are the
+  constrained least-squares solution of ``white + sum a_p (c_p - white) =
+  t`` in linear RGB (``t`` the pixel) with ``a_p >= 0`` and ``sum a_p <=
+  1``: the nearest point to ``t`` of the gamut, the convex hull of paper
+  and pens. It is found exactly, for all colours at once, by projecting
+  onto every face of at most four of those vertices (a point of a 3-D
+  hull is a mix of at most four, Caratheodory) and keeping the nearest
+  feasible one; where several mixes give the colour (four pens or more),
+  the one with the least ink.
+* **CMYK** (``--colors cmyk``): black generation first, then the coloured
+  pens. Black covers ``K = g (1 - max(R, G, B))`` (linear RGB; ``g`` the
+  black generation, 1 = full grey-component replacement): the largest black
+  area that the rest of the paper can still lighten to the pixel's colour.
+  Under-colour removal: cyan, magenta and yellow then separate the rest,
+  ``t / (1 - K)``, in the remaining area ``1 - K`` (the model above with
+  those three pens, which is exact: paper, C, M, Y are affinely
+  independent). Pen colours are the ideal process inks (cyan ``#00ffff``,
+  magenta ``#ff00ff``, yellow ``#ffff00``, black ``#000000``); give real
+  pen colours with ``--pens``.
+* **CMY** (``--colors cmy``): the three coloured pens by the model above;
+  their darkest grey is 2/3 of white (in linear light).
+
+The ``"overprint"`` model (``separate(..., model="overprint")``, CMYK and
+CMY only) is the textbook separation for inks printed over each other, and
+what layers stippled independently give on average (their dots overlap at
+random, so reflectances multiply): ``K = g (1 - max(R, G, B))``, then
+``C = 1 - R / (1 - K)`` and likewise M, Y (linear light; exact for the
+ideal inks). The naive overlay of ``benchmarks/color_quality.py`` uses it.
+
+``clean_black``/``clean_white``: pixels whose R, G and B (sRGB values in
+[0, 1]) are all within the tolerance of black (white) are separated as pure
+black (white, no ink), so near-black areas are drawn by one pen.
+
+Measures (:func:`color_measures`): mean CIELAB Delta E (CIE 1976) between the
+photograph and the rendered stippling, both blurred by about one dot
+spacing; SSIM per separated layer (:func:`diskpack_cl.analysis.tone_ssim`);
+spacing P01 per pen and of all dots (:func:`diskpack_cl.analysis.spacing`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .options import OptionConflict, check_fields, option
+
+__all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "separate", "load_rgb", "srgb_to_linear",
+           "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
+           "color_measures"]
+
+#: Named palettes: (name, sRGB hex) per pen, lightest first.
+PALETTES = {
+    "cmyk": (("yellow", "#ffff00"), ("cyan", "#00ffff"), ("magenta", "#ff00ff"), ("black", "#000000")),
+    "cmy": (("yellow", "#ffff00"), ("cyan", "#00ffff"), ("magenta", "#ff00ff")),
+}
+
+# distances (linear RGB) and inks closer than this are ties in the unmixing
+_TIE = 1e-9
+
+
+def srgb_to_linear(v):
+    """sRGB values in [0, 1] to linear light (IEC 61966-2-1).
+
+    Examples
+    --------
+    >>> srgb_to_linear(np.array([0.0, 0.5, 1.0])).round(4).tolist()
+    [0.0, 0.214, 1.0]
+    """
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(v):
+    """Linear light in [0, 1] to sRGB values (the inverse of :func:`srgb_to_linear`).
+
+    Examples
+    --------
+    >>> float(linear_to_srgb(srgb_to_linear(0.3)).round(12))
+    0.3
+    """
+    v = np.clip(np.asarray(v, dtype=np.float64), 0.0, 1.0)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+_RGB_TO_XYZ = np.array([[0.4124564, 0.3575761, 0.1804375],
+                        [0.2126729, 0.7151522, 0.0721750],
+                        [0.0193339, 0.1191920, 0.9503041]])
+_WHITE_D65 = _RGB_TO_XYZ.sum(axis=1)
+
+
+def srgb_to_lab(rgb):
+    """sRGB values (..., 3) in [0, 1] to CIELAB (D65 white).
+
+    Examples
+    --------
+    >>> srgb_to_lab(np.array([1.0, 1.0, 1.0])).round(6).tolist()
+    [100.0, 0.0, 0.0]
+    """
+    xyz = srgb_to_linear(rgb) @ _RGB_TO_XYZ.T / _WHITE_D65
+    e = 216 / 24389
+    f = np.where(xyz > e, np.cbrt(xyz), (24389 / 27 * xyz + 16) / 116)
+    return np.stack([116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]),
+                     200 * (f[..., 1] - f[..., 2])], axis=-1)
+
+
+def delta_e(rgb_a, rgb_b):
+    """Mean CIE 1976 Delta E*ab between two sRGB images (..., 3) in [0, 1].
+
+    Examples
+    --------
+    >>> delta_e(np.zeros((2, 2, 3)), np.ones((2, 2, 3)))
+    100.0
+    """
+    d = srgb_to_lab(rgb_a) - srgb_to_lab(rgb_b)
+    return float(np.mean(np.sqrt(np.sum(d * d, axis=-1))))
+
+
+def _color(text):
+    from PIL import ImageColor
+
+    try:
+        return np.array(ImageColor.getrgb(text)[:3], dtype=np.float64) / 255.0
+    except ValueError:
+        raise ValueError(f"unknown colour {text!r}: give #rgb, #rrggbb or a CSS colour name") from None
+
+
+def parse_pens(text):
+    """``"black=#000,red=#c00"`` to ``(names, colors)``, colours sRGB in [0, 1].
+
+    Examples
+    --------
+    >>> names, colors = parse_pens("black=#000,red=#c00")
+    >>> names, colors.round(1).tolist()
+    (('black', 'red'), [[0.0, 0.0, 0.0], [0.8, 0.0, 0.0]])
+    """
+    names, colors = [], []
+    for item in str(text).split(","):
+        name, sep, value = item.strip().partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise ValueError(f"bad pen {item.strip()!r}: give NAME=COLOR, e.g. red=#c00")
+        names.append(name.strip())
+        colors.append(_color(value.strip()))
+    if len(set(names)) != len(names):
+        raise ValueError(f"pen names must differ, got {', '.join(names)}")
+    return tuple(names), np.array(colors)
+
+
+def _palette(colors):
+    """``(names, colors)`` of a palette name or a ``NAME=COLOR,...`` text."""
+    if isinstance(colors, str) and colors.lower() in PALETTES:
+        pens = PALETTES[colors.lower()]
+        return tuple(p[0] for p in pens), np.array([_color(p[1]) for p in pens])
+    if isinstance(colors, str):
+        return parse_pens(colors)
+    names, rgb = zip(*colors)
+    return tuple(names), np.array([_color(c) if isinstance(c, str) else np.asarray(c, float) for c in rgb])
+
+
+@dataclass(frozen=True)
+class Separation:
+    """Pen layers of a colour image.
+
+    Attributes
+    ----------
+    layers : (P, H, W) float64
+        Coverage of each pen in [0, 1], summing to at most 1 per pixel.
+    names : tuple of str
+    colors : (P, 3) float64
+        Pen colours, sRGB in [0, 1].
+    rgb : (H, W, 3) float64
+        The image separated (sRGB in [0, 1], after the clean tolerances).
+    """
+
+    layers: np.ndarray
+    names: tuple
+    colors: np.ndarray
+    rgb: np.ndarray
+
+    @property
+    def darkness(self):
+        """All pens' coverage per pixel: the density of all dots together."""
+        return np.clip(self.layers.sum(axis=0), 0.0, 1.0)
+
+    def render(self):
+        """The area mix of the layers (sRGB, (H, W, 3)): what a perfect stippling shows."""
+        return area_mix(self.layers, self.colors)
+
+
+def area_mix(coverage, colors):
+    """sRGB image of pens side by side: ``(1 - sum a_p) + sum a_p c_p`` in linear light.
+
+    Examples
+    --------
+    >>> area_mix(np.full((1, 1, 1), 0.5), np.array([[0.0, 0.0, 0.0]])).round(4).tolist()
+    [[[0.7354, 0.7354, 0.7354]]]
+    """
+    a = np.asarray(coverage, dtype=np.float64)
+    absorb = 1.0 - srgb_to_linear(colors)               # (P, 3)
+    lin = 1.0 - np.tensordot(a, absorb, axes=([0], [0]))
+    return linear_to_srgb(lin)
+
+
+def _face(vertices, targets):
+    """Nearest points of the simplex `vertices` (s, 3) to `targets` (m, 3), restricted to
+    its affine hull: ``(barycentric (m, s), distance (m,))``, NaN where degenerate."""
+    v0, B = vertices[0], vertices[1:] - vertices[0]
+    m = len(targets)
+    if len(B) == 0:
+        return np.ones((m, 1)), np.linalg.norm(targets - v0, axis=1)
+    G = B @ B.T
+    if np.linalg.matrix_rank(G) < len(B):
+        return np.full((m, len(vertices)), np.nan), np.full(m, np.inf)
+    mu = np.linalg.solve(G, B @ (targets - v0).T).T                     # (m, s - 1)
+    bary = np.column_stack([1.0 - mu.sum(axis=1), mu])
+    return bary, np.linalg.norm(targets - v0 - mu @ B, axis=1)
+
+
+def _unmix(targets, pens):
+    """Coverages (m, P) of pens (P, 3) mixing the linear colours `targets` (m, 3) side by
+    side on white paper: the nearest mix in the convex hull of paper and pens, the one
+    with the least ink where several are as near (see the module docstring)."""
+    from itertools import combinations
+
+    V = np.vstack([np.ones(3), pens])                                   # paper, then the pens
+    best = np.full(len(targets), np.inf)
+    ink = np.full(len(targets), np.inf)
+    out = np.zeros((len(targets), len(pens)))
+    for s in range(1, min(4, len(V)) + 1):                              # faces of <= 4 vertices
+        for face in combinations(range(len(V)), s):
+            bary, dist = _face(V[list(face)], targets)
+            ok = np.all(bary >= -1e-12, axis=1)
+            used = bary[:, [i for i, f in enumerate(face) if f > 0]].sum(axis=1)
+            better = ok & ((dist < best - _TIE) | ((dist < best + _TIE) & (used < ink - _TIE)))
+            best[better], ink[better] = np.minimum(dist[better], best[better]), used[better]
+            out[better] = 0.0
+            for i, f in enumerate(face):
+                if f > 0:
+                    out[better, f - 1] = bary[better, i]
+    return np.clip(out, 0.0, 1.0)
+
+
+def _black_first(lin, names, black_generation):
+    """CMYK's black coverage ``K`` (n,), what is left of each colour, ``t / (1 - K)``
+    (n, 3), and the indices of the other pens."""
+    k = black_generation * (1.0 - lin.max(axis=1))
+    room = 1.0 - k
+    t = np.divide(lin, room[:, None], out=np.ones_like(lin), where=room[:, None] > 1e-9)
+    return k, np.clip(t, 0.0, 1.0), [p for p in range(len(names)) if names[p] != "black"]
+
+
+def _separate_unique(rgb, names, colors, black_generation, model):
+    """Coverages (m, P) of the distinct sRGB colours rgb (m, 3); with a
+    `black_generation` (CMYK), the pen ``"black"`` first, then the others.
+    ``model="overprint"``: the textbook formulas of the ideal inks (C = 1 - R)."""
+    lin = srgb_to_linear(rgb)
+    pens = srgb_to_linear(colors)
+    out = np.zeros((len(lin), len(names)))
+    k, t, others = (0.0, lin, list(range(len(names)))) if black_generation is None else \
+        _black_first(lin, names, black_generation)
+    if model == "area":
+        out[:, others] = _unmix(t, pens[others]) * np.reshape(1.0 - k, (-1, 1))
+    else:   # the channel each ideal ink absorbs: C absorbs R, M G, Y B
+        out[:, others] = 1.0 - t[:, [int(np.argmin(pens[p])) for p in others]]
+    if black_generation is not None:
+        out[:, names.index("black")] = k
+    out[out < 1e-9] = 0.0   # the solver's rounding: no ink
+    return np.clip(out, 0.0, 1.0)
+
+
+def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, clean_white=0.0,
+             model="area"):
+    """Separate a colour image into pen layers (see the module docstring).
+
+    Parameters
+    ----------
+    image : str, os.PathLike, PIL.Image.Image or array_like
+        A colour image (:func:`load_rgb`).
+    colors : str or sequence of (name, colour)
+        ``"cmyk"``, ``"cmy"``, a ``"NAME=COLOR,..."`` text or pairs.
+    black_generation : float in [0, 1]
+        CMYK only: black covers ``g (1 - max(R, G, B))`` (linear).
+    clean_black, clean_white : float in [0, 1)
+        Tolerances (sRGB) under which a pixel is separated as pure black or white.
+    model : {"area", "overprint"}
+        Ink model: ``"area"`` (dots side by side, the packing's) or
+        ``"overprint"`` (CMYK and CMY only: layers printed over each
+        other, as independent layers give on average; see the module docstring).
+
+    Returns
+    -------
+    Separation
+
+    Examples
+    --------
+    >>> img = np.array([[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0]]])
+    >>> sep = separate(img, "cmyk")
+    >>> sep.names, sep.layers[:, 0, :].round(3).T.tolist()
+    (('yellow', 'cyan', 'magenta', 'black'), [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
+    """
+    names, pens = _palette(colors)
+    if model not in ("area", "overprint"):
+        raise ValueError(f"model must be 'area' or 'overprint', got {model!r}")
+    palette = colors.lower() if isinstance(colors, str) and colors.lower() in PALETTES else None
+    if model == "overprint" and palette is None:
+        raise ValueError("model='overprint' is the textbook separation of 'cmyk' and 'cmy'; "
+                         "other pens use model='area'")
+    for name, v in (("black_generation", black_generation), ("clean_black", clean_black),
+                    ("clean_white", clean_white)):
+        if not 0.0 <= v <= 1.0:
+            raise ValueError(f"{name} must be in [0, 1], got {v}")
+    rgb = load_rgb(image)
+    rgb = np.where((rgb.max(axis=2) <= clean_black)[..., None], 0.0, rgb)
+    rgb = np.where((rgb.min(axis=2) >= 1.0 - clean_white)[..., None], 1.0, rgb)
+    q = np.round(rgb * 255).astype(np.int64)
+    keys, inverse = np.unique((q[..., 0] << 16) | (q[..., 1] << 8) | q[..., 2], return_inverse=True)
+    uniq = np.stack([keys >> 16, (keys >> 8) & 255, keys & 255], axis=1) / 255.0
+    gcr = black_generation if palette == "cmyk" else None
+    cov = _separate_unique(uniq, names, pens, gcr, model)
+    layers = np.moveaxis(cov[inverse.reshape(rgb.shape[:2])], 2, 0)
+    return Separation(np.ascontiguousarray(layers), names, pens, rgb)
+
+
+def load_rgb(image):
+    """Anything image-like to float64 sRGB (H, W, 3) in [0, 1] (a new array).
+
+    Paths and Pillow images are read with their EXIF orientation, transparency
+    composited on white; gray images give three equal channels. Arrays:
+    ``(H, W)`` or ``(H, W, 3|4)``, integers scaled by their bit depth (uint8
+    by 255, uint16 by 65535), floats in [0, 1].
+
+    Examples
+    --------
+    >>> load_rgb(np.array([[[255, 0, 0, 0]]], dtype=np.uint8)).tolist()
+    [[[1.0, 1.0, 1.0]]]
+    """
+    import os
+
+    from PIL import Image, ImageOps
+
+    if isinstance(image, (str, os.PathLike)):
+        from .image import load_gray
+
+        load_gray(image)   # the same checks and messages as for gray input
+        with Image.open(image) as im:
+            image = ImageOps.exif_transpose(im).convert("RGBA")
+    elif isinstance(image, Image.Image):
+        image = ImageOps.exif_transpose(image).convert("RGBA")
+    a = np.asarray(image)
+    if np.issubdtype(a.dtype, np.integer):
+        f = a.astype(np.float64) / (255.0 if a.max(initial=0) <= 255 else 65535.0)
+    else:
+        f = np.asarray(a, dtype=np.float64)
+    if f.ndim == 2:
+        f = np.repeat(f[..., None], 3, axis=2)
+    if f.ndim != 3 or f.shape[2] not in (3, 4) or not np.all(np.isfinite(f)) \
+            or f.min(initial=0) < 0 or f.max(initial=0) > 1:
+        raise ValueError(f"a colour image must be (H, W) or (H, W, 3|4) with values in [0, 1], "
+                         f"got shape {a.shape}")
+    if f.shape[2] == 4:
+        f = f[..., :3] * f[..., 3:] + (1.0 - f[..., 3:])
+    return np.ascontiguousarray(f)
+
+
+#: Pens with fewer dots get no SSIM or P01 in :func:`color_measures` (a percentile of a
+#: handful of distances says nothing).
+MIN_DOTS = 50
+
+
+def render_pens(points, pen, radii, colors, shape, *, scale=3):
+    """Linear-light RGB (H, W, 3) of dots drawn with their pens' inks, overprinting where they overlap.
+
+    Each pen's dots (radius ``radii[p]`` px) are drawn at `scale` times the
+    image resolution (:func:`diskpack_cl.analysis.render_dots`), coverage
+    clipped at 1; inks multiply, ``prod_p (1 - a_p (1 - c_p))``, so pens
+    side by side mix by area and overlapping dots overprint; the result is
+    averaged back to the image's pixels.
+
+    Examples
+    --------
+    >>> img = render_pens([[2.0, 2.0]], [0], [1.0], np.array([[0.0, 0.0, 0.0]]), (4, 4))
+    >>> round(float(img[..., 0].mean()), 3)   # 1 - pi / 16
+    0.804
+    """
+    from .analysis import render_dots
+
+    p = np.asarray(points, dtype=np.float64)
+    pen = np.asarray(pen)
+    H, W = shape
+    absorb = 1.0 - srgb_to_linear(colors)
+    lin = np.ones((H * scale, W * scale, 3))
+    for q in range(len(colors)):
+        mine = pen == q
+        if np.any(mine):
+            a = np.minimum(render_dots(p[mine] * scale, radii[q] * scale, lin.shape[:2]), 1.0)
+            lin *= 1.0 - a[..., None] * absorb[q]
+    return lin.reshape(H, scale, W, scale, 3).mean(axis=(1, 3))
+
+
+def pen_tone_radii(layers, counts):
+    """Dot radius per pen at which its dots hold its layer's ink (1 where a pen has no dots)."""
+    from .analysis import tone_radius
+
+    return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
+
+
+def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
+    """Colour fidelity and spacing of a colour stippling.
+
+    Parameters
+    ----------
+    points : (n, 2) array_like
+        All dots, pixel units.
+    pen : (n,) array_like of int
+        Pen per dot.
+    layers : (P, H, W) array_like
+        The separated layers the pens draw (coverage in [0, 1]).
+    colors : (P, 3) array_like
+        Pen colours, sRGB in [0, 1].
+    rgb : (H, W, 3) array_like
+        The photograph, sRGB in [0, 1].
+    sigma : float, optional
+        Blur in pixels for Delta E; default one dot spacing ``sqrt(W H / n)``.
+
+    Returns
+    -------
+    dict
+        ``delta_e``: mean CIE 1976 Delta E*ab between the photograph and the
+        drawing (:func:`render_pens`, each pen's dots at the radius holding
+        its layer's ink), both blurred by `sigma` in linear light;
+        ``ssim``: per pen, :func:`diskpack_cl.analysis.tone_ssim` of its
+        dots against its layer; ``p01``: per pen, the spacing P01
+        (:func:`diskpack_cl.analysis.spacing`) of its dots against its
+        layer (both None for a pen of fewer than :data:`MIN_DOTS` dots);
+        ``p01_joint``: of all dots against all layers' coverage.
+    """
+    from scipy import ndimage
+
+    from .analysis import spacing, tone_ssim
+
+    p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
+    P, H, W = layers.shape
+    counts = np.bincount(pen, minlength=P)
+    sigma = float(np.sqrt(W * H / len(p))) if sigma is None else float(sigma)
+    drawn = render_pens(p, pen, pen_tone_radii(layers, counts), colors, (H, W))
+
+    def blur(lin):
+        return linear_to_srgb(ndimage.gaussian_filter(lin, (sigma, sigma, 0), mode="reflect"))
+
+    mine = [pen == q for q in range(P)]
+    total = layers.sum(axis=0)   # over 1 where overprinting layers add up
+    return {
+        "delta_e": delta_e(blur(drawn), blur(srgb_to_linear(rgb))),
+        "ssim": [tone_ssim(p[m], a) if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
+        "p01": [spacing(p[m], a).p01 if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
+        "p01_joint": spacing(p, total / max(float(total.max()), 1.0)).p01,
+        "sigma": sigma,
+    }
+
+
+_COLOUR = "colour (several pens, one certified packing of all dots)"
+
+
+@dataclass(frozen=True)
+class ColorOptions:
+    """The separation options of :func:`diskpack_cl.stipple_colors` (``diskpack stipple
+    --colors/--pens``); neither ``colors`` nor ``pens``: one pen.
+
+    Examples
+    --------
+    >>> ColorOptions(colors="cmy").separation()["colors"]
+    'cmy'
+    >>> ColorOptions().separation() is None
+    True
+    """
+
+    colors: str = option(None, "separate the image into pen layers: cmyk (black generation "
+                         "K = G (1 - max(R, G, B)) in linear light, the other inks separate "
+                         "the rest side by side) or cmy; one SVG layer per pen",
+                         choices=("cmyk", "cmy"), group=_COLOUR)
+    pens: str = option(None, "any set of pens, e.g. black=#000,red=#c00,blue=#06c: the nearest "
+                       "mix of paper and pens side by side (linear RGB)", metavar="NAME=COLOR,...",
+                       group=_COLOUR)
+    black_generation: float = option(1.0, "cmyk: share of the grey component drawn in black "
+                                     "(default 1)", lo=0, hi=1, metavar="G", group=_COLOUR)
+    clean_black: float = option(0.0, "pixels with R, G, B all within T of black are pure black "
+                                "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+    clean_white: float = option(0.0, "pixels with R, G, B all within T of white get no ink "
+                                "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.colors is not None and self.pens is not None:
+            raise OptionConflict(f"{{}} {self.colors} and {{}} both name the pens; give one",
+                                 "colors", "pens")
+
+    def separation(self):
+        """The separation arguments of :func:`diskpack_cl.stipple_colors`, or None (one pen)."""
+        if self.colors is None and self.pens is None:
+            return None
+        return dict(colors=self.pens or self.colors, black_generation=self.black_generation,
+                    clean_black=self.clean_black, clean_white=self.clean_white)

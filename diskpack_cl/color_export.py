@@ -1,0 +1,160 @@
+"""Writers for colour stipplings (:class:`diskpack_cl.multipen.ColorStippleResult`).
+
+:func:`diskpack_cl.export.write_stipple` sends a result with a ``pen``
+attribute here for ``.svg`` and ``.png``; ``.npz`` and ``.csv`` are the mono
+writers with the pens added (a ``pen`` column, pen names and colours).
+
+* SVG: one Inkscape layer per pen (``<g inkscape:groupmode="layer"
+  inkscape:label="NAME">``, which vpype reads as one layer each), the pen's
+  colour as stroke (and fill), lightest pen first (or ``pen_order``), each
+  layer's dots along a short pen path.
+* PNG: the inks composited (:func:`diskpack_cl.color.render_pens`'s model:
+  coverages multiply in linear light), 8-bit sRGB.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .color import linear_to_srgb, srgb_to_linear
+from .export import (PLOT_SPEED_MM_S, _coverage, _inside_page, _svg_dots, _svg_head, _svg_meta,
+                     _svg_size, plot_time, svg_layout)
+from .pen_path import pen_path_order
+from .io import atomic_write
+
+__all__ = ["layer_order", "write_color_svg", "write_color_png"]
+
+
+def layer_order(names, colors, pen_order=None):
+    """Pen indices in drawing order: `pen_order` (names), else lightest first (luminance).
+
+    Examples
+    --------
+    >>> layer_order(("black", "yellow"), np.array([[0, 0, 0], [1, 1, 0.0]]))
+    [1, 0]
+    >>> layer_order(("black", "yellow"), np.zeros((2, 3)), ["black", "yellow"])
+    [0, 1]
+    """
+    if pen_order is None:
+        lum = srgb_to_linear(np.asarray(colors)) @ np.array([0.2126, 0.7152, 0.0722])
+        return [int(i) for i in np.argsort(-lum, kind="stable")]
+    order = list(pen_order)
+    if sorted(order) != sorted(names):
+        raise ValueError(f"pen order must name every pen once ({', '.join(names)}), got "
+                         f"{', '.join(order)}")
+    return [names.index(name) for name in order]
+
+
+def _radii(result, scale, dots, dot_mm, radius_scale):
+    """Drawn radius per dot in output units: each pen's tone radius (the one tone
+    radius of a stippling read from CSV), the packing disks, or dot_mm."""
+    if dot_mm is not None:
+        if not dot_mm > 0:
+            raise ValueError(f"dot_mm must be > 0, got {dot_mm}")
+        return np.full(len(result.points), 0.5 * float(dot_mm))
+    if dots == "packing":
+        return np.asarray(result.radii) * scale * radius_scale
+    per_pen = getattr(result, "pen_radius", None)
+    tone = np.full(len(result.names), result.tone_radius) if per_pen is None else per_pen
+    return np.asarray(tone)[result.pen] * scale * radius_scale
+
+
+def _paint(color, pen_mm):
+    return (f'fill="{color}" stroke="{color}" stroke-width="0"' if pen_mm is None else
+            f'fill="none" stroke="{color}" stroke-width="{pen_mm:.4f}" stroke-linecap="round" '
+            f'stroke-linejoin="round"')
+
+
+def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
+                    radius_scale=1.0, pen_path="auto", pen_mm=None, dots="tone", pen_order=None,
+                    invert=False, page=None, landscape=False, margin_mm=None,
+                    plot_speed_mm_s=PLOT_SPEED_MM_S):
+    """Write an SVG with one named layer per pen (see the module docstring).
+
+    The options are those of :func:`diskpack_cl.export.write_svg`, plus
+    `pen_order` (pen names, first drawn first); ``dots="tone"`` draws each
+    pen's dots at the radius that holds its layer's ink. `invert` is refused.
+
+    Returns
+    -------
+    dict
+        As :func:`diskpack_cl.export.write_svg`'s (all layers together), and
+        ``layers`` (name, colour, n, in drawing order).
+    """
+    from .multipen import hex_color
+
+    if invert:
+        raise ValueError("invert has no meaning for colour stippling")
+    W, H = float(result.width), float(result.height)
+    lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
+                     landscape=landscape, margin_mm=margin_mm)
+    pm, rad, moved = _inside_page(np.asarray(result.points) * lay["scale"],
+                                  _radii(result, lay["scale"], dots, dot_mm, radius_scale),
+                                  *lay["picture"])
+    pm += lay["offset"]
+    order = layer_order(result.names, result.colors, pen_order)
+    meta = dict(_svg_meta(result, lay, rad, pen_mm, False, result.names[order[0]]),
+                pens=[result.names[p] for p in order])
+    parts = [_svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta,
+                       _paint(hex_color(result.colors[order[0]]), pen_mm), False)]
+    layers, before, after, draw = [], 0.0, 0.0, 0.0
+    for i, p in enumerate(order):
+        idx = np.flatnonzero(result.pen == p)
+        # the pen-path budget of one mono layer, shared by the pens
+        path_order, b, a = pen_path_order(pm[idx], method=pen_path, budget_s=2.0 / len(order))
+        idx = idx[path_order]
+        c = hex_color(result.colors[p])
+        if i:
+            parts.append(f'  </g>\n  <g inkscape:groupmode="layer" inkscape:label="{result.names[p]}" '
+                         f'id="layer{i + 1}" {_paint(c, pen_mm)}>\n')
+        text, length = _svg_dots(pm[idx], rad[idx], pen_mm)
+        parts.append(text)
+        layers.append({"name": result.names[p], "color": c, "n": int(len(idx))})
+        before, after, draw = before + b, after + a, draw + length
+    with atomic_write(path, "w") as fh:
+        fh.write("".join(parts) + "  </g>\n</svg>\n")
+    info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
+            "page_mm": list(lay["page"]), "n": int(len(pm)), "layers": layers,
+            "travel_before_mm": before, "travel_after_mm": after, "moved_inside": moved,
+            "pen_downs": int(len(pm)), "draw_mm": draw,
+            "plot_seconds": plot_time(len(pm), draw, after, speed_mm_s=plot_speed_mm_s)}
+    if pen_mm is not None:
+        info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
+    return info
+
+
+def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, aa=4, dots="tone",
+                    invert=False, pen_px=None, progress=None):
+    """Write a colour PNG preview: every pen's dots, inks composited (8-bit sRGB).
+
+    Options as :func:`diskpack_cl.export.write_png`; `invert` is refused.
+
+    Returns
+    -------
+    dict
+        ``width``, ``height`` (output pixels), ``n``.
+    """
+    from PIL import Image
+
+    if invert:
+        raise ValueError("invert has no meaning for colour stippling")
+    ow, oh = max(1, round(result.width * scale)), max(1, round(result.height * scale))
+    rad = (np.full(len(result.points), float(dot_px)) if dot_px is not None
+           else _radii(result, scale, dots, None, radius_scale))
+    if pen_px is not None:   # what the pen draws: at least a touch a pen wide
+        rad = np.maximum(rad, 0.5 * pen_px)
+    lin = np.ones((oh, ow, 3))
+    absorb = 1.0 - srgb_to_linear(result.colors)
+    p = np.asarray(result.points) * scale
+    for q in range(len(result.names)):
+        mine = result.pen == q
+        if np.any(mine):
+            cover = _coverage(p[mine], rad[mine], ow, oh, int(aa), progress)
+            lin *= 1.0 - cover[..., None] * absorb[q]
+    img = Image.fromarray(np.round(linear_to_srgb(lin) * 255).astype(np.uint8), "RGB")
+    with atomic_write(path, "wb") as fh:
+        img.save(fh, format="PNG")
+    return {"width": ow, "height": oh, "n": int(len(p))}
+
+
+COLOR_WRITERS = {".svg": write_color_svg, ".png": write_color_png}

@@ -1,0 +1,189 @@
+"""Colour stippling (diskpack_cl.multipen), its writers and its command line."""
+
+import csv
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from PIL import Image
+
+from diskpack_cl.cli import main
+from diskpack_cl.export import read_stipple, write_stipple
+from diskpack_cl.multipen import assign_pens, pen_counts, stipple_colors
+
+SVG = "{http://www.w3.org/2000/svg}"
+INK = "{http://www.inkscape.org/namespaces/inkscape}"
+PENS3 = "black=#000,red=#c00,blue=#06c"
+
+
+def _image(h=40, w=48):
+    """Left half cyan-ish, right half magenta-ish, darker towards the bottom."""
+    img = np.ones((h, w, 3))
+    img[:, : w // 2, 0] = 0.2
+    img[:, w // 2:, 1] = 0.2
+    return img * np.linspace(1.0, 0.6, h)[:, None, None]
+
+
+@pytest.fixture(scope="module")
+def result():
+    return stipple_colors(_image(), 300, "cmyk", seed=1)
+
+
+def _disjoint(points, radii, W, H):
+    """Brute force: every disk inside the rectangle, every pair apart."""
+    d = np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    inside = np.all(points - radii[:, None] >= 0) and np.all(points + radii[:, None] <= [W, H])
+    return inside and np.all(d > radii[:, None] + radii[None, :])
+
+
+def test_all_pens_in_one_certified_packing(result):
+    assert result.n == 300 and result.certificate.valid
+    assert _disjoint(result.points, result.radii, result.width, result.height)
+    assert result.counts.tolist() == pen_counts(result.layers, 300).tolist()
+    assert result.names == ("yellow", "cyan", "magenta", "black")
+
+
+def test_each_pen_follows_its_layer(result):
+    left = result.points[:, 0] < result.width / 2
+    cyan, magenta = result.pen == 1, result.pen == 2
+    assert np.count_nonzero(cyan & left) > 0.9 * np.count_nonzero(cyan)
+    assert np.count_nonzero(magenta & ~left) > 0.9 * np.count_nonzero(magenta)
+
+
+def test_given_counts_and_errors():
+    res = stipple_colors(_image(), 200, PENS3, counts=[50, 100, 50], schedule=[("mix", 2, 0.5)])
+    assert res.counts.tolist() == [50, 100, 50] and res.certificate.valid
+    with pytest.raises(ValueError, match="counts must be 3 non-negative integers summing to n = 200"):
+        stipple_colors(_image(), 200, PENS3, counts=[50, 100, 49])
+    with pytest.raises(ValueError, match="invert is for one pen"):
+        stipple_colors(_image(), 200, invert=True)
+    with pytest.raises(ValueError, match="paper_tone is for one pen"):
+        stipple_colors(_image(), 200, paper_tone=0.1)
+    with pytest.raises(ValueError, match="nothing to stipple"):
+        stipple_colors(np.ones((8, 8, 3)), 10)
+
+
+@settings(max_examples=25)
+@given(st.integers(1, 300), st.lists(st.floats(0.01, 1), min_size=1, max_size=5), st.integers(0, 9))
+def test_assign_pens_gives_exact_counts(n, ink, seed):
+    rng = np.random.default_rng(seed)
+    x = rng.random((n, 2)) * 30
+    share = rng.random((n, len(ink))) * ink
+    share /= share.sum(axis=1, keepdims=True)
+    counts = pen_counts(np.array(ink)[:, None], n)
+    assert counts.sum() == n and np.all(np.abs(counts - n * np.array(ink) / sum(ink)) < 1)
+    assert np.bincount(assign_pens(x, share, counts), minlength=len(ink)).tolist() == counts.tolist()
+
+
+def test_npz_csv_round_trip(tmp_path, result):
+    write_stipple(tmp_path / "c.npz", result)
+    back = read_stipple(tmp_path / "c.npz")
+    assert np.array_equal(back.pen, result.pen) and back.names == result.names
+    assert np.array_equal(back.points, result.points) and np.allclose(back.colors, result.colors)
+    write_stipple(tmp_path / "again.svg", back)          # what was read writes again
+    write_stipple(tmp_path / "c.csv", result)
+    with open(tmp_path / "c.csv") as fh:
+        assert fh.readline().startswith("# diskpack_cl stippling ")
+        rows = list(csv.DictReader(fh))
+    assert [r["pen"] for r in rows] == [result.names[p] for p in result.pen]
+    assert np.array_equal([float(r["x"]) for r in rows], result.points[:, 0])
+    back = read_stipple(tmp_path / "c.csv")
+    assert np.array_equal(back.pen, result.pen) and back.names == result.names
+    assert np.array_equal(back.points, result.points) and np.allclose(back.colors, result.colors)
+    write_stipple(tmp_path / "again.png", back)          # one tone size for all pens
+
+
+def test_svg_one_layer_per_pen(tmp_path, result):
+    import vpype
+
+    write_stipple(tmp_path / "c.svg", result, width_mm=100)
+    root = ET.parse(tmp_path / "c.svg").getroot()
+    layers = [g for g in root.iter(SVG + "g") if g.get(INK + "groupmode") == "layer"]
+    assert [g.get(INK + "label") for g in layers] == ["yellow", "cyan", "magenta", "black"]
+    assert [g.get("stroke") for g in layers] == ["#ffff00", "#00ffff", "#ff00ff", "#000000"]
+    assert [len(g.findall(SVG + "circle")) for g in layers] == result.counts.tolist()
+    doc = vpype.read_multilayer_svg(str(tmp_path / "c.svg"), 0.05)
+    assert len(doc.layers) == np.count_nonzero(result.counts)   # vpype drops an empty layer
+    assert sum(len(lc) for lc in doc.layers.values()) == 300
+    back = read_stipple(tmp_path / "c.svg")            # the dots of every layer, with their pens
+    assert back.names == result.names and np.allclose(back.colors, result.colors)
+    assert np.bincount(back.pen, minlength=4).tolist() == result.counts.tolist()
+    # border dots move inside the page by less than their drawn radius
+    reach = result.pen_radius.max() + 1e-3
+    assert np.allclose(np.sort(back.points[:, 0]), np.sort(result.points[:, 0]), atol=reach)
+    write_stipple(tmp_path / "o.svg", result, pen_order=["black", "cyan", "magenta", "yellow"])
+    root = ET.parse(tmp_path / "o.svg").getroot()
+    assert [g.get(INK + "label") for g in root.iter(SVG + "g")][0] == "black"
+    with pytest.raises(ValueError, match="pen order must name every pen once"):
+        write_stipple(tmp_path / "x.svg", result, pen_order=["black"])
+
+
+def test_png_preview_composites_the_inks(tmp_path, result):
+    write_stipple(tmp_path / "c.png", result, scale=2)
+    im = np.asarray(Image.open(tmp_path / "c.png"))
+    assert im.shape == (80, 96, 3)
+    left, right = im[:, :48].reshape(-1, 3).mean(0), im[:, 48:].reshape(-1, 3).mean(0)
+    assert left[0] < left[1] and right[1] < right[0]      # cyan on the left, magenta on the right
+
+
+def test_cli_colors_and_pens(tmp_path, capsys):
+    Image.fromarray(np.round(_image() * 255).astype(np.uint8)).save(tmp_path / "in.png")
+    svg, npz = str(tmp_path / "c.svg"), str(tmp_path / "c.npz")
+    assert main(["stipple", str(tmp_path / "in.png"), "--colors", "cmy", "-n", "200", "-o", svg,
+                 "-o", npz, "-o", str(tmp_path / "c.png"), "--pen-order", "magenta,cyan,yellow",
+                 "--json", "-q"]) == 0
+    assert '"pens"' in capsys.readouterr().out
+    back = read_stipple(npz)
+    assert back.names == ("yellow", "cyan", "magenta") and len(back.pen) == 200
+    assert main(["stipple", str(tmp_path / "in.png"), "--pens", PENS3, "-n", "150", "-o", svg,
+                 "--clean-white", "0.05", "-q"]) == 0
+    assert main(["stipple", str(tmp_path / "in.png"), "--colors", "cmyk", "-n", "100", "-o", svg,
+                 "--invert", "-q"]) == 2
+    assert main(["stipple", str(tmp_path / "in.png"), "--colors", "cmyk", "-n", "tone",
+                 "--dot-mm", "0.5", "-o", svg, "-q"]) == 2
+
+
+def _two_images(folder):
+    folder.mkdir()
+    for name, img in (("a", _image()), ("b", _image()[::-1])):
+        Image.fromarray(np.round(img * 255).astype(np.uint8)).save(folder / f"{name}.png")
+    return folder
+
+
+def test_cli_batch_of_colour_images(tmp_path):
+    images = _two_images(tmp_path / "in")
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["stipple", str(images), "--colors", "cmy", "-n", "120", "--schedule", "classic",
+                 "-o", str(out / "{stem}.svg"), "-o", str(out / "{stem}.npz"), "-q"]) == 0
+    for stem in ("a", "b"):
+        back = read_stipple(out / f"{stem}.npz")
+        assert back.names == ("yellow", "cyan", "magenta") and len(back.pen) == 120
+        assert [len(g) for g in _svg_layers(out / f"{stem}.svg")] == np.bincount(
+            back.pen, minlength=3).tolist()
+
+
+def _svg_layers(path):
+    root = ET.parse(path).getroot()
+    return [g.findall(SVG + "circle") for g in root.iter(SVG + "g")
+            if g.get(INK + "groupmode") == "layer"]
+
+
+def test_dask_colour_batch_matches_one_process(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    from diskpack_cl.batch import stipple_many
+
+    images = [str(p) for p in sorted(_two_images(tmp_path / "in").iterdir())]
+    opts = dict(n=100, color={"colors": PENS3}, schedule=[("mix", 3, 0.5)], manifest=False)
+    local = list(stipple_many(images, [str(tmp_path / "local" / "{stem}.npz")], jobs=1, **opts))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as lc, distributed.Client(lc) as client:
+        dask = list(stipple_many(images, [str(tmp_path / "dask" / "{stem}.npz")], client=client,
+                                 **opts))
+    assert [r["status"] for r in local + dask] == ["ok"] * 4
+    for stem in ("a", "b"):
+        a, b = (read_stipple(tmp_path / d / f"{stem}.npz") for d in ("local", "dask"))
+        assert np.array_equal(a.points, b.points) and np.array_equal(a.pen, b.pen)
