@@ -148,8 +148,11 @@ def test_exact_mic_clustered_points_on_torus():
     def cap():
         resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
 
+    import os
+
+    # the child imports the oracles (tests/reference.py) from its working folder
     proc = subprocess.run([sys.executable, "-c", _CLUSTERED], capture_output=True, text=True,
-                          timeout=120, preexec_fn=cap)
+                          timeout=120, preexec_fn=cap, cwd=os.path.dirname(__file__))
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
