@@ -179,7 +179,9 @@ def test_dask_colour_batch_matches_one_process(ctx, tmp_path):
     from diskpack_cl.batch import stipple_many
 
     images = [str(p) for p in sorted(_two_images(tmp_path / "in").iterdir())]
-    opts = dict(n=100, color={"colors": PENS3}, schedule=[("mix", 3, 0.5)], manifest=False)
+    # one engine on both sides: Dask workers do not see the test run's OpenCL patch
+    opts = dict(n=100, color={"colors": PENS3}, schedule=[("mix", 3, 0.5)], manifest=False,
+                backend="exact")
     local = list(stipple_many(images, [str(tmp_path / "local" / "{stem}.npz")], jobs=1, **opts))
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
                                   dashboard_address=":0") as lc, distributed.Client(lc) as client:
