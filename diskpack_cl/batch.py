@@ -545,7 +545,8 @@ def _stipple_item(item, device, progress):
         def callback(entry):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
-    res = run(image, n, device=device, callback=callback, **params.get("options", {}))
+    res = run(image, n, device=device, callback=callback, backend=params.get("backend", "auto"),
+              **params.get("options", {}))
     t = time.perf_counter()
     dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), write)
     summary = res.summary()
@@ -887,7 +888,7 @@ def _image_dots(path, count, write):
 
 def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
                  recursive=False, allow_large=False, write=None, tone=None, color=None,
-                 **overrides):
+                 backend="auto", **overrides):
     """Items for stippling every image of ``inputs`` (files or folders).
 
     Parameters
@@ -909,6 +910,8 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
     **overrides
         Fields of :class:`~diskpack_cl.schedule.StippleOptions` (``gamma``,
         ``schedule``, ``seed``, ...) replacing those of `options`.
+    backend : {"auto", "opencl", "exact"}
+        The engine of every item (:func:`diskpack_cl.stipple`).
     color : ColorOptions or dict, optional
         Several pens: the separation of :func:`diskpack_cl.stipple_colors`
         (:class:`diskpack_cl.color.ColorOptions`, or a dict of ``colors``,
@@ -939,6 +942,8 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
         params["allow_large"] = True
     if color is not None:
         params["color"] = color if isinstance(color, dict) else color.separation()
+    if backend != "auto":
+        params["backend"] = backend
     uses_n = any("{n" in t for t in outputs)
     items = []
     for i, path in enumerate(expand_inputs(inputs, recursive=recursive)):
@@ -1028,7 +1033,7 @@ class Batch:
 
 def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
                  recursive=False, allow_large=False, write=None, tone=None, color=None,
-                 manifest=None,
+                 backend="auto", manifest=None,
                  overwrite=False, jobs=1, devices=None, client=None, collect=False,
                  progress=None, **overrides):
     """Stipple many images: a :class:`Batch` that yields one record per image as it finishes.
@@ -1053,7 +1058,7 @@ def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_pe
     items = plan_stipple(inputs, outputs, options, n=n, density=density,
                          dots_per_cm2=dots_per_cm2, recursive=recursive,
                          allow_large=allow_large, write=write, tone=tone, color=color,
-                         **overrides)
+                         backend=backend, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 

@@ -172,9 +172,7 @@ def _svg_layers(path):
             if g.get(INK + "groupmode") == "layer"]
 
 
-def test_dask_colour_batch_matches_one_process(ctx, tmp_path):
-    # ctx: the Dask worker sees the OpenCL devices (DISKPACK_CL_HIDE_OPENCL hides them from
-    # this process only), so both sides need them to run the same engine
+def test_dask_colour_batch_matches_one_process(tmp_path):
     distributed = pytest.importorskip("distributed")
     from diskpack_cl.batch import stipple_many
 
