@@ -6,6 +6,10 @@ those tests are skipped with the driver error as the reason; with
 Doctests that need a device are named in :data:`OPENCL_DOCTESTS` and treated
 the same way.
 
+Hypothesis runs the ``ci`` profile (derandomized, no example database)
+when ``CI`` is true (``.ci/run`` sets it), else ``diskpack``; ``HYPOTHESIS_PROFILE``
+chooses one explicitly.
+
 ``DISKPACK_CL_HIDE_OPENCL=1`` patches pyopencl's platform list empty for the
 whole run, so that one machine can check that the suite passes (and skips
 cleanly) where no OpenCL exists; ``.ci/run`` runs the suite once that way.
@@ -19,7 +23,13 @@ try:  # no per-example deadline: a 2-core CI machine has noisy timings
     from hypothesis import settings
 
     settings.register_profile("diskpack", deadline=None)
-    settings.load_profile("diskpack")
+    # CI: the same examples on every run (derandomized, a fixed seed) and no
+    # example database, so that a run depends on the commit alone
+    settings.register_profile("ci", deadline=None, derandomize=True, database=None,
+                              print_blob=True)
+    settings.load_profile(os.environ.get(
+        "HYPOTHESIS_PROFILE",
+        "ci" if os.environ.get("CI", "").lower() in ("1", "true", "yes") else "diskpack"))
 except ImportError:  # pragma: no cover - hypothesis is in the test extra
     pass
 

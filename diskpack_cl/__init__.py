@@ -9,23 +9,25 @@ from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
 from .domain import Domain
-from .geometry import certify_disks, exact_mic
+from .geometry import CertificateError, certify_disks, exact_mic
 from .measures import normalized_radius
-from .relax import RadiusResult, RelaxResult, max_points_for_radius, relax_poisson
+from .relax import RadiusResult, RelaxOptions, RelaxResult, max_points_for_radius, relax_poisson
 from .sampling import dart_throwing, random_points
 from ._device import NoOpenCLError, describe, get_context, list_devices
 from .dithering import error_diffusion
+from .schedule import StippleOptions
 from .stipple import StippleResult, stipple
-from .export import read_stipple, write_stipple
-from .image import load_gray, sample_image_path
+from .export import WriteOptions, read_stipple, write_stipple
+from .image import ToneOptions, load_gray, sample_image_path
 from .multipen import ColorStippleResult, stipple_colors
 
 __all__ = [
-    "Domain", "certify_disks", "exact_mic", "normalized_radius",
+    "Domain", "CertificateError", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
-    "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
-    "StippleResult", "error_diffusion", "stipple", "read_stipple", "write_stipple",
-    "load_gray", "sample_image_path", "ColorStippleResult", "stipple_colors",
+    "RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
+    "StippleOptions", "StippleResult", "error_diffusion", "stipple", "read_stipple",
+    "write_stipple", "WriteOptions", "ToneOptions", "load_gray", "sample_image_path",
+    "ColorStippleResult", "stipple_colors",
 ]
 
 try:  # the installed distribution's version (pyproject.toml), read once

@@ -11,24 +11,15 @@ _PROGRAMS: dict = {}
 
 
 def kernel_dir() -> Path:
-    """Folder holding the OpenCL sources (installed wheel first, then checkout)."""
-    tried = []
-    try:
-        p = Path(str(importlib.resources.files("diskpack_cl") / "kernels"))
-        if (p / "common.h").is_file():
-            return p
-        tried.append(str(p))
-    except (ModuleNotFoundError, TypeError):  # pragma: no cover
-        pass
-    p = Path(__file__).resolve().parents[1] / "kernels"
-    if (p / "common.h").is_file():
-        return p
-    tried.append(str(p))
-    raise FileNotFoundError("OpenCL kernel sources not found; looked in " + ", ".join(tried))
+    """Folder holding the OpenCL sources: the package data ``diskpack_cl/kernels``."""
+    p = Path(str(importlib.resources.files("diskpack_cl") / "kernels"))
+    if not (p / "common.h").is_file():
+        raise FileNotFoundError(f"OpenCL kernel sources not found in {p}")
+    return p
 
 
 def build_program(ctx, stem: str, defines: dict | None = None):
-    """Build ``kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
+    """Build ``diskpack_cl/kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
 
     Built programs and their kernel objects are memoized by
     (context, stem, defines), so each combination compiles once per process.

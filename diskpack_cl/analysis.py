@@ -320,47 +320,9 @@ def anisotropy(P, freqs):
 
 
 #: The plane (no wrap); nearest-neighbour distances do not use its size.
-_PLANE = Domain(math.inf, math.inf, False)
-
-
-def _domain(periodic):
-    """The domain ``periodic`` names: a Domain, True (unit torus), (W, H) (torus) or False (plane)."""
-    if isinstance(periodic, Domain):
-        return periodic
-    if periodic is True:
-        return Domain.torus()
-    if periodic is False or periodic is None:
-        return _PLANE
-    box = np.asarray(periodic, dtype=np.float64)
-    if box.shape != (2,) or not np.all(box > 0):
-        raise ValueError(f"periodic must be True, False or a domain size (W, H) > 0, got {periodic!r}")
-    return Domain(float(box[0]), float(box[1]), True)
-
-
-def nearest_neighbor_distances(points, periodic=True):
-    """Distance from each point to its nearest other point.
-
-    Parameters
-    ----------
-    points : array_like, shape (n, 2), n >= 2
-    periodic : bool, (W, H) or Domain
-        ``True``: the unit torus [0,1)^2 (points are wrapped into it);
-        ``(W, H)``: the torus [0,W) x [0,H); ``False``: the plane (a bounded
-        domain, no wrap); a :class:`~diskpack_cl.Domain`: its torus
-        or its rectangle.
-
-    Returns
-    -------
-    ndarray of float64, shape (n,)
-
-    Examples
-    --------
-    >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]])
-    array([0.1, 0.1])
-    >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]], periodic=False)
-    array([0.9, 0.9])
-    """
-    return measures.nearest_neighbor_distances(_as_points(points), _domain(periodic))
+_PLANE = measures.PLANE
+_domain = measures.as_domain
+nearest_neighbor_distances = measures.nearest_neighbor_distances
 
 
 def mean_normalized_radius(points):
@@ -383,7 +345,7 @@ def mean_normalized_radius(points):
     True
     """
     p = _as_points(points)
-    return float(nearest_neighbor_distances(p, periodic=True).mean() / 2.0 / hexagonal_radius(len(p)))
+    return float(nearest_neighbor_distances(p, True).mean() / 2.0 / hexagonal_radius(len(p)))
 
 
 # ---------------------------------------------------------------------------
@@ -768,7 +730,7 @@ def spacing(points, darkness, *, sigma=3.0, normalize="dot"):
     sigma : float
         Blur of the expected density, in pixels.
     normalize : {"dot", "pair"}
-        ``"dot"`` (the measure above, issue 11's P01): the distance read
+        ``"dot"`` (the measure above, the spacing P01): the distance read
         against the dot's own expected spacing ``1 / sqrt(rho_i)``.
         ``"pair"``: against the mean of the expected spacings of the dot and
         its nearest neighbour ``j``, ``s_i = d_nn(i) * 2 sqrt(rho_i rho_j) /

@@ -428,9 +428,7 @@ def _is_done(item, record):
 
 # ----------------------------------------------------------------- one item
 
-def write_stipple_outputs(result, gray, outputs, *, dots="tone", dot_mm=None, radius_scale=1.0,
-                          pen_path="auto", png_scale=None, invert=False, pen_mm=None,
-                          plot_speed_mm_s=None, progress=None, pen_order=None, **layout):
+def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None, **overrides):
     """Write a stippling to every path of ``outputs``, as ``diskpack stipple`` does.
 
     With ``dots="tone"`` (and no ``dot_mm``) every dot gets one size, chosen
@@ -448,20 +446,13 @@ def write_stipple_outputs(result, gray, outputs, *, dots="tone", dot_mm=None, ra
         tone dot size is ``result.tone_radius``.
     outputs : list of str
         ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
-    pen_mm : float, optional
-        Plotter pen width for the SVG (see :func:`diskpack_cl.export.write_svg`);
-        the PNG preview shows what the pen draws.
-    png_scale : float, optional
-        See :func:`diskpack_cl.export.preview_scale`.
+    options : WriteOptions, optional
+        How the dots are drawn (:class:`diskpack_cl.export.WriteOptions`;
+        ``pen_mm``: the PNG preview shows what the pen draws).
     progress : callable, optional
         ``progress(k)`` after each ``k`` dots a PNG preview stamped.
-    pen_order : list of str, optional
-        A colour stippling's SVG layer order
-        (:func:`diskpack_cl.color_export.write_color_svg`); its tone dots
-        have one size per pen, so no ``dot_mm`` is derived for it.
-    **layout
-        ``width_mm``, ``height_mm``, ``dpi``, ``page``, ``landscape``,
-        ``margin_mm`` of :func:`diskpack_cl.export.svg_layout`.
+    **overrides
+        Fields of :class:`~diskpack_cl.export.WriteOptions` replacing those of `options`.
 
     Returns
     -------
@@ -481,24 +472,27 @@ def write_stipple_outputs(result, gray, outputs, *, dots="tone", dot_mm=None, ra
     >>> written[0]["format"], round(dot_mm, 3) > 0
     ('svg', True)
     """
-    from diskpack_cl.export import (PLOT_SPEED_MM_S, check_output_path, preview_scale,
-                                    svg_layout, write_stipple)
+    from diskpack_cl.export import WriteOptions, check_output_path, preview_scale, write_stipple
     from diskpack_cl.io import atomic_writes
 
-    scale = svg_layout(result.width, result.height, **layout)["scale"]
-    png_scale = preview_scale(result.width, result.height, png_scale)
-    color = getattr(result, "pen", None) is not None
+    o = (options or WriteOptions()).replace(**overrides)
+    dots = o.dots or "tone"
+    scale = o.scale(result.width, result.height)
+    png_scale = preview_scale(result.width, result.height, o.png_scale)
+    dot_mm = o.dot_mm
+    color = getattr(result, "pen", None) is not None   # one tone dot size per pen
     if dot_mm is None and dots == "tone" and not color:
-        dot_mm = 2.0 * _tone_radius(result, gray, invert) * radius_scale * scale
-    svg_opts = dict(dot_mm=dot_mm, radius_scale=radius_scale, pen_path=pen_path, invert=invert,
-                    pen_mm=pen_mm, dots=dots, plot_speed_mm_s=plot_speed_mm_s or PLOT_SPEED_MM_S,
-                    **layout, **({"pen_order": pen_order} if color else {}))
-    png_opts = dict(scale=png_scale, radius_scale=radius_scale, invert=invert, dots=dots,
+        dot_mm = 2.0 * _tone_radius(result, gray, o.invert) * o.radius_scale * scale
+    svg_opts = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, pen_path=o.pen_path,
+                    invert=o.invert, pen_mm=o.pen_mm, dots=dots,
+                    plot_speed_mm_s=o.plot_speed_mm_s, **o.layout(),
+                    **({"pen_order": o.pen_order} if color else {}))
+    png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
                     progress=progress)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
-    if pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots
-        png_opts["pen_px"] = pen_mm / scale * png_scale
+    if o.pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots
+        png_opts["pen_px"] = o.pen_mm / scale * png_scale
     written = []
     with atomic_writes():
         for out in outputs:
@@ -507,12 +501,6 @@ def write_stipple_outputs(result, gray, outputs, *, dots="tone", dot_mm=None, ra
             info = write_stipple(out, result, **opts)
             written.append({"path": out, "format": ext[1:], **info})
     return dot_mm, written
-
-
-def _layout(write):
-    """The picture-on-paper options among the write options of an item."""
-    return {k: write.get(k) for k in ("width_mm", "height_mm", "dpi", "page", "landscape",
-                                      "margin_mm") if write.get(k) is not None}
 
 
 def _tone_radius(result, gray, invert):
@@ -527,35 +515,40 @@ def _tone_radius(result, gray, invert):
     return tone_radius(len(result.points), gray if invert else 1.0 - gray)
 
 
-def _stipple_item(item, device, progress):
-    from diskpack_cl.image import adjust_tone
-
-    params = dict(item.params)
-    allow_large = params.pop("allow_large", False)
-    count = {k: params.pop(k, None) for k in ("n", "density", "dots_per_cm2")}
-    tone, color = params.pop("tone", {}), params.pop("color", None)
+def _item_image(path, params):
+    """``(gray, image, run)`` of an item: the toned gray image and :func:`diskpack_cl.stipple`,
+    or (with ``params["color"]``) the colour image and :func:`diskpack_cl.stipple_colors`."""
+    color = params.get("color")
     if color is None:
         from diskpack_cl import load_gray, stipple
+        from diskpack_cl.image import ToneOptions
 
-        gray = image = adjust_tone(load_gray(item.input, allow_large=allow_large), **tone)
-        run = stipple
-    else:   # several pens: diskpack_cl.stipple_colors with the separation of `color`
-        from diskpack_cl.color import load_rgb
-        from diskpack_cl.multipen import stipple_colors
+        gray = ToneOptions(**params.get("tone", {})).adjust(
+            load_gray(path, allow_large=params.get("allow_large", False)))
+        return gray, gray, stipple
+    from diskpack_cl.color import load_rgb
+    from diskpack_cl.multipen import stipple_colors
 
-        gray, image = None, load_rgb(item.input)
-        run = functools.partial(stipple_colors, **color)
-    n = dots_for_image(image.shape[1], image.shape[0], **count, **_layout(item.write))
+    return None, load_rgb(path), functools.partial(stipple_colors, **color)
+
+
+def _stipple_item(item, device, progress):
+    from diskpack_cl.export import WriteOptions
+
+    params = item.params
+    count = {k: params.get(k) for k in ("n", "density", "dots_per_cm2")}
+    write = WriteOptions(**item.write)
+    gray, image, run = _item_image(item.input, params)
+    n = dots_for_image(image.shape[1], image.shape[0], **count, **write.layout())
     callback = None
     if progress is not None:
         def callback(entry):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
-    res = run(image, n, seed=item.seed, device=device, callback=callback, **params)
-    if not getattr(res.certificate, "valid", False):
-        raise ValueError(f"the result failed its certificate ({res.certificate})")
+    res = run(image, n, device=device, callback=callback, backend=params.get("backend", "auto"),
+              **params.get("options", {}))
     t = time.perf_counter()
-    dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), **item.write)
+    dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), write)
     summary = res.summary()
     summary.pop("params", None)
     summary.update(dot_mm=dot_mm, files=written, write_seconds=time.perf_counter() - t)
@@ -890,11 +883,12 @@ def _image_dots(path, count, write):
 
     with Image.open(path) as im:
         width, height = im.size
-    return dots_for_image(width, height, **count, **_layout(write))
+    return dots_for_image(width, height, **count, **write.layout())
 
 
-def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, seed=0,
-                 recursive=False, allow_large=False, write=None, **options):
+def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
+                 recursive=False, allow_large=False, write=None, tone=None, color=None,
+                 backend="auto", **overrides):
     """Items for stippling every image of ``inputs`` (files or folders).
 
     Parameters
@@ -906,16 +900,23 @@ def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
     n, density, dots_per_cm2 : optional
         Exactly one: dots per image, per megapixel, or per cm^2 of the print
         (with ``width_mm``/``height_mm``/``dpi`` in ``write``).
-    seed : int
-        The error-diffusion seed of every image.
-    write : dict, optional
+    options : StippleOptions, optional
+        The options of :func:`diskpack_cl.stipple` for every image (its
+        ``seed`` is the items' seed).
+    write : WriteOptions, optional
         Options of :func:`write_stipple_outputs`.
-    **options
-        Keyword arguments of :func:`diskpack_cl.stipple` (``gamma``,
-        ``schedule``, ...); ``color``, a dict of the separation arguments
-        of :func:`diskpack_cl.stipple_colors` (``colors``,
-        ``black_generation``, ``clean_black``, ``clean_white``), makes
-        every item a colour stippling.
+    tone : ToneOptions, optional
+        Tone controls applied to every image before stippling.
+    **overrides
+        Fields of :class:`~diskpack_cl.schedule.StippleOptions` (``gamma``,
+        ``schedule``, ``seed``, ...) replacing those of `options`.
+    backend : {"auto", "opencl", "exact"}
+        The engine of every item (:func:`diskpack_cl.stipple`).
+    color : ColorOptions or dict, optional
+        Several pens: the separation of :func:`diskpack_cl.stipple_colors`
+        (:class:`diskpack_cl.color.ColorOptions`, or a dict of ``colors``,
+        ``black_generation``, ``clean_black``, ``clean_white``) makes every
+        item a colour stippling.
 
     Raises
     ------
@@ -924,13 +925,25 @@ def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
     """
     if sum(v is not None for v in (n, density, dots_per_cm2)) != 1:
         raise ValueError("give exactly one of n, density (dots per megapixel) and dots_per_cm2")
+    from diskpack_cl.export import WriteOptions
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.options import changed
+    from diskpack_cl.schedule import StippleOptions
+
+    options = (options or StippleOptions()).replace(**overrides)
+    write = write or WriteOptions()
+    seed = options.seed
     count = {"n": n, "density": density, "dots_per_cm2": dots_per_cm2}
-    write = dict(write or {})
     if dots_per_cm2 is not None:  # refused now, not once per image
-        dots_for_image(1, 1, dots_per_cm2=dots_per_cm2, **_layout(write))
-    params = {**{k: v for k, v in count.items() if v is not None}, **options}
+        dots_for_image(1, 1, dots_per_cm2=dots_per_cm2, **write.layout())
+    params = {**{k: v for k, v in count.items() if v is not None},
+              "options": changed(options), "tone": changed(tone or ToneOptions())}
     if allow_large:
         params["allow_large"] = True
+    if color is not None:
+        params["color"] = color if isinstance(color, dict) else color.separation()
+    if backend != "auto":
+        params["backend"] = backend
     uses_n = any("{n" in t for t in outputs)
     items = []
     for i, path in enumerate(expand_inputs(inputs, recursive=recursive)):
@@ -944,21 +957,26 @@ def plan_stipple(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
         rendered = [render_template(t, input=path, n=dots if dots is not None else 0,
                                     seed=seed, i=i) for t in outputs]
         items.append(Item("stipple", i, path, seed, json.loads(json.dumps(params)),
-                          tuple(rendered), write, error))
+                          tuple(rendered), changed(write), error))
     check_outputs(items, _paths_check("stipple"))
     return items
 
 
-def _relax_params(eps, max_iter, backend, grid):
-    return {"eps": eps, "max_iter": max_iter, "backend": backend, "grid": grid}
+def _relax_params(relax, overrides):
+    """The relaxation of every item: :class:`~diskpack_cl.relax.RelaxOptions` as JSON."""
+    from diskpack_cl.relax import RelaxOptions
+
+    return replace(relax or RelaxOptions(), **overrides).kwargs()
 
 
-def plan_poisson(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74, eps=0.8,
-                 max_iter=1000, backend="auto", grid=None):
+def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_radius=0.74,
+                 **overrides):
     """Items for ``count`` Poisson disk sets with seeds derived from ``seed``.
 
     Set ``i`` has seed ``derive_seeds(seed, count)[i]``; ``seed=None`` takes
-    a fresh one. ``init`` is ``"dart"`` or ``"random"``.
+    a fresh one. ``init`` is ``"dart"`` or ``"random"``. ``relax`` (a
+    :class:`~diskpack_cl.relax.RelaxOptions`) with ``overrides`` (its
+    fields: ``eps``, ``max_iter``, ...) relaxes every set.
     """
     if init not in ("dart", "random"):
         raise ValueError(f"init must be 'dart' or 'random' for many sets, got {init!r}")
@@ -966,7 +984,7 @@ def plan_poisson(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74,
         import numpy as np
 
         seed = int(np.random.SeedSequence().entropy % 2**31)
-    params = {"n": n, "init": init, **_relax_params(eps, max_iter, backend, grid)}
+    params = {"n": n, "init": init, **_relax_params(relax, overrides)}
     if init == "dart":
         params["dart_radius"] = dart_radius
     items = [Item("poisson", i, None, s, {**params, "base_seed": seed},
@@ -976,9 +994,10 @@ def plan_poisson(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74,
     return items
 
 
-def plan_relax(inputs, outputs, *, eps=0.8, max_iter=1000, backend="auto", grid=None):
-    """Items for relaxing every point file of ``inputs``."""
-    params = _relax_params(eps, max_iter, backend, grid)
+def plan_relax(inputs, outputs, relax=None, **overrides):
+    """Items for relaxing every point file of ``inputs`` (see :func:`plan_poisson` for
+    ``relax`` and ``overrides``)."""
+    params = _relax_params(relax, overrides)
     items = [Item("relax", i, os.fspath(path), None, params,
                   tuple(render_template(t, input=path, i=i) for t in outputs))
              for i, path in enumerate(inputs)]
@@ -1012,10 +1031,11 @@ class Batch:
                          **self._run)
 
 
-def stipple_many(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, seed=0,
-                 recursive=False, allow_large=False, write=None, manifest=None,
+def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
+                 recursive=False, allow_large=False, write=None, tone=None, color=None,
+                 backend="auto", manifest=None,
                  overwrite=False, jobs=1, devices=None, client=None, collect=False,
-                 progress=None, **options):
+                 progress=None, **overrides):
     """Stipple many images: a :class:`Batch` that yields one record per image as it finishes.
 
     Plans with :func:`plan_stipple` now (every template and output is
@@ -1035,16 +1055,17 @@ def stipple_many(inputs, outputs, *, n=None, density=None, dots_per_cm2=None, se
     >>> [(r["status"], os.path.basename(r["outputs"][0])) for r in recs]
     [('ok', 'astronaut_105.npz')]
     """
-    items = plan_stipple(inputs, outputs, n=n, density=density, dots_per_cm2=dots_per_cm2,
-                         seed=seed, recursive=recursive, allow_large=allow_large,
-                         write=write, **options)
+    items = plan_stipple(inputs, outputs, options, n=n, density=density,
+                         dots_per_cm2=dots_per_cm2, recursive=recursive,
+                         allow_large=allow_large, write=write, tone=tone, color=color,
+                         backend=backend, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 
 
-def poisson_many(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74, eps=0.8,
-                 max_iter=1000, backend="auto", grid=None, manifest=None, overwrite=False,
-                 jobs=1, devices=None, client=None, collect=False, progress=None):
+def poisson_many(count, n, outputs, relax=None, *, seed=None, init="dart", dart_radius=0.74,
+                 manifest=None, overwrite=False, jobs=1, devices=None, client=None,
+                 collect=False, progress=None, **overrides):
     """Make ``count`` independent Poisson disk sets; yield records as they finish.
 
     Seeds come from ``numpy.random.SeedSequence(seed).spawn(count)``; each
@@ -1058,16 +1079,15 @@ def poisson_many(count, n, outputs, *, seed=None, init="dart", dart_radius=0.74,
         seed = next((r["params"]["base_seed"] for r in reversed(Manifest(manifest).records())
                      if r.get("kind") == "poisson" and "base_seed" in r.get("params", {})),
                     None)
-    items = plan_poisson(count, n, outputs, seed=seed, init=init, dart_radius=dart_radius,
-                         eps=eps, max_iter=max_iter, backend=backend, grid=grid)
+    items = plan_poisson(count, n, outputs, relax, seed=seed, init=init,
+                         dart_radius=dart_radius, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 
 
-def relax_many(inputs, outputs, *, eps=0.8, max_iter=1000, backend="auto", grid=None,
-               manifest=None, overwrite=False, jobs=1, devices=None, client=None,
-               collect=False, progress=None):
+def relax_many(inputs, outputs, relax=None, *, manifest=None, overwrite=False, jobs=1,
+               devices=None, client=None, collect=False, progress=None, **overrides):
     """Relax many point files; yield records as they finish (see :func:`plan_relax`)."""
-    items = plan_relax(inputs, outputs, eps=eps, max_iter=max_iter, backend=backend, grid=grid)
+    items = plan_relax(inputs, outputs, relax, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)

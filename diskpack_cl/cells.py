@@ -1,6 +1,6 @@
 """Per-cell stage: the maximal inscribed circle of every power cell on the device.
 
-``kernels/cell_mic.cl`` gives each site one work item that gathers its
+``diskpack_cl/kernels/cell_mic.cl`` gives each site one work item that gathers its
 neighbours from a bucket grid, solves its cell's Chebyshev-centre linear
 program in float64 by the dual simplex method, proves the answer against
 every site that could cut the disk, and reports the three active
@@ -39,12 +39,11 @@ CHUNK = 1 << 17  # work items per enqueue (rounded down to whole groups): each w
 # GPU's warp; at most the kernel's and the device's limits): each work item
 # keeps a ~2.3 KB constraint list in private memory, and PoCL lays a whole
 # work-group's out on one thread's stack; 16 also balances small sets over
-# the cores (n = 1024: kernel 0.44 ms against 0.76 ms with 64; no difference
-# measured at 20k, 200k).
+# the cores.
 GROUP = 16
 _MAX_WINDOW = 8  # widest weight window of the proof scan, in buckets (CellMIC._local_wmax)
 
-#: Flag bits of the kernel (``kernels/cell_mic.cl``): why a cell was not proven.
+#: Flag bits of the kernel (``diskpack_cl/kernels/cell_mic.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
          "rounds": 32, "shift": 64, "nn": 128}
 _NN = FLAGS["nn"]
@@ -331,9 +330,10 @@ class CellMIC:
         flags = out["codes"][:, 3]
         proven = (flags & ~_NN) == 0
         q, R, ok = refine_active(X, w, self.domain, out["codes"][:, :3], out["codes"][:, 4:])
-        # the device and the host solved the same 3 x 3 system
+        # the device and the host solved the same 3 x 3 system: same radius, same centre
         scale = max(self.domain.width, self.domain.height)
-        agree = np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale
+        agree = ((np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale)
+                 & np.all(np.abs(X + q - out["mic"][:, :2]) <= 1e-9 * scale, axis=1))
         good = proven & ok & agree
         t1 = time.perf_counter()
         timings["refine"] = t1 - t_start

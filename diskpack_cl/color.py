@@ -52,7 +52,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PALETTES", "Separation", "parse_pens", "separate", "load_rgb", "srgb_to_linear",
+from .options import OptionConflict, check_fields, option
+
+__all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
            "color_measures"]
 
@@ -463,3 +465,47 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         "p01_joint": spacing(p, total / max(float(total.max()), 1.0)).p01,
         "sigma": sigma,
     }
+
+
+_COLOUR = "colour (several pens, one certified packing of all dots)"
+
+
+@dataclass(frozen=True)
+class ColorOptions:
+    """The separation options of :func:`diskpack_cl.stipple_colors` (``diskpack stipple
+    --colors/--pens``); neither ``colors`` nor ``pens``: one pen.
+
+    Examples
+    --------
+    >>> ColorOptions(colors="cmy").separation()["colors"]
+    'cmy'
+    >>> ColorOptions().separation() is None
+    True
+    """
+
+    colors: str = option(None, "separate the image into pen layers: cmyk (black generation "
+                         "K = G (1 - max(R, G, B)) in linear light, the other inks separate "
+                         "the rest side by side) or cmy; one SVG layer per pen",
+                         choices=("cmyk", "cmy"), group=_COLOUR)
+    pens: str = option(None, "any set of pens, e.g. black=#000,red=#c00,blue=#06c: the nearest "
+                       "mix of paper and pens side by side (linear RGB)", metavar="NAME=COLOR,...",
+                       group=_COLOUR)
+    black_generation: float = option(1.0, "cmyk: share of the grey component drawn in black "
+                                     "(default 1)", lo=0, hi=1, metavar="G", group=_COLOUR)
+    clean_black: float = option(0.0, "pixels with R, G, B all within T of black are pure black "
+                                "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+    clean_white: float = option(0.0, "pixels with R, G, B all within T of white get no ink "
+                                "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.colors is not None and self.pens is not None:
+            raise OptionConflict(f"{{}} {self.colors} and {{}} both name the pens; give one",
+                                 "colors", "pens")
+
+    def separation(self):
+        """The separation arguments of :func:`diskpack_cl.stipple_colors`, or None (one pen)."""
+        if self.colors is None and self.pens is None:
+            return None
+        return dict(colors=self.pens or self.colors, black_generation=self.black_generation,
+                    clean_black=self.clean_black, clean_white=self.clean_white)

@@ -137,19 +137,9 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     >>> error_diffusion(g, 100, seed=1).shape
     (100, 2)
     """
-    g = np.asarray(gray, dtype=np.float64)
-    if g.ndim != 2 or g.size == 0:
-        raise ValueError(f"gray must be a non-empty 2-D array, got shape {g.shape}")
     n = check_count(n)
-    d = 1.0 - g if density is None else np.asarray(density, dtype=np.float64)
-    if d.shape != g.shape:
-        raise ValueError(f"density shape {d.shape} differs from the image shape {g.shape}")
-    if not np.all(np.isfinite(d)) or d.min() < 0:
-        raise ValueError("density must be finite and non-negative")
-    d = np.maximum(d, 0.0)
+    d = _density(gray, density)
     total = d.sum()
-    if not total > 0:
-        raise ValueError("nothing to stipple: the image is white (zero darkness everywhere)")
     H, W = d.shape
     # Few points for many pixels: diffuse on b x b blocks (about 4 points per
     # block... at most), so that the error does not wander across half the
@@ -172,8 +162,28 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     blk = np.repeat(np.arange(Hc * Wc), counts)
     rng = np.random.default_rng(seed)
     row, col = _pixels_in_blocks(blk, blocks, b, (H, W), rng) if b > 1 else np.divmod(blk, W)
-    jitter = rng.random((n, 2))
-    pts = np.empty((n, 2))
+    return _jittered(row, col, rng.random((n, 2)))
+
+
+def _density(gray, density):
+    """The checked density (default: the darkness ``1 - gray``) of :func:`error_diffusion`."""
+    g = np.asarray(gray, dtype=np.float64)
+    if g.ndim != 2 or g.size == 0:
+        raise ValueError(f"gray must be a non-empty 2-D array, got shape {g.shape}")
+    d = 1.0 - g if density is None else np.asarray(density, dtype=np.float64)
+    if d.shape != g.shape:
+        raise ValueError(f"density shape {d.shape} differs from the image shape {g.shape}")
+    if not np.all(np.isfinite(d)) or d.min() < 0:
+        raise ValueError("density must be finite and non-negative")
+    d = np.maximum(d, 0.0)
+    if not d.sum() > 0:
+        raise ValueError("nothing to stipple: the image is white (zero darkness everywhere)")
+    return d
+
+
+def _jittered(row, col, jitter):
+    """Points at pixels ``(row, col)`` plus `jitter`, inside their pixels' open upper bounds."""
+    pts = np.empty((len(row), 2))
     pts[:, 0] = col + jitter[:, 0]
     pts[:, 1] = row + jitter[:, 1]
     # keep the open upper bound of the pixel (and the image)

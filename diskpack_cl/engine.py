@@ -82,8 +82,9 @@ class ExactEngine:
     device = "cpu (scipy)"
     gives_nn = False
 
-    def __init__(self, domain):
+    def __init__(self, domain, *, fallback=None):
         self.domain = domain
+        self.fallback = fallback   # None, or why ``auto`` chose this engine
 
     def mic(self, points, weights=None):
         t0 = time.perf_counter()
@@ -102,6 +103,7 @@ class RasterEngine:
 
     name = "raster"
     gives_nn = False
+    fallback = None
 
     def __init__(self, domain, n, *, device=None, grid=None, profile=False):
         from .raster import PowerRaster, auto_grid
@@ -128,6 +130,7 @@ class CellEngine:
 
     name = "cells"
     gives_nn = True
+    fallback = None
 
     def __init__(self, domain, *, device=None, profile=False):
         from .cells import CellMIC
@@ -163,17 +166,16 @@ def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
 def _opencl_engine(ctx, domain, n, backend, route, grid, profile):
     """The OpenCL route for `ctx`: the per-cell kernel where the device has
     float64; else the raster route on GPUs, and for ``auto`` on CPUs without
-    float64 the exact engine (measured: the raster route is slower than scipy
-    alone on a CPU)."""
+    float64 the exact engine."""
     import pyopencl as cl
 
     from .cells import has_fp64
 
     if route == "cells" or (route == "auto" and has_fp64(ctx)):
-        return CellEngine(domain, device=ctx, profile=profile), None
+        return CellEngine(domain, device=ctx, profile=profile)
     if route == "raster" or backend == "opencl" or ctx.devices[0].type & cl.device_type.GPU:
-        return RasterEngine(domain, n, device=ctx, grid=grid, profile=profile), None
-    return ExactEngine(domain), "a CPU device without float64: scipy alone is faster"
+        return RasterEngine(domain, n, device=ctx, grid=grid, profile=profile)
+    return ExactEngine(domain, fallback="a CPU device without float64: scipy alone is faster")
 
 
 def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="auto", profile=False):
@@ -191,8 +193,8 @@ def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="aut
     grid : tuple of int, optional
         Raster shape ``(ny, nx)`` of the ``raster`` route.
     route : {"auto", "cells", "raster"}
-        OpenCL route: ``auto`` takes ``cells`` on devices with float64 (the
-        fastest engine there at every size measured), ``raster`` on GPUs
+        OpenCL route: ``auto`` takes ``cells`` on devices with float64,
+        ``raster`` on GPUs
         without float64, and with ``backend="auto"`` the exact engine on a
         CPU without float64.
     profile : bool
@@ -216,17 +218,12 @@ def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="aut
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if route not in ROUTES:
         raise ValueError(f"route must be one of {ROUTES}, got {route!r}")
-    fallback = None
     if backend == "exact":
-        engine = ExactEngine(domain)
-    else:
-        try:
-            ctx = get_context(device)
-        except NoOpenCLError as exc:
-            if backend == "opencl" or device is not None:
-                raise
-            engine, fallback = ExactEngine(domain), f"no OpenCL device ({exc})"
-        else:
-            engine, fallback = _opencl_engine(ctx, domain, n, backend, route, grid, profile)
-    engine.fallback = fallback
-    return engine
+        return ExactEngine(domain)
+    try:
+        ctx = get_context(device)
+    except NoOpenCLError as exc:
+        if backend == "opencl" or device is not None:
+            raise
+        return ExactEngine(domain, fallback=f"no OpenCL device ({exc})")
+    return _opencl_engine(ctx, domain, n, backend, route, grid, profile)

@@ -14,15 +14,18 @@ import json
 import os
 import re
 from pathlib import Path
+from dataclasses import dataclass, replace
 from types import SimpleNamespace
 
 import numpy as np
 
 from diskpack_cl.io import atomic_write, check_writable
-from diskpack_cl.pen_path import path_travel, pen_path_order
+from diskpack_cl.options import OptionConflict, check_fields, option
+from diskpack_cl.pen_path import PEN_PATHS, path_travel, pen_path_order
 
 __all__ = [
     "WRITERS",
+    "WriteOptions",
     "check_output_path",
     "mm_per_px",
     "pen_path_order",
@@ -36,6 +39,7 @@ __all__ = [
 ]
 
 MM_PER_INCH = 25.4
+_OUTPUT = "output"
 
 
 # --------------------------------------------------------------------------
@@ -219,6 +223,106 @@ PLOT_SPEED_MM_S = 50.0
 PEN_LIFT_S = 0.3
 
 
+def _pen_names(text):
+    """The command line's pen order: ``NAME,...``."""
+    return [v.strip() for v in text.split(",")]
+
+
+def _check_page(page):
+    paper_size(page)
+
+
+@dataclass(frozen=True)
+class WriteOptions:
+    """How a stippling is drawn (SVG, PNG): the options of
+    :func:`diskpack_cl.batch.write_stipple_outputs`, ``diskpack stipple`` and
+    ``diskpack export``.
+
+    Examples
+    --------
+    >>> WriteOptions(pen_mm=0.5, page="a4").layout()["page"]
+    'a4'
+    >>> WriteOptions(dpi=300, width_mm=100)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.options.OptionConflict: give the SVG size either by width_mm/height_mm or by dpi, not both
+    """
+
+    width_mm: float = option(None, "picture width in mm (with --height-mm: fit inside the "
+                             "box)", unit="mm", lo=0, lo_open=True, metavar="MM", group=_OUTPUT)
+    height_mm: float = option(None, "picture height in mm", unit="mm", lo=0, lo_open=True,
+                              metavar="MM", group=_OUTPUT)
+    dpi: float = option(None, "picture size from the image's pixels at DPI (default 96 when "
+                        "no mm size and no --page)", lo=0, lo_open=True, metavar="DPI",
+                        group=_OUTPUT)
+    page: str = option(None, f"the SVG's page is this paper: {', '.join(PAPERS)} or WxHmm "
+                       f"(e.g. 300x200mm), portrait; the picture is centred on it and, without "
+                       f"a size, fitted inside the margins", check=_check_page, metavar="PAPER",
+                       group=_OUTPUT)
+    landscape: bool = option(False, "turn the --page paper", group=_OUTPUT)
+    margin_mm: float = option(None, f"margin around the picture on the --page paper "
+                              f"(default {DEFAULT_MARGIN_MM:g})", unit="mm", lo=0,
+                              metavar="MM", group=_OUTPUT)
+    dots: str = option(None, "dot size in SVG and PNG: tone (default) = one size for all "
+                       "dots, chosen so that the total ink equals the image's total darkness; "
+                       "packing = each dot its certified packing disk (large where the image "
+                       "is light: it shows the packing, not the tone)",
+                       choices=("tone", "packing"), group=_OUTPUT)
+    dot_mm: float = option(None, "fixed dot diameter in mm instead of --dots; the PNG preview "
+                           "shows the same dots", unit="mm", lo=0, lo_open=True, metavar="MM",
+                           group=_OUTPUT)
+    pen_mm: float = option(None, "plotter pen width in mm: the SVG draws each dot as the pen "
+                           "draws it, one path per dot: a dot not wider than the pen is one "
+                           "pen touch, a wider one is filled by concentric rings W apart (the "
+                           "outermost of radius (dot diameter - W)/2); the PNG preview shows "
+                           "the same ink (default: filled circles, which a plotter traces W "
+                           "wider)", unit="mm", lo=0, lo_open=True, metavar="W", group=_OUTPUT)
+    radius_scale: float = option(1.0, "factor on the dot radii of --dots in SVG and PNG "
+                                 "(default 1.0)", lo=0, lo_open=True, metavar="F",
+                                 group=_OUTPUT)
+    pen_path: str = option("auto", "SVG dot order: auto (default) = the shorter of greedy and "
+                           "Hilbert, then 2-opt for at most 2 s; hilbert = Hilbert curve; "
+                           "greedy = nearest neighbour; none = as computed",
+                           choices=PEN_PATHS, group=_OUTPUT)
+    png_scale: float = option(None, f"PNG pixels per image pixel (default 2.0, at most a "
+                              f"{PREVIEW_MAX_PX} px long side)", lo=0, lo_open=True,
+                              metavar="F", group=_OUTPUT)
+    plot_speed_mm_s: float = option(
+        PLOT_SPEED_MM_S, f"plot-time estimate: pen speed V mm/s drawing and travelling, plus "
+        f"{PEN_LIFT_S:g} s to lower and raise the pen per dot (default {PLOT_SPEED_MM_S:g})",
+        unit="mm/s", lo=0, lo_open=True, metavar="V", group=_OUTPUT)
+    pen_order: object = option(None, "SVG layer order of a colour stippling (--colors, "
+                               "--pens; first drawn first; default: lightest pen first)",
+                               cli_type=_pen_names, metavar="NAME,...", group=_OUTPUT)
+    invert: bool = option(False, "light dots on dark paper", cli=False)
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.dot_mm is not None and self.dots is not None:
+            raise OptionConflict(f"{{}} {self.dot_mm:g} and {{}} {self.dots} both set the dot "
+                                 f"size; give one", "dot_mm", "dots")
+        if self.dpi is not None and (self.width_mm is not None or self.height_mm is not None):
+            raise OptionConflict("give the SVG size either by {}/{} or by {}, not both",
+                                 "width_mm", "height_mm", "dpi")
+        for name in ("margin_mm", "landscape"):
+            if getattr(self, name) not in (None, False) and self.page is None:
+                raise OptionConflict("{} is for a {} paper: give {} too (e.g. {} a4)",
+                                     name, "page", "page", "page")
+
+    def layout(self):
+        """Where the picture goes on paper: the keyword arguments of :func:`svg_layout`."""
+        return {k: getattr(self, k) for k in ("width_mm", "height_mm", "dpi", "page",
+                                               "landscape", "margin_mm")}
+
+    def scale(self, width, height):
+        """Millimetres per image pixel of a `width` x `height` picture on this paper."""
+        return svg_layout(width, height, **self.layout())["scale"]
+
+    def replace(self, **overrides):
+        """A copy with ``overrides`` (field names), checked again."""
+        return replace(self, **overrides)
+
+
 def plot_time(pen_downs, draw_mm, travel_mm, *, speed_mm_s=PLOT_SPEED_MM_S,
               pen_lift_s=PEN_LIFT_S):
     """Estimated plot time in seconds: all lines at ``speed_mm_s``, plus a pen lift per dot.
@@ -394,19 +498,9 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     pm += lay["offset"]
     order, before, after = pen_path_order(pm, method=pen_path)
     meta = _svg_meta(result, lay, rad, pen_mm, invert, layer)
-    paint = (f'fill="{"white" if invert else "black"}" stroke="none"' if pen_mm is None else
-             f'fill="none" stroke="{"white" if invert else "black"}" '
-             f'stroke-width="{pen_mm:.4f}" stroke-linecap="round" stroke-linejoin="round"')
-    draw = 0.0
-    with atomic_write(path, "w") as fh:
-        fh.write(_svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta, paint,
-                           invert))
-        for a in range(0, len(order), 100_000):
-            text, length = _svg_dots(pm[order[a : a + 100_000]], rad[order[a : a + 100_000]],
-                                     pen_mm)
-            fh.write(text)
-            draw += length
-        fh.write("  </g>\n</svg>\n")
+    head = _svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta,
+                     _svg_paint(pen_mm, invert), invert)
+    draw = _write_svg_file(path, head, pm[order], rad[order], pen_mm)
     info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
             "page_mm": list(lay["page"]), "n": int(len(p)), "travel_before_mm": before,
             "travel_after_mm": after, "moved_inside": moved, "pen_downs": int(len(p)),
@@ -415,6 +509,27 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info
+
+
+def _svg_paint(pen_mm, invert):
+    """The dots' paint: filled circles, or the pen's stroke."""
+    if pen_mm is None:
+        return f'fill="{"white" if invert else "black"}" stroke="none"'
+    return (f'fill="none" stroke="{"white" if invert else "black"}" '
+            f'stroke-width="{pen_mm:.4f}" stroke-linecap="round" stroke-linejoin="round"')
+
+
+def _write_svg_file(path, head, centres, rad, pen_mm):
+    """Write the SVG (atomically) in chunks of dots; the pen-down drawing length (mm)."""
+    draw = 0.0
+    with atomic_write(path, "w") as fh:
+        fh.write(head)
+        for a in range(0, len(centres), 100_000):
+            text, length = _svg_dots(centres[a : a + 100_000], rad[a : a + 100_000], pen_mm)
+            fh.write(text)
+            draw += length
+        fh.write("  </g>\n</svg>\n")
+    return draw
 
 
 def _svg_radii(result, radii, scale, dot_mm, dots, radius_scale):

@@ -255,6 +255,28 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     q0 = c_est - X
     if domain.periodic:
         q0 -= np.round(q0 / (domain.width, domain.height)) * (domain.width, domain.height)
+    q, R, stats = _solve_with_margin(X, w, q0, r_est, domain, todo, k)
+    R, c_est, r_est = R[todo], c_est[todo], r_est[todo]
+    centers, empty = _centres(X[todo], q[todo], R, domain)
+    if estimate is not None:
+        stats.update(_estimate_errors(centers, R, c_est, r_est, domain))
+    stats["empty"] = int(empty.sum())
+    return MIC(centers, R, empty, stats)
+
+
+def _centres(X, q, R, domain):
+    """MIC centres ``X + q`` (the site itself for an empty cell, ``R < 0``), wrapped."""
+    empty = R < 0
+    centers = X + q
+    centers[empty] = X[empty]
+    if domain.periodic:
+        centers = domain.wrap(centers)
+    return centers, empty
+
+
+def _solve_with_margin(X, w, q0, r_est, domain, todo, k):
+    """Solve the cells `todo`, widening the periodic margin until every cell fits in it."""
+    n = len(X)
     scale = max(domain.width, domain.height)
     wmax = w.max() if n else 0.0
     spacing = np.sqrt(domain.area / max(n, 1))
@@ -269,16 +291,7 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
             # a cell reaches past the periodic images in the tree: add more
             margin = min(max(1.25 * exc.needed, 2 * margin), full)
     stats["margin"] = margin
-    X, q, R, c_est, r_est = X[todo], q[todo], R[todo], c_est[todo], r_est[todo]
-    empty = R < 0
-    centers = X + q
-    centers[empty] = X[empty]
-    if domain.periodic:
-        centers = domain.wrap(centers)
-    if estimate is not None:
-        stats.update(_estimate_errors(centers, R, c_est, r_est, domain))
-    stats["empty"] = int(empty.sum())
-    return MIC(centers, R, empty, stats)
+    return q, R, stats
 
 
 def _checked_sites(points, weights, domain):
@@ -729,6 +742,19 @@ def chebyshev_center_linprog(normals, beta):
     if res.status != 0:
         raise RuntimeError(f"linprog failed: {res.message}")
     return res.x[:2], res.x[2]
+
+
+class CertificateError(ValueError):
+    """Disks that failed their certificate: no result is returned (or written) for them.
+
+    Attributes
+    ----------
+    certificate : Certificate
+    """
+
+    def __init__(self, message, certificate):
+        super().__init__(f"{message} ({certificate})")
+        self.certificate = certificate
 
 
 @dataclass

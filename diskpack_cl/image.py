@@ -16,6 +16,7 @@ uniform point set.
 from __future__ import annotations
 
 import contextlib
+from dataclasses import dataclass
 import os
 import warnings
 from importlib import resources
@@ -23,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["adjust_tone", "load_gray", "to_gray", "sample_image_path", "LUMA_601"]
+from .options import OptionConflict, check_fields, option
+
+__all__ = ["adjust_tone", "ToneOptions", "load_gray", "to_gray", "sample_image_path", "LUMA_601"]
 
 #: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
 LUMA_601 = (0.299, 0.587, 0.114)
@@ -288,3 +291,43 @@ def adjust_tone(gray, *, black=0.0, white=1.0, gamma=1.0):
         raise ValueError(f"the tone gamma must be a finite number > 0, got {gamma:g}")
     g = np.clip((np.asarray(gray, dtype=np.float64) - black) / (white - black), 0.0, 1.0)
     return g if gamma == 1.0 else g**gamma
+
+
+_TONE = "tone (before stippling, on every schedule; in --json params.tone)"
+
+
+@dataclass(frozen=True)
+class ToneOptions:
+    """The tone controls of :func:`adjust_tone`, as options.
+
+    Examples
+    --------
+    >>> ToneOptions(black_point=0.1, white_point=0.9).adjust(np.array([0.1, 0.5, 0.95]))
+    array([0. , 0.5, 1. ])
+    >>> ToneOptions(black_point=0.6, white_point=0.5)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.options.OptionConflict: black_point 0.6 must be below white_point 0.5
+    """
+
+    black_point: float = option(0.0, "gray levels at or below B (0 black .. 1 white) get full "
+                                "ink (default 0)", lo=0, hi=1, metavar="B", group=_TONE)
+    white_point: float = option(1.0, "gray levels at or above W are blank paper, no dots "
+                                "(default 1)", lo=0, hi=1, metavar="W", group=_TONE)
+    tone_gamma: float = option(1.0, "contrast: the levels between the points are raised to G "
+                               "(above 1: darker mid-tones, below 1: lighter; default 1)",
+                               lo=0, lo_open=True, metavar="G", group=_TONE)
+
+    def __post_init__(self):
+        check_fields(self)
+        if not self.black_point < self.white_point:
+            raise OptionConflict(f"{{}} {self.black_point:g} must be below {{}} "
+                                 f"{self.white_point:g}", "black_point", "white_point")
+
+    def params(self):
+        """The keyword arguments of :func:`adjust_tone` (recorded as ``params["tone"]``)."""
+        return {"black": self.black_point, "white": self.white_point, "gamma": self.tone_gamma}
+
+    def adjust(self, gray):
+        """``gray`` with these tone controls (:func:`adjust_tone`)."""
+        return adjust_tone(gray, **self.params())

@@ -11,7 +11,8 @@ import numpy as np
 
 from .domain import Domain
 
-__all__ = ["HEXAGONAL_CELL", "hexagonal_radius", "nearest_neighbors", "nearest_neighbor_distances",
+__all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "hexagonal_radius", "nearest_neighbors",
+           "nearest_neighbor_distances",
            "min_distance", "normalized_radius", "coincident_pairs", "kdtree"]
 
 #: Area per point of the densest (hexagonal) packing of unit disks, ``2 sqrt(3)``:
@@ -72,15 +73,45 @@ def nearest_neighbors(points, domain=Domain.torus()):
     return d[:, 1], j[:, 1]
 
 
+#: The unbounded plane (no edges, no wrap).
+PLANE = Domain(float("inf"), float("inf"), False)
+
+
+def as_domain(domain):
+    """The domain ``domain`` names: a Domain, True (unit torus), (W, H) (torus) or False (plane)."""
+    if isinstance(domain, Domain):
+        return domain
+    if domain is True:
+        return Domain.torus()
+    if domain is False or domain is None:
+        return PLANE
+    box = np.asarray(domain, dtype=np.float64)
+    if box.shape != (2,) or not np.all(box > 0):
+        raise ValueError(f"periodic must be True, False or a domain size (W, H) > 0, "
+                         f"got {domain!r}")
+    return Domain(float(box[0]), float(box[1]), True)
+
+
 def nearest_neighbor_distances(points, domain=Domain.torus()):
-    """Distance from each point to its nearest other point (n >= 2).
+    """Distance from each point to its nearest other point (n >= 2): the one API.
+
+    ``domain`` is a :class:`~diskpack_cl.Domain` (its torus, points wrapped
+    into it, or its rectangle), ``True`` (the unit torus), ``(W, H)`` (the
+    torus [0,W) x [0,H)) or ``False`` (the plane).
 
     Examples
     --------
     >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]]).round(12).tolist()
     [0.1, 0.1]
+    >>> nearest_neighbor_distances([[0.05, 0.5], [0.95, 0.5]], False).round(12).tolist()
+    [0.9, 0.9]
     """
-    return nearest_neighbors(points, domain)[0]
+    p = np.asarray(points, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError("points must be finite")
+    return nearest_neighbors(p, as_domain(domain))[0]
 
 
 def min_distance(points, domain=Domain.torus()):

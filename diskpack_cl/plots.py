@@ -150,6 +150,51 @@ def point_set_numbers(points_list, *, kmax=None):
     return _point_set_measures(analysis._as_realizations(points_list), kmax)[0]
 
 
+def _points_panel(ax_pts, first, K):
+    dot = max(0.05, min(4.0, 2000.0 / len(first)))
+    ax_pts.scatter(first[:, 0] % 1.0, first[:, 1] % 1.0, s=dot, c="k", linewidths=0)
+    ax_pts.set(xlim=(0, 1), ylim=(1, 0), aspect="equal", xticks=[], yticks=[])
+    ax_pts.set_title("points" + (f" (1 of {K})" if K > 1 else ""), fontsize=9)
+
+
+def _periodogram_panel(ax_per, P, k, K):
+    import matplotlib
+    from matplotlib.colors import LogNorm
+
+    positive = P[P > 0]
+    vmax = max(float(positive.max()) if positive.size else 1.0, 4.0)
+    ax_per.imshow(
+        np.where(P > 0, P, np.nan),
+        cmap=matplotlib.colormaps["gray"].with_extremes(bad="k"),
+        norm=LogNorm(vmin=0.05, vmax=vmax, clip=True),
+        extent=(-k - 0.5, k + 0.5, -k - 0.5, k + 0.5), origin="lower", interpolation="nearest",
+    )
+    ax_per.set(xticks=[-k, 0, k], yticks=[-k, 0, k])
+    ax_per.tick_params(labelsize=7)
+    ax_per.set_title(f"mean periodogram (K={K}, log)", fontsize=9)
+
+
+def _spectrum_panels(ax_rad, ax_ani, centres, power, aniso, ref_db, k):
+    finite = np.isfinite(aniso)
+    ax_rad.plot(centres, power, color="k", lw=1)
+    ax_rad.axhline(1.0, color="0.6", lw=0.8, ls="--")
+    ax_rad.set_xlim(0, k)
+    ax_rad.set_ylim(0, max(2.0, 1.05 * float(power.max())))
+    ax_rad.set_xlabel("frequency", fontsize=8)
+    ax_rad.tick_params(labelsize=7)
+    ax_rad.set_title("radial mean power", fontsize=9)
+
+    ax_ani.plot(centres[finite], aniso[finite], color="k", lw=1)
+    ax_ani.axhline(ref_db, color="0.6", lw=0.8, ls="--")
+    ax_ani.set_xlim(0, k)
+    lo = min(ref_db - 6.0, float(np.min(aniso[finite])) - 1.0) if finite.any() else ref_db - 6.0
+    hi = max(ref_db + 6.0, float(np.max(aniso[finite])) + 1.0) if finite.any() else ref_db + 6.0
+    ax_ani.set_ylim(max(lo, ref_db - 30.0), min(hi, ref_db + 30.0))
+    ax_ani.set_xlabel("frequency", fontsize=8)
+    ax_ani.tick_params(labelsize=7)
+    ax_ani.set_title("anisotropy (dB)", fontsize=9)
+
+
 def point_set_report(points_list, path, *, title=None, kmax=None):
     """One figure of a point set on the unit torus, and its numbers.
 
@@ -197,49 +242,13 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     first = sets[0]
     K = numbers["realizations"]
     ref_db = numbers["anisotropy_reference_db"]
-    finite = np.isfinite(aniso)
 
     fig = _figure((10, 3))
-    from matplotlib.colors import LogNorm
-
     ax_pts, ax_per, ax_rad, ax_ani = fig.subplots(1, 4)
-    dot = max(0.05, min(4.0, 2000.0 / len(first)))
-    ax_pts.scatter(first[:, 0] % 1.0, first[:, 1] % 1.0, s=dot, c="k", linewidths=0)
-    ax_pts.set(xlim=(0, 1), ylim=(1, 0), aspect="equal", xticks=[], yticks=[])
-    ax_pts.set_title("points" + (f" (1 of {K})" if K > 1 else ""), fontsize=9)
-
     k = int(freqs[-1])
-    positive = P[P > 0]
-    vmax = max(float(positive.max()) if positive.size else 1.0, 4.0)
-    import matplotlib
-
-    ax_per.imshow(
-        np.where(P > 0, P, np.nan),
-        cmap=matplotlib.colormaps["gray"].with_extremes(bad="k"),
-        norm=LogNorm(vmin=0.05, vmax=vmax, clip=True),
-        extent=(-k - 0.5, k + 0.5, -k - 0.5, k + 0.5), origin="lower", interpolation="nearest",
-    )
-    ax_per.set(xticks=[-k, 0, k], yticks=[-k, 0, k])
-    ax_per.tick_params(labelsize=7)
-    ax_per.set_title(f"mean periodogram (K={K}, log)", fontsize=9)
-
-    ax_rad.plot(centres, power, color="k", lw=1)
-    ax_rad.axhline(1.0, color="0.6", lw=0.8, ls="--")
-    ax_rad.set_xlim(0, k)
-    ax_rad.set_ylim(0, max(2.0, 1.05 * float(power.max())))
-    ax_rad.set_xlabel("frequency", fontsize=8)
-    ax_rad.tick_params(labelsize=7)
-    ax_rad.set_title("radial mean power", fontsize=9)
-
-    ax_ani.plot(centres[finite], aniso[finite], color="k", lw=1)
-    ax_ani.axhline(ref_db, color="0.6", lw=0.8, ls="--")
-    ax_ani.set_xlim(0, k)
-    lo = min(ref_db - 6.0, float(np.min(aniso[finite])) - 1.0) if finite.any() else ref_db - 6.0
-    hi = max(ref_db + 6.0, float(np.max(aniso[finite])) + 1.0) if finite.any() else ref_db + 6.0
-    ax_ani.set_ylim(max(lo, ref_db - 30.0), min(hi, ref_db + 30.0))
-    ax_ani.set_xlabel("frequency", fontsize=8)
-    ax_ani.tick_params(labelsize=7)
-    ax_ani.set_title("anisotropy (dB)", fontsize=9)
+    _points_panel(ax_pts, first, K)
+    _periodogram_panel(ax_per, P, k, K)
+    _spectrum_panels(ax_rad, ax_ani, centres, power, aniso, ref_db, k)
 
     head = f"{title}\n" if title else ""
     fig.suptitle(
@@ -312,6 +321,45 @@ def stipple_numbers(points, radii, darkness, certificate=None, *, sigma=3.0):
     return numbers
 
 
+def _spacing_panel(ax_h, sp):
+    vals = sp.values[np.isfinite(sp.values)]
+    hi = max(1.6, float(np.percentile(vals, 99.5)) if vals.size else 1.6)
+    ax_h.hist(np.clip(vals, 0, hi), bins=60, range=(0, hi), color="0.35")
+    ax_h.axvline(analysis.HEXAGONAL_SPACING, color="k", ls="--", lw=1)
+    ax_h.axvline(sp.p01, color="k", ls=":", lw=1.2)
+    ax_h.text(analysis.HEXAGONAL_SPACING, 0.97, " hex 1.075", transform=ax_h.get_xaxis_transform(),
+              va="top", fontsize=7)
+    ax_h.text(sp.p01, 0.85, f" P01 {sp.p01:.3f}", transform=ax_h.get_xaxis_transform(),
+              va="top", fontsize=7)
+    ax_h.set_xlabel("NN distance x sqrt(expected density)", fontsize=8)
+    ax_h.tick_params(labelsize=7)
+    ax_h.set_title(f"spacing (median {sp.median:.3f})", fontsize=9)
+
+
+def _numbers_panel(ax_t, numbers, sp, n, size, r_tone, radii, cert):
+    ax_t.axis("off")
+    lines = [
+        f"n = {n}, image {size[0]} x {size[1]} px",
+        f"tone SSIM = {numbers['tone_ssim']:.4f}",
+        f"spacing P01 = {sp.p01:.4f}, median = {sp.median:.4f}",
+        f"mean |psi6| = {numbers['psi6_mean']:.4f}",
+        f"dots drawn with equal-ink radius {r_tone:.3g} px",
+    ]
+    if radii is not None:
+        lines.append(
+            f"packing radii (px): min {numbers['radius_min']:.3g},\n"
+            f"  median {numbers['radius_median']:.3g}, max {numbers['radius_max']:.3g}"
+        )
+    if cert is not None:
+        lines.append("")
+        lines.append("certificate:")
+        for key, value in cert.items():
+            shown = f"{value:.6g}" if isinstance(value, float) else str(value)
+            lines.append(f"  {key} = {shown}")
+    ax_t.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", fontsize=7.5, family="monospace",
+              transform=ax_t.transAxes)
+
+
 def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0, title=None):
     """One figure of a stippling beside its input, and its numbers.
 
@@ -372,42 +420,8 @@ def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0
         ax.set(xticks=[], yticks=[])
         ax.set_title(name, fontsize=9)
 
-    ax_h = axes[0, 2]
-    vals = sp.values[np.isfinite(sp.values)]
-    hi = max(1.6, float(np.percentile(vals, 99.5)) if vals.size else 1.6)
-    ax_h.hist(np.clip(vals, 0, hi), bins=60, range=(0, hi), color="0.35")
-    ax_h.axvline(analysis.HEXAGONAL_SPACING, color="k", ls="--", lw=1)
-    ax_h.axvline(sp.p01, color="k", ls=":", lw=1.2)
-    ax_h.text(analysis.HEXAGONAL_SPACING, 0.97, " hex 1.075", transform=ax_h.get_xaxis_transform(),
-              va="top", fontsize=7)
-    ax_h.text(sp.p01, 0.85, f" P01 {sp.p01:.3f}", transform=ax_h.get_xaxis_transform(),
-              va="top", fontsize=7)
-    ax_h.set_xlabel("NN distance x sqrt(expected density)", fontsize=8)
-    ax_h.tick_params(labelsize=7)
-    ax_h.set_title(f"spacing (median {sp.median:.3f})", fontsize=9)
-
-    ax_t = axes[1, 2]
-    ax_t.axis("off")
-    lines = [
-        f"n = {len(p)}, image {nx} x {ny} px",
-        f"tone SSIM = {numbers['tone_ssim']:.4f}",
-        f"spacing P01 = {sp.p01:.4f}, median = {sp.median:.4f}",
-        f"mean |psi6| = {numbers['psi6_mean']:.4f}",
-        f"dots drawn with equal-ink radius {r_tone:.3g} px",
-    ]
-    if radii is not None:
-        lines.append(
-            f"packing radii (px): min {numbers['radius_min']:.3g},\n"
-            f"  median {numbers['radius_median']:.3g}, max {numbers['radius_max']:.3g}"
-        )
-    if cert is not None:
-        lines.append("")
-        lines.append("certificate:")
-        for key, value in cert.items():
-            shown = f"{value:.6g}" if isinstance(value, float) else str(value)
-            lines.append(f"  {key} = {shown}")
-    ax_t.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", fontsize=7.5, family="monospace",
-              transform=ax_t.transAxes)
+    _spacing_panel(axes[0, 2], sp)
+    _numbers_panel(axes[1, 2], numbers, sp, len(p), (nx, ny), r_tone, radii, cert)
     if title:
         fig.suptitle(title, fontsize=10)
     _save(fig, path, fmt)

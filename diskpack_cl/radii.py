@@ -225,6 +225,9 @@ def certified_k(points, r, width, height, domain):
     ------
     ValueError
         Two points coincide or one lies on the border (no positive k).
+    CertificateError
+        The disks still fail :func:`~diskpack_cl.geometry.certify_disks`
+        after the shrinking: an invalid certificate is never returned.
 
     Examples
     --------
@@ -233,7 +236,7 @@ def certified_k(points, r, width, height, domain):
     >>> round(float(k), 9), cert.valid
     (1.0, True)
     """
-    from .geometry import certify_disks
+    from .geometry import CertificateError, certify_disks
 
     k = largest_valid_k(points, r, width, height)
     if not k > 0:
@@ -246,4 +249,4 @@ def certified_k(points, r, width, height, domain):
         if cert.valid:
             return k, radii, cert
         shrink = shrink * shrink * shrink * (1 - 1e-12)
-    return k, radii, cert
+    raise CertificateError("the disks of the largest valid k failed their certificate", cert)

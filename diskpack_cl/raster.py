@@ -25,15 +25,15 @@ from .labels import cell_centroids
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
-TILE = 8   # widest work-group side of power_labels (kernels/power_diagram.cl)
-CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of kernels/cell_sums.cl
+TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/power_diagram.cl)
+CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/cell_sums.cl
 TILE_W, TILE_H = 8, 16   # grid cells per work item of power_labels_tile (TW, TH there)
 MAX_GROUPS = 4096   # 8 x 8 work-groups per enqueue of power_labels (about 0.26 M grid cells)
 # work items per group of cell_max, cell_argmax and cell_sums, at most (the
 # kernel and device limits may give fewer); their atomics make the result
 # independent of the group size
 REDUCE_GROUP = 256
-#: Status bits of kernels/power_diagram.cl (ST_* in common.h): why a labelling is refused.
+#: Status bits of diskpack_cl/kernels/power_diagram.cl (ST_* in common.h): why a labelling is refused.
 STATUS = {"ring_limit": 1, "no_owner": 2}
 
 
@@ -366,8 +366,6 @@ class PowerRaster:
             The labelling kernel reported a ring search at its limit or a
             grid cell without an owner (:data:`STATUS`).
         """
-        import pyopencl as cl
-
         t0 = time.perf_counter()
         pts, w = check_sites(points, weights, self.domain)
         n = len(pts)
@@ -386,12 +384,7 @@ class PowerRaster:
         ny, nx = self.shape
         dom = self.domain
         npix = nx * ny
-        # the maps are allocated once and reused (a fresh buffer of a large
-        # raster costs its page faults every call); an earlier result's maps
-        # are read before the next compute or not at all
-        maps = {"label": (self._map_buffer("label", 4 * npix), np.int32),
-                "dist": (self._map_buffer("dist", 4 * npix), np.float32),
-                "nbr": (self._map_buffer("nbr", 4 * npix), np.int32)}
+        maps = self._map_buffers(npix)
         self._generation += 1
         self._label(distance, (b_site, b_w, b_id, b_start, b_wmax), (nbx, nby, bw, bh),
                     float(wmax_b.max()), maps)
@@ -404,18 +397,7 @@ class PowerRaster:
                                       (dom.width / nx, dom.height / ny),
                                       {"raster_labels": t1 - t0, "mic_estimate": 0.0}, self, maps,
                                       self._generation, pts)
-        rbits = np.full(n, -1, np.int32)
-        argpix = np.full(n, INT_MAX, np.int32)
-        b_r = self._site_buffer("rbits", rbits)
-        b_a = self._site_buffer("argpix", argpix)
-        lab, dist = maps["label"][0], maps["dist"][0]
-        g = self._groups
-        self._k_max(self.queue, (padded(npix, g["cell_max"]),), (g["cell_max"],), lab, dist,
-                    np.int32(npix), np.int32(n), b_r)
-        self._k_argmax(self.queue, (padded(npix, g["cell_argmax"]),), (g["cell_argmax"],), lab,
-                       dist, np.int32(npix), np.int32(n), b_r, b_a)
-        cl.enqueue_copy(self.queue, rbits, b_r)
-        cl.enqueue_copy(self.queue, argpix, b_a)
+        rbits, argpix = self._cell_maxima(maps, n)
         has = rbits >= 0
         radii = np.full(n, -1.0)
         radii[has] = rbits[has].view(np.float32)
@@ -428,6 +410,36 @@ class PowerRaster:
         return RasterResult(centers, radii, self.shape, (hx, hy),
                                   {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps,
                                   self._generation, pts)
+
+    def _map_buffers(self, npix):
+        """The label, distance and neighbour maps (buffer, dtype).
+
+        They are allocated once and reused (a fresh buffer of a large raster
+        costs its page faults every call); an earlier result's maps are read
+        before the next compute or not at all.
+        """
+        return {"label": (self._map_buffer("label", 4 * npix), np.int32),
+                "dist": (self._map_buffer("dist", 4 * npix), np.float32),
+                "nbr": (self._map_buffer("nbr", 4 * npix), np.int32)}
+
+    def _cell_maxima(self, maps, n):
+        """Per cell: the largest distance (float bits, -1: no pixel) and its first pixel."""
+        import pyopencl as cl
+
+        npix = self.shape[0] * self.shape[1]
+        rbits = np.full(n, -1, np.int32)
+        argpix = np.full(n, INT_MAX, np.int32)
+        b_r = self._site_buffer("rbits", rbits)
+        b_a = self._site_buffer("argpix", argpix)
+        lab, dist = maps["label"][0], maps["dist"][0]
+        g = self._groups
+        self._k_max(self.queue, (padded(npix, g["cell_max"]),), (g["cell_max"],), lab, dist,
+                    np.int32(npix), np.int32(n), b_r)
+        self._k_argmax(self.queue, (padded(npix, g["cell_argmax"]),), (g["cell_argmax"],), lab,
+                       dist, np.int32(npix), np.int32(n), b_r, b_a)
+        cl.enqueue_copy(self.queue, rbits, b_r)
+        cl.enqueue_copy(self.queue, argpix, b_a)
+        return rbits, argpix
 
     def _label(self, distance, bufs, grid, wmax, maps):
         """Run the labelling kernel in bands (see `max_groups`) into `maps`,
@@ -460,7 +472,7 @@ class PowerRaster:
                                "sites the host checks should have refused")
 
     def _device_centroids(self, label_buf, sites, density):
-        """Centroids from the device reduction (kernels/cell_sums.cl): the label
+        """Centroids from the device reduction (diskpack_cl/kernels/cell_sums.cl): the label
         map never leaves the device; the density is uploaded once per array.
         The sums are fixed point (2^-24), so masses and centroids agree with a
         float64 host reduction to about 1e-7 relative."""

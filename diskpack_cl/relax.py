@@ -17,9 +17,43 @@ import numpy as np
 
 from .domain import Domain
 from .engine import BACKENDS, check_against_exact, make_engine
+from .options import check_fields, option
 from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
-__all__ = ["relax_poisson", "RelaxResult", "BACKENDS", "max_points_for_radius", "RadiusResult"]
+__all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
+           "RadiusResult"]
+
+#: Iteration cap of :func:`relax_poisson` when none is given.
+MAX_ITER = 1000
+
+
+@dataclass(frozen=True)
+class RelaxOptions:
+    """The options of :func:`relax_poisson` (``diskpack poisson`` and ``relax``).
+
+    Examples
+    --------
+    >>> RelaxOptions(eps=0.85).kwargs()
+    {'eps': 0.85, 'max_iter': 1000, 'backend': 'auto', 'grid': None}
+    """
+
+    eps: float = option(0.8, "stop when the normalized radius rho reaches EPS (default 0.8)",
+                        lo=0, hi=1, lo_open=True, hi_open=True, metavar="EPS")
+    max_iter: int = option(None, f"iteration cap (default {MAX_ITER})", integer=True, lo=0,
+                           metavar="N")
+    backend: str = option("auto", "opencl: MICs on the OpenCL device, checked in float64; "
+                          "exact: scipy only; auto (default): opencl when a device exists, "
+                          "else exact", choices=BACKENDS)
+    grid: int = option(None, "raster size G x G of the raster route (devices without "
+                       "float64; default: automatic)", integer=True, lo=1, metavar="G")
+
+    def __post_init__(self):
+        check_fields(self)
+
+    def kwargs(self):
+        """The keyword arguments of :func:`relax_poisson`."""
+        return {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
+                "backend": self.backend, "grid": self.grid}
 
 
 @dataclass
@@ -145,6 +179,16 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     if engine.fallback:
         stats["fallback"] = engine.fallback
     t_start = time.perf_counter()
+    X, rho, it, reason = _iterate(engine, X, eps, int(max_iter), patience, callback, verify,
+                                  timings, stats)
+    seconds = time.perf_counter() - t_start
+    _certify_rho(X, rho[-1])
+    return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
+                       "exact" if engine.name == "exact" else "opencl", engine.device, stats)
+
+
+def _iterate(engine, X, eps, max_iter, patience, callback, verify, timings, stats):
+    """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason)``."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     step = _mic(engine, X, timings, stats) if engine.gives_nn else None
     rho = [_rho(X, step, verify)]
@@ -168,10 +212,7 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         elif it - best_at >= patience:
             reason = "stalled"
             break
-    seconds = time.perf_counter() - t_start
-    _certify_rho(X, rho[-1])
-    return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
-                       "exact" if engine.name == "exact" else "opencl", engine.device, stats)
+    return X, rho, it, reason
 
 
 def _mic(engine, X, timings, stats):
@@ -299,63 +340,81 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
     >>> res.n, bool(res.achieved_radius >= 0.043)
     (129, True)
     """
-    from .sampling import dart_throwing, random_points
-
     radius = float(radius)
     if not (np.isfinite(radius) and 0.0 < radius < 0.25):
         raise ValueError(f"radius must be in (0, 0.25), got {radius}")
     if not (0.0 < rho_start < rho_limit <= 1.0):
         raise ValueError(f"need 0 < rho_start < rho_limit <= 1, got {rho_start}, {rho_limit}")
-    if callable(start):
-        make = start
-    elif start == "dart":
-        def make(n, rng):
-            return dart_throwing(n, seed=rng)
-    elif start == "random":
-        def make(n, rng):
-            return random_points(n, seed=rng)
-    else:
-        raise ValueError(f"start must be 'dart', 'random' or a callable, got {start!r}")
-
-    def target(n):
-        return radius * np.sqrt(HEXAGONAL_CELL * n)
-
-    def n_at(rho):
-        return int(np.floor((rho / radius) ** 2 / HEXAGONAL_CELL))
-
     t_start = time.perf_counter()
-    trials = []
-    done = {}
+    trials = _RadiusTrials(radius, _start_sets(start), seed, eps_margin, rho_limit, callback,
+                           dict(max_iter=max_iter, backend=backend, grid=grid, device=device,
+                                patience=patience))
+    lo = _largest_success(trials, max(2, trials.n_at(rho_start)), trials.n_at(rho_limit) + 1)
+    pts = trials.done[lo][1]
+    d = min_distance(pts) / 2.0
+    return RadiusResult(pts, int(lo), radius, float(d), float(normalized_radius(pts)),
+                        trials.records, time.perf_counter() - t_start)
 
-    def trial(n):
-        if n in done:
-            return done[n]
-        t = target(n)
-        if t >= rho_limit:
-            done[n] = (False, None)
-            return done[n]
-        pts = np.asarray(make(n, np.random.default_rng([int(seed), n])), dtype=np.float64)
+
+def _start_sets(start):
+    """``make(n, rng) -> (n, 2)`` start points of :func:`max_points_for_radius`."""
+    from .sampling import dart_throwing, random_points
+
+    if callable(start):
+        return start
+    if start == "dart":
+        return lambda n, rng: dart_throwing(n, seed=rng)
+    if start == "random":
+        return lambda n, rng: random_points(n, seed=rng)
+    raise ValueError(f"start must be 'dart', 'random' or a callable, got {start!r}")
+
+
+class _RadiusTrials:
+    """The trials of :func:`max_points_for_radius`, each run once: ``self(n) -> (ok, points)``."""
+
+    def __init__(self, radius, make, seed, eps_margin, rho_limit, callback, relax):
+        self.radius, self.make, self.seed = radius, make, int(seed)
+        self.eps_margin, self.rho_limit, self.callback, self.relax = (eps_margin, rho_limit,
+                                                                      callback, relax)
+        self.records, self.done = [], {}
+
+    def target(self, n):
+        return self.radius * np.sqrt(HEXAGONAL_CELL * n)
+
+    def n_at(self, rho):
+        return int(np.floor((rho / self.radius) ** 2 / HEXAGONAL_CELL))
+
+    def __call__(self, n):
+        if n not in self.done:
+            self.done[n] = self._run(n)
+        return self.done[n]
+
+    def _run(self, n):
+        t = self.target(n)
+        if t >= self.rho_limit:
+            return False, None
+        pts = np.asarray(self.make(n, np.random.default_rng([self.seed, n])), dtype=np.float64)
         t0 = time.perf_counter()
-        res = relax_poisson(pts, min(t * (1.0 + eps_margin), 1.0 - 1e-12), max_iter=max_iter,
-                            backend=backend, grid=grid, device=device, patience=patience)
-        ok = bool(min_distance(res.points) / 2.0 >= radius)
+        res = relax_poisson(pts, min(t * (1.0 + self.eps_margin), 1.0 - 1e-12), **self.relax)
+        ok = bool(min_distance(res.points) / 2.0 >= self.radius)
         rec = {"n": int(n), "target_rho": float(t), "reached": ok, "rho": float(res.rho[-1]),
                "iterations": int(res.iterations), "stop_reason": res.stop_reason,
                "seconds": time.perf_counter() - t0}
-        trials.append(rec)
-        if callback is not None:
-            callback(rec)
-        done[n] = (ok, res.points if ok else None)
-        return done[n]
+        self.records.append(rec)
+        if self.callback is not None:
+            self.callback(rec)
+        return ok, res.points if ok else None
 
-    n_hi_cap = n_at(rho_limit) + 1            # first n never tried
-    n = max(2, n_at(rho_start))
+
+def _largest_success(trial, n, n_hi_cap):
+    """Down from `n` until a success, gallop up until a failure, bisect; the largest success."""
     if n >= n_hi_cap:
-        raise RuntimeError(f"radius {radius} leaves no n >= 2 with target rho below {rho_limit}")
+        raise RuntimeError(f"radius {trial.radius} leaves no n >= 2 with target rho below "
+                           f"{trial.rho_limit}")
     # downward (10 % steps) until a success
     while not trial(n)[0]:
         if n <= 2:
-            raise RuntimeError(f"no point set with n >= 2 reached radius {radius}")
+            raise RuntimeError(f"no point set with n >= 2 reached radius {trial.radius}")
         n = max(2, min(n - 1, int(n * 0.9)))
     lo = n
     # gallop upward until a failure
@@ -377,7 +436,4 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
             lo = mid
         else:
             hi = mid
-    pts = done[lo][1]
-    d = min_distance(pts) / 2.0
-    return RadiusResult(pts, int(lo), radius, float(d), float(normalized_radius(pts)), trials,
-                        time.perf_counter() - t_start)
+    return lo

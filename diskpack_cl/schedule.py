@@ -9,16 +9,18 @@ resolved from the schedule's defaults and checked, before any device work.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._checks import check_count
+from .options import OptionConflict, check_fields, option
 
 GAMMA_DEFAULT = 3.0   # exponent of the gray radius mapping (the paper's)
 
 __all__ = ["SCHEDULES", "SCHEDULE_NAMES", "SCHEDULE_OPTIONS", "SPACING_BANDS", "default_band",
-           "make_schedule", "StippleOptions"]
+           "make_schedule", "StippleOptions", "StipplePlan"]
 
 #: Named schedules: lists of (kind, iterations) or ("mix", iterations, blend),
 #: kind "pack", "lloyd" or "mix".
@@ -33,9 +35,9 @@ SCHEDULES = {
 # Disk packing blended with Lloyd (see :func:`stipple`, ``"mix"`` phases):
 # 35 steps of MIC + 0.5 (centroid - MIC), then 12 of MIC + 0.4 (centroid - MIC),
 # with the density-consistent radii; the default until the spacing bands
-# below (issue 11). Measured in docs/stipple_quality.md.
+# below. Measured in docs/stipple_quality.md.
 SCHEDULES["classic"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
-# The classic steps, shortened to 18 + 7, with features="detail" (issue 11):
+# The classic steps, shortened to 18 + 7, with features="detail":
 # fewer packing steps leave the points less hexagonal (lower |psi6|), the
 # feature-aware blend gives the tone back. Measured in docs/stipple_quality.md.
 SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
@@ -199,33 +201,230 @@ def _schedule_defaults(schedule, beta, lloyd, rounds, method, spacing):
     return opts
 
 
-def _check_range(name, value, lo, hi=np.inf, *, lo_open=False, hi_open=False, text=None):
-    ok = np.isfinite(value) and (value > lo if lo_open else value >= lo)
-    ok = ok and (value < hi if hi_open else value <= hi)
-    if not ok:
-        raise ValueError(f"{name} must be {text}, got {value}")
-    return float(value)
+_STIPPLING = "stippling (the paper's parameters)"
+
+
+def _check_schedule(schedule):
+    if isinstance(schedule, str):
+        if schedule not in SCHEDULE_NAMES:
+            raise ValueError(f"unknown schedule {schedule!r}; choose from {list(SCHEDULE_NAMES)}")
+    else:
+        make_schedule(schedule)  # an explicit list of phases: checked now
+
+
+def _check_seed(seed):
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed < 0:
+        raise ValueError(f"seed must be at least 0, got {seed}")
+
+
+def _seed_text(text):
+    """The command line's seed: an integer >= 0."""
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be at least 0, got {text}")
+    return value
 
 
 @dataclass(frozen=True)
 class StippleOptions:
-    """Every option of one stippling run, resolved and checked.
+    """The options of :func:`diskpack_cl.stipple`, each with its default, range and help.
 
-    Build it with :meth:`resolve`, which fills the options left as None
-    from the schedule's defaults (:data:`SCHEDULE_OPTIONS`) and checks them
-    all; see :func:`diskpack_cl.stipple` for what each option means.
+    ``None`` leaves an option to the schedule (:data:`SCHEDULE_OPTIONS`).
+    The ranges are checked and the contradictions refused
+    (:class:`~diskpack_cl.options.OptionConflict`) on construction;
+    :meth:`plan` resolves them for an image. :func:`diskpack_cl.options.describe`
+    lists every field's help, ``diskpack stipple --help`` shows them.
 
     Examples
     --------
-    >>> opt = StippleOptions.resolve(2000, 512, 512)
-    >>> opt.radii, opt.floor, opt.supersample, opt.phases, opt.features
-    ('density', 0.01, 1, (('mix', 20, 0.6), ('mix', 6, 0.4), ('mix', 1, 1.0)), 'detail')
-    >>> StippleOptions.resolve(2000, 512, 512, schedule="paper").radii
-    'gray'
-    >>> StippleOptions.resolve(2000, 512, 512, blend=2)
+    >>> opt = StippleOptions(k_quantile=0.2)
+    >>> opt.plan(2000, 512, 512).k_quantile
+    0.2
+    >>> StippleOptions(blend=2)
     Traceback (most recent call last):
     ...
     ValueError: blend must be in [0, 1], got 2.0
+    >>> StippleOptions(method="lloyd", schedule="paper")
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.options.OptionConflict: method lloyd runs Lloyd iterations only (lloyd L), so schedule paper would be ignored; give one
+    """
+
+    gamma: float = option(
+        None, "gamma: contrast exponent of the gray radius mapping, base radius "
+        "r_i = max(gray, FLOOR)^(gamma/2) (default 3.0); only --radii gray has it (the "
+        "paper, pack and lloyd schedules), so the default schedule's density radii refuse it",
+        lo=0, lo_open=True, group=_STIPPLING)
+    floor: float = option(
+        None, "floor of the radius mapping, so that black (gray) or white (density) regions "
+        "keep a finite radius (default: the schedule's, 0.1 for paper, pack and lloyd, 0.01 "
+        "for default)", lo=0, hi=1, lo_open=True, group=_STIPPLING, metavar="FLOOR")
+    radii: str = option(
+        None, "radius mapping: gray = the paper's r_i = max(gray, FLOOR)^(gamma/2); density = "
+        "r_i ~ darkness^(-1/2), the density Lloyd aims at (default: the schedule's, density "
+        "for default)", choices=("gray", "density"), group=_STIPPLING)
+    blend: float = option(
+        None, "mix phases move to MIC + BLEND * (centroid - MIC) (default: the schedule's)",
+        lo=0, hi=1, group=_STIPPLING, metavar="BLEND")
+    features: str = option(
+        None, "detail: feature-aware mix steps, where the image holds detail finer than the "
+        "dot spacing dots move further towards their cell's centroid and the radii follow "
+        "the detail (more tone, slightly less even spacing); default: the schedule's (detail "
+        "for --schedule detail, and for the default where the dot spacing is 3 px or more)",
+        choices=("none", "detail"), group=_STIPPLING)
+    capacity: float = option(
+        None, "equal ink per dot: after each step every dot's radius is scaled by (mean ink / "
+        "its power cell's ink)^GAIN, as in capacity-constrained stippling; more tone, closer "
+        "pairs across tone edges (default: the schedule's, 0.1 for default, 0 = off for the "
+        "others)", lo=0, hi=1, group=_STIPPLING, metavar="GAIN")
+    support: float = option(
+        None, "keep dots on the ink: a dot whose largest empty disk leaves its cell's ink "
+        "moves towards the cell's centroid instead, by S times how far it left (default: the "
+        "schedule's, 1 for default, 0 for the others; 0 lets edge dots drift onto white "
+        "paper)", lo=0, hi=1, group=_STIPPLING, metavar="S")
+    paper_tone: float = option(
+        0.0, "darkness T added under the whole image, so that white paper gets sparse dots "
+        "too (default 0: white stays white)", lo=0, hi=1, hi_open=True, group=_STIPPLING,
+        metavar="T")
+    k_quantile: float = option(
+        None, "during iterations, k is this quantile of R_i/r_i (0 = the paper's minimum; the "
+        "output always uses the largest certified k)", lo=0, hi=1, hi_open=True,
+        group=_STIPPLING, metavar="K_QUANTILE")
+    schedule: object = option(
+        None, "named schedule of disk-packing (pack) and Lloyd phases (default: default); "
+        "the library also takes a list of phases, see make_schedule", check=_check_schedule,
+        cli_choices=SCHEDULE_NAMES, group=_STIPPLING)
+    beta: int = option(
+        None, "beta: disk-packing iterations per round; with --lloyd and --rounds it replaces "
+        "--schedule (missing ones: the paper's beta 40, lloyd 10, rounds 3; the last round is "
+        "half as long)", integer=True, lo=0, group=_STIPPLING, metavar="BETA")
+    lloyd: int = option(
+        None, "Lloyd iterations between rounds (paper: 10); with --method lloyd: the number "
+        "of Lloyd iterations (default 50)", integer=True, lo=0, group=_STIPPLING, metavar="L")
+    rounds: int = option(
+        None, "number of disk-packing rounds (paper: 3)", integer=True, lo=1,
+        group=_STIPPLING, metavar="ROUNDS")
+    method: str = option(
+        "diskpack", "diskpack (default): the paper's disk packing; lloyd: weighted Voronoi "
+        "stippling (Secord 2002), the baseline, from the same start",
+        choices=("diskpack", "lloyd"), group=_STIPPLING)
+    supersample: int = option(
+        None, "raster cells per image pixel side (default: automatic, about 16 cells per dot, "
+        "at most 8)", integer=True, lo=1, group=_STIPPLING, metavar="S")
+    refine_every: int = option(
+        1, "refine the raster MIC estimate exactly every R disk-packing iterations (default "
+        "1 = always; 0 = never); the output is always certified", integer=True, lo=0,
+        group=_STIPPLING, metavar="R")
+    seed: object = option(
+        0, "seed of the error-diffusion start (default 0; same seed, same result)",
+        check=_check_seed, cli_type=_seed_text, group=_STIPPLING, metavar="SEED")
+    invert: bool = option(
+        False, "stipple the light parts (light dots on a dark ground)", group=_STIPPLING)
+    k0: float = option(1e-6, "initial scale factor k (the paper: 1e-6, so that no disks "
+                       "overlap)", lo=0, lo_open=True, cli=False)
+    radius_sigma: float = option(None, "blur of the darkness in the density radius mapping",
+                                 unit="px", lo=0, cli=False)
+    density_sigma: float = option(None, "blur of the darkness used as the centroid density "
+                                  "of Lloyd and mix steps", unit="px", lo=0, cli=False)
+    blend_cell: str = option("power", "cells whose centroids a mix step blends towards: the "
+                             "power cells of the grid or the Voronoi cells",
+                             choices=("power", "voronoi"), cli=False)
+
+    def __post_init__(self):
+        check_fields(self)
+        built = [k for k in ("beta", "rounds") if getattr(self, k) is not None]
+        if self.method == "lloyd":
+            for name in [k for k in ("schedule", *built) if getattr(self, k) is not None]:
+                value = getattr(self, name)
+                raise OptionConflict(f"{{}} lloyd runs Lloyd iterations only ({{}} L), so "
+                                     f"{{}} {value} would be ignored; give one",
+                                     "method", "lloyd", name)
+        elif self.lloyd is not None:
+            built.append("lloyd")
+        if built and self.schedule is not None:
+            raise OptionConflict(f"{'/'.join(['{}'] * len(built))} build the schedule the "
+                                 f"paper's way, so {{}} {self.schedule} would be ignored; "
+                                 f"give one", *built, "schedule")
+        if self.gamma is not None and self.radii_for() != "gray":
+            which = (f"{{}} {self.radii}",) if self.radii else (
+                f"the {self.schedule or 'default'} schedule's {self.radii_for()} radii",)
+            raise OptionConflict(
+                f"{{}} = {self.gamma:g} has no effect with {self.radii_for()} radii ("
+                + which[0] + "); it is the exponent of {} gray, which the paper, pack and "
+                f"lloyd schedules use (e.g. {{}} paper {{}} {self.gamma:g}); {{}} sets the "
+                "contrast on every schedule", "gamma", *(["radii"] if self.radii else []),
+                "radii", "schedule", "gamma", "tone_gamma")
+
+    def radii_for(self):
+        """The radius mapping these options give: ``radii``, else the schedule's."""
+        if self.radii is not None:
+            return self.radii
+        if self.method == "lloyd":
+            return SCHEDULE_OPTIONS["lloyd"]["radii"]
+        paper = any(getattr(self, k) is not None for k in ("beta", "lloyd", "rounds"))
+        name = ("default" if self.schedule is None else
+                self.schedule if isinstance(self.schedule, str) else "paper")
+        return SCHEDULE_OPTIONS["paper" if paper else name]["radii"]
+
+    def replace(self, **overrides):
+        """A copy with ``overrides`` (field names), checked again."""
+        return dataclasses.replace(self, **overrides)
+
+    @classmethod
+    def resolve(cls, n, width, height, options=None, **overrides):
+        """The :class:`StipplePlan` of ``options`` (default: all defaults) with ``overrides``."""
+        return (options or cls()).replace(**overrides).plan(n, width, height)
+
+    def plan(self, n, width, height):
+        """The options resolved for `n` dots on a `width` x `height` image.
+
+        Raises
+        ------
+        ValueError
+            n too large for the grid, or a bad schedule.
+        """
+        n = check_count(n)
+        s = auto_supersample(n, width, height) if self.supersample is None else self.supersample
+        if 4 * n > (s * width) * (s * height):
+            raise ValueError(
+                f"n = {n} is too large for a {width}x{height} image at supersample {s}: at most "
+                f"{(s * width) * (s * height) // 4} points (4 grid cells per point); raise supersample")
+        spacing = np.sqrt(width * height / n)
+        schedule = "default" if self.schedule is None else self.schedule
+        phases = make_schedule(schedule, beta=self.beta, lloyd=self.lloyd, rounds=self.rounds,
+                               method=self.method, spacing=spacing)
+        d = _schedule_defaults(schedule, self.beta, self.lloyd, self.rounds, self.method,
+                               spacing)
+        d.setdefault("features", "none")
+        d.setdefault("capacity", 0.0)
+        d.setdefault("support", 0.0)
+        picked = {k: d[k] if getattr(self, k) is None else getattr(self, k)
+                  for k in ("floor", "radii", "radius_sigma", "blend", "k_quantile",
+                            "density_sigma", "features", "capacity", "support")}
+        return StipplePlan(
+            n=n, gamma=GAMMA_DEFAULT if self.gamma is None else self.gamma, supersample=s,
+            seed=self.seed, method=self.method, invert=self.invert, phases=tuple(phases),
+            refine_every=self.refine_every, blend_cell=self.blend_cell, k0=self.k0,
+            paper_tone=self.paper_tone, **{k: v if isinstance(v, str) else float(v)
+                                           for k, v in picked.items()})
+
+
+@dataclass(frozen=True)
+class StipplePlan:
+    """The options of one stippling run, resolved for its image (:meth:`StippleOptions.plan`).
+
+    Examples
+    --------
+    >>> opt = StippleOptions().plan(2000, 512, 512)
+    >>> opt.radii, opt.floor, opt.supersample, opt.phases, opt.features
+    ('density', 0.01, 1, (('mix', 20, 0.6), ('mix', 6, 0.4), ('mix', 1, 1.0)), 'detail')
+    >>> StippleOptions(schedule="paper").plan(2000, 512, 512).radii
+    'gray'
     """
 
     n: int
@@ -248,79 +447,6 @@ class StippleOptions:
     capacity: float = 0.0
     support: float = 0.0
     paper_tone: float = 0.0
-
-    @classmethod
-    def resolve(cls, n, width, height, *, gamma=GAMMA_DEFAULT, floor=None, schedule="default", beta=None,
-                lloyd=None, rounds=None, supersample=None, seed=0, method="diskpack", invert=False,
-                refine_every=1, k0=1e-6, radii=None, radius_sigma=None, blend=None,
-                blend_cell="power", k_quantile=None, density_sigma=None, features=None,
-                capacity=None, support=None, paper_tone=0.0):
-        """Options for `n` dots on a `width` x `height` image; None: the schedule's default.
-
-        Raises
-        ------
-        ValueError
-            An option out of its range, a bad schedule, n too large for the
-            grid, or a `gamma` other than the default with density radii
-            (which have no exponent).
-        """
-        n = check_count(n)
-        if not (np.isfinite(gamma) and gamma > 0):
-            raise ValueError(f"gamma must be > 0, got {gamma}")
-        s = auto_supersample(n, width, height) if supersample is None else int(supersample)
-        if s < 1:
-            raise ValueError(f"supersample must be >= 1, got {supersample}")
-        if 4 * n > (s * width) * (s * height):
-            raise ValueError(
-                f"n = {n} is too large for a {width}x{height} image at supersample {s}: at most "
-                f"{(s * width) * (s * height) // 4} points (4 grid cells per point); raise supersample")
-        spacing = np.sqrt(width * height / n)
-        phases = make_schedule(schedule, beta=beta, lloyd=lloyd, rounds=rounds, method=method,
-                               spacing=spacing)
-        d = _schedule_defaults(schedule, beta, lloyd, rounds, method, spacing)
-
-        def pick(name, value):
-            return d[name] if value is None else value
-
-        if float(gamma) != GAMMA_DEFAULT and pick("radii", radii) != "gray":
-            # the density mapping has no exponent: a gamma there would be ignored
-            raise ValueError(f"gamma = {gamma:g} has no effect with {pick('radii', radii)} radii "
-                             f"(schedule {schedule!r}); it is the exponent of radii='gray', which "
-                             "the 'paper', 'pack' and 'lloyd' schedules use")
-        return cls(n=n, gamma=float(gamma), floor=float(pick("floor", floor)), supersample=s,
-                   seed=seed, method=method, invert=bool(invert), phases=tuple(phases),
-                   refine_every=refine_every, radii=pick("radii", radii),
-                   radius_sigma=float(pick("radius_sigma", radius_sigma)),
-                   blend=float(pick("blend", blend)), blend_cell=blend_cell,
-                   k_quantile=float(pick("k_quantile", k_quantile)),
-                   density_sigma=float(pick("density_sigma", density_sigma)), k0=k0,
-                   features=d.get("features", "none") if features is None else features,
-                   capacity=float(d.get("capacity", 0.0) if capacity is None else capacity),
-                   support=float(d.get("support", 0.0) if support is None else support),
-                   paper_tone=float(paper_tone))
-
-    def __post_init__(self):
-        _check_range("floor", self.floor, 0, 1, lo_open=True, text="in (0, 1]")
-        _check_range("radius_sigma", self.radius_sigma, 0, text=">= 0")
-        _check_range("density_sigma", self.density_sigma, 0, text=">= 0")
-        if self.radii not in ("gray", "density"):
-            raise ValueError(f"radii must be 'gray' or 'density', got {self.radii!r}")
-        if not 0.0 <= self.blend <= 1.0:
-            raise ValueError(f"blend must be in [0, 1], got {self.blend}")
-        if self.blend_cell not in ("power", "voronoi"):
-            raise ValueError(f"blend_cell must be 'power' or 'voronoi', got {self.blend_cell!r}")
-        if self.features not in ("none", "detail"):
-            raise ValueError(f"features must be 'none' or 'detail', got {self.features!r}")
-        _check_range("capacity", self.capacity, 0, 1, text="in [0, 1]")
-        _check_range("support", self.support, 0, 1, text="in [0, 1]")
-        _check_range("paper_tone", self.paper_tone, 0, 1, hi_open=True, text="in [0, 1)")
-        if not 0.0 <= self.k_quantile < 1.0:
-            raise ValueError(f"k_quantile must be in [0, 1), got {self.k_quantile}")
-        if not (np.isfinite(self.k0) and self.k0 > 0):
-            raise ValueError(f"k0 must be > 0, got {self.k0}")
-        if isinstance(self.refine_every, bool) or int(self.refine_every) != self.refine_every \
-                or self.refine_every < 0:
-            raise ValueError(f"refine_every must be an integer >= 0, got {self.refine_every!r}")
 
     def grid_shape(self, width, height):
         """Raster shape ``(ny, nx)`` for a `width` x `height` image."""

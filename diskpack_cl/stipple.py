@@ -83,7 +83,7 @@ from .analysis import tone_radius
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
-from .schedule import StippleOptions
+from .schedule import StippleOptions, StipplePlan
 from .stipple_engine import VerifiedEngine, make_stipple_engine
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
@@ -182,7 +182,7 @@ class StippleStage:
     """What every step works against: engine, options, radius field, centroid density."""
 
     engine: object
-    options: StippleOptions
+    options: StipplePlan
     radius_field: np.ndarray
     density: np.ndarray
     blend_weight: object = None  # features="detail": per-pixel weight, see radii.detail_fields
@@ -409,6 +409,16 @@ def _centroid_density(darkness, opt):
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
 
+def _toned(gray, opt):
+    """The gray image under the paper tone and its darkness (refused when white)."""
+    if opt.paper_tone > 0:
+        gray = gray * (1.0 - opt.paper_tone)
+    darkness = 1.0 - gray
+    if not darkness.max() > 1e-9:
+        raise ValueError("nothing to stipple: the image is white")
+    return gray, darkness
+
+
 def _make_stage(gray, opt, engine):
     """The :class:`StippleStage` of a gray image: radius field, centroid density, ink."""
     darkness = 1.0 - gray
@@ -420,8 +430,23 @@ def _make_stage(gray, opt, engine):
                         _blurred(darkness, INK_SIGMA))
 
 
-def stipple(image, n, *, start=None, callback=None, device=None, backend="auto", verify=False,
-            profile=False, **options):
+def _certified_result(state, stage, history, timings, t_start, darkness):
+    """The :class:`StippleResult` of the final state: radii at the largest certified k."""
+    W, H = stage.size
+    t0 = time.perf_counter()
+    r = dot_radii(state, stage, state.points)
+    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    timings["certify"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t_start
+    return StippleResult(
+        points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
+        history=history, width=W, height=H, timings=timings, params=stage.options.params(),
+        engine=stage.engine.name, tone_radius=tone_radius(len(state.points), darkness),
+    )
+
+
+def stipple(image, n, options=None, *, start=None, callback=None, device=None, backend="auto",
+            verify=False, profile=False, **overrides):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
     Parameters
@@ -432,6 +457,9 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
         1 = white).
     n : int
         Number of stipples.
+    options : StippleOptions, optional
+        The stippling options (default: ``StippleOptions()``); every field
+        is described there (:func:`diskpack_cl.options.describe`).
     start : (n, 2) array_like, optional
         Start points instead of error diffusion (must lie inside the image).
     callback : callable, optional
@@ -453,99 +481,10 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
         ``kernel_s`` (device seconds of the step's kernels) and
         ``kernel_<name>_s`` per kernel, and ``timings`` their totals
         (``kernel``, ``kernel_<name>``).  No effect on the result.
-    **options
-        The options of :meth:`diskpack_cl.schedule.StippleOptions.resolve`,
-        listed under Other Parameters; all are checked before any device work.
-
-    Other Parameters
-    ----------------
-    gamma : float, optional
-        Contrast exponent of the ``"gray"`` mapping, ``r_i = I_i^(gamma/2)``
-        (default 3).
-    floor : float, optional
-        Floor of the radius mapping, so that black (``"gray"``) or white
-        (``"density"``) regions keep a finite radius (default: the
-        schedule's, 0.01 for ``"default"``, 0.1 for the others).
-    schedule : str or list of phases, optional
-        ``"default"`` (phases and options by the dot spacing, see
-        :data:`diskpack_cl.schedule.SPACING_BANDS`), ``"classic"`` (35 mix
-        at blend 0.5, 12 mix at blend 0.4, with the options in
-        ``SCHEDULE_OPTIONS["classic"]``), ``"detail"`` (18 mix at
-        0.5, 7 at 0.4, with ``features="detail"``), ``"paper"`` (40 pack, 10
-        Lloyd, 40, 10, 20 pack; gray radii), ``"pack"``, ``"lloyd"`` or an
-        explicit list of ``(kind, iterations)`` with kind ``"pack"``,
-        ``"lloyd"`` or ``"mix"``, or ``("mix", iterations, blend)``; see
-        :func:`diskpack_cl.schedule.make_schedule`. A named schedule brings
-        its option defaults (``SCHEDULE_OPTIONS``); an explicit list, or
-        ``beta``/``lloyd``/``rounds``, uses the paper's.
-    beta, lloyd, rounds : int, optional
-        Build the schedule from disk-packing iterations per round, Lloyd
-        iterations between rounds, and the number of rounds.
-    supersample : int, optional
-        Grid cells per image pixel side (default: about 16 grid cells per
-        average power cell, at most 8).
-    seed : int, optional
-        Seed of the error-diffusion jitter (default 0). The same seed gives
-        the same result.
-    method : {"diskpack", "lloyd"}
-        ``"lloyd"`` is weighted Voronoi stippling (Secord 2002) on the same
-        engine, from the same start.
-    invert : bool, optional
-        Stipple the light parts (for light-on-dark output).
-    refine_every : int, optional
-        Refine the raster MIC estimate exactly every this many disk-packing
-        iterations (1 = always, the default; 0 = never). The final output is
-        always exact and certified.
-    k0 : float, optional
-        Initial scale factor (the paper: 1e-6, so that no disks overlap).
-    radii : {"gray", "density"}, optional
-        Radius mapping, see :func:`diskpack_cl.radii.radius_field` (schedule
-        default: ``"gray"`` for the paper's, ``"density"`` for ``"default"``).
-    radius_sigma : float, optional
-        Blur (pixels) of the darkness in the ``"density"`` mapping
-        (``"default"``: 3).
-    blend : float in [0, 1], optional
-        Move of a ``"mix"`` phase without its own blend:
-        ``x <- m + blend * (c - m)`` (``m`` MIC centre, ``c`` centroid);
-        ``"default"``: 0.5.
-    blend_cell : {"power", "voronoi"}, optional
-        Cells whose centroids a mix step blends towards: the power cells of
-        the same grid (default, no extra work) or the Voronoi cells (one
-        more labelling per step; measured worse).
-    k_quantile : float in [0, 1), optional
-        ``k`` after a disk-packing or mix step is this quantile of
-        ``R_i / r_i`` (0: the minimum, the paper's rule; ``"default"``: 0.15).
-        Only the weights of the next iteration see it; the returned radii
-        always use the largest valid ``k``.
-    density_sigma : float, optional
-        Blur (pixels) of the darkness used as the centroid density of Lloyd
-        and mix steps (paper: 0; ``"default"``: 0.5).
-    features : {"none", "detail"}, optional
-        ``"detail"``: feature-aware mix steps (:func:`diskpack_cl.radii.detail_fields`):
-        where the image holds detail finer than the dot spacing, a point
-        moves further towards its cell's centroid, and the radii are the
-        largest within a quarter of a dot spacing. On the held-out
-        validation photographs: more tone at sigma 3 and 1.5, P01 lower by
-        about 0.006 (``docs/stipple_quality.md``). Default: the schedule's
-        (``"detail"`` for ``schedule="detail"`` and for the default at dot
-        spacings of 3 px and more, else ``"none"``).
-    capacity : float in [0, 1], optional
-        Equal ink per dot (:func:`equal_ink`): after every disk-packing or
-        mix step each dot's radius factor is multiplied by ``(mean mass /
-        mass of its power cell) ** capacity``, so that the cells, and the
-        dots, come to hold the same darkness, as in capacity-constrained
-        stippling; 0 is off. Default: the schedule's (0.1 for
-        ``"default"``, 0 for the others).
-    support : float in [0, 1], optional
-        Keep dots on the ink (:func:`off_support`): a packing or mix step
-        moves a dot ``m + a (c - m)`` with ``a`` at least ``support`` times
-        how far its MIC centre ``m`` has left its cell's ink, so a dot whose
-        largest empty disk lies on white paper goes to its cell's centroid
-        ``c`` instead. Default: the schedule's (1 for ``"default"``, 0 for
-        the others, which then let outline dots drift onto white paper).
-    paper_tone : float in [0, 1), optional
-        Darkness added under the whole image: white paper then gets sparse
-        dots too (default 0: pure white gets none).
+    **overrides
+        Fields of :class:`~diskpack_cl.schedule.StippleOptions` that replace
+        those of `options` (``gamma``, ``schedule``, ``k_quantile``, ...);
+        all are checked before any device work.
 
     Returns
     -------
@@ -569,14 +508,11 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
     from .image import to_gray
 
     t_start = time.perf_counter()
-    gray = to_gray(image, invert=options.get("invert", False))
+    options = (options or StippleOptions()).replace(**overrides)
+    gray = to_gray(image, invert=options.invert)
     H, W = gray.shape
-    opt = StippleOptions.resolve(n, W, H, **options)
-    if opt.paper_tone > 0:
-        gray = gray * (1.0 - opt.paper_tone)
-    darkness = 1.0 - gray
-    if not darkness.max() > 1e-9:
-        raise ValueError("nothing to stipple: the image is white")
+    opt = options.plan(n, W, H)
+    gray, darkness = _toned(gray, opt)
     timings = {"load": time.perf_counter() - t_start}
     t0 = time.perf_counter()
     x = _start_points(gray, opt, start)
@@ -586,14 +522,5 @@ def stipple(image, n, *, start=None, callback=None, device=None, backend="auto",
         engine = VerifiedEngine(engine)
     stage = _make_stage(gray, opt, engine)
     state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
-    t0 = time.perf_counter()
-    r = dot_radii(state, stage, state.points)
-    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
-    timings["certify"] = time.perf_counter() - t0
     timings.update(stage_seconds)
-    timings["total"] = time.perf_counter() - t_start
-    return StippleResult(
-        points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
-        history=history, width=W, height=H, timings=timings, params=opt.params(), engine=engine.name,
-        tone_radius=tone_radius(len(state.points), darkness),
-    )
+    return _certified_result(state, stage, history, timings, t_start, darkness)

@@ -89,6 +89,7 @@ class OpenCLStippleEngine:
     """
 
     name = "opencl"
+    fallback = None
 
     def __init__(self, domain, shape, device=None, route="auto", profile=False):
         from .cells import CellMIC, has_fp64
@@ -171,9 +172,10 @@ class ExactStippleEngine:
     device = "cpu (scipy)"
     profile = False   # no kernels to time
 
-    def __init__(self, domain, shape):
+    def __init__(self, domain, shape, *, fallback=None):
         self.domain = domain
         self.shape = tuple(shape)
+        self.fallback = fallback   # None, or why ``auto`` chose this engine
 
     def mic(self, points, weights, *, exact=True):
         """Exact MICs (``exact`` is ignored: there is no estimate to stop at)."""
@@ -197,9 +199,9 @@ class VerifiedEngine:
 
     def __init__(self, engine):
         self.engine = engine
-        self.name, self.device = engine.name, engine.device
-        self.fallback = engine.fallback
-        self.profile = engine.profile
+
+    def __getattr__(self, name):   # name, device, fallback, profile, ...: the engine's
+        return getattr(self.engine, name)
 
     def mic(self, points, weights, *, exact=True):
         m = self.engine.mic(points, weights, exact=exact)
@@ -229,15 +231,11 @@ def make_stipple_engine(domain, shape, backend="auto", device=None, profile=Fals
 
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    fallback = None
     if backend == "exact":
-        engine = ExactStippleEngine(domain, shape)
-    else:
-        try:
-            engine = OpenCLStippleEngine(domain, shape, device=device, profile=profile)
-        except NoOpenCLError as exc:
-            if backend == "opencl" or device is not None:
-                raise
-            engine, fallback = ExactStippleEngine(domain, shape), f"no OpenCL device ({exc})"
-    engine.fallback = fallback
-    return engine
+        return ExactStippleEngine(domain, shape)
+    try:
+        return OpenCLStippleEngine(domain, shape, device=device, profile=profile)
+    except NoOpenCLError as exc:
+        if backend == "opencl" or device is not None:
+            raise
+        return ExactStippleEngine(domain, shape, fallback=f"no OpenCL device ({exc})")

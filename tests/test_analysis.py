@@ -176,13 +176,13 @@ def test_nearest_neighbor_distances_match_brute_force(n, seed, w, h):
     d = pts[:, None, :] - pts[None, :, :]
     plane = np.hypot(d[..., 0], d[..., 1])
     np.fill_diagonal(plane, np.inf)
-    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=False), plane.min(axis=1))
+    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, domain=False), plane.min(axis=1))
     d = d - box * np.round(d / box)
     torus = np.hypot(d[..., 0], d[..., 1])
     np.fill_diagonal(torus, np.inf)
-    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=(w, h)), torus.min(axis=1))
-    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=Domain(w, h, True)), torus.min(axis=1))
-    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, periodic=Domain.rect(w, h)), plane.min(axis=1))
+    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, domain=(w, h)), torus.min(axis=1))
+    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, domain=Domain(w, h, True)), torus.min(axis=1))
+    np.testing.assert_allclose(A.nearest_neighbor_distances(pts, domain=Domain.rect(w, h)), plane.min(axis=1))
 
 
 def test_nearest_neighbor_distances_wrap_and_errors():
@@ -191,7 +191,7 @@ def test_nearest_neighbor_distances_wrap_and_errors():
     with pytest.raises(ValueError, match="need at least 2 points"):
         A.nearest_neighbor_distances([[0.5, 0.5]])
     with pytest.raises(ValueError, match="periodic must be True, False or a domain size"):
-        A.nearest_neighbor_distances([[0.1, 0.5], [0.2, 0.5]], periodic=(1.0, -1.0))
+        A.nearest_neighbor_distances([[0.1, 0.5], [0.2, 0.5]], domain=(1.0, -1.0))
 
 
 @pytest.mark.parametrize("m, r", [(7, 8), (26, 30), (13, 14)])

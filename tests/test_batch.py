@@ -24,6 +24,7 @@ from diskpack_cl.batch import (
     render_template, stipple_many,
 )
 from diskpack_cl.cli import main
+from diskpack_cl.export import WriteOptions
 
 DATA = Path(__file__).parent / "data"
 QUICK = dict(schedule=[("pack", 2)])  # a short schedule: the batch layer is under test
@@ -118,7 +119,7 @@ def test_density_sets_n_per_image(tmp_path):
     with pytest.raises(ValueError, match="--dots-per-cm2 needs the print size"):
         plan_stipple([small], [str(tmp_path / "{stem}.svg")], dots_per_cm2=10)
     (item,) = plan_stipple([small], [str(tmp_path / "{stem}_{n}.svg")], dots_per_cm2=10,
-                           write={"width_mm": 100.0})
+                           write=WriteOptions(width_mm=100.0))
     assert item.outputs[0].endswith("_1000.svg")  # 10 cm x 10 cm
 
 
@@ -292,7 +293,7 @@ def test_jobs_two_gives_the_files_of_jobs_one(ctx, tmp_path):
 def cluster():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as lc, \
+                                  dashboard_address=":0") as lc, \
             distributed.Client(lc) as client:
         yield lc, client
 

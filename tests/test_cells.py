@@ -5,7 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.cells import FLAGS, NO_CODE, CellMIC, refine_active
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
@@ -286,3 +286,42 @@ def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit)
 def test_solve_refuses_sites_it_cannot_bound(solvers, pts, w, match):
     with pytest.raises(ValueError, match=match):
         solvers(Domain.torus()).solve(pts, w)
+
+
+def _power_cell_slack(pts, w, centers, radii, dom):
+    """Smallest distance, over every other site and periodic image, from each disk to the
+    bisector of its power cell (>= 0: the disk lies in its cell)."""
+    shifts = [(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1)] if dom.periodic else [(0, 0)]
+    slack = np.full(len(pts), np.inf)
+    rel = centers - pts
+    if dom.periodic:
+        rel -= np.round(rel / (dom.width, dom.height)) * (dom.width, dom.height)
+    for sx, sy in shifts:
+        other = pts + (sx * dom.width, sy * dom.height)
+        d = other[None, :, :] - pts[:, None, :]                     # x_j - x_i
+        L = np.hypot(d[..., 0], d[..., 1])
+        c = rel[:, None, :]
+        beta = (L * L - w[None, :] + w[:, None]) / (2 * np.where(L > 0, L, 1))
+        s = beta - np.einsum("ijk,ijk->ij", d, c) / np.where(L > 0, L, 1) - radii[:, None]
+        s[L == 0] = np.inf
+        slack = np.minimum(slack, s.min(axis=1))
+    return slack
+
+
+@pytest.mark.parametrize("kind", ["lattice", "dart"])
+def test_host_check_certifies_centres_not_only_radii(solvers, kind):
+    """Every returned disk lies in its cell (a wrong centre with the right radius does not),
+    and on these sets the host re-solve agrees with the device on every cell."""
+    dom = Domain.torus()
+    if kind == "lattice":   # a sheared lattice: cells are all alike, x and y differ
+        g = np.arange(12) / 12
+        pts = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+        pts = np.mod(pts + [0.3 / 12, 0.0] * (np.arange(len(pts)) // 12 % 2)[:, None]
+                     + [0.01, 0.02], 1.0)
+    else:
+        pts = dart_throwing(600, seed=3)
+    w = np.zeros(len(pts))
+    res = solvers(dom).solve(pts)
+    scale = max(dom.width, dom.height)
+    assert _power_cell_slack(pts, w, res.centers, res.radii, dom).min() >= -1e-9 * scale
+    assert res.stats["rejected"] == 0 and res.stats["fallback"] == 0

@@ -1,3 +1,4 @@
+import argparse
 import importlib
 import io
 import json
@@ -256,12 +257,18 @@ def test_devices_without_opencl(monkeypatch, capsys):
     assert "diskpack: error: no OpenCL platform found; install" in capsys.readouterr().err
 
 
-def test_subcommands_are_registered_from_add_functions():
-    names = [n[5:] for n in vars(cli) if n.startswith("_add_")]
-    assert {"devices", "poisson", "relax", "stipple", "analyze"} <= set(names)
-    assert [f.__name__[5:] for f in cli._SUBCOMMANDS] == names   # none forgotten, in order
+def test_every_command_module_is_registered():
+    """One module per subcommand, each with ``_add_NAME`` and ``_run_NAME``; all registered."""
+    import importlib
+    import pkgutil
+
+    modules = [m.name for m in pkgutil.iter_modules(cli.__path__) if not m.name.startswith("_")]
+    names = [f.__name__[5:] for f in cli._SUBCOMMANDS]
+    assert sorted(names) == sorted(modules)
+    assert names[:3] == ["devices", "poisson", "relax"]
     for name in names:
-        assert callable(getattr(cli, f"_run_{name}"))
+        module = importlib.import_module(f"diskpack_cl.cli.{name}")
+        assert callable(getattr(module, f"_add_{name}")) and callable(getattr(module, f"_run_{name}"))
 
 
 # ------------------------------------------------------ README and .ci/run
@@ -387,8 +394,8 @@ def fake_stipple(monkeypatch):
     """Record stipple()'s arguments, then fail as a user error would."""
     calls = []
 
-    def stipple(image, n, **kwargs):
-        calls.append(dict(image=np.asarray(image), n=n, **kwargs))
+    def stipple(image, n, options=None, **kwargs):
+        calls.append(dict(image=np.asarray(image), n=n, options=options, **kwargs))
         raise ValueError("fake stipple stops here")
 
     monkeypatch.setattr(STIPPLE_MODULE, "stipple", stipple)
@@ -403,6 +410,9 @@ def test_stipple_passes_options_and_sample(fake_stipple, tmp_path, capsys, ctx):
     assert rc == 1 and "fake stipple stops here" in capsys.readouterr().err
     (call,) = fake_stipple
     assert call["image"].shape == (512, 512) and call["n"] == 77
+    call.update({k: getattr(call["options"], k) for k in (
+        "gamma", "floor", "schedule", "supersample", "seed", "method", "invert", "refine_every",
+        "features", "capacity", "support", "paper_tone")})
     assert {k: call[k] for k in ("gamma", "floor", "schedule", "supersample", "seed", "method",
                                  "invert", "refine_every", "device", "features", "capacity",
                                  "support", "paper_tone", "profile")} == dict(
@@ -416,7 +426,7 @@ def test_stipple_schedule_choices_follow_the_library():
     from diskpack_cl.schedule import SCHEDULE_NAMES
 
     parser = cli.build_parser()
-    sub = next(a for a in parser._actions if isinstance(a, cli.argparse._SubParsersAction))
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     action = next(a for a in sub.choices["stipple"]._actions if a.dest == "schedule")
     assert set(action.choices) == set(SCHEDULE_NAMES)
 
@@ -747,3 +757,22 @@ def test_tone_controls_act_on_the_default_schedule(ctx, tmp_path, capsys):
     assert cli.main(["stipple", str(image), "-n", "8", "--black-point", "0.6",
                      "--white-point", "0.5", "-o", str(tmp_path / "x.svg")]) == 2
     assert "--black-point 0.6 must be below --white-point 0.5" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["stipple", "export"])
+def test_pen_width_changes_what_is_drawn(stippled, tmp_path, capsys, command):
+    """--pen-mm reaches the writers: a dot narrower than the pen is one pen touch, drawn
+    as a path (SVG) and previewed as wide as the pen (PNG); without it, a small circle."""
+    head = (["export", str(stippled.outs["npz"])] if command == "export" else
+            ["stipple", str(stippled.outs["png"].parent / "grad.png"), *STIPPLE_ARGS,
+             "--seed", "1"])
+    drawn = {}
+    for pen in ([], ["--pen-mm", "1.0"]):
+        out = tmp_path / f"pen{len(pen)}"
+        out.mkdir()
+        assert cli.main([*head, "--dot-mm", "0.3", "-q", *pen, "-o", str(out / "a.svg"),
+                         "-o", str(out / "a.png")]) == 0
+        drawn[bool(pen)] = {ext: (out / f"a.{ext}").read_bytes() for ext in ("svg", "png")}
+    assert drawn[True]["svg"] != drawn[False]["svg"]
+    assert drawn[True]["png"] != drawn[False]["png"]
+    assert b"<circle" in drawn[False]["svg"] and b"<circle" not in drawn[True]["svg"]

@@ -117,3 +117,19 @@ def test_devices_command_names_kinds(monkeypatch, capsys):
     out = capsys.readouterr().out
     assert "Oclgrind Simulator  [GPU | CPU | ACCELERATOR]" in out
     assert "pthread-AMD EPYC  [CPU]" in out and "ALL" not in out
+
+
+def test_hypothesis_is_derandomized_in_ci():
+    """With CI=true the suite runs hypothesis's fixed-seed profile without a database."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import conftest, hypothesis; s = hypothesis.settings.default; "
+            "print(s.derandomize, s.database)")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = {**os.environ, "CI": "true"}
+    env.pop("HYPOTHESIS_PROFILE", None)
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True,
+                         text=True, check=True).stdout.split()
+    assert out == ["True", "None"]

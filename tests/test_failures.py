@@ -16,7 +16,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from diskpack_cl import cli
+from diskpack_cl import cli, memory
 from diskpack_cl.io import write_points
 
 STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
@@ -197,8 +197,8 @@ def test_contradicting_options_are_usage_errors(tmp_path, no_stipple, capsys, mo
 def test_gamma_is_accepted_where_it_acts(monkeypatch, tmp_path, capsys):
     calls = []
 
-    def fake(image, n, **kwargs):
-        calls.append(kwargs)
+    def fake(image, n, options=None, **kwargs):
+        calls.append({"gamma": options.gamma, **kwargs})
         raise ValueError("stop")
 
     monkeypatch.setattr(STIPPLE_MODULE, "stipple", fake)
@@ -326,7 +326,7 @@ def test_stipple_without_opencl_says_which_engine(tmp_path, no_opencl, capsys):
 def test_sizes_beyond_memory_are_refused_before_the_work(tmp_path, monkeypatch, no_stipple,
                                                          capsys, argv, option):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(cli, "_available_memory", lambda: 2**30)  # a 1 GiB machine
+    monkeypatch.setattr(memory, "available_memory", lambda: 2**30)  # a 1 GiB machine
     rc, _, err = _run(["stipple", "sample", "-n", "100", "-o", "s.npz", *argv], capsys)
     assert rc == 1, err
     assert option in err and "more than" in err
@@ -336,7 +336,7 @@ def test_sizes_beyond_memory_are_refused_before_the_work(tmp_path, monkeypatch, 
 def test_supersample_beyond_the_device_buffer_is_refused(ctx, tmp_path, monkeypatch, no_stipple,
                                                          capsys):
     """The device's largest buffer, not the machine, is the limit here."""
-    monkeypatch.setattr(cli, "_available_memory", lambda: None)  # unknown: not checked
+    monkeypatch.setattr(memory, "available_memory", lambda: None)  # unknown: not checked
     biggest = ctx.devices[0].max_mem_alloc_size
     s = int(np.ceil(np.sqrt(biggest / 4 / (512 * 512)))) + 1
     rc, _, err = _run(["stipple", "sample", "-n", "100", "--supersample", str(s), "-o",

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import certify_disks, exact_mic
 
@@ -121,7 +121,7 @@ def test_exact_mic_weight_shift_invariance(case, shift):
 
 _CLUSTERED = """
 import numpy as np
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 rng = np.random.default_rng(2)
@@ -148,8 +148,11 @@ def test_exact_mic_clustered_points_on_torus():
     def cap():
         resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
 
+    import os
+
+    # the child imports the oracles (tests/reference.py) from its working folder
     proc = subprocess.run([sys.executable, "-c", _CLUSTERED], capture_output=True, text=True,
-                          timeout=120, preexec_fn=cap)
+                          timeout=120, preexec_fn=cap, cwd=os.path.dirname(__file__))
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
@@ -318,3 +321,14 @@ def test_torus_with_a_large_empty_region_is_solved_exactly():
     for i in [600, 601, *np.argsort(-m.radii)[2:6]]:
         want = ref.chebyshev_ref(pts, None, tor, i)
         assert m.radii[i] == pytest.approx(want.radius, abs=1e-12)
+
+
+def test_certificate_searches_the_whole_band_of_an_octave():
+    """Two disks of radius 1.9 overlap at distance 3.5; a 1.0 disk shares their octave
+    [1, 2): the pair search must reach r_i + the octave's largest radius, not its smallest."""
+
+    C = np.array([[5.0, 5.0], [8.5, 5.0], [5.0, 12.0]])
+    cert = certify_disks(C, [1.9, 1.9, 1.0], Domain.rect(20.0, 20.0))
+    assert not cert.valid and not cert.disjoint
+    assert cert.min_gap == pytest.approx(3.5 - 3.8)
+    assert certify_disks(C, [1.7, 1.7, 1.0], Domain.rect(20.0, 20.0)).valid

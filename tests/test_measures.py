@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.measures import (coincident_pairs, hexagonal_radius, min_distance,
                                   nearest_neighbor_distances, normalized_radius)

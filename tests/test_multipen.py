@@ -182,7 +182,7 @@ def test_dask_colour_batch_matches_one_process(tmp_path):
                 backend="exact")
     local = list(stipple_many(images, [str(tmp_path / "local" / "{stem}.npz")], jobs=1, **opts))
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as lc, distributed.Client(lc) as client:
+                                  dashboard_address=":0") as lc, distributed.Client(lc) as client:
         dask = list(stipple_many(images, [str(tmp_path / "dask" / "{stem}.npz")], client=client,
                                  **opts))
     assert [r["status"] for r in local + dask] == ["ok"] * 4

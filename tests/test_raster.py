@@ -5,7 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 
 pytest.importorskip("pyopencl")
@@ -501,3 +501,24 @@ def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit,
     assert max(small._groups.values()) <= limit
     for a, b in zip(want, _all_outputs(small, pts, w)):
         np.testing.assert_array_equal(a, b)   # (NaN centroids of empty cells compare equal)
+
+
+@pytest.mark.parametrize("layout", [None, "tile", "item"])
+@pytest.mark.parametrize("order", [(0, 1), (1, 0)])
+def test_power_ties_go_to_the_lowest_index(ctx, order, layout):
+    """Two sites mirrored about the middle column of a 5 x 5 grid: every cell of that
+    column is an exact tie, which the kernels (and the reference) give to site 0."""
+    from diskpack_cl.raster import PowerRaster
+
+    dom = Domain.rect(5.0, 5.0)
+    pts = np.array([[1.5, 2.5], [3.5, 2.5]])[list(order)]
+    if layout is None:      # labels with the distance map
+        lab = _raster(ctx, dom, (5, 5), pts)[2]
+    else:                   # labels only
+        lab = PowerRaster(dom, (5, 5), device=ctx, layout=layout).compute(
+            pts, distance=False).labels.copy()
+    rl, gap = ref.power_labels_ref(pts, None, dom, (5, 5))
+    assert np.all(gap[:, 2] == 0)                 # the middle column ties exactly
+    assert np.all(lab[:, 2] == 0) and np.array_equal(lab, rl)
+    left = order.index(0)                         # the site on the left owns columns 0, 1
+    assert np.all(lab[:, :2] == left) and np.all(lab[:, 3:] == 1 - left)

@@ -9,7 +9,7 @@ import pytest
 from diskpack_cl.cli import build_parser
 from diskpack_cl.export import write_svg
 from diskpack_cl.relax import relax_poisson
-from diskpack_cl.schedule import StippleOptions
+from diskpack_cl.schedule import GAMMA_DEFAULT
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
@@ -54,13 +54,17 @@ def _stated_defaults(first, meaning):
 
 #: Where an option the parser leaves as None gets its default.
 LIBRARY = {"poisson": [relax_poisson], "relax": [relax_poisson],
-           "stipple": [StippleOptions.resolve, write_svg]}
+           "stipple": [{"gamma": GAMMA_DEFAULT}, write_svg]}
 
 
 def _effective_default(command, action):
     if action.default is not None:
         return action.default
     for func in LIBRARY[command]:
+        if isinstance(func, dict):      # a default the options resolve (None: 3.0)
+            if action.dest in func:
+                return func[action.dest]
+            continue
         p = inspect.signature(func).parameters.get(action.dest)
         if p is not None and p.default is not inspect.Parameter.empty:
             return p.default

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from diskpack_cl import _device
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.relax import relax_poisson
 

@@ -4,7 +4,7 @@ bucket grid and ring searches must not degenerate on extreme aspect ratios."""
 import numpy as np
 import pytest
 
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 
 pytest.importorskip("pyopencl")

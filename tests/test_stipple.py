@@ -292,7 +292,7 @@ def test_default_schedule_certified_and_deterministic(ctx):
 
 
 def test_paper_schedule_keeps_the_paper_mapping(ctx):
-    res = stipple(gradient(), 60, seed=0, schedule="paper", beta=2, lloyd=1, rounds=2)
+    res = stipple(gradient(), 60, seed=0, beta=2, lloyd=1, rounds=2)
     assert res.params["radii"] == "gray" and res.certificate.valid
     assert [h["kind"] for h in res.history] == ["pack", "pack", "lloyd", "pack"]
 
@@ -369,7 +369,7 @@ def test_schedule_options_resolution():
     ({"refine_every": 1.5}, "refine_every must be an integer >= 0, got 1.5"),
     ({"radius_sigma": -1}, "radius_sigma must be >= 0, got -1.0"),
     ({"density_sigma": np.nan}, "density_sigma must be >= 0, got nan"),
-    ({"supersample": 0}, "supersample must be >= 1, got 0"),
+    ({"supersample": 0}, "supersample must be an integer >= 1, got 0"),
 ])
 def test_options_checked_before_any_work(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -428,11 +428,13 @@ def test_mix_step_blends_the_mic_towards_the_cell_centroid(blend_cell):
                                rtol=0, atol=1e-12)
 
 
-def test_lloyd_step_moves_to_the_voronoi_centroids_and_takes_the_largest_k():
+@pytest.mark.parametrize("seed", [2, 3, 5, 8])
+def test_lloyd_step_moves_to_the_voronoi_centroids_and_takes_the_largest_k(seed):
+    """k is the largest valid one at the new positions, with the radii there."""
     from diskpack_cl.labels import cell_centroids, grid_power_labels
 
     g = gradient(24, 32)
-    x = error_diffusion(g, 40, seed=2)
+    x = error_diffusion(g, 40, seed=seed)
     opt = StippleOptions.resolve(40, 32, 24, schedule=[("lloyd", 1)])
     rfield = radius_field(g, radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
     dom, shape = Domain.rect(32, 24), opt.grid_shape(32, 24)
@@ -466,6 +468,19 @@ def test_gamma_is_refused_where_the_radii_have_no_exponent():
         stipple(gray, 50, gamma=1.0, backend="exact", schedule=[("pack", 1)], radii="density")
     with pytest.raises(ValueError, match="has no effect"):
         stipple(gray, 50, gamma=6.0)
-    a = stipple(gray, 50, gamma=1.0, schedule="paper", backend="exact", beta=2, lloyd=1, rounds=1)
-    b = stipple(gray, 50, gamma=6.0, schedule="paper", backend="exact", beta=2, lloyd=1, rounds=1)
+    a = stipple(gray, 50, gamma=1.0, backend="exact", beta=2, lloyd=1, rounds=1)
+    b = stipple(gray, 50, gamma=6.0, backend="exact", beta=2, lloyd=1, rounds=1)
     assert not np.allclose(a.base_radii, b.base_radii)      # gamma acts on gray radii
+
+
+def test_largest_valid_k_finds_a_binding_pair_that_no_nearest_neighbour_forms():
+    """Two large disks 5 apart bind (k = 5 / (5 + 5)); each has a tiny disk 3 away as its
+    nearest neighbour, so the nearest-neighbour bound alone would give k = 0.6."""
+
+    p = np.array([[45.0, 50.0], [50.0, 50.0], [45.0, 47.0], [50.0, 53.0]])
+    r = np.array([5.0, 5.0, 1e-3, 1e-3])
+    brute = min(np.hypot(*(p[i] - p[j])) / (r[i] + r[j])
+                for i in range(4) for j in range(i + 1, 4))
+    assert brute == 0.5
+    assert largest_valid_k(p, r, 100.0, 100.0) == 0.5
+    assert largest_valid_k(p[[2, 0, 3, 1]], r[[2, 0, 3, 1]], 100.0, 100.0) == 0.5

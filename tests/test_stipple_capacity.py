@@ -82,3 +82,26 @@ def test_capacity_evens_the_ink_and_keeps_the_certificate():
     again = stipple(g, 300, seed=2, capacity=0.25, **OPTS)
     np.testing.assert_array_equal(again.points, runs[0.25].points)
     assert runs[0.25].params["capacity"] == 0.25
+
+
+@pytest.mark.parametrize("mass", [[0.0, 5e-324, 1e-320], [0.0, 0.0, 0.0], [0.0, 1e-310, 1.0]])
+def test_equal_ink_divides_only_by_cells_that_hold_ink(mass):
+    """Subnormal and empty cells: no division by zero, finite factors, empty cells grow."""
+    mass = np.array(mass)
+    with np.errstate(divide="raise", invalid="raise", over="raise"):
+        ink = equal_ink(np.ones(3), mass, 0.5)
+    assert np.all(np.isfinite(ink)) and np.all(ink > 0)
+    assert ink[0] >= ink.min()
+
+
+def test_final_radii_carry_the_equal_ink_factors():
+    """On a flat image the radius field is constant: only the capacity factors make
+    the dots' base radii differ, and the returned radii keep them."""
+    gray = np.full((32, 32), 0.5)
+    res = stipple(gray, 60, schedule=[("pack", 3)], capacity=0.5, backend="exact", seed=1)
+    assert res.params["capacity"] == 0.5
+    spread = res.base_radii.std() / res.base_radii.mean()
+    assert spread > 0.01
+    np.testing.assert_allclose(res.radii, res.k * res.base_radii, rtol=1e-12)
+    flat = stipple(gray, 60, schedule=[("pack", 3)], backend="exact", seed=1)
+    assert flat.base_radii.std() == 0

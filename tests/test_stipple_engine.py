@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl import NoOpenCLError
-from diskpack_cl import reference as ref
+import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.labels import cell_centroids, grid_power_labels
 from diskpack_cl.stipple import stipple

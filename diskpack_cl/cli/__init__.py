@@ -1,0 +1,155 @@
+"""Command line interface: ``diskpack <subcommand> ...``.
+
+One module per subcommand (``devices``, ``poisson``, ``relax``, ``stipple``,
+``export``, ``analyze``), each thin: it parses arguments, reads and writes
+files and calls the public Python API. Heavy modules are imported inside the
+subcommand functions, so ``diskpack --help`` stays fast.
+
+Adding a subcommand means adding a module with two functions,
+``_add_NAME(subparsers)`` (creates the parser with
+``subparsers.add_parser("NAME", ...)`` and calls
+``parser.set_defaults(run=_run_NAME)``) and ``_run_NAME(args) -> int``, and
+listing ``_add_NAME`` in :data:`_SUBCOMMANDS`.
+
+Raise ``ValueError``/``OSError`` for user errors: :func:`main` prints
+``diskpack: error: ...`` and returns 1 (2 for a usage error or an
+:class:`~diskpack_cl.options.OptionConflict`, 130 on Ctrl-C, 143 on SIGTERM,
+129 on SIGHUP). Check outputs with :func:`diskpack_cl.io.check_writable`
+before the work and write them with the atomic writers of
+:mod:`diskpack_cl.io` after it, all in one :func:`diskpack_cl.io.atomic_writes`,
+so that a failed or interrupted run writes no output and leaves every earlier
+file as it was.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from ._batches import _raise_terminated, _Terminated
+from ._common import PROG, _Parser, _UsageError
+from .analyze import _add_analyze
+from .devices import _add_devices
+from .export import _add_export
+from .poisson import _add_poisson
+from .relax import _add_relax
+from .stipple import _add_stipple
+
+__all__ = ["main", "build_parser"]
+
+
+#: The subcommands, in the order of ``diskpack --help``.
+_SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_export,
+                _add_analyze)
+
+
+def build_parser():
+    """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`."""
+    parser = _Parser(
+        prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
+    try:
+        from importlib.metadata import version
+
+        parser.add_argument("--version", action="version", version=f"%(prog)s {version('diskpack_cl')}")
+    except Exception:  # pragma: no cover - not installed
+        pass
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for add in _SUBCOMMANDS:
+        add(subparsers)
+    return parser
+
+
+def _terminate_handlers():
+    """Make SIGTERM and SIGHUP raise :class:`_Terminated`, as Ctrl-C raises
+    KeyboardInterrupt, so that a killed run cleans up like an interrupted
+    one; return the handlers to restore (none off the main thread)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    handlers = {}
+    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
+            handlers[sig] = signal.signal(sig, _raise_terminated)
+    return handlers
+
+
+def _stdout_closed():
+    """After a BrokenPipeError (``diskpack ... --json | head``): end quietly.
+
+    Point the stdout descriptor at /dev/null so that the interpreter's final
+    flush does not raise again; return 141, the status of a SIGPIPE death.
+    """
+    with open(os.devnull, "wb") as null:
+        try:
+            os.dup2(null.fileno(), sys.stdout.fileno())
+        except (OSError, ValueError):  # stdout is no real file (tests)
+            pass
+    return 128 + 13
+
+
+def _os_error_text(exc):
+    """``path: reason`` for an OSError, without the raw ``[Errno N]`` prefix."""
+    reason = exc.strerror or str(exc)
+    return f"{exc.filename}: {reason}" if exc.filename else reason
+
+
+def main(argv=None):
+    """Run the CLI; return the exit status.
+
+    0 ok, 1 error, 2 usage error, 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (an
+    interrupted run writes none of its outputs and leaves earlier files as
+    they were), 141 when stdout was closed.
+    """
+    import signal
+
+    from diskpack_cl import NoOpenCLError
+    from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
+
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, usage errors
+        return exc.code if isinstance(exc.code, int) else 1
+    handlers = _terminate_handlers()
+    try:
+        device = getattr(args, "device", None)
+        if device and "," not in device:  # an explicit device must exist, on every command
+            from diskpack_cl import get_context
+
+            get_context(device)
+        return int(args.run(args) or 0)
+    except NamedOptionError as exc:   # the options named as flags
+        usage = isinstance(exc, OptionConflict)
+        print(f"{PROG}{f' {args.command}' if usage else ''}: error: {exc.render(flag_name)}",
+              file=sys.stderr)
+        return 2 if usage else 1
+    except _UsageError as exc:
+        print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        how = (signal.Signals(exc.args[0]).name if isinstance(exc, _Terminated)
+               else "interrupted")
+        print(f"{PROG}: error: {how}, nothing written", file=sys.stderr)
+        return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
+    except BrokenPipeError:
+        return _stdout_closed()
+    except (ValueError, NoOpenCLError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 1
+    except OSError as exc:  # a write failed: read-only, full, gone
+        print(f"{PROG}: error: {_os_error_text(exc)}; nothing written", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(f"{PROG}: error: out of memory, nothing written", file=sys.stderr)
+        return 1
+    except Exception as exc:
+        if type(exc).__module__.split(".")[0] != "pyopencl":
+            raise
+        print(f"{PROG}: error: OpenCL failed ({type(exc).__name__}: {exc}); try another "
+              f"--device (see 'diskpack devices'); nothing written", file=sys.stderr)
+        return 1
+    finally:
+        for sig, old in handlers.items():
+            signal.signal(sig, old)

@@ -1,0 +1,121 @@
+"""Batch mode (several inputs, a folder, a template, a batch option): where items run, the report."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+
+from diskpack_cl.batch import json_default
+
+from ._common import PROG, _UsageError, _bar
+
+
+def _batch_mode(args, inputs, outputs):
+    """Whether the command is a batch (else it runs exactly as for one input).
+
+    Raises _UsageError for a batch with --verify or --profile, which apply
+    to one input.
+    """
+    batch = (len(inputs) > 1 or any(os.path.isdir(x) for x in inputs)
+             or any("{" in str(o) for o in outputs) or "," in (args.device or "")
+             or any(getattr(args, k, None) for k in ("jobs", "manifest", "overwrite",
+                                                      "scheduler", "collect", "count")))
+    single = [f"--{k}" for k in ("verify", "profile") if getattr(args, k, False)]
+    if batch and single:
+        verb = "apply" if len(single) > 1 else "applies"
+        raise _UsageError(f"{' and '.join(single)} {verb} to one input; this command is a batch "
+                          "(several inputs, a folder, a template or a batch option)")
+    return batch
+
+
+def _batch_run(args):
+    """Keyword arguments of the batch functions for where and how items run."""
+    devices = [d.strip() for d in args.device.split(",") if d.strip()] if args.device else None
+    scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+    if args.collect and scheduler is None:
+        raise ValueError("--collect is for a Dask cluster: give --scheduler ADDRESS too")
+    if scheduler is not None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            from diskpack_cl.batch import DASK_HINT
+
+            raise ValueError(f"--scheduler: {DASK_HINT}") from None
+    from diskpack_cl.batch import default_jobs
+
+    return dict(manifest=args.manifest, overwrite=args.overwrite, devices=devices,
+                jobs=args.jobs or default_jobs(devices), client=scheduler,
+                collect=args.collect)
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP during a batch."""
+
+
+def _raise_terminated(signum, frame):
+    raise _Terminated(signum)
+
+
+def _report_batch(args, batch):
+    """Run a planned batch with a progress bar / log lines / JSON; the exit status.
+
+    :func:`main` turns SIGTERM and SIGHUP into :class:`_Terminated`; an
+    interrupted batch says how far it came and how to resume.
+    """
+    total = len(batch)
+    bar = _bar(args, args.command, "item", total, leave=True)
+    counts = {"ok": 0, "failed": 0, "skipped": 0}
+    failures = []
+    t0 = time.perf_counter()
+
+    def tally():
+        return f"ok {counts['ok']} failed {counts['failed']} skipped {counts['skipped']}"
+
+    def on_iteration(item, iteration, text):
+        bar.set_postfix_str(f"{tally()} | {os.path.basename(item.input or item.outputs[0])} "
+                            f"it {iteration} {text}")
+
+    if bar is not None:
+        batch.progress = on_iteration
+    try:
+        for rec in batch:
+            counts[rec["status"]] += 1
+            name = rec.get("input") or rec["outputs"][0]
+            if rec["status"] == "failed":
+                failures.append({"input": name, "error": rec.get("error")})
+            if args.json:
+                print(json.dumps(rec, default=json_default), flush=True)
+            if bar is not None:
+                bar.set_postfix_str(tally(), refresh=False)
+                bar.update(1)
+            elif not args.quiet:
+                done = sum(counts.values())
+                took = f" ({rec['seconds']:.3g} s)" if rec["status"] != "skipped" else ""
+                error = f": {rec['error']}" if rec["status"] == "failed" else ""
+                print(f"{PROG}: [{done}/{total}] {rec['status']} {name}{took}{error}",
+                      file=sys.stderr, flush=True)
+    except KeyboardInterrupt as exc:
+        if bar is not None:
+            bar.close()
+        done = sum(counts.values())
+        print(f"{PROG}: error: interrupted after {done} of {total} items; the finished ones "
+              f"are in {batch.manifest}: rerun the same command to resume", file=sys.stderr)
+        return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
+    if bar is not None:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    ran = counts["ok"] + counts["failed"]
+    summary = {"summary": True, "items": total, **counts, "seconds": seconds,
+               "items_per_minute": 60.0 * ran / seconds if ran and seconds > 0 else None,
+               "manifest": batch.manifest, "failures": failures}
+    if args.json:
+        print(json.dumps(summary), flush=True)
+    if not args.quiet:
+        print(f"{PROG}: {counts['ok']} done, {counts['failed']} failed, {counts['skipped']} "
+              f"skipped (already done) of {total} in {seconds:.3g} s; manifest "
+              f"{batch.manifest}", file=sys.stderr)
+        for f in failures:
+            print(f"{PROG}: failed: {f['error']}", file=sys.stderr)
+    return 1 if failures else 0

@@ -1,0 +1,66 @@
+"""How the dots are drawn, for ``stipple`` and ``export``: the output options, writing and the report."""
+
+from __future__ import annotations
+
+import json
+import time
+
+from diskpack_cl.batch import json_default
+
+from ._common import _bar
+
+
+def _drawing_options(p, summary):
+    """The options of how the dots are drawn (SVG, PNG), of ``stipple`` and ``export``."""
+    from diskpack_cl.export import WriteOptions
+    from diskpack_cl.options import add_arguments
+
+    o = add_arguments(p, WriteOptions)["output"]
+    o.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress bar and no summary on stderr")
+    o.add_argument("--json", action="store_true",
+                   help=f"print one JSON line on stdout at the end: {summary}each output's "
+                        f"info, plot (pen-down count, pen-up travel before and after the "
+                        f"pen path, plot time) and seconds")
+    return o
+
+
+def _write_bar(args, n, outputs):
+    """Return (callback, close): a bar over the dots the PNG previews stamp."""
+    pngs = sum(o.lower().endswith(".png") for o in outputs)
+    bar = _bar(args, "write", "dot", n * pngs) if pngs else None
+    return (None, lambda: None) if bar is None else (bar.update, bar.close)
+
+
+def _plot_summary(written, speed):
+    """Plot figures of the first SVG output, and their text for the summary line."""
+    svg = next((w for w in written if w["format"] == "svg"), None)
+    if svg is None:
+        return None, ""
+    plot = {k: svg[k] for k in ("pen_downs", "draw_mm", "travel_before_mm", "travel_after_mm",
+                                "plot_seconds")}
+    plot["plot_speed_mm_s"] = speed
+    hours, minutes = divmod(round(plot["plot_seconds"] / 60), 60)
+    return plot, (f"; pen-up travel {plot['travel_before_mm']:.0f} -> "
+                  f"{plot['travel_after_mm']:.0f} mm, plot about {hours} h {minutes:02d} min "
+                  f"at {speed:g} mm/s")
+
+
+def _write_and_report(args, write, res, gray, outputs, summary, t0):
+    """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
+    print it with --json; return the tail of the summary line."""
+    from diskpack_cl.batch import write_stipple_outputs
+
+    t_write = time.perf_counter()
+    progress, close = _write_bar(args, len(res.points), outputs)
+    try:
+        dot_mm, written = write_stipple_outputs(res, gray, outputs, write, progress=progress)
+    finally:
+        close()
+    plot, text = _plot_summary(written, write.plot_speed_mm_s)
+    summary.update(dot_mm=dot_mm, outputs=written, plot=plot,
+                   write_seconds=time.perf_counter() - t_write,
+                   seconds=time.perf_counter() - t0)
+    if args.json:
+        print(json.dumps(summary, default=json_default), flush=True)
+    return f"{text}; wrote " + ", ".join(outputs)

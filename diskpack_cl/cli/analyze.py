@@ -1,0 +1,75 @@
+"""``diskpack analyze``: spectra and measures of point sets or of a stippling."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from diskpack_cl.batch import json_default
+
+from ._common import PROG, _image_path, _positive_float, _positive_int
+
+
+def _add_analyze(subparsers):
+    p = subparsers.add_parser(
+        "analyze", help="spectra and measures of point sets or of a stippling, as a figure",
+        description="Point sets on the unit torus (.npz, .npy, .csv, .txt, .xy): one figure "
+                    "with the points, the mean periodogram (averaged over all files, as "
+                    "realizations), the radial mean power and the anisotropy in dB, with n, "
+                    "rho and the mean nearest-neighbour rho. A stippling (.npz written by "
+                    "'diskpack stipple', with --image): the rendering beside the input, both "
+                    "blurred with the tone SSIM, the spacing histogram and the certificate "
+                    "(re-checked from the file). Figures need matplotlib: "
+                    "pip install \"diskpack_cl[plot]\".",
+        epilog="examples:\n"
+               "  diskpack analyze a.npz b.npz c.npz -o report.png --json\n"
+               "  diskpack analyze stipple.npz --image sample -o stipple_report.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("inputs", nargs="+", metavar="POINTS",
+                   help="point files (realizations of one process), or one stippling .npz")
+    p.add_argument("-o", "--output", default=None, metavar="REPORT",
+                   help="figure file (.png, .pdf or .svg); written atomically")
+    p.add_argument("--json", action="store_true",
+                   help="print the numbers as one JSON line on stdout")
+    p.add_argument("--image", default=None, metavar="IMAGE",
+                   help="for a stippling: the input image ('sample' for the bundled one)")
+    p.add_argument("--invert", action="store_true",
+                   help="for a stippling: the image was stippled with --invert (default: as "
+                        "recorded in the .npz)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="lift Pillow's decompression-bomb limit for --image")
+    p.add_argument("--sigma", type=_positive_float, default=3.0,
+                   help="for a stippling: Gaussian blur in pixels for tone and spacing "
+                        "(default 3)")
+    p.add_argument("--kmax", type=_positive_int, default=None,
+                   help="for point sets: periodogram frequency range (default: automatic)")
+    p.add_argument("--title", default=None, help="figure title")
+    p.set_defaults(run=_run_analyze)
+
+
+def _run_analyze(args):
+    from diskpack_cl.reports import PLOT_HINT, analyze, have_matplotlib
+
+    if args.output is None and not args.json:
+        raise ValueError("nothing to do: give -o REPORT.png for a figure and/or --json")
+    plot = args.output is not None
+    if plot:
+        from diskpack_cl.io import check_writable
+        from diskpack_cl.plots import figure_format
+
+        figure_format(args.output)
+        check_writable(args.output)
+        if not have_matplotlib() and not args.json:
+            raise ValueError(f"{PLOT_HINT} (the numbers print without it with --json)")
+    image = None if args.image is None else _image_path(args.image)
+    numbers = analyze(args.inputs, image=image, output=args.output, invert=args.invert,
+                      allow_large=args.allow_large, sigma=args.sigma, kmax=args.kmax,
+                      title=args.title)
+    if args.json:
+        print(json.dumps(numbers, default=json_default), flush=True)
+    if plot and not have_matplotlib():
+        raise ValueError(f"{PLOT_HINT}; no figure written")
+    if plot:
+        print(f"{PROG}: wrote {args.output}", file=sys.stderr)
+    return 0

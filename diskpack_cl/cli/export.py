@@ -1,0 +1,53 @@
+"""``diskpack export``: draw a finished stippling again."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ._common import PROG, _checked_outputs
+from ._drawing import _drawing_options, _write_and_report
+
+
+def _add_export(subparsers):
+    p = subparsers.add_parser(
+        "export", help="draw a finished stippling again, for another paper, pen or dot size",
+        description="Draw a stippling that 'diskpack stipple' wrote (.npz; its .csv and .svg "
+                    "are read too) again without recomputing it: another paper (--page), "
+                    "size, pen (--pen-mm), dot size or pen path. The dots keep the size whose "
+                    "ink equals the image's darkness (stored in the .npz) unless --dot-mm or "
+                    "--dots packing is given.",
+        epilog="examples:\n"
+               "  diskpack export out.npz -o a4.svg --page a4 --pen-mm 0.5\n"
+               "  diskpack export out.npz -o a3.svg -o a3.png --page a3 --landscape "
+               "--margin-mm 20",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("input", metavar="STIPPLING",
+                   help="a stippling written by diskpack stipple (.npz, .csv or .svg)")
+    p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
+                   help="output file; repeat for several: .svg, .png, .npz, .csv")
+    p.add_argument("--invert", action="store_true",
+                   help="light dots on dark paper (default: as the stippling was made)")
+    _drawing_options(p, "n, the input, ")
+    p.set_defaults(run=_run_export)
+
+
+def _run_export(args):
+    from diskpack_cl.export import WriteOptions, read_stipple
+    from diskpack_cl.options import from_namespace
+
+    write = from_namespace(WriteOptions, args)
+    t0 = time.perf_counter()
+    outputs = _checked_outputs(args)
+    res = read_stipple(args.input)
+    if res is None:
+        raise ValueError(f"{args.input} is a point set, not a stippling (no radii, width and "
+                         f"height)")
+    write = write.replace(invert=args.invert or bool(res.params.get("invert", False)))
+    summary = {"n": len(res.points), "width": res.width, "height": res.height,
+               "input": str(args.input)}
+    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
+    if not args.quiet:
+        print(f"{PROG}: {len(res.points)} dots of {args.input}{tail}", file=sys.stderr)
+    return 0

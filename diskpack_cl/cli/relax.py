@@ -1,0 +1,121 @@
+"""``diskpack relax``: relax point files on the unit torus (and the relaxation shared with ``poisson``)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ._batches import _batch_mode, _batch_run, _report_batch
+from ._common import PROG, _bar, _batch_options, _device_options, _output_options
+
+
+def _relax_options(p):
+    from diskpack_cl.options import add_arguments
+    from diskpack_cl.relax import RelaxOptions
+
+    add_arguments(p, RelaxOptions)
+    p.add_argument("--verify", action="store_true",
+                   help="check every iteration against scipy (exact MICs, KD-tree rho); slow")
+    p.add_argument("--profile", action="store_true",
+                   help="time the OpenCL kernels with events (--json stage_seconds.kernel)")
+    _device_options(p)
+
+
+def _relax(args):
+    """The :class:`~diskpack_cl.relax.RelaxOptions` of the arguments."""
+    from diskpack_cl.options import from_namespace
+    from diskpack_cl.relax import RelaxOptions
+
+    return from_namespace(RelaxOptions, args)
+
+
+def _progress(args, label):
+    """Return (callback, close) feeding a tqdm bar on a terminal, or no-ops."""
+    bar = _bar(args, label, "it", _relax(args).kwargs()["max_iter"] or None)
+    if bar is None:
+        return None, lambda: None
+
+    def callback(iteration, rho):
+        bar.set_postfix_str(f"rho={rho:.4f}", refresh=False)
+        bar.update(iteration - bar.n)
+
+    return callback, bar.close
+
+
+def _relax_and_write(points, args, *, extra_summary=None):
+    """Relax `points`, write ``args.output``, report; return the exit status."""
+    from diskpack_cl.io import write_points
+    from diskpack_cl.relax import relax_poisson
+
+    callback, close = _progress(args, "relax")
+    try:
+        res = relax_poisson(points, **_relax(args).kwargs(), device=args.device,
+                            callback=callback, verify=args.verify, profile=args.profile)
+    finally:
+        close()
+    extra = {}
+    if args.output.lower().endswith(".npz"):
+        extra = {"rho": res.rho, "eps": args.eps}
+    write_points(args.output, res.points, **extra)
+    stages = {k: float(v) for k, v in res.timings.items()}
+    summary = {
+        "n": int(len(res.points)),
+        "iterations": int(res.iterations),
+        "rho_start": float(res.rho[0]),
+        "rho_final": float(res.rho[-1]),
+        "eps": args.eps,
+        "seconds": float(res.seconds),
+        "seconds_per_iteration": float(res.seconds / res.iterations) if res.iterations else None,
+        "stage_seconds": stages,
+        "backend": res.backend,
+        "device": res.device,
+        "stop_reason": res.stop_reason,
+        "output": str(args.output),
+        # raster estimate error and how often the exact stage widened its set
+        "refinement": {k: (v if isinstance(v, (int, list, str)) else float(v))
+                       for k, v in res.stats.items()},
+    }
+    if extra_summary:
+        summary.update(extra_summary)
+    if res.stats.get("fallback") and not args.quiet:
+        print(f"{PROG}: note: {res.stats['fallback']}: used the exact backend "
+              f"(--backend auto)", file=sys.stderr)
+    if not args.quiet:
+        print(f"{PROG}: {summary['n']} points, rho {summary['rho_start']:.4f} -> "
+              f"{summary['rho_final']:.4f} in {summary['iterations']} iterations "
+              f"({summary['seconds']:.3g} s, {res.backend} on {res.device}, "
+              f"stop: {res.stop_reason}); wrote {args.output}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary), flush=True)
+    return 0
+
+
+def _add_relax(subparsers):
+    p = subparsers.add_parser(
+        "relax", help="relax a point file on the unit torus",
+        description="Relax a point set on the unit torus by disk packing until rho >= EPS. "
+                    "Points outside [0,1)^2 are wrapped onto the torus.")
+    p.add_argument("inputs", nargs="+", metavar="IN",
+                   help="point file (.npz, .npy, .csv, .txt, .xy); several make a batch "
+                        "(-o a template such as out/{stem}.npz)")
+    _output_options(p)
+    _relax_options(p)
+    _batch_options(p)
+    p.set_defaults(run=_run_relax)
+
+
+def _run_relax(args):
+    from diskpack_cl.io import check_points_path, read_points
+
+    if _batch_mode(args, args.inputs, [args.output]):
+        return _run_relax_batch(args)
+    check_points_path(args.output, for_writing=True)
+    points = read_points(args.inputs[0], min_points=2)
+    return _relax_and_write(points, args, extra_summary={"input": str(args.inputs[0])})
+
+
+def _run_relax_batch(args):
+    from diskpack_cl.batch import relax_many
+
+    batch = relax_many(args.inputs, [args.output], _relax(args), **_batch_run(args))
+    return _report_batch(args, batch)

@@ -1,0 +1,263 @@
+"""``diskpack stipple``: stipple images."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ._batches import _batch_mode, _batch_run, _report_batch
+from ._common import PROG, _UsageError, _bar, _batch_options, _checked_outputs, _device_options, _dot_count, _image_path, _positive_float
+from ._drawing import _drawing_options, _write_and_report
+
+
+def _phase_text(phase):
+    kind, it = phase[0], phase[1]
+    return f"{kind} {it}" + (f" (blend {phase[2]})" if len(phase) > 2 else "")
+
+
+def _default_schedule_text():
+    """The default schedule's bands, for --help."""
+    from diskpack_cl.schedule import SPACING_BANDS
+
+    parts, lo = [], 0.0
+    for bound, phases, options in SPACING_BANDS:
+        where = f"s < {bound:g}" if lo == 0 else (f"s >= {lo:g}" if bound == float("inf")
+                                                  else f"{lo:g} <= s < {bound:g}")
+        extra = ", ".join(f"{k} {v}" for k, v in options.items())
+        parts.append(f"{where}: " + ", ".join(_phase_text(ph) for ph in phases) + f" ({extra})")
+        lo = bound
+    return "default = by the dot spacing s = sqrt(W*H/n) px: " + "; ".join(parts)
+
+
+def _schedules_text():
+    """Each schedule's phases, for --help."""
+    from diskpack_cl.schedule import SCHEDULES
+
+    return (_default_schedule_text() + "; "
+            + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
+                        for name, phases in sorted(SCHEDULES.items())))
+
+
+def _add_stipple(subparsers):
+    from diskpack_cl.color import ColorOptions
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.options import add_arguments
+    from diskpack_cl.schedule import _STIPPLING, StippleOptions
+
+    p = subparsers.add_parser(
+        "stipple", help="stipple an image with N dots (paper Algorithm 2)",
+        description="Stipple an image with N dots by unequal disk packing on power diagrams. "
+                    "From an error-diffusion start, the default schedule moves every dot "
+                    "towards the centre of the largest circle inside its power cell (pack) "
+                    "and part-way to the cell's centroid (mix), with radii from the image's "
+                    "density; its phases follow the dot spacing (see --schedule; --schedule "
+                    "paper runs the paper's Algorithm 2 loop). The disks are certified inside "
+                    "the image and pairwise disjoint (exact float64); the outputs draw every "
+                    "dot at one size whose ink equals the image's darkness (--dots), as the "
+                    "plotter's pen draws it with --pen-mm. Every output path is checked before "
+                    "the computation; the outputs are written together after it, so a failed "
+                    "or interrupted run writes nothing and leaves earlier files as they were.",
+        epilog="schedules (--schedule): " + _schedules_text() + "\n\nexamples:\n"
+               "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
+               "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
+               "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json\n"
+               "  diskpack stipple photos/ --density 80000 -o out/{stem}.svg -o out/{stem}.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("images", nargs="+", metavar="IMAGE",
+                   help="image file Pillow reads (PNG, JPEG, TIFF, ...; colour is converted to "
+                        "luminance), or the word 'sample' for the bundled 512x512 sample "
+                        "photograph (use ./sample for a file of that name); several files or "
+                        "folders make a batch")
+    count = p.add_mutually_exclusive_group(required=True)
+    count.add_argument("-n", type=_dot_count, default=None, metavar="N",
+                       help="number of dots (at least 2), or 'tone' with --dot-mm or --pen-mm: "
+                            "as many dots as give the image's ink on the paper")
+    count.add_argument("--density", type=_positive_float, default=None, metavar="D",
+                       help="instead of -n: D dots per megapixel of each image")
+    count.add_argument("--dots-per-cm2", type=_positive_float, default=None, metavar="D",
+                       help="instead of -n: D dots per cm^2 of the print (needs --width-mm, "
+                            "--height-mm or --dpi)")
+    p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
+                   help="output file; repeat for several: .svg (pen plotters, Inkscape), .png "
+                        "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
+                        "(x,y,r in pixels)")
+    groups = add_arguments(p, StippleOptions)
+    g = groups[_STIPPLING]
+    g.add_argument("--verify", action="store_true",
+                   help="check every MIC step against scipy (exact_mic); slow, for testing "
+                        "(single inputs)")
+    g.add_argument("--profile", action="store_true",
+                   help="time the OpenCL kernels with events (--json timings.kernel and "
+                        "timings.kernel_<name>: device seconds, all and per kernel; single inputs)")
+    g.add_argument("--allow-large", action="store_true",
+                   help="lift Pillow's decompression-bomb limit (about 89 Mpixel) for trusted "
+                        "large images")
+    add_arguments(p, ToneOptions, groups=groups)
+    _device_options(g)
+    _drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
+    add_arguments(p, ColorOptions)
+    _batch_options(p).add_argument("--recursive", "-r", action="store_true",
+                                   help="a folder given as IMAGE contributes the images of "
+                                        "its subfolders too")
+    p.set_defaults(run=_run_stipple)
+
+
+def _stipple_progress(args, total):
+    """Return (callback, close): a tqdm bar (iteration, phase kind, k) on a terminal."""
+    bar = _bar(args, "stipple", "it", total or None)
+    if bar is None:
+        return None, lambda: None
+
+    def callback(entry):
+        post = f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}"
+        if entry.get("empty"):
+            post += f" empty={entry['empty']}"
+        bar.set_postfix_str(post, refresh=False)
+        bar.update(int(entry.get("iteration", bar.n)) + 1 - bar.n)
+
+    return callback, bar.close
+
+
+def _stipple_objects(args):
+    """The options of the arguments: ``(StippleOptions, ToneOptions, WriteOptions, ColorOptions)``.
+
+    Raises :class:`~diskpack_cl.options.OptionConflict` (status 2) for options
+    that contradict each other.
+    """
+    from diskpack_cl.color import ColorOptions
+    from diskpack_cl.export import WriteOptions
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.options import from_namespace
+    from diskpack_cl.schedule import StippleOptions
+
+    return (from_namespace(StippleOptions, args), from_namespace(ToneOptions, args),
+            from_namespace(WriteOptions, args, invert=args.invert),
+            from_namespace(ColorOptions, args))
+
+
+def _tone_count(args, write, gray, n):
+    """With --dot-mm/--pen-mm: the dots whose ink is the image's (a note when far from n).
+
+    Returns ``(n, info)``: ``n`` itself unless it is ``"tone"``, and the
+    ``tone_n`` summary (None without a pen or dot size).
+    """
+    from diskpack_cl.export import tone_dot_count
+
+    dot = write.dot_mm or write.pen_mm
+    if dot is None:
+        if n == "tone":
+            raise _UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
+        return n, None
+    h, w = gray.shape
+    tone = tone_dot_count(gray if write.invert else 1.0 - gray, write.scale(w, h), dot)
+    if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and not args.quiet:
+        print(f"{PROG}: note: {tone} dots of {dot:g} mm give the image's ink on this paper; "
+              f"-n {n} will look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})",
+              file=sys.stderr)
+    return (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
+
+
+def _run_stipple(args):
+    from diskpack_cl.batch import dots_for_image
+    from diskpack_cl.export import preview_scale
+    from diskpack_cl.image import load_gray
+    from diskpack_cl.memory import check_stipple_memory
+    from diskpack_cl.stipple import stipple
+
+    options, tone, write, color = _stipple_objects(args)
+    if color.separation() is not None:
+        return _run_stipple_colors(args, options, tone, write, color)
+    if write.pen_order is not None:
+        raise _UsageError("--pen-order orders the pens of --colors or --pens")
+    if _batch_mode(args, args.images, args.output):
+        if args.n == "tone":
+            raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
+        return _run_stipple_batch(args, options, tone, write)
+    t0 = time.perf_counter()
+    # everything that can be refused is refused before the computation
+    outputs = _checked_outputs(args)
+    image = _image_path(args.images[0])
+    gray = tone.adjust(load_gray(image, allow_large=args.allow_large))
+    h, w = gray.shape
+    n, tone_n = _tone_count(args, write, gray, args.n)
+    n = dots_for_image(w, h, n=n, density=args.density, dots_per_cm2=args.dots_per_cm2,
+                       **write.layout())
+    write = write.replace(png_scale=preview_scale(w, h, write.png_scale))
+    check_stipple_memory(w, h, n, supersample=options.supersample, png_scale=write.png_scale,
+                         device=args.device, outputs=outputs)
+    # the phases (for the progress total) follow n and the image size
+    plan = options.plan(n, w, h)
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in plan.phases))
+    try:
+        res = stipple(gray, n, options, device=args.device, callback=callback,
+                      verify=args.verify, profile=args.profile)
+    finally:
+        close()
+    res.params["tone"] = tone.params()  # recorded in the .npz and the --json params
+    summary = res.summary()
+    summary.update(image=str(image), tone_n=tone_n)
+    tail = _write_and_report(args, write, res, gray, outputs, summary, t0)
+    if res.engine == "exact" and not args.quiet:
+        print(f"{PROG}: note: no OpenCL device: stippled with the exact (scipy) engine",
+              file=sys.stderr)
+    if not args.quiet:
+        cert = res.certificate
+        print(f"{PROG}: {res.n} dots on {res.width}x{res.height} px, k = {res.k:.4g}, "
+              f"radii {summary['min_radius']:.3g}..{summary['max_radius']:.3g} px, "
+              f"certified {'valid' if cert.valid else 'INVALID'} (min gap {cert.min_gap:.3g} px), "
+              f"{summary['iterations']} iterations in {summary['seconds']:.3g} s{tail}",
+              file=sys.stderr)
+    return 0
+
+
+def _run_stipple_colors(args, options, tone, write, color):
+    """``diskpack stipple --colors/--pens``: one image, every pen's dots in one certified packing."""
+    from diskpack_cl.batch import dots_for_image
+    from diskpack_cl.color import load_rgb
+    from diskpack_cl.export import preview_scale
+    from diskpack_cl.image import ToneOptions
+    from diskpack_cl.memory import check_stipple_memory
+    from diskpack_cl.multipen import stipple_colors
+    from diskpack_cl.options import changed, flag_name
+
+    mono = [flag_name(k) for k in ("invert", "paper_tone") if getattr(options, k)]
+    mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
+    if mono:
+        raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
+    if _batch_mode(args, args.images, args.output):
+        return _run_stipple_batch(args, options, ToneOptions(), write, color.separation())
+    t0 = time.perf_counter()
+    outputs = _checked_outputs(args)
+    rgb = load_rgb(_image_path(args.images[0]))
+    H, W = rgb.shape[:2]
+    n = dots_for_image(W, H, n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
+                       **write.layout())
+    write = write.replace(png_scale=preview_scale(W, H, write.png_scale))
+    check_stipple_memory(W, H, n, supersample=options.supersample, png_scale=write.png_scale,
+                         device=args.device, outputs=outputs)
+    callback, close = _stipple_progress(args, sum(ph[1] for ph in options.plan(n, W, H).phases))
+    try:
+        res = stipple_colors(rgb, n, device=args.device, callback=callback,
+                             **color.separation(), **changed(options))
+    finally:
+        close()
+    summary = dict(res.summary(), image=str(args.images[0]))
+    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
+    if not args.quiet:
+        pens = ", ".join(f"{p['name']} {p['n']}" for p in summary["pens"])
+        print(f"{PROG}: {res.n} dots ({pens}) on {W}x{H} px, certified valid over all pens "
+              f"(min gap {res.certificate.min_gap:.3g} px), {summary['iterations']} iterations "
+              f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
+    return 0
+
+
+def _run_stipple_batch(args, options, tone, write, color=None):
+    from diskpack_cl.batch import stipple_many
+
+    batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
+                         options, n=args.n, density=args.density,
+                         dots_per_cm2=args.dots_per_cm2, recursive=args.recursive,
+                         allow_large=args.allow_large, write=write, tone=tone, color=color,
+                         **_batch_run(args))
+    return _report_batch(args, batch)

@@ -1,0 +1,101 @@
+"""Memory estimates of a stippling run, checked before the work.
+
+:func:`check_stipple_memory` refuses a raster (``supersample``) or a PNG
+preview (``png_scale``) that the machine's available memory or the OpenCL
+device cannot hold, naming the option to lower and the largest value that
+fits (:class:`MemoryLimit`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from .options import NamedOptionError
+
+__all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
+           "MemoryLimit", "available_memory", "check_stipple_memory"]
+
+# Peak bytes per unit of a stippling run (default schedule; PNG writer)
+HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
+DEVICE_BYTES_PER_CELL = 12     # labels, distances, neighbours (4 bytes each)
+HOST_BYTES_PER_PNG_PIXEL = 32  # ink coverage, gray values, the encoded image
+
+
+class MemoryLimit(NamedOptionError):
+    """A size that memory cannot hold; the message names the option to lower."""
+
+
+def available_memory():
+    """Bytes of memory the machine has available now (MemAvailable), or None."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _gib(b):
+    return f"{b / 2**30:.3g} GiB"
+
+
+def _raster_limits(free, device):
+    """``(bytes per raster cell, bytes available, what)`` of the machine and the device."""
+    from ._device import NoOpenCLError, get_context
+
+    limits = []
+    if free is not None:
+        limits.append((HOST_BYTES_PER_CELL, free, "memory available on this machine"))
+    try:
+        dev = get_context(device).devices[0]
+    except NoOpenCLError:
+        dev = None
+    if dev is not None:
+        limits += [(4, dev.max_mem_alloc_size, "the OpenCL device's largest buffer"),
+                   (DEVICE_BYTES_PER_CELL, dev.global_mem_size, "the OpenCL device's memory")]
+    return limits
+
+
+def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, device=None,
+                         outputs=(), free=None):
+    """Refuse, before the work, a raster or a PNG preview that memory cannot hold.
+
+    The raster (``supersample``, default automatic) is checked against the
+    machine's available memory (`free`, default :func:`available_memory`)
+    and the OpenCL device's largest buffer and global memory; a PNG among
+    `outputs` (``png_scale``) against the machine's memory.
+
+    Raises
+    ------
+    MemoryLimit
+        Naming the option to lower and the largest value that fits.
+    """
+    from .schedule import auto_supersample
+
+    free = available_memory() if free is None else free
+    s = supersample or auto_supersample(n, width, height)
+    cells = (s * width) * (s * height)
+    for per_cell, have, what in _raster_limits(free, device):
+        if cells * per_cell > have:
+            fit = math.isqrt(int(have // (per_cell * width * height)))
+            lower = (f"lower {{}} (at most {fit} here)" if fit >= 1 else
+                     "the image is too large even at {} 1: downscale it")
+            raise MemoryLimit(f"supersample {s} makes a {s * width}x{s * height} raster "
+                              f"needing {_gib(cells * per_cell)}, more than {what} "
+                              f"({_gib(have)}): {lower}", "supersample")
+    if free is None or png_scale is None or not any(
+            str(o).lower().endswith(".png") for o in outputs):
+        return
+    pw, ph = max(1, round(width * png_scale)), max(1, round(height * png_scale))
+    if pw * ph * HOST_BYTES_PER_PNG_PIXEL > free:
+        fit = math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (width * height))
+        raise MemoryLimit(f"{{}} {png_scale:g} makes a {pw}x{ph} PNG needing "
+                          f"{_gib(pw * ph * HOST_BYTES_PER_PNG_PIXEL)}, more than the memory "
+                          f"available ({_gib(free)}): lower {{}} (at most "
+                          f"{math.floor(fit * 10) / 10:g} here)", "png_scale", "png_scale")
