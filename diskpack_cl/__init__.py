@@ -12,6 +12,7 @@ from .domain import Domain
 from .geometry import certify_disks, exact_mic
 from .measures import normalized_radius
 from .relax import RadiusResult, RelaxResult, max_points_for_radius, relax_poisson
+from .poisson import PoissonDisk, PoissonDiskResult, poisson_disk
 from .sampling import dart_throwing, random_points
 from ._device import NoOpenCLError, describe, get_context, list_devices
 from .dithering import error_diffusion
@@ -22,7 +23,7 @@ from .image import load_gray, sample_image_path
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
-    "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
+    "RelaxResult", "relax_poisson", "PoissonDisk", "PoissonDiskResult", "poisson_disk", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
     "StippleResult", "error_diffusion", "stipple", "read_stipple", "write_stipple",
     "load_gray", "sample_image_path",
 ]

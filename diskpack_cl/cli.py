@@ -118,7 +118,25 @@ def _relax_options(p):
                    help="check every iteration against scipy (exact MICs, KD-tree rho); slow")
     p.add_argument("--profile", action="store_true",
                    help="time the OpenCL kernels with events (--json stage_seconds.kernel)")
+    p.add_argument("--allow-unreached", action="store_true",
+                   help=f"exit 0 when rho stops short of EPS (default: the set is written and "
+                        f"the exit status is {UNREACHED})")
+    p.add_argument("--box", default=None, metavar="WxH",
+                   help="a box [0,W] x [0,H] with walls instead of the unit torus, e.g. 2x1")
     _device_options(p)
+
+
+#: Exit status of a run whose rho (or distance) stopped short of its goal.
+UNREACHED = 3
+
+
+def _unreached(args, what):
+    """Exit status for a result short of its goal: UNREACHED, or 0 with --allow-unreached."""
+    if args.allow_unreached:
+        return 0
+    print(f"{PROG}: error: {what}; the set was written (--allow-unreached: exit 0)",
+          file=sys.stderr)
+    return UNREACHED
 
 
 def _batch_options(p):
@@ -211,13 +229,14 @@ def _progress(args, label):
 def _relax_and_write(points, args, *, extra_summary=None):
     """Relax `points`, write ``args.output``, report; return the exit status."""
     from diskpack_cl.io import write_points
+    from diskpack_cl.poisson import as_box
     from diskpack_cl.relax import relax_poisson
 
     callback, close = _progress(args, "relax")
     try:
         res = relax_poisson(points, args.eps, max_iter=_max_iter(args), backend=args.backend,
                             grid=args.grid, device=args.device, callback=callback,
-                            verify=args.verify, profile=args.profile)
+                            verify=args.verify, profile=args.profile, domain=as_box(args.box))
     finally:
         close()
     extra = {}
@@ -254,6 +273,9 @@ def _relax_and_write(points, args, *, extra_summary=None):
               f"stop: {res.stop_reason}); wrote {args.output}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary), flush=True)
+    if res.stop_reason != "eps":
+        return _unreached(args, f"rho {res.rho[-1]:.4f} did not reach --eps {args.eps:g} "
+                                f"(stop: {res.stop_reason})")
     return 0
 
 
@@ -287,6 +309,10 @@ def _add_poisson(subparsers):
     count = p.add_mutually_exclusive_group()
     count.add_argument("-n", type=_point_count, default=None, metavar="N",
                        help="number of points (default 1024; with --init FILE: the file's count)")
+    count.add_argument("--min-distance", type=_positive_float, default=None, metavar="D",
+                       help="instead of -n: the smallest distance between points (scipy's "
+                            "radius; twice the paper's radius R): as many points as D allows at "
+                            "rho <= --rho-max, relaxed once until they reach it")
     count.add_argument("--radius", type=_radius, default=None, metavar="R",
                        help="instead of -n: find the largest n whose relaxation reaches Poisson "
                             "disk radius R (half the minimum distance, 0 < R < 0.25; the paper's "
@@ -297,6 +323,14 @@ def _add_poisson(subparsers):
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
                    help="relative radius of the dart-throwing start (default 0.74)")
     p.add_argument("--seed", type=_nonnegative_int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
+    p.add_argument("--rho-max", type=_unit_open, default=0.8, metavar="RHO",
+                   help="with --min-distance: the largest rho D may ask for (default 0.8)")
+    p.add_argument("--mask", default=None, metavar="IMAGE",
+                   help="points only where the image is light (> 0.5 gray; the image spans "
+                        "--box, default: the image's aspect, longer side 1)")
+    p.add_argument("--density", default=None, metavar="IMAGE",
+                   help="variable spacing: more points where the image is dark (unequal disk "
+                        "packing; needs -n)")
     _output_options(p)
     _relax_options(p)
     g = _batch_options(p)
@@ -345,13 +379,18 @@ def _run_poisson_radius(args):
         "trials": res.trials, "seconds": float(res.seconds), "init": args.init,
         "output": str(args.output),
     }
+    _report(args, f"{res.n} points reach radius {res.radius:g} (achieved "
+                  f"{res.achieved_radius:.6g}, rho {res.rho:.4f}) after {len(res.trials)} trials "
+                  f"({res.seconds:.3g} s); wrote {args.output}", summary)
+    return 0
+
+
+def _report(args, line, summary):
+    """The summary line on stderr (unless --quiet) and the JSON line on stdout (--json)."""
     if not args.quiet:
-        print(f"{PROG}: {res.n} points reach radius {res.radius:g} (achieved "
-              f"{res.achieved_radius:.6g}, rho {res.rho:.4f}) after {len(res.trials)} trials "
-              f"({res.seconds:.3g} s); wrote {args.output}", file=sys.stderr)
+        print(f"{PROG}: {line}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary, default=json_default), flush=True)
-    return 0
 
 
 def _run_poisson(args):
@@ -365,6 +404,9 @@ def _run_poisson(args):
     check_points_path(args.output, for_writing=True)
     if args.radius is not None:
         return _run_poisson_radius(args)
+    if args.min_distance is not None or args.mask or args.density or (
+            args.box is not None and args.init in ("dart", "random")):
+        return _run_poisson_set(args)
     t0 = time.perf_counter()
     if args.seed is None:
         import numpy as np
@@ -374,13 +416,13 @@ def _run_poisson(args):
     info = {"init": args.init, "seed": args.seed}
     if args.init == "dart":
         n = 1024 if args.n is None else args.n
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings():
             warnings.simplefilter("always", DartThrowingWarning)
+            # printed as they come: a saturated radius is said at once
+            warnings.showwarning = lambda message, *_a, **_k: None if args.quiet else print(
+                f"{PROG}: warning: {message}", file=sys.stderr, flush=True)
             points, dart = dart_throwing(n, rel_radius=args.dart_radius, seed=args.seed,
                                          full_output=True)
-        for w in caught:
-            if not args.quiet:
-                print(f"{PROG}: warning: {w.message}", file=sys.stderr)
         info["dart_rel_radius"] = dart["rel_radius"]
     elif args.init == "random":
         points = random_points(1024 if args.n is None else args.n, seed=args.seed)
@@ -395,6 +437,57 @@ def _run_poisson(args):
     return _relax_and_write(points, args, extra_summary=info)
 
 
+def _field_image(args, path):
+    """``(array, box)`` of a --mask or --density image: light 1, dark 0; the box by default
+    has the image's aspect, longer side 1."""
+    from diskpack_cl.image import load_gray
+
+    gray = load_gray(_image_path(path))
+    if args.box is not None:
+        return gray, args.box
+    h, w = gray.shape
+    return gray, (w / max(w, h), h / max(w, h))
+
+
+def _run_poisson_set(args):
+    """``poisson`` with a box, a minimum distance, a mask or a density (:func:`poisson_disk`)."""
+    from diskpack_cl.io import write_points
+    from diskpack_cl.poisson import poisson_disk
+
+    if args.init not in ("dart", "random"):
+        raise ValueError("--box, --min-distance, --mask and --density make their own start set: "
+                         "leave --init out")
+    box, mask, density = args.box, None, None
+    if args.mask:
+        mask, box = _field_image(args, args.mask)
+    if args.density:
+        density, box = _field_image(args, args.density)
+        density = 1.0 - density
+    n = 1024 if args.n is None and args.min_distance is None else args.n
+    callback, close = _progress(args, "relax")
+    try:
+        res = poisson_disk(n, min_distance=args.min_distance, box=box, mask=mask, density=density,
+                           seed=args.seed, eps=args.eps, rho_max=args.rho_max,
+                           backend=args.backend, device=args.device, max_iter=_max_iter(args),
+                           callback=callback)
+    finally:
+        close()
+    write_points(args.output, res.points)
+    summary = {"n": int(len(res.points)), "box": [res.domain.width, res.domain.height],
+               "torus": res.domain.periodic, "rho": res.rho, "min_distance": res.min_distance,
+               "reached": res.reached, "stop_reason": res.stop_reason, "iterations": res.iterations,
+               "seconds": res.seconds, "init_seconds": res.start_seconds, "seed": args.seed,
+               "output": str(args.output)}
+    _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, rho "
+                  f"{res.rho:.4f} in {res.iterations} iterations ({res.seconds:.3g} s, stop: "
+                  f"{res.stop_reason}); wrote {args.output}", summary)
+    if not res.reached:
+        goal = (f"--min-distance {args.min_distance:g}" if args.min_distance is not None
+                else f"--eps {args.eps:g}")
+        return _unreached(args, f"the set did not reach {goal} (stop: {res.stop_reason})")
+    return 0
+
+
 def _add_relax(subparsers):
     p = subparsers.add_parser(
         "relax", help="relax a point file on the unit torus",
@@ -403,10 +496,20 @@ def _add_relax(subparsers):
     p.add_argument("inputs", nargs="+", metavar="IN",
                    help="point file (.npz, .npy, .csv, .txt, .xy); several make a batch "
                         "(-o a template such as out/{stem}.npz)")
+    p.add_argument("--columns", type=_columns, default=None, metavar="A,B",
+                   help="the two columns to read: header names (x,y) or indices (0,1); needed "
+                        "where a file has more coordinates (a z column)")
     _output_options(p)
     _relax_options(p)
     _batch_options(p)
     p.set_defaults(run=_run_relax)
+
+
+def _columns(text):
+    parts = [t.strip() for t in text.split(",")]
+    if len(parts) != 2 or not all(parts):
+        raise argparse.ArgumentTypeError(f"need two columns A,B, got {text!r}")
+    return tuple(int(t) if t.isdigit() else t for t in parts)
 
 
 def _run_relax(args):
@@ -415,7 +518,7 @@ def _run_relax(args):
     if _batch_mode(args, args.inputs, [args.output]):
         return _run_relax_batch(args)
     check_points_path(args.output, for_writing=True)
-    points = read_points(args.inputs[0], min_points=2)
+    points = read_points(args.inputs[0], min_points=2, columns=args.columns)
     return _relax_and_write(points, args, extra_summary={"input": str(args.inputs[0])})
 
 
@@ -1265,8 +1368,10 @@ def _run_stipple_batch(args):
 def _run_poisson_batch(args):
     from diskpack_cl.batch import poisson_many
 
-    if args.radius is not None:
-        raise ValueError("--radius makes one set; it does not combine with --count or a batch")
+    if args.radius is not None or args.min_distance is not None:
+        raise ValueError("--radius and --min-distance make one set; they do not combine with "
+                         "--count or a batch")
+    _single_only(args, "box", "mask", "density")
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
                          seed=args.seed, init=args.init, dart_radius=args.dart_radius,
                          eps=args.eps, max_iter=_max_iter(args), backend=args.backend,
@@ -1274,9 +1379,17 @@ def _run_poisson_batch(args):
     return _report_batch(args, batch)
 
 
+def _single_only(args, *names):
+    """Refuse options that batches do not take."""
+    given = [f"--{n}" for n in names if getattr(args, n, None) is not None]
+    if given:
+        raise ValueError(f"{', '.join(given)} make(s) one set: not with --count or a batch")
+
+
 def _run_relax_batch(args):
     from diskpack_cl.batch import relax_many
 
+    _single_only(args, "box", "columns")
     batch = relax_many(args.inputs, [args.output], eps=args.eps, max_iter=_max_iter(args),
                        backend=args.backend, grid=args.grid, **_batch_run(args))
     return _report_batch(args, batch)

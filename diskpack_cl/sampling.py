@@ -225,6 +225,10 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     while m < n:
         live = np.flatnonzero(state.alive)
         if not live.size or darts_level >= max_attempts:
+            if not shrinks:  # say so at once, not after the remaining shrinks
+                warnings.warn(f"dart throwing saturated at relative radius {rel_radius:g} with "
+                              f"{m} of {n} points placed; shrinking the radius by {shrink:g} a step",
+                              DartThrowingWarning, stacklevel=2)
             shrinks += 1
             rel *= shrink
             r = rel * hexagonal_radius(n)

@@ -52,8 +52,12 @@ def test_dart_throwing_default_rho_near_074():
 
 
 def test_dart_throwing_fallback_shrinks_and_warns():
-    with pytest.warns(DartThrowingWarning, match=r"could not place 200 points at relative radius 0\.95; shrank it"):
+    with pytest.warns(DartThrowingWarning) as caught:
         p, info = dart_throwing(200, rel_radius=0.95, seed=1, full_output=True)
+    first, last = (str(w.message) for w in caught)
+    # said at once, when the radius first saturates, and summed up at the end
+    assert first.startswith("dart throwing saturated at relative radius 0.95 with ")
+    assert last.startswith("dart throwing could not place 200 points at relative radius 0.95; shrank it")
     assert p.shape == (200, 2)
     assert info["shrinks"] >= 1 and info["rel_radius"] < 0.95
     assert info["rel_radius"] == pytest.approx(0.95 * 0.98 ** info["shrinks"])
