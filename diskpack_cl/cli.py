@@ -323,6 +323,9 @@ def _add_poisson(subparsers):
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
                    help="relative radius of the dart-throwing start (default 0.74)")
     p.add_argument("--seed", type=_nonnegative_int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
+    p.add_argument("--dim", type=int, choices=(2, 3), default=2,
+                   help="3: points in the unit 3-torus or a box WxHxD, relaxed to the centres of "
+                        "the largest spheres in their 3D Voronoi cells (rho against FCC)")
     p.add_argument("--rho-max", type=_unit_open, default=0.8, metavar="RHO",
                    help="with --min-distance: the largest rho D may ask for (default 0.8)")
     p.add_argument("--mask", default=None, metavar="IMAGE",
@@ -404,7 +407,7 @@ def _run_poisson(args):
     check_points_path(args.output, for_writing=True)
     if args.radius is not None:
         return _run_poisson_radius(args)
-    if args.min_distance is not None or args.mask or args.density or (
+    if args.min_distance is not None or args.mask or args.density or args.dim == 3 or (
             args.box is not None and args.init in ("dart", "random")):
         return _run_poisson_set(args)
     t0 = time.perf_counter()
@@ -469,11 +472,11 @@ def _run_poisson_set(args):
         res = poisson_disk(n, min_distance=args.min_distance, box=box, mask=mask, density=density,
                            seed=args.seed, eps=args.eps, rho_max=args.rho_max,
                            backend=args.backend, device=args.device, max_iter=_max_iter(args),
-                           callback=callback)
+                           callback=callback, dim=args.dim)
     finally:
         close()
     write_points(args.output, res.points)
-    summary = {"n": int(len(res.points)), "box": [res.domain.width, res.domain.height],
+    summary = {"n": int(len(res.points)), "box": res.domain.size.tolist(), "dim": args.dim,
                "torus": res.domain.periodic, "rho": res.rho, "min_distance": res.min_distance,
                "reached": res.reached, "stop_reason": res.stop_reason, "iterations": res.iterations,
                "seconds": res.seconds, "init_seconds": res.start_seconds, "seed": args.seed,

@@ -250,7 +250,7 @@ def check_points_path(path, *, for_writing=False):
     return suffix
 
 
-def validate_points(points, *, min_points=2, domain=None, source=None):
+def validate_points(points, *, min_points=2, domain=None, source=None, dims=(2,)):
     """Check a point array and return it as a C-contiguous ``(n, 2)`` float64 array.
 
     Parameters
@@ -265,6 +265,8 @@ def validate_points(points, *, min_points=2, domain=None, source=None):
         finite coordinates; callers wrap them onto the torus.
     source : str or path, optional
         Named in error messages (the file the points came from).
+    dims : tuple of int, optional
+        Accepted numbers of coordinates (``(2, 3)`` for the writers).
 
     Raises
     ------
@@ -289,8 +291,9 @@ def validate_points(points, *, min_points=2, domain=None, source=None):
         p = np.ascontiguousarray(p, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name}: points must be numeric ({exc})") from None
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"{name}: points must have shape (n, 2), got {p.shape}")
+    if p.ndim != 2 or p.shape[1] not in dims:
+        want = " or ".join(f"(n, {d})" for d in dims)
+        raise ValueError(f"{name}: points must have shape {want}, got {p.shape}")
     n = p.shape[0]
     if n < min_points:
         raise ValueError(f"{name}: has {n} point{'s' if n != 1 else ''}, "
@@ -447,7 +450,7 @@ def read_points(path, *, min_points=2, domain=None, columns=None):
 
 
 def write_points(path, points, /, **extra):
-    """Write an ``(n, 2)`` point array atomically; the format follows the extension.
+    """Write an ``(n, 2)`` (or 3D ``(n, 3)``) point array atomically; the format follows the extension.
 
     Parameters
     ----------
@@ -477,7 +480,7 @@ def write_points(path, points, /, **extra):
     ['points', 'rho']
     """
     suffix = check_points_path(path)
-    pts = validate_points(points, min_points=1, source=path)
+    pts = validate_points(points, min_points=1, source=path, dims=(2, 3))
     if "points" in extra:
         raise ValueError(f"{path}: 'points' is reserved; pass it as the points argument")
     if suffix == ".npz":
@@ -494,7 +497,7 @@ def write_points(path, points, /, **extra):
         raise ValueError(f"{path}: {suffix} files hold points only; "
                          f"use .npz or .csv to also store {', '.join(extra)}")
     columns = [pts]
-    names = ["x", "y"]
+    names = ["x", "y", "z"][:pts.shape[1]]
     for key, value in extra.items():
         col = np.asarray(value, dtype=np.float64)
         if col.shape != (pts.shape[0],):

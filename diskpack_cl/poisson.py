@@ -91,14 +91,25 @@ def as_box(box):
         return Domain.torus()
     if isinstance(box, Domain):
         return box
+    return Domain.rect(*box_sizes(box, "WxH"))
+
+
+def box_sizes(box, form):
+    """The sizes a box names (``"2x1"``, ``(2, 1)``), as many as `form` (``"WxH"``) has, each > 0.
+
+    Examples
+    --------
+    >>> box_sizes("2x1x0.5", "WxHxD")
+    [2.0, 1.0, 0.5]
+    """
     parts = box.lower().split("x") if isinstance(box, str) else list(np.ravel(box))
     try:
         size = [float(v) for v in parts]
     except (TypeError, ValueError):
-        raise ValueError(f"box must be 'torus', WxH or (W, H), got {box!r}") from None
-    if len(size) != 2 or not all(np.isfinite(v) and v > 0 for v in size):
-        raise ValueError(f"box must be two positive finite sizes (W, H), got {box!r}")
-    return Domain.rect(*size)
+        raise ValueError(f"box must be 'torus' or {form}, got {box!r}") from None
+    if len(size) != len(form.split("x")) or not all(np.isfinite(v) and v > 0 for v in size):
+        raise ValueError(f"box must be {form}: positive finite sizes, got {box!r}")
+    return size
 
 
 def count_for_distance(min_distance, area, rho_max=0.8):
@@ -212,7 +223,7 @@ def _region(mask, polygon, domain):
 
 def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None, density=None,
                  seed=None, eps=0.8, rho_max=0.8, backend="auto", device=None, max_iter=1000,
-                 patience=100, callback=None):
+                 patience=100, callback=None, dim=2):
     """A Poisson disk set by disk packing: a count or a minimum distance, torus or box.
 
     Parameters
@@ -243,6 +254,11 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         With `min_distance`: the largest rho the distance may ask for.
     backend, device, max_iter, patience, callback :
         Passed to :func:`diskpack_cl.relax_poisson`.
+    dim : {2, 3}
+        3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
+        centres of the maximal inscribed spheres of their 3D Voronoi cells
+        (:func:`diskpack_cl.poisson3.relax_poisson3`; rho normalized by the
+        FCC packing) from uniform random points; no mask or density.
 
     Returns
     -------
@@ -262,6 +278,14 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
     """
     if (n is None) == (min_distance is None):
         raise ValueError("give exactly one of n or min_distance")
+    options = dict(backend=backend, device=device, max_iter=max_iter, patience=patience,
+                   callback=callback)
+    if dim == 3:
+        if mask is not None or polygon is not None or density is not None:
+            raise ValueError("3D sets take no mask, polygon or density")
+        return _relaxed3(n, min_distance, box, seed, eps, rho_max, options)
+    if dim != 2:
+        raise ValueError(f"dim must be 2 or 3, got {dim!r}")
     domain = as_box(box)
     if density is not None:
         if min_distance is not None or mask is not None or polygon is not None:
@@ -282,9 +306,29 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         from ._checks import check_count
 
         n_all = max(2, int(round(check_count(n, 2) / share)))
-    return _relaxed(n_all, domain, eps, seed, inside, min_distance,
-                    dict(backend=backend, device=device, max_iter=max_iter, patience=patience,
-                         callback=callback))
+    return _relaxed(n_all, domain, eps, seed, inside, min_distance, options)
+
+
+def _relaxed3(n, distance, box, seed, eps, rho_max, options):
+    """The 3D :class:`PoissonDiskResult`: uniform start, relaxation to the spheres' centres."""
+    from ._checks import check_count
+    from .poisson3 import as_box3, fcc_radius, relax_poisson3
+    from .sampling import _rng
+
+    domain = as_box3(box)
+    if distance is not None:
+        n = int(np.floor(domain.volume * rho_max ** 3 / (4 * np.sqrt(2) * (0.5 * distance) ** 3)))
+        if n < 2:
+            raise ValueError(f"min_distance {distance:g} leaves {n} point(s) at rho <= {rho_max:g}")
+        eps = min(0.5 * distance / fcc_radius(n, domain.volume) * (1 + 1e-9), rho_max)
+    t0 = time.perf_counter()
+    start = _rng(seed).random((check_count(n, 2), 3)) * domain.size
+    t_start = time.perf_counter() - t0
+    res = relax_poisson3(start, eps, domain=domain, **options)
+    d_min = float(2 * res.rho[-1] * fcc_radius(n, domain.volume))
+    reached = bool(d_min >= distance) if distance is not None else bool(res.rho[-1] >= eps)
+    return PoissonDiskResult(res.points, domain, float(res.rho[-1]), d_min, reached,
+                             res.stop_reason, res.iterations, res.seconds, t_start, float(eps))
 
 
 def _relaxed(n, domain, eps, seed, inside, distance, options):
