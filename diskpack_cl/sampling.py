@@ -31,6 +31,11 @@ class DartThrowingWarning(UserWarning):
     """Dart throwing could not place n points at the requested radius and shrank it."""
 
 
+#: Relative radius at which maximal dart throwing saturates (0.77 to 0.78 with n):
+#: a larger request is said to be out of reach before any dart is thrown.
+DART_SATURATION = 0.78
+
+
 def _rng(seed):
     return seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
 
@@ -215,6 +220,12 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     rng = _rng(seed)
     rel = float(rel_radius)
     r = rel * hexagonal_radius(n)
+    warned = rel > DART_SATURATION
+    if warned:  # said at once, not after the darts of every shrink step
+        warnings.warn(f"relative radius {rel_radius:g} is above maximal dart throwing's "
+                      f"saturation (about {DART_SATURATION}): {n} points will not fit, the radius "
+                      f"shrinks by {shrink:g} a step until they do", DartThrowingWarning,
+                      stacklevel=2)
     pts = np.empty((n, 2), dtype=np.float64)
     m = 0
     darts_total = 0
@@ -225,7 +236,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     while m < n:
         live = np.flatnonzero(state.alive)
         if not live.size or darts_level >= max_attempts:
-            if not shrinks:  # say so at once, not after the remaining shrinks
+            if not (shrinks or warned):  # say so at once, not after the remaining shrinks
                 warnings.warn(f"dart throwing saturated at relative radius {rel_radius:g} with "
                               f"{m} of {n} points placed; shrinking the radius by {shrink:g} a step",
                               DartThrowingWarning, stacklevel=2)

@@ -247,7 +247,7 @@ def test_cli_saturated_darts_are_said_at_once(tmp_path, capsys):
     rc, cap = _cli(["poisson", "-n", "300", "--dart-radius", "0.95", "-o", str(tmp_path / "d.npz"),
                     "--seed", "1", "--backend", "exact"], capsys)
     lines = cap.err.splitlines()
-    assert rc == 0 and lines[0].startswith("diskpack: warning: dart throwing saturated")
+    assert rc == 0 and lines[0].startswith("diskpack: warning: relative radius 0.95 is above")
 
 
 def test_stall_counts_only_real_progress():
