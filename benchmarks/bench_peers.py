@@ -38,10 +38,14 @@ PEER_RHO = {2: {"scipy": 0.72, "poisson_disc": 0.72, "bridson": 0.66},
             3: {"scipy": 0.79, "poisson_disc": 0.79}}
 
 
+def _r_max(n, dim):
+    """Radius of the densest packing of n disks (hexagonal) or spheres (FCC) in the unit cube."""
+    return math.sqrt(1 / (2 * math.sqrt(3) * n)) if dim == 2 else (1 / (4 * math.sqrt(2) * n)) ** (1 / 3)
+
+
 def _min_distance(n, dim, rho):
-    """The minimum distance at which a sampler of normalized radius rho gives n points in the unit cube."""
-    r_max = math.sqrt(1 / (2 * math.sqrt(3) * n)) if dim == 2 else (1 / (4 * math.sqrt(2) * n)) ** (1 / 3)
-    return 2 * rho * r_max
+    """The minimum distance at which a sampler of normalized radius rho gives n points."""
+    return 2 * rho * _r_max(n, dim)
 
 
 def run_sampler(name, n, dim, torus, seed):
@@ -76,9 +80,9 @@ def measures(pts, dim, torus):
     from scipy.spatial import cKDTree
 
     n = len(pts)
-    d, _ = cKDTree(np.mod(pts, 1.0) if torus else pts, boxsize=1.0 if torus else None).query(pts if not torus else np.mod(pts, 1.0), k=2)
-    r_max = math.sqrt(1 / (2 * math.sqrt(3) * n)) if dim == 2 else (1 / (4 * math.sqrt(2) * n)) ** (1 / 3)
-    out = {"n": n, "rho": 0.5 * float(d[:, 1].min()) / r_max}
+    X = np.mod(pts, 1.0) if torus else pts
+    d, _ = cKDTree(X, boxsize=1.0 if torus else None).query(X, k=2)
+    out = {"n": n, "rho": 0.5 * float(d[:, 1].min()) / _r_max(n, dim)}
     if dim == 2:
         from diskpack_cl.analysis import periodogram, radial_power
 
@@ -99,7 +103,7 @@ def main():
     args = ap.parse_args()
     names = (args.samplers.split(",") if args.samplers else
              ["diskpack", "scipy", "poisson_disc"] + (["bridson"] if args.dim == 2 else []))
-    print(f"| d | n asked | domain | sampler | n | seconds | rho |" + (" low | peak |" if args.dim == 2 else ""))
+    print("| d | n asked | domain | sampler | n | seconds | rho |" + (" low | peak |" if args.dim == 2 else ""))
     for n in (int(s) for s in args.sizes.split(",")):
         for torus in (True, False):
             for name in names:
@@ -112,10 +116,10 @@ def main():
                     except TimeoutError:
                         for p in pool._processes.values():   # a peer past the timeout is stopped
                             p.terminate()
-                        print(f"| {args.dim} | {n} | {'torus' if torus else 'box'} | {name} | - | > {args.timeout:g} | - |")
+                        print(f"| {args.dim} | {n} | box | {name} | - | > {args.timeout:g} | - |")
                         continue
-                row = {"dim": args.dim, "asked": n, "domain": "torus" if torus else "box", "sampler": name,
-                       "seconds": sec, **measures(pts, args.dim, torus)}
+                row = {"dim": args.dim, "asked": n, "domain": "torus" if torus else "box",
+                       "sampler": name, "seconds": sec, **measures(pts, args.dim, torus)}
                 extra = f" {row['low']:.3f} | {row['peak']:.2f} |" if args.dim == 2 else ""
                 print(f"| {args.dim} | {n} | {row['domain']} | {name} | {row['n']} | {sec:.3g} | "
                       f"{row['rho']:.3f} |{extra}", flush=True)

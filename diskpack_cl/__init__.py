@@ -23,7 +23,8 @@ from .image import load_gray, sample_image_path
 __all__ = [
     "Domain", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
-    "RelaxResult", "relax_poisson", "PoissonDisk", "PoissonDiskResult", "poisson_disk", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
+    "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
+    "PoissonDisk", "PoissonDiskResult", "poisson_disk",
     "StippleResult", "error_diffusion", "stipple", "read_stipple", "write_stipple",
     "load_gray", "sample_image_path",
 ]

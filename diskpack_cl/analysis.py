@@ -145,10 +145,9 @@ def periodogram(points_or_list, *, kmax=None, method="auto"):
         the mean number of points: about twice the frequency of the blue-noise
         peak, which sits near ``sqrt(n)``.
     method : {"auto", "direct", "nufft"}
-        ``direct``: the exact Fourier sums, O(n kmax^2); ``nufft``: a
-        non-uniform FFT (Gaussian gridding with its exact deconvolution,
-        O(n + kmax^2 log kmax), power within about 1e-8 of the direct
-        sums); ``auto``: nufft where ``n kmax^2`` exceeds 2e8.
+        ``direct``: exact sums, O(n kmax^2); ``nufft``: :func:`_nufft_power`,
+        O(n + kmax^2 log kmax), within about 1e-8 of them; ``auto``: nufft
+        where ``n (2 kmax + 1)^2`` exceeds 2e8.
 
     Returns
     -------
@@ -165,10 +164,9 @@ def periodogram(points_or_list, *, kmax=None, method="auto"):
     ``Ey.T @ Ex``: O(n kmax^2) work in BLAS, no Python loop over frequencies.
     Only the half plane ky >= 0 is computed (``P(-k) = P(k)`` for real
     points). Phases are reduced modulo 1 before the exponential, so the sums
-    are accurate to float64 round-off.  The non-uniform FFT
-    (:func:`_nufft_power`) spreads the points with a Gaussian onto a grid
-    twice as fine as the spectrum, takes one real FFT and divides by the
-    Gaussian's Fourier transform (Greengard and Lee 2004).
+    are accurate to float64 round-off.  The non-uniform FFT spreads the
+    points with a Gaussian onto a grid twice as fine as the spectrum, takes
+    one real FFT and divides by the Gaussian's transform.
 
     References
     ----------

@@ -271,7 +271,8 @@ def refine_basis(X, domain, codes, tol=1e-9):
     ok = np.abs(np.linalg.det(A)) > 1e-12
     A[~ok] = np.eye(4)
     x = np.linalg.solve(A, b[..., None])[..., 0]
-    lam = np.linalg.solve(np.swapaxes(A, 1, 2), np.broadcast_to([0.0, 0, 0, 1], (len(X), 4))[..., None])[..., 0]
+    e4 = np.broadcast_to([0.0, 0.0, 0.0, 1.0], (len(X), 4))[..., None]
+    lam = np.linalg.solve(np.swapaxes(A, 1, 2), e4)[..., 0]
     ok &= np.all(lam >= -tol, axis=1)
     return x[:, :3], x[:, 3], ok
 

@@ -296,17 +296,22 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         if domain.periodic:
             raise ValueError("a mask or polygon needs a box (box='WxH')")
         inside, share = _region(mask, polygon, domain)
-    if min_distance is not None:
-        n_all = count_for_distance(float(min_distance), domain.area, rho_max)
-        if n_all < 2:
-            raise ValueError(f"min_distance {min_distance:g} leaves {n_all} point(s) in the box "
-                             f"at rho <= {rho_max:g}")
-        eps = min(0.5 * min_distance / hexagonal_radius(n_all, domain.area) * (1 + 1e-9), rho_max)
-    else:
-        from ._checks import check_count
-
-        n_all = max(2, int(round(check_count(n, 2) / share)))
+    n_all, eps = _count_and_eps(n, min_distance, domain.area, share, eps, rho_max)
     return _relaxed(n_all, domain, eps, seed, inside, min_distance, options)
+
+
+def _count_and_eps(n, distance, area, share, eps, rho_max):
+    """Points to relax in the box and the rho to reach: from n (scaled up by the mask's
+    share of the box) or from the minimum distance (the rho it means for that count)."""
+    from ._checks import check_count
+
+    if distance is None:
+        return max(2, int(round(check_count(n, 2) / share))), eps
+    n_all = count_for_distance(float(distance), area, rho_max)
+    if n_all < 2:
+        raise ValueError(f"min_distance {distance:g} leaves {n_all} point(s) in the box "
+                         f"at rho <= {rho_max:g}")
+    return n_all, min(0.5 * distance / hexagonal_radius(n_all, area) * (1 + 1e-9), rho_max)
 
 
 def _relaxed3(n, distance, box, seed, eps, rho_max, options):

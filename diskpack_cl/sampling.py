@@ -156,6 +156,16 @@ def _first_come(cand, d):
     return state == 1
 
 
+def _beyond_saturation(rel, n, shrink):
+    """Warn at once (before any dart) when `rel` is past the saturation; True if it is."""
+    if rel <= DART_SATURATION:
+        return False
+    warnings.warn(f"relative radius {rel:g} is above maximal dart throwing's saturation (about "
+                  f"{DART_SATURATION}): {n} points will not fit, the radius shrinks by {shrink:g} "
+                  f"a step until they do", DartThrowingWarning, stacklevel=3)
+    return True
+
+
 def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.98,
                   full_output=False):
     """Dart throwing on the unit torus at a relative radius.
@@ -220,12 +230,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     rng = _rng(seed)
     rel = float(rel_radius)
     r = rel * hexagonal_radius(n)
-    warned = rel > DART_SATURATION
-    if warned:  # said at once, not after the darts of every shrink step
-        warnings.warn(f"relative radius {rel_radius:g} is above maximal dart throwing's "
-                      f"saturation (about {DART_SATURATION}): {n} points will not fit, the radius "
-                      f"shrinks by {shrink:g} a step until they do", DartThrowingWarning,
-                      stacklevel=2)
+    warned = _beyond_saturation(rel, n, shrink)
     pts = np.empty((n, 2), dtype=np.float64)
     m = 0
     darts_total = 0
