@@ -258,7 +258,7 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
         centres of the maximal inscribed spheres of their 3D Voronoi cells
         (:func:`diskpack_cl.poisson3.relax_poisson3`; rho normalized by the
-        FCC packing) from uniform random points; no mask or density.
+        FCC packing) from a 3D dart-throwing start; no mask or density.
 
     Returns
     -------
@@ -315,10 +315,9 @@ def _count_and_eps(n, distance, area, share, eps, rho_max):
 
 
 def _relaxed3(n, distance, box, seed, eps, rho_max, options):
-    """The 3D :class:`PoissonDiskResult`: uniform start, relaxation to the spheres' centres."""
+    """The 3D :class:`PoissonDiskResult`: dart throwing, relaxation to the spheres' centres."""
     from ._checks import check_count
-    from .poisson3 import as_box3, fcc_radius, relax_poisson3
-    from .sampling import _rng
+    from .poisson3 import as_box3, dart_throwing3, fcc_radius, relax_poisson3
 
     domain = as_box3(box)
     if distance is not None:
@@ -327,7 +326,7 @@ def _relaxed3(n, distance, box, seed, eps, rho_max, options):
             raise ValueError(f"min_distance {distance:g} leaves {n} point(s) at rho <= {rho_max:g}")
         eps = min(0.5 * distance / fcc_radius(n, domain.volume) * (1 + 1e-9), rho_max)
     t0 = time.perf_counter()
-    start = _rng(seed).random((check_count(n, 2), 3)) * domain.size
+    start = dart_throwing3(check_count(n, 2), domain, seed=seed)
     t_start = time.perf_counter() - t0
     res = relax_poisson3(start, eps, domain=domain, **options)
     d_min = float(2 * res.rho[-1] * fcc_radius(n, domain.volume))

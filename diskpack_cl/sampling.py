@@ -135,13 +135,14 @@ class _Darts:
         return bad
 
 
-def _first_come(cand, d):
+def _first_come(cand, d, boxsize=1.0):
     """Sequential acceptance inside one batch: a dart is kept unless an earlier kept
-    dart of the batch lies closer than `d` (vectorized rounds, no per-dart loop)."""
+    dart of the batch lies closer than `d` (vectorized rounds, no per-dart loop);
+    `boxsize`: the torus (any dimension), or None in a box."""
     from scipy.spatial import cKDTree
 
     m = len(cand)
-    pairs = cKDTree(cand, boxsize=1.0).query_pairs(d, output_type="ndarray")
+    pairs = cKDTree(cand, boxsize=boxsize).query_pairs(d, output_type="ndarray")
     if not len(pairs):
         return np.ones(m, dtype=bool)
     pi, pj = pairs.min(axis=1), pairs.max(axis=1)

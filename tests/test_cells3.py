@@ -6,7 +6,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl.cells3 import CellMIC3, Domain3, certify_mis, exact_mis, inscribed_sphere_linprog
-from diskpack_cl.poisson3 import FCC_DENSITY, as_box3, fcc_radius, normalized_radius3, relax_poisson3
+from diskpack_cl.poisson3 import (FCC_DENSITY, as_box3, dart_throwing3, fcc_radius, normalized_radius3,
+                                  relax_poisson3)
 
 SHIFTS = np.array(np.meshgrid(*[[-1, 0, 1]] * 3, indexing="ij")).reshape(3, -1).T
 
@@ -147,3 +148,10 @@ def test_poisson_disk_3d_and_cli(tmp_path, capsys, ctx):
         read_points(out)
     with pytest.raises(ValueError, match="no mask"):
         poisson_disk(10, dim=3, mask=np.ones((2, 2)))
+
+
+@pytest.mark.parametrize("dom", [Domain3.torus(), Domain3.box(1, 2, 0.5)])
+def test_dart_throwing3_keeps_its_distance(dom):
+    p = dart_throwing3(400, dom, rel_radius=0.7, seed=np.random.default_rng(3))
+    assert p.shape == (400, 3) and np.all(p >= 0) and np.all(p <= dom.size)
+    assert _brute_rho(p, dom) >= 0.7
