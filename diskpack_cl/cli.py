@@ -303,9 +303,11 @@ def _run_devices(args):
 
 def _add_poisson(subparsers):
     p = subparsers.add_parser(
-        "poisson", help="make a Poisson disk set on the unit torus",
+        "poisson", help="make a Poisson disk set on the unit torus, in a box, 2D or 3D",
         description="Make a start set (dart throwing, uniform random or a file) on the unit "
-                    "torus and relax it by disk packing until rho >= EPS (paper Algorithm 1).")
+                    "torus (or in a --box, or in 3D with --dim 3) and relax it by disk packing "
+                    "until rho >= EPS (paper Algorithm 1). Exit status 3 when rho stops short "
+                    "of EPS (the set is written; --allow-unreached: 0).")
     count = p.add_mutually_exclusive_group()
     count.add_argument("-n", type=_point_count, default=None, metavar="N",
                        help="number of points (default 1024; with --init FILE: the file's count)")
