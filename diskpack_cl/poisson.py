@@ -133,7 +133,9 @@ def start_points(n, domain, seed=None):
     """A dart-throwing start set of `n` points on the torus or in a box.
 
     In a box ``W x H`` the darts are thrown on a square torus of side
-    ``max(W, H)`` with enough points that at least `n` fall in the box; the
+    ``max(W, H)`` with enough points that at least `n` fall in the box
+    inset by a disk radius (where relaxed points end up: the walls push
+    them that far in, so the relaxation saves most of its iterations); the
     box keeps those and drops its surplus at random (so its spacing is at
     least the torus set's).
 
@@ -147,14 +149,15 @@ def start_points(n, domain, seed=None):
     rng = _rng(seed)
     if domain.periodic:
         return dart_throwing(n, seed=rng)
-    side = max(domain.width, domain.height)
-    share = domain.area / side ** 2
-    m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) / share))
+    inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
+    inner = domain.size - 2.0 * inset
+    side = max(inner)
+    m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
     while True:
         pts = dart_throwing(m, seed=rng) * side
-        pts = pts[np.all(pts <= domain.size, axis=1)]
+        pts = pts[np.all(pts <= inner, axis=1)]
         if len(pts) >= n:
-            return pts[np.sort(rng.choice(len(pts), n, replace=False))]
+            return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
         m = int(m * 1.1) + 1  # pragma: no cover - 4 sigma short
 
 

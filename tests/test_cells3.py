@@ -153,5 +153,6 @@ def test_poisson_disk_3d_and_cli(tmp_path, capsys, ctx):
 @pytest.mark.parametrize("dom", [Domain3.torus(), Domain3.box(1, 2, 0.5)])
 def test_dart_throwing3_keeps_its_distance(dom):
     p = dart_throwing3(400, dom, rel_radius=0.7, seed=np.random.default_rng(3))
-    assert p.shape == (400, 3) and np.all(p >= 0) and np.all(p <= dom.size)
+    inset = 0.0 if dom.periodic else 0.7 * fcc_radius(400, dom.volume)
+    assert p.shape == (400, 3) and np.all(p >= inset) and np.all(p <= dom.size - inset)
     assert _brute_rho(p, dom) >= 0.7
