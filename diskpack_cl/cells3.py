@@ -25,7 +25,8 @@ from ._device import describe, get_context, group_size, padded
 from ._kernels import build_program
 from .cells import _keep_freed_memory, has_fp64
 
-__all__ = ["Domain3", "CellMIC3", "MIS", "exact_mis", "certify_mis", "inscribed_sphere_linprog"]
+__all__ = ["Domain3", "CellMIC3", "MIS", "exact_mis", "certify_mis", "inscribed_sphere_linprog",
+           "refine_basis"]
 
 CHUNK = 1 << 16  # work items per enqueue
 _FIRST_K = 24    # sites per cell in the certificate's first pass
@@ -266,6 +267,13 @@ def refine_basis(X, domain, codes, tol=1e-9):
     Returns ``(q (n, 3), R (n,), ok (n,))``: ok where the basis is regular
     and dual feasible (multipliers >= -tol), so R bounds the optimum from
     above; with the primal certificate (:func:`certify_mis`) it is optimal.
+
+    Examples
+    --------
+    >>> X = np.array([[0.5, 0.5, 0.5]])    # one site in the unit box: four walls
+    >>> q, R, ok = refine_basis(X, Domain3.box(1, 1, 1), np.array([[-1, -2, -3, -5]]))
+    >>> float(R[0]), bool(ok[0])
+    (0.5, True)
     """
     A, b = _basis_rows(X, domain, codes)
     ok = np.abs(np.linalg.det(A)) > 1e-12
