@@ -256,8 +256,8 @@ def exact_mis(points, domain, cells=None, *, k=64):
         todo, k = todo[~good], 2 * k
     # ill-conditioned cells (a tight cluster's nearly parallel planes) may keep
     # linprog's answer, within its tolerance (1e-7): counted, not hidden
-    left = len(todo) and int(np.count_nonzero(~certify_mis(X, centers[todo], radii[todo], domain,
-                                                           cells=cells[todo])))
+    left = len(todo) and int(np.count_nonzero(~certify_mis(
+        X, centers[todo], radii[todo], domain, cells=cells[todo], k=min(27 * len(X), 2048))))
     return MIS(centers, radii, {"linprog": int(len(cells)), "uncertified": int(left)})
 
 
