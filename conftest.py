@@ -40,6 +40,7 @@ OPENCL_DOCTESTS = {
     "diskpack_cl._device.group_size",
     "diskpack_cl.raster.PowerRaster",
     "diskpack_cl.cells.CellMIC",
+    "diskpack_cl.cells3.CellMIC3",
 }
 
 

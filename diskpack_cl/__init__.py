@@ -12,6 +12,7 @@ from .domain import Domain
 from .geometry import CertificateError, certify_disks, exact_mic
 from .measures import normalized_radius
 from .relax import RadiusResult, RelaxOptions, RelaxResult, max_points_for_radius, relax_poisson
+from .poisson import PoissonDisk, PoissonDiskResult, poisson_disk
 from .sampling import dart_throwing, random_points
 from ._device import NoOpenCLError, describe, get_context, list_devices
 from .dithering import error_diffusion
@@ -25,6 +26,7 @@ __all__ = [
     "Domain", "CertificateError", "certify_disks", "exact_mic", "normalized_radius",
     "NoOpenCLError", "describe", "get_context", "list_devices",
     "RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
+    "PoissonDisk", "PoissonDiskResult", "poisson_disk",
     "StippleOptions", "StippleResult", "error_diffusion", "stipple", "read_stipple",
     "write_stipple", "WriteOptions", "ToneOptions", "load_gray", "sample_image_path",
     "ColorStippleResult", "stipple_colors",

@@ -250,7 +250,7 @@ def check_points_path(path, *, for_writing=False):
     return suffix
 
 
-def validate_points(points, *, min_points=2, domain=None, source=None):
+def validate_points(points, *, min_points=2, domain=None, source=None, dims=(2,)):
     """Check a point array and return it as a C-contiguous ``(n, 2)`` float64 array.
 
     Parameters
@@ -265,6 +265,8 @@ def validate_points(points, *, min_points=2, domain=None, source=None):
         finite coordinates; callers wrap them onto the torus.
     source : str or path, optional
         Named in error messages (the file the points came from).
+    dims : tuple of int, optional
+        Accepted numbers of coordinates (``(2, 3)`` for the writers).
 
     Raises
     ------
@@ -289,8 +291,9 @@ def validate_points(points, *, min_points=2, domain=None, source=None):
         p = np.ascontiguousarray(p, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name}: points must be numeric ({exc})") from None
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"{name}: points must have shape (n, 2), got {p.shape}")
+    if p.ndim != 2 or p.shape[1] not in dims:
+        want = " or ".join(f"(n, {d})" for d in dims)
+        raise ValueError(f"{name}: points must have shape {want}, got {p.shape}")
     n = p.shape[0]
     if n < min_points:
         raise ValueError(f"{name}: has {n} point{'s' if n != 1 else ''}, "
@@ -312,9 +315,28 @@ def validate_points(points, *, min_points=2, domain=None, source=None):
     return p
 
 
-def _read_text(path, suffix):
-    """Parse a csv/txt/xy file with numpy's C reader; return a float array."""
-    usecols = None
+def _header_columns(path, names, columns):
+    """Indices of the columns to read from a .csv header (x and y unless `columns` names others)."""
+    if columns is None:
+        if "z" in names:
+            raise ValueError(f"{path}: has a z column (3D points?); these are read as 2D: choose "
+                             f"two columns (--columns x,y, or columns=('x', 'y'))")
+        columns = ("x", "y")
+    if not isinstance(columns[0], str):
+        return tuple(columns)
+    missing = [c for c in columns if c.lower() not in names]
+    if missing:
+        raise ValueError(f"{path}: no column {missing[0]!r} (columns: {','.join(names)})")
+    return tuple(names.index(c.lower()) for c in columns)
+
+
+def _read_text(path, suffix, columns=None):
+    """Parse a csv/txt/xy file with numpy's C reader; return a float array.
+
+    `columns`: two column names (a .csv header) or indices to read; a .csv
+    header with a ``z`` column (3D points) needs them.
+    """
+    usecols = None if columns is None or isinstance(columns[0], str) else tuple(columns)
     skiprows = 0
     delimiter = "," if suffix == ".csv" else None
     with open(path, encoding="utf-8", errors="strict") as fh:
@@ -335,7 +357,7 @@ def _read_text(path, suffix):
                     raise ValueError(
                         f"{path}: malformed .csv file: header must name columns x,y, "
                         f"got {text[:60]!r}") from None
-                usecols = (names.index("x"), names.index("y"))
+                usecols = _header_columns(path, names, columns)
                 skiprows = lineno + 1
             break
     try:
@@ -351,7 +373,7 @@ def _read_text(path, suffix):
     return data
 
 
-def read_points(path, *, min_points=2, domain=None):
+def read_points(path, *, min_points=2, domain=None, columns=None):
     """Read an ``(n, 2)`` float64 point array from a ``.npz/.npy/.csv/.txt/.xy`` file.
 
     Parameters
@@ -362,6 +384,10 @@ def read_points(path, *, min_points=2, domain=None):
         Smallest accepted number of points.
     domain : diskpack_cl.Domain, optional
         Passed to :func:`validate_points`.
+    columns : pair of str or int, optional
+        The two columns to read: names of a ``.csv`` header or indices (any
+        format).  Needed where a file has more coordinates (a ``.csv`` with
+        a ``z`` column, an array of three columns), which are refused.
 
     Returns
     -------
@@ -410,19 +436,21 @@ def read_points(path, *, min_points=2, domain=None):
                     raise ValueError(f"{path}: unreadable .npy file: not a numpy array file")
             data = np.load(p, allow_pickle=False)
         else:
-            data = _read_text(p, suffix)
+            data = _read_text(p, suffix, columns)
+        if columns is not None and suffix in (".npz", ".npy"):
+            data = np.asarray(data)[:, list(columns)]
     except ValueError as exc:
         msg = str(exc)
         if not msg.startswith(str(path)):
             msg = f"{path}: unreadable {suffix} file: {msg}"
         raise ValueError(msg) from None
-    except (OSError, EOFError, zipfile.BadZipFile, UnicodeDecodeError) as exc:
+    except (OSError, EOFError, zipfile.BadZipFile, UnicodeDecodeError, IndexError) as exc:
         raise ValueError(f"{path}: unreadable {suffix} file: {exc}") from None
     return validate_points(data, min_points=min_points, domain=domain, source=path)
 
 
 def write_points(path, points, /, **extra):
-    """Write an ``(n, 2)`` point array atomically; the format follows the extension.
+    """Write an ``(n, 2)`` (or 3D ``(n, 3)``) point array atomically; the format follows the extension.
 
     Parameters
     ----------
@@ -452,7 +480,7 @@ def write_points(path, points, /, **extra):
     ['points', 'rho']
     """
     suffix = check_points_path(path)
-    pts = validate_points(points, min_points=1, source=path)
+    pts = validate_points(points, min_points=1, source=path, dims=(2, 3))
     if "points" in extra:
         raise ValueError(f"{path}: 'points' is reserved; pass it as the points argument")
     if suffix == ".npz":
@@ -469,7 +497,7 @@ def write_points(path, points, /, **extra):
         raise ValueError(f"{path}: {suffix} files hold points only; "
                          f"use .npz or .csv to also store {', '.join(extra)}")
     columns = [pts]
-    names = ["x", "y"]
+    names = ["x", "y", "z"][:pts.shape[1]]
     for key, value in extra.items():
         col = np.asarray(value, dtype=np.float64)
         if col.shape != (pts.shape[0],):

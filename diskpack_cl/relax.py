@@ -21,7 +21,7 @@ from .options import check_fields, option
 from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
 __all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
-           "RadiusResult"]
+           "RadiusResult", "STALL_GAIN"]
 
 #: Iteration cap of :func:`relax_poisson` when none is given.
 MAX_ITER = 1000
@@ -54,6 +54,12 @@ class RelaxOptions:
         """The keyword arguments of :func:`relax_poisson`."""
         return {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
                 "backend": self.backend, "grid": self.grid}
+
+#: Progress that counts: within ``patience`` iterations rho must grow by this
+#: share of itself or of its gap to eps (the smaller), or the run stops as
+#: ``"stalled"``; a set creeping towards a rho it cannot reach stops instead
+#: of running to ``max_iter``, a tiny cluster that grows geometrically goes on.
+STALL_GAIN = 1e-3
 
 
 @dataclass
@@ -100,7 +106,7 @@ class RelaxResult:
         return self.seconds / max(self.iterations, 1)
 
 
-def _check_points(points):
+def _check_points(points, domain):
     X = np.array(points, dtype=np.float64)
     if X.ndim != 2 or X.shape[1] != 2:
         raise ValueError(f"points must have shape (n, 2), got {X.shape}")
@@ -109,23 +115,32 @@ def _check_points(points):
     bad = ~np.all(np.isfinite(X), axis=1)
     if bad.any():
         raise ValueError(f"{bad.sum()} point(s) have NaN or infinite coordinates (first: row {np.argmax(bad)})")
-    X = Domain.torus().wrap(X)
-    dup = coincident_pairs(X)
+    if domain.periodic:
+        X = domain.wrap(X)
+    else:
+        out = ~np.all((X >= 0) & (X <= domain.size), axis=1)
+        if out.any():
+            raise ValueError(f"{out.sum()} point(s) lie outside the box {domain.width:g} x "
+                             f"{domain.height:g} (first: row {np.argmax(out)})")
+    dup = coincident_pairs(X, domain)
     if len(dup):
+        where = "on the torus" if domain.periodic else "in the box"
         shown = ", ".join(f"{i}={j}" for i, j in dup[:5])
-        raise ValueError(f"{len(dup)} pair(s) of coincident points on the torus (rows {shown}); "
+        raise ValueError(f"{len(dup)} pair(s) of coincident points {where} (rows {shown}); "
                          "remove duplicates first")
     return X
 
 
 def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, device=None,
-                  callback=None, patience=100, route="auto", verify=False, profile=False):
-    """Relax a point set on the unit torus by disk packing until rho >= eps.
+                  callback=None, patience=100, route="auto", verify=False, profile=False,
+                  domain=None):
+    """Relax a point set on the unit torus (or in a box) by disk packing until rho >= eps.
 
     Parameters
     ----------
     points : (n, 2) array_like
-        Start set; coordinates outside [0, 1) are wrapped onto the torus.
+        Start set; on a torus, coordinates outside it are wrapped; in a box
+        every point must lie inside.
     eps : float
         Target normalized Poisson disk radius, in (0, 1).  The paper uses 0.8.
     max_iter : int
@@ -143,7 +158,8 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     callback : callable, optional
         ``callback(iteration, rho)`` after each iteration.
     patience : int
-        Stop as ``"stalled"`` when rho has not grown for this many iterations.
+        Stop as ``"stalled"`` when rho has not grown by :data:`STALL_GAIN`
+        of itself or of its gap to `eps` in this many iterations.
     route : {"auto", "cells", "raster"}
         OpenCL route: the float64 per-cell kernel (default where the device
         has float64) or the float32 raster estimate refined on the host.
@@ -153,6 +169,13 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         rho against a scipy KD-tree; raises RuntimeError on a mismatch.
     profile : bool
         Profile the OpenCL kernels (``timings["kernel"]``).
+    domain : Domain, optional
+        ``Domain.torus()`` (default) or a box ``Domain.rect(W, H)``: there
+        each point moves to the centre of the largest disk inside its
+        Voronoi cell clipped to the box (the walls are exact constraints),
+        and rho is normalized by the box's area.  There rho may drop in
+        an iteration (a wall cuts the disk a cell had around its site);
+        the smallest MIC radius still never does after the first.
 
     Returns
     -------
@@ -166,32 +189,32 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     >>> bool(res.rho[-1] >= 0.75), res.stop_reason
     (True, 'eps')
     """
-    X = _check_points(points)
+    dom = Domain.torus() if domain is None else domain
+    X = _check_points(points, dom)
     if not (0.0 < eps < 1.0):
         raise ValueError(f"eps must be in (0, 1), got {eps}")
     if int(max_iter) < 0:
         raise ValueError(f"max_iter must be >= 0, got {max_iter}")
     n = len(X)
-    dom = Domain.torus()
     shape = None if grid is None else (int(grid), int(grid))
     engine = make_engine(dom, n, backend, device=device, grid=shape, route=route, profile=profile)
     timings, stats = {}, {"engine": engine.name}
     if engine.fallback:
         stats["fallback"] = engine.fallback
     t_start = time.perf_counter()
-    X, rho, it, reason = _iterate(engine, X, eps, int(max_iter), patience, callback, verify,
+    X, rho, it, reason = _iterate(engine, dom, X, eps, int(max_iter), patience, callback, verify,
                                   timings, stats)
     seconds = time.perf_counter() - t_start
-    _certify_rho(X, rho[-1])
+    _certify_rho(X, rho[-1], dom)
     return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
                        "exact" if engine.name == "exact" else "opencl", engine.device, stats)
 
 
-def _iterate(engine, X, eps, max_iter, patience, callback, verify, timings, stats):
+def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings, stats):
     """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason)``."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     step = _mic(engine, X, timings, stats) if engine.gives_nn else None
-    rho = [_rho(X, step, verify)]
+    rho = [_rho(X, step, verify, dom)]
     best_at = 0
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
@@ -199,13 +222,13 @@ def _iterate(engine, X, eps, max_iter, patience, callback, verify, timings, stat
         it += 1
         step = step or _mic(engine, X, timings, stats)
         if verify:
-            _verify_step(X, step)
+            check_against_exact(X, None, dom, step.radii, step.empty)
         X = step.centers
         step = _mic(engine, X, timings, stats) if engine.gives_nn else None
-        rho.append(_rho(X, step, verify))
+        rho.append(_rho(X, step, verify, dom))
         if callback is not None:
             callback(it, rho[-1])
-        if rho[-1] > rho[best_at] + 1e-12:
+        if rho[-1] > rho[best_at] + max(1e-12, STALL_GAIN * min(rho[best_at], eps - rho[best_at])):
             best_at = it
         if rho[-1] >= eps:
             reason = "eps"
@@ -225,26 +248,21 @@ def _mic(engine, X, timings, stats):
     return step
 
 
-def _rho(X, step, verify):
+def _rho(X, step, verify, domain):
     """rho of X: from the engine's nearest-neighbour distances, or a KD-tree."""
     if step is None or step.nn is None:
-        return normalized_radius(X)
-    rho = 0.5 * float(step.nn.min()) / hexagonal_radius(len(X))
+        return normalized_radius(X, domain)
+    rho = 0.5 * float(step.nn.min()) / hexagonal_radius(len(X), domain.area)
     if verify:
-        _certify_rho(X, rho)
+        _certify_rho(X, rho, domain)
     return rho
 
 
-def _certify_rho(X, rho):
-    """The independent check of rho: scipy's KD-tree on the torus."""
-    exact = normalized_radius(X)
+def _certify_rho(X, rho, domain):
+    """The independent check of rho: scipy's KD-tree (periodic on a torus)."""
+    exact = normalized_radius(X, domain)
     if not abs(exact - rho) <= 1e-12:
         raise RuntimeError(f"rho {rho!r} from the engine disagrees with the KD-tree's {exact!r}")
-
-
-def _verify_step(X, step):
-    """Raise when an engine's MICs are not the exact ones (exact_mic, 1e-9)."""
-    check_against_exact(X, None, Domain.torus(), step.radii, step.empty)
 
 
 @dataclass

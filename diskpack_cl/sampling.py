@@ -31,6 +31,11 @@ class DartThrowingWarning(UserWarning):
     """Dart throwing could not place n points at the requested radius and shrank it."""
 
 
+#: Relative radius at which maximal dart throwing saturates (0.77 to 0.78 with n):
+#: a larger request is said to be out of reach before any dart is thrown.
+DART_SATURATION = 0.78
+
+
 def _rng(seed):
     return seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
 
@@ -130,13 +135,14 @@ class _Darts:
         return bad
 
 
-def _first_come(cand, d):
+def _first_come(cand, d, boxsize=1.0):
     """Sequential acceptance inside one batch: a dart is kept unless an earlier kept
-    dart of the batch lies closer than `d` (vectorized rounds, no per-dart loop)."""
+    dart of the batch lies closer than `d` (vectorized rounds, no per-dart loop);
+    `boxsize`: the torus (any dimension), or None in a box."""
     from scipy.spatial import cKDTree
 
     m = len(cand)
-    pairs = cKDTree(cand, boxsize=1.0).query_pairs(d, output_type="ndarray")
+    pairs = cKDTree(cand, boxsize=boxsize).query_pairs(d, output_type="ndarray")
     if not len(pairs):
         return np.ones(m, dtype=bool)
     pi, pj = pairs.min(axis=1), pairs.max(axis=1)
@@ -182,6 +188,16 @@ def _throw(state, rng, live, batch, pts, m, remaining, r):
     pts[m:m + ok.size] = cand[ok]
     state.insert(cand[ok], np.arange(m, m + ok.size))
     return ok.size
+
+
+def _beyond_saturation(rel, n, shrink):
+    """Warn at once (before any dart) when `rel` is past the saturation; True if it is."""
+    if rel <= DART_SATURATION:
+        return False
+    warnings.warn(f"relative radius {rel:g} is above maximal dart throwing's saturation (about "
+                  f"{DART_SATURATION}): {n} points will not fit, the radius shrinks by {shrink:g} "
+                  f"a step until they do", DartThrowingWarning, stacklevel=3)
+    return True
 
 
 def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.98,
@@ -238,13 +254,19 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     rng = _rng(seed)
     rel = float(rel_radius)
     r = rel * hexagonal_radius(n)
+    warned = _beyond_saturation(rel, n, shrink)
     pts = np.empty((n, 2), dtype=np.float64)
     m = darts_total = shrinks = darts_level = 0
     state, rate = _Darts(r, n, pts, m), 1.0
     while m < n:
         live = np.flatnonzero(state.alive)
         if not live.size or darts_level >= max_attempts:
-            shrinks, rel = shrinks + 1, rel * shrink
+            if not (shrinks or warned):  # say so at once, not after the remaining shrinks
+                warnings.warn(f"dart throwing saturated at relative radius {rel_radius:g} with "
+                              f"{m} of {n} points placed; shrinking the radius by {shrink:g} a step",
+                              DartThrowingWarning, stacklevel=2)
+            shrinks += 1
+            rel *= shrink
             r = rel * hexagonal_radius(n)
             state, darts_level, rate = _Darts(r, n, pts, m), 0, 1.0
             continue

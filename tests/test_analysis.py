@@ -50,6 +50,41 @@ def test_periodogram_equals_direct_sum(n, kmax, seed):
     np.testing.assert_allclose(P, direct_periodogram(pts, kmax), rtol=1e-10, atol=1e-10)
 
 
+def _degenerate_set(kind, n, rng):
+    """Point sets that stress the NUFFT's spreading: lattices, clusters, points on the edges."""
+    if kind == "lattice":
+        m = max(1, int(math.sqrt(n)))
+        return hex_lattice(m, 2 * max(1, n // (2 * m)))
+    if kind == "cluster":
+        return np.mod(0.999 + 1e-4 * rng.random((n, 2)), 1.0)
+    if kind == "edges":
+        return rng.choice([0.0, 0.5, 1.0 - 1e-16, 1.0], size=(n, 2))
+    return rng.random((n, 2)) * 3 - 1   # outside [0, 1): periodic
+
+
+@settings(max_examples=25, deadline=None)
+@given(kind=st.sampled_from(["lattice", "cluster", "edges", "random"]), n=st.integers(1, 80),
+       kmax=st.integers(1, 25), seed=st.integers(0, 2**32 - 1))
+def test_nufft_periodogram_equals_direct_sum(kind, n, kmax, seed):
+    pts = _degenerate_set(kind, n, np.random.default_rng(seed))
+    freqs, P = A.periodogram(pts, kmax=kmax, method="nufft")
+    assert P[kmax, kmax] == 0.0
+    np.testing.assert_allclose(P, direct_periodogram(pts, kmax), rtol=1e-8, atol=1e-8 * len(pts))
+
+
+def test_nufft_on_a_blue_noise_set_and_auto():
+    from diskpack_cl.sampling import dart_throwing
+
+    pts = dart_throwing(4000, seed=1)
+    _, direct = A.periodogram(pts, kmax=60, method="direct")
+    _, fast = A.periodogram(pts, kmax=60, method="nufft")
+    assert np.abs(fast - direct).max() < 1e-8
+    # the spread's width sets the accuracy: a narrow Gaussian is visibly off
+    assert np.abs(A._nufft_power(pts, 60, spread=4) - direct).max() > 1e-6
+    with pytest.raises(ValueError, match="method must be"):
+        A.periodogram(pts, method="fft")
+
+
 def test_periodogram_large_frequencies_are_accurate():
     pts = np.random.default_rng(0).random((50, 2))
     _, P = A.periodogram(pts, kmax=300)

@@ -193,8 +193,8 @@ def test_write_rejects_bad_points_and_leaves_nothing(tmp_path, suffix):
     path = tmp_path / f"a{suffix}"
     with pytest.raises(ValueError, match=r"NaN or infinite"):
         write_points(path, [[0.0, np.nan], [0.1, 0.2]])
-    with pytest.raises(ValueError, match=r"shape \(n, 2\)"):
-        write_points(path, np.zeros((3, 3)))
+    with pytest.raises(ValueError, match=r"shape \(n, 2\) or \(n, 3\)"):
+        write_points(path, np.zeros((3, 4)))
     assert _leftovers(tmp_path) == []
 
 

@@ -52,12 +52,23 @@ def test_dart_throwing_default_rho_near_074():
 
 
 def test_dart_throwing_fallback_shrinks_and_warns():
-    with pytest.warns(DartThrowingWarning, match=r"could not place 200 points at relative radius 0\.95; shrank it"):
+    with pytest.warns(DartThrowingWarning) as caught:
         p, info = dart_throwing(200, rel_radius=0.95, seed=1, full_output=True)
+    first, last = (str(w.message) for w in caught)
+    # said at once, before any dart (0.95 is past saturation), and summed up at the end
+    assert first.startswith("relative radius 0.95 is above maximal dart throwing's saturation")
+    assert last.startswith("dart throwing could not place 200 points at relative radius 0.95; shrank it")
     assert p.shape == (200, 2)
     assert info["shrinks"] >= 1 and info["rel_radius"] < 0.95
     assert info["rel_radius"] == pytest.approx(0.95 * 0.98 ** info["shrinks"])
     assert _min_torus_distance(p) >= 2 * info["radius"]
+
+
+def test_dart_throwing_says_when_it_saturates():
+    # below the known saturation, the first saturation is said when it happens
+    with pytest.warns(DartThrowingWarning) as caught:
+        dart_throwing(100, rel_radius=0.7, seed=0, max_attempts=50, shrink=0.5)
+    assert str(caught[0].message).startswith("dart throwing saturated at relative radius 0.7 with ")
 
 
 def test_dart_throwing_small_budget_falls_back():

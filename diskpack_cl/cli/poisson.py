@@ -1,4 +1,4 @@
-"""``diskpack poisson``: make Poisson disk sets on the unit torus."""
+"""``diskpack poisson``: make Poisson disk sets on the unit torus, in a box, 2D or 3D."""
 
 from __future__ import annotations
 
@@ -9,18 +9,25 @@ import time
 from diskpack_cl.batch import json_default
 
 from ._batches import _batch_mode, _batch_run, _report_batch
-from ._common import PROG, _bar, _batch_options, _checked, _nonnegative_int, _output_options, _point_count, _positive_int, _unit_open
-from .relax import _relax, _relax_and_write, _relax_options
+from ._common import (PROG, _bar, _batch_options, _checked, _image_path, _nonnegative_int,
+                      _output_options, _point_count, _positive_float, _positive_int, _unit_open)
+from .relax import _progress, _relax, _relax_and_write, _relax_options, _single_only, _unreached
 
 
 def _add_poisson(subparsers):
     p = subparsers.add_parser(
-        "poisson", help="make a Poisson disk set on the unit torus",
+        "poisson", help="make a Poisson disk set on the unit torus, in a box, 2D or 3D",
         description="Make a start set (dart throwing, uniform random or a file) on the unit "
-                    "torus and relax it by disk packing until rho >= EPS (paper Algorithm 1).")
+                    "torus (or in a --box, or in 3D with --dim 3) and relax it by disk packing "
+                    "until rho >= EPS (paper Algorithm 1). Exit status 3 when rho stops short "
+                    "of EPS (the set is written; --allow-unreached: 0).")
     count = p.add_mutually_exclusive_group()
     count.add_argument("-n", type=_point_count, default=None, metavar="N",
                        help="number of points (default 1024; with --init FILE: the file's count)")
+    count.add_argument("--min-distance", type=_positive_float, default=None, metavar="D",
+                       help="instead of -n: the smallest distance between points (scipy's "
+                            "radius; twice the paper's radius R): as many points as D allows at "
+                            "rho <= --rho-max, relaxed once until they reach it")
     count.add_argument("--radius", type=_radius, default=None, metavar="R",
                        help="instead of -n: find the largest n whose relaxation reaches Poisson "
                             "disk radius R (half the minimum distance, 0 < R < 0.25; the paper's "
@@ -31,6 +38,17 @@ def _add_poisson(subparsers):
     p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
                    help="relative radius of the dart-throwing start (default 0.74)")
     p.add_argument("--seed", type=_nonnegative_int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
+    p.add_argument("--dim", type=int, choices=(2, 3), default=2,
+                   help="3: points in the unit 3-torus or a box WxHxD, relaxed to the centres of "
+                        "the largest spheres in their 3D Voronoi cells (rho against FCC)")
+    p.add_argument("--rho-max", type=_unit_open, default=0.8, metavar="RHO",
+                   help="with --min-distance: the largest rho D may ask for (default 0.8)")
+    p.add_argument("--mask", default=None, metavar="IMAGE",
+                   help="points only where the image is light (> 0.5 gray; the image spans "
+                        "--box, default: the image's aspect, longer side 1)")
+    p.add_argument("--density", default=None, metavar="IMAGE",
+                   help="variable spacing: more points where the image is dark (unequal disk "
+                        "packing; needs -n)")
     _output_options(p)
     _relax_options(p)
     g = _batch_options(p)
@@ -79,13 +97,18 @@ def _run_poisson_radius(args):
         "trials": res.trials, "seconds": float(res.seconds), "init": args.init,
         "output": str(args.output),
     }
+    _report(args, f"{res.n} points reach radius {res.radius:g} (achieved "
+                  f"{res.achieved_radius:.6g}, rho {res.rho:.4f}) after {len(res.trials)} trials "
+                  f"({res.seconds:.3g} s); wrote {args.output}", summary)
+    return 0
+
+
+def _report(args, line, summary):
+    """The summary line on stderr (unless --quiet) and the JSON line on stdout (--json)."""
     if not args.quiet:
-        print(f"{PROG}: {res.n} points reach radius {res.radius:g} (achieved "
-              f"{res.achieved_radius:.6g}, rho {res.rho:.4f}) after {len(res.trials)} trials "
-              f"({res.seconds:.3g} s); wrote {args.output}", file=sys.stderr)
+        print(f"{PROG}: {line}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary, default=json_default), flush=True)
-    return 0
 
 
 def _run_poisson(args):
@@ -99,6 +122,9 @@ def _run_poisson(args):
     check_points_path(args.output, for_writing=True)
     if args.radius is not None:
         return _run_poisson_radius(args)
+    if args.min_distance is not None or args.mask or args.density or args.dim == 3 or (
+            args.box is not None and args.init in ("dart", "random")):
+        return _run_poisson_set(args)
     t0 = time.perf_counter()
     if args.seed is None:
         import numpy as np
@@ -108,13 +134,13 @@ def _run_poisson(args):
     info = {"init": args.init, "seed": args.seed}
     if args.init == "dart":
         n = 1024 if args.n is None else args.n
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings():
             warnings.simplefilter("always", DartThrowingWarning)
+            # printed as they come: a saturated radius is said at once
+            warnings.showwarning = lambda message, *_a, **_k: None if args.quiet else print(
+                f"{PROG}: warning: {message}", file=sys.stderr, flush=True)
             points, dart = dart_throwing(n, rel_radius=args.dart_radius, seed=args.seed,
                                          full_output=True)
-        for w in caught:
-            if not args.quiet:
-                print(f"{PROG}: warning: {w.message}", file=sys.stderr)
         info["dart_rel_radius"] = dart["rel_radius"]
     elif args.init == "random":
         points = random_points(1024 if args.n is None else args.n, seed=args.seed)
@@ -129,11 +155,65 @@ def _run_poisson(args):
     return _relax_and_write(points, args, extra_summary=info)
 
 
+def _field_image(args, path):
+    """``(array, box)`` of a --mask or --density image: light 1, dark 0; the box by default
+    has the image's aspect, longer side 1."""
+    from diskpack_cl.image import load_gray
+
+    gray = load_gray(_image_path(path))
+    if args.box is not None:
+        return gray, args.box
+    h, w = gray.shape
+    return gray, (w / max(w, h), h / max(w, h))
+
+
+def _run_poisson_set(args):
+    """``poisson`` with a box, a minimum distance, a mask or a density (:func:`poisson_disk`)."""
+    from diskpack_cl.io import write_points
+    from diskpack_cl.poisson import poisson_disk
+
+    if args.init not in ("dart", "random"):
+        raise ValueError("--box, --min-distance, --mask and --density make their own start set: "
+                         "leave --init out")
+    box, mask, density = args.box, None, None
+    if args.mask:
+        mask, box = _field_image(args, args.mask)
+    if args.density:
+        density, box = _field_image(args, args.density)
+        density = 1.0 - density
+    n = 1024 if args.n is None and args.min_distance is None else args.n
+    relax = _relax(args).kwargs()
+    callback, close = _progress(args, "relax")
+    try:
+        res = poisson_disk(n, min_distance=args.min_distance, box=box, mask=mask, density=density,
+                           seed=args.seed, eps=relax["eps"], rho_max=args.rho_max,
+                           backend=relax["backend"], device=args.device,
+                           max_iter=relax["max_iter"], callback=callback, dim=args.dim)
+    finally:
+        close()
+    write_points(args.output, res.points)
+    summary = {"n": int(len(res.points)), "box": res.domain.size.tolist(), "dim": args.dim,
+               "torus": res.domain.periodic, "rho": res.rho, "min_distance": res.min_distance,
+               "reached": res.reached, "stop_reason": res.stop_reason, "iterations": res.iterations,
+               "seconds": res.seconds, "init_seconds": res.start_seconds, "seed": args.seed,
+               "output": str(args.output)}
+    _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, rho "
+                  f"{res.rho:.4f} in {res.iterations} iterations ({res.seconds:.3g} s, stop: "
+                  f"{res.stop_reason}); wrote {args.output}", summary)
+    if not res.reached:
+        goal = (f"--min-distance {args.min_distance:g}" if args.min_distance is not None
+                else f"--eps {args.eps:g}")
+        return _unreached(args, f"the set did not reach {goal} (stop: {res.stop_reason})")
+    return 0
+
+
 def _run_poisson_batch(args):
     from diskpack_cl.batch import poisson_many
 
-    if args.radius is not None:
-        raise ValueError("--radius makes one set; it does not combine with --count or a batch")
+    if args.radius is not None or args.min_distance is not None:
+        raise ValueError("--radius and --min-distance make one set; they do not combine with "
+                         "--count or a batch")
+    _single_only(args, "box", "mask", "density")
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
                          _relax(args), seed=args.seed, init=args.init,
                          dart_radius=args.dart_radius, **_batch_run(args))

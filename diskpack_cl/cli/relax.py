@@ -18,7 +18,32 @@ def _relax_options(p):
                    help="check every iteration against scipy (exact MICs, KD-tree rho); slow")
     p.add_argument("--profile", action="store_true",
                    help="time the OpenCL kernels with events (--json stage_seconds.kernel)")
+    p.add_argument("--allow-unreached", action="store_true",
+                   help=f"exit 0 when rho stops short of EPS (default: the set is written and "
+                        f"the exit status is {UNREACHED})")
+    p.add_argument("--box", default=None, metavar="WxH",
+                   help="a box [0,W] x [0,H] with walls instead of the unit torus, e.g. 2x1")
     _device_options(p)
+
+
+#: Exit status of a run whose rho (or distance) stopped short of its goal.
+UNREACHED = 3
+
+
+def _unreached(args, what):
+    """Exit status for a result short of its goal: UNREACHED, or 0 with --allow-unreached."""
+    if args.allow_unreached:
+        return 0
+    print(f"{PROG}: error: {what}; the set was written (--allow-unreached: exit 0)",
+          file=sys.stderr)
+    return UNREACHED
+
+
+def _single_only(args, *names):
+    """Refuse options that batches do not take."""
+    given = [f"--{n}" for n in names if getattr(args, n, None) is not None]
+    if given:
+        raise ValueError(f"{', '.join(given)} make(s) one set: not with --count or a batch")
 
 
 def _relax(args):
@@ -45,12 +70,14 @@ def _progress(args, label):
 def _relax_and_write(points, args, *, extra_summary=None):
     """Relax `points`, write ``args.output``, report; return the exit status."""
     from diskpack_cl.io import write_points
+    from diskpack_cl.poisson import as_box
     from diskpack_cl.relax import relax_poisson
 
     callback, close = _progress(args, "relax")
     try:
         res = relax_poisson(points, **_relax(args).kwargs(), device=args.device,
-                            callback=callback, verify=args.verify, profile=args.profile)
+                            callback=callback, verify=args.verify, profile=args.profile,
+                            domain=as_box(args.box))
     finally:
         close()
     extra = {}
@@ -87,6 +114,9 @@ def _relax_and_write(points, args, *, extra_summary=None):
               f"stop: {res.stop_reason}); wrote {args.output}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary), flush=True)
+    if res.stop_reason != "eps":
+        return _unreached(args, f"rho {res.rho[-1]:.4f} did not reach --eps {args.eps:g} "
+                                f"(stop: {res.stop_reason})")
     return 0
 
 
@@ -98,10 +128,22 @@ def _add_relax(subparsers):
     p.add_argument("inputs", nargs="+", metavar="IN",
                    help="point file (.npz, .npy, .csv, .txt, .xy); several make a batch "
                         "(-o a template such as out/{stem}.npz)")
+    p.add_argument("--columns", type=_columns, default=None, metavar="A,B",
+                   help="the two columns to read: header names (x,y) or indices (0,1); needed "
+                        "where a file has more coordinates (a z column)")
     _output_options(p)
     _relax_options(p)
     _batch_options(p)
     p.set_defaults(run=_run_relax)
+
+
+def _columns(text):
+    import argparse
+
+    parts = [t.strip() for t in text.split(",")]
+    if len(parts) != 2 or not all(parts):
+        raise argparse.ArgumentTypeError(f"need two columns A,B, got {text!r}")
+    return tuple(int(t) if t.isdigit() else t for t in parts)
 
 
 def _run_relax(args):
@@ -110,12 +152,13 @@ def _run_relax(args):
     if _batch_mode(args, args.inputs, [args.output]):
         return _run_relax_batch(args)
     check_points_path(args.output, for_writing=True)
-    points = read_points(args.inputs[0], min_points=2)
+    points = read_points(args.inputs[0], min_points=2, columns=args.columns)
     return _relax_and_write(points, args, extra_summary={"input": str(args.inputs[0])})
 
 
 def _run_relax_batch(args):
     from diskpack_cl.batch import relax_many
 
+    _single_only(args, "box", "columns")
     batch = relax_many(args.inputs, [args.output], _relax(args), **_batch_run(args))
     return _report_batch(args, batch)

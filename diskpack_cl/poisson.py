@@ -1,0 +1,431 @@
+"""Poisson disk sets the way graphics users ask for them.
+
+:func:`poisson_disk` takes either a count ``n`` or a minimum distance, a
+domain (the unit torus or a box of any size and aspect ratio, with exact
+walls), an optional mask (an image, a polygon or a callable) where the
+points may lie, or a density for variable spacing, and a seed or a
+``numpy.random.Generator``.  :class:`PoissonDisk` wraps it in the shape of
+``scipy.stats.qmc.PoissonDisk``.
+
+Two radii meet here.  scipy's ``radius`` (and this module's
+``min_distance``) is the smallest distance between two points.  The paper's
+Poisson disk radius ``r`` is half of it: disks of radius ``r`` around the
+points do not overlap.  The normalized radius is
+``rho = r / r_max(n)``, ``r_max(n) = sqrt(area / (2 sqrt(3) n))`` the
+radius of the hexagonal packing of n disks in the area (rho = 1).
+
+Given a minimum distance ``D``, the set holds the most points for which
+``D`` means ``rho <= rho_max`` (default 0.8, the paper's eps: sets much
+beyond it start to look regular), and one relaxation brings it there: no
+search over n.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .domain import Domain
+from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
+from .relax import relax_poisson
+
+__all__ = ["PoissonDisk", "PoissonDiskResult", "as_box", "count_for_distance", "poisson_disk",
+           "start_points"]
+
+#: Grid cells per side on which a callable mask or density is sampled.
+FIELD_SAMPLES = 512
+
+
+@dataclass
+class PoissonDiskResult:
+    """Outcome of :func:`poisson_disk`.
+
+    Attributes
+    ----------
+    points : (n, 2) float64
+        The points, in the domain's coordinates (inside the mask if one was
+        given).
+    domain : Domain
+    rho : float
+        Normalized Poisson disk radius of the relaxed set in its domain (for
+        a mask: of the set before the mask was applied).
+    min_distance : float
+        Smallest distance between two returned points (periodic on a torus).
+    reached : bool
+        The set reached its goal: ``rho >= eps`` for a count, the minimum
+        distance for a distance.  A density has no such goal (always True).
+    stop_reason : str
+        The relaxation's (``eps``, ``stalled`` or ``max_iter``).
+    iterations : int
+    seconds, start_seconds : float
+        Wall time of the relaxation and of the start set.
+    eps : float
+        The rho the relaxation aimed at.
+    """
+
+    points: np.ndarray
+    domain: Domain
+    rho: float
+    min_distance: float
+    reached: bool
+    stop_reason: str
+    iterations: int
+    seconds: float
+    start_seconds: float
+    eps: float
+
+
+def as_box(box):
+    """The domain `box` names: None or ``"torus"`` (the unit torus), ``(W, H)`` or ``"WxH"``.
+
+    Examples
+    --------
+    >>> as_box("2x1")
+    Domain(width=2.0, height=1.0, periodic=False)
+    >>> as_box(None).periodic
+    True
+    """
+    if box is None or (isinstance(box, str) and box == "torus"):
+        return Domain.torus()
+    if isinstance(box, Domain):
+        return box
+    return Domain.rect(*box_sizes(box, "WxH"))
+
+
+def box_sizes(box, form):
+    """The sizes a box names (``"2x1"``, ``(2, 1)``), as many as `form` (``"WxH"``) has, each > 0.
+
+    Examples
+    --------
+    >>> box_sizes("2x1x0.5", "WxHxD")
+    [2.0, 1.0, 0.5]
+    """
+    parts = box.lower().split("x") if isinstance(box, str) else list(np.ravel(box))
+    try:
+        size = [float(v) for v in parts]
+    except (TypeError, ValueError):
+        raise ValueError(f"box must be 'torus' or {form}, got {box!r}") from None
+    if len(size) != len(form.split("x")) or not all(np.isfinite(v) and v > 0 for v in size):
+        raise ValueError(f"box must be {form}: positive finite sizes, got {box!r}")
+    return size
+
+
+def count_for_distance(min_distance, area, rho_max=0.8):
+    """The most points whose hexagonal radius makes `min_distance` a rho of at most `rho_max`.
+
+    ``n = floor(area rho_max^2 / (2 sqrt(3) (min_distance / 2)^2))``.
+
+    Examples
+    --------
+    >>> count_for_distance(0.026, 1.0)    # the paper's Fig. 7 radius 0.013
+    1093
+    """
+    if not (np.isfinite(min_distance) and min_distance > 0):
+        raise ValueError(f"min_distance must be positive, got {min_distance}")
+    if not 0.0 < rho_max < 1.0:
+        raise ValueError(f"rho_max must be in (0, 1), got {rho_max}")
+    return int(np.floor(area * rho_max ** 2 / (HEXAGONAL_CELL * (0.5 * min_distance) ** 2)))
+
+
+def start_points(n, domain, seed=None):
+    """A dart-throwing start set of `n` points on the torus or in a box.
+
+    In a box ``W x H`` the darts are thrown on a square torus of side
+    ``max(W, H)`` with enough points that at least `n` fall in the box
+    inset by a disk radius (where relaxed points end up: the walls push
+    them that far in, so the relaxation saves most of its iterations); the
+    box keeps those and drops its surplus at random (so its spacing is at
+    least the torus set's).
+
+    Examples
+    --------
+    >>> start_points(100, Domain.rect(2, 1), seed=0).max(axis=0) <= (2, 1)
+    array([ True,  True])
+    """
+    from .sampling import _rng, dart_throwing
+
+    rng = _rng(seed)
+    if domain.periodic:
+        return dart_throwing(n, seed=rng)
+    inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
+    inner = domain.size - 2.0 * inset
+    side = max(inner)
+    m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
+    while True:
+        pts = dart_throwing(m, seed=rng) * side
+        pts = pts[np.all(pts <= inner, axis=1)]
+        if len(pts) >= n:
+            return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
+        m = int(m * 1.1) + 1  # pragma: no cover - 4 sigma short
+
+
+def _field(field, domain, name):
+    """A mask or density as a 2D array over the box (row 0 at y = 0), from an array or callable."""
+    if callable(field):
+        side = max(domain.width, domain.height)
+        nx = max(1, int(round(FIELD_SAMPLES * domain.width / side)))
+        ny = max(1, int(round(FIELD_SAMPLES * domain.height / side)))
+        x = (np.arange(nx) + 0.5) * domain.width / nx
+        y = (np.arange(ny) + 0.5) * domain.height / ny
+        field = field(*np.meshgrid(x, y))
+    a = np.asarray(field, dtype=np.float64)
+    if a.ndim != 2 or min(a.shape) < 1:
+        raise ValueError(f"{name} must be a 2D array or a callable f(x, y), got shape {a.shape}")
+    if not np.all(np.isfinite(a)) or a.min() < 0:
+        raise ValueError(f"{name} must be finite and non-negative")
+    return a
+
+
+def _lookup(image, points, domain):
+    """Values of `image` (pixels spanning the box, row 0 at y = 0) at `points`."""
+    h, w = image.shape
+    ix = np.clip((points[:, 0] * (w / domain.width)).astype(np.int64), 0, w - 1)
+    iy = np.clip((points[:, 1] * (h / domain.height)).astype(np.int64), 0, h - 1)
+    return image[iy, ix]
+
+
+def _in_polygon(points, vertices):
+    """Even-odd rule: which points lie inside the polygon with these vertices."""
+    v = np.asarray(vertices, dtype=np.float64)
+    if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3 or not np.all(np.isfinite(v)):
+        raise ValueError(f"polygon must be (k, 2) finite vertices with k >= 3, got {v.shape}")
+    inside = np.zeros(len(points), dtype=bool)
+    x, y = points[:, 0], points[:, 1]
+    for (x0, y0), (x1, y1) in zip(v, np.roll(v, -1, axis=0)):
+        crosses = (y0 > y) != (y1 > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+        inside ^= crosses & (x < xc)
+    return inside
+
+
+def _region(mask, polygon, domain):
+    """``(inside(points) -> bool array, area share of the box)`` of a mask or polygon."""
+    if mask is not None and polygon is not None:
+        raise ValueError("give a mask or a polygon, not both")
+    if polygon is not None:
+        def inside(p):
+            return _in_polygon(p, polygon)
+    else:
+        image = _field(mask, domain, "mask") > 0.5
+
+        def inside(p):
+            return _lookup(image, p, domain)
+    side = max(domain.width, domain.height)
+    nx = max(1, int(round(FIELD_SAMPLES * domain.width / side)))
+    ny = max(1, int(round(FIELD_SAMPLES * domain.height / side)))
+    gx, gy = np.meshgrid((np.arange(nx) + 0.5) * domain.width / nx,
+                         (np.arange(ny) + 0.5) * domain.height / ny)
+    share = float(inside(np.column_stack([gx.ravel(), gy.ravel()])).mean())
+    if share == 0.0:
+        raise ValueError("the mask leaves no room for points (no part of the box is inside)")
+    return inside, share
+
+
+def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None, density=None,
+                 seed=None, eps=0.8, rho_max=0.8, backend="auto", device=None, max_iter=1000,
+                 patience=100, callback=None, dim=2):
+    """A Poisson disk set by disk packing: a count or a minimum distance, torus or box.
+
+    Parameters
+    ----------
+    n : int, optional
+        Number of points (for a mask: about n land inside it).
+    min_distance : float, optional
+        Instead of `n`: the smallest distance between points (scipy's
+        ``radius``; twice the paper's Poisson disk radius).  The set holds
+        :func:`count_for_distance` points and is relaxed until it reaches
+        the distance, in one run.
+    box : None, "torus", "WxH", (W, H) or Domain, optional
+        The unit torus (default) or the box ``[0, W] x [0, H]``, whose walls
+        clip every Voronoi cell exactly.
+    mask : (h, w) array_like or callable, optional
+        Where points may lie: pixels > 0.5 (row 0 at y = 0, spanning the
+        box), or ``mask(x, y) -> array``.  The set is made in the box and
+        restricted to the mask, so its spacing holds inside.
+    polygon : (k, 2) array_like, optional
+        Instead of `mask`: the vertices of a polygon (even-odd rule).
+    density : (h, w) array_like or callable, optional
+        Relative point density over the box (variable spacing), by unequal
+        disk packing (:func:`diskpack_cl.stipple`); needs `n`.
+    seed : int, numpy.random.Generator or None, optional
+    eps : float, optional
+        With `n`: the rho to reach (the paper's 0.8).
+    rho_max : float, optional
+        With `min_distance`: the largest rho the distance may ask for.
+    backend, device, max_iter, patience, callback :
+        Passed to :func:`diskpack_cl.relax_poisson`.
+    dim : {2, 3}
+        3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
+        centres of the maximal inscribed spheres of their 3D Voronoi cells
+        (:func:`diskpack_cl.poisson3.relax_poisson3`; rho normalized by the
+        FCC packing) from a 3D dart-throwing start; no mask or density.
+
+    Returns
+    -------
+    PoissonDiskResult
+
+    Raises
+    ------
+    ValueError
+        Neither or both of `n` and `min_distance`, a bad box, mask,
+        polygon or density, or a distance that leaves fewer than 2 points.
+
+    Examples
+    --------
+    >>> res = poisson_disk(min_distance=0.1, box="2x1", seed=0, backend="exact")
+    >>> len(res.points), res.reached, bool(res.min_distance >= 0.1)
+    (147, True, True)
+    """
+    if (n is None) == (min_distance is None):
+        raise ValueError("give exactly one of n or min_distance")
+    options = dict(backend=backend, device=device, max_iter=max_iter, patience=patience,
+                   callback=callback)
+    if dim == 3:
+        if mask is not None or polygon is not None or density is not None:
+            raise ValueError("3D sets take no mask, polygon or density")
+        return _relaxed3(n, min_distance, box, seed, eps, rho_max, options)
+    if dim != 2:
+        raise ValueError(f"dim must be 2 or 3, got {dim!r}")
+    domain = as_box(box)
+    if density is not None:
+        if min_distance is not None or mask is not None or polygon is not None:
+            raise ValueError("a density sets the spacing itself: give n, without a mask")
+        return _with_density(n, density, domain, seed, backend, device)
+    share, inside = 1.0, None
+    if mask is not None or polygon is not None:
+        if domain.periodic:
+            raise ValueError("a mask or polygon needs a box (box='WxH')")
+        inside, share = _region(mask, polygon, domain)
+    n_all, eps = _count_and_eps(n, min_distance, domain.area, share, eps, rho_max)
+    return _relaxed(n_all, domain, eps, seed, inside, min_distance, options)
+
+
+def _count_and_eps(n, distance, area, share, eps, rho_max):
+    """Points to relax in the box and the rho to reach: from n (scaled up by the mask's
+    share of the box) or from the minimum distance (the rho it means for that count)."""
+    from ._checks import check_count
+
+    if distance is None:
+        return max(2, int(round(check_count(n, 2) / share))), eps
+    n_all = count_for_distance(float(distance), area, rho_max)
+    if n_all < 2:
+        raise ValueError(f"min_distance {distance:g} leaves {n_all} point(s) in the box "
+                         f"at rho <= {rho_max:g}")
+    return n_all, min(0.5 * distance / hexagonal_radius(n_all, area) * (1 + 1e-9), rho_max)
+
+
+def _relaxed3(n, distance, box, seed, eps, rho_max, options):
+    """The 3D :class:`PoissonDiskResult`: dart throwing, relaxation to the spheres' centres."""
+    from ._checks import check_count
+    from .poisson3 import as_box3, dart_throwing3, fcc_radius, relax_poisson3
+
+    domain = as_box3(box)
+    if distance is not None:
+        n = int(np.floor(domain.volume * rho_max ** 3 / (4 * np.sqrt(2) * (0.5 * distance) ** 3)))
+        if n < 2:
+            raise ValueError(f"min_distance {distance:g} leaves {n} point(s) at rho <= {rho_max:g}")
+        eps = min(0.5 * distance / fcc_radius(n, domain.volume) * (1 + 1e-9), rho_max)
+    t0 = time.perf_counter()
+    start = dart_throwing3(check_count(n, 2), domain, seed=seed)
+    t_start = time.perf_counter() - t0
+    res = relax_poisson3(start, eps, domain=domain, **options)
+    d_min = float(2 * res.rho[-1] * fcc_radius(n, domain.volume))
+    reached = bool(d_min >= distance) if distance is not None else bool(res.rho[-1] >= eps)
+    return PoissonDiskResult(res.points, domain, float(res.rho[-1]), d_min, reached,
+                             res.stop_reason, res.iterations, res.seconds, t_start, float(eps))
+
+
+def _relaxed(n, domain, eps, seed, inside, distance, options):
+    """Start set, relaxation, mask: the :class:`PoissonDiskResult` of one run."""
+    t0 = time.perf_counter()
+    start = start_points(n, domain, seed)
+    t_start = time.perf_counter() - t0
+    res = relax_poisson(start, eps, domain=domain, **options)
+    pts = res.points
+    rho = float(res.rho[-1])
+    d_min = _min_distance(pts, domain)
+    reached = bool(d_min >= distance) if distance is not None else rho >= eps
+    if inside is not None:
+        pts = pts[inside(pts)]
+        d_min = _min_distance(pts, domain) if len(pts) >= 2 else float("inf")
+    return PoissonDiskResult(pts, domain, rho, float(d_min), reached, res.stop_reason,
+                             res.iterations, res.seconds, t_start, float(eps))
+
+
+def _with_density(n, density, domain, seed, backend, device):
+    """Variable spacing: unequal disk packing of a density image, scaled to the box."""
+    from ._checks import check_count
+    from .stipple import stipple
+
+    if domain.periodic:
+        domain = Domain.rect(1.0, 1.0)
+    dens = _field(density, domain, "density")
+    if dens.max() <= 0:
+        raise ValueError("density must be positive somewhere")
+    gray = 1.0 - dens / dens.max()
+    if not isinstance(seed, (int, np.integer)):
+        seed = int(np.random.default_rng(seed).integers(2 ** 31))
+    t0 = time.perf_counter()
+    res = stipple(gray, check_count(n, 2), backend=backend, device=device, seed=int(seed),
+                  radii="density")
+    h, w = gray.shape
+    pts = res.points * (domain.width / w, domain.height / h)
+    return PoissonDiskResult(pts, domain, float("nan"), _min_distance(pts, domain), True, "density",
+                             len(res.history), time.perf_counter() - t0, 0.0, float("nan"))
+
+
+class PoissonDisk:
+    """Poisson disk sampling in the shape of ``scipy.stats.qmc.PoissonDisk`` (d = 2).
+
+    Parameters
+    ----------
+    d : int
+        Dimension; 2.
+    radius : float, optional
+        Minimum distance between points (scipy's meaning), used by
+        :meth:`fill_space` and as a floor by :meth:`random`.
+    l_bounds, u_bounds : array_like, optional
+        The box's corners (default the unit square).
+    torus : bool, optional
+        Periodic boundaries (the unit torus; bounds must be left out).
+    seed : int or numpy.random.Generator, optional
+    **options
+        Passed to :func:`poisson_disk` (``eps``, ``rho_max``, ``backend``...).
+
+    Examples
+    --------
+    >>> eng = PoissonDisk(radius=0.1, seed=1, backend="exact")
+    >>> pts = eng.fill_space()
+    >>> pts.shape, bool(pts.min() >= 0)
+    ((73, 2), True)
+    """
+
+    def __init__(self, d=2, *, radius=None, l_bounds=None, u_bounds=None, torus=False, seed=None,
+                 **options):
+        if d != 2:
+            raise ValueError(f"d must be 2, got {d}")
+        lo = np.zeros(2) if l_bounds is None else np.asarray(l_bounds, dtype=np.float64)
+        hi = np.ones(2) if u_bounds is None else np.asarray(u_bounds, dtype=np.float64)
+        if lo.shape != (2,) or hi.shape != (2,) or not np.all(hi > lo):
+            raise ValueError(f"need l_bounds < u_bounds, two values each, got {lo} and {hi}")
+        if torus and (l_bounds is not None or u_bounds is not None):
+            raise ValueError("the torus is the unit square: leave l_bounds and u_bounds out")
+        self.radius, self.lower, self.torus = radius, lo, torus
+        self.box = None if torus else (hi - lo)
+        self.rng = np.random.default_rng(seed)
+        self.options = options
+
+    def random(self, n=1):
+        """`n` points relaxed to rho >= eps (and to `radius` where that is larger)."""
+        res = poisson_disk(n, box=self.box, seed=self.rng, **self.options)
+        return res.points + (0 if self.torus else self.lower)
+
+    def fill_space(self):
+        """As many points as `radius` allows at rho <= rho_max."""
+        if self.radius is None:
+            raise ValueError("fill_space needs a radius")
+        res = poisson_disk(min_distance=self.radius, box=self.box, seed=self.rng, **self.options)
+        return res.points + (0 if self.torus else self.lower)
