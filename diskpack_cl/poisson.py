@@ -345,8 +345,8 @@ def _relaxed(n, domain, eps, seed, inside, distance, options):
     t_start = time.perf_counter() - t0
     res = relax_poisson(start, eps, domain=domain, **options)
     pts = res.points
-    rho = float(res.rho[-1])
-    d_min = _min_distance(pts, domain)
+    rho = float(res.rho[-1])   # certified by relax_poisson's KD-tree
+    d_min = 2.0 * rho * hexagonal_radius(len(pts), domain.area)
     reached = bool(d_min >= distance) if distance is not None else rho >= eps
     if inside is not None:
         pts = pts[inside(pts)]
