@@ -200,6 +200,12 @@ def _beyond_saturation(rel, n, shrink):
     return True
 
 
+def _warn_saturated(rel_radius, m, n, shrink):
+    warnings.warn(f"dart throwing saturated at relative radius {rel_radius:g} with {m} of {n} "
+                  f"points placed; shrinking the radius by {shrink:g} a step",
+                  DartThrowingWarning, stacklevel=3)
+
+
 def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.98,
                   full_output=False):
     """Dart throwing on the unit torus at a relative radius.
@@ -210,9 +216,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     checked against a bucket grid; inside a batch, darts are accepted in order,
     exactly as if thrown one by one. Cells already covered by one disk are not
     sampled (their darts would all be rejected), which speeds up the end of the
-    run without changing the distribution.
-
-    The result has ``rho >= rel_radius``.
+    run without changing the distribution. The result has ``rho >= rel_radius``.
 
     Parameters
     ----------
@@ -222,7 +226,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
         Requested normalized radius, in (0, 1). Maximal dart throwing saturates
         near 0.77 to 0.78 (depending on n); above that `n` points cannot be placed.
     seed : int, numpy.random.Generator or None, optional
-        Seed for ``numpy.random.default_rng``; results are deterministic for a seed.
+        Seed for ``numpy.random.default_rng`` (deterministic for a seed).
     max_attempts : int, optional
         Darts allowed at one radius before it is declared saturated. Default
         ``50 * n + 10000``.
@@ -262,9 +266,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
         live = np.flatnonzero(state.alive)
         if not live.size or darts_level >= max_attempts:
             if not (shrinks or warned):  # say so at once, not after the remaining shrinks
-                warnings.warn(f"dart throwing saturated at relative radius {rel_radius:g} with "
-                              f"{m} of {n} points placed; shrinking the radius by {shrink:g} a step",
-                              DartThrowingWarning, stacklevel=2)
+                _warn_saturated(rel_radius, m, n, shrink)
             shrinks += 1
             rel *= shrink
             r = rel * hexagonal_radius(n)
