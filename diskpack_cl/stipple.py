@@ -186,7 +186,7 @@ class StippleStage:
     radius_field: np.ndarray
     density: np.ndarray
     blend_weight: object = None  # features="detail": per-pixel weight, see radii.detail_fields
-    ink: np.ndarray = None       # darkness per pixel blurred by INK_SIGMA, for off_support
+    ink: np.ndarray = None       # darkness per pixel blurred by INK_SIGMA (support > 0)
 
     @property
     def size(self):
@@ -426,8 +426,8 @@ def _make_stage(gray, opt, engine):
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield)
-    return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight,
-                        _blurred(darkness, INK_SIGMA))
+    ink = _blurred(darkness, INK_SIGMA) if opt.support > 0 else None   # only off_support reads it
+    return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight, ink)
 
 
 def _certified_result(state, stage, history, timings, t_start, darkness):
