@@ -100,7 +100,7 @@ SCHEDULE_OPTIONS["detail"] = dict(SCHEDULE_OPTIONS["classic"], features="detail"
 # Over classic's: a dot whose largest empty disk leaves its cell's ink moves
 # to the centroid instead (support: white paper stays white, outlines stay
 # sharp) and equal ink per dot (capacity). Measured in docs/stipple_quality.md.
-SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"], support=1.0, capacity=0.1)
+SCHEDULE_OPTIONS["default"] = dict(SCHEDULE_OPTIONS["classic"], support=8.0, capacity=0.1)
 
 
 
@@ -284,9 +284,9 @@ class StippleOptions:
         "others)", lo=0, hi=1, group=_STIPPLING, metavar="GAIN")
     support: float = option(
         None, "keep dots on the ink: a dot whose largest empty disk leaves its cell's ink "
-        "moves towards the cell's centroid instead, by S times how far it left (default: the "
-        "schedule's, 1 for default, 0 for the others; 0 lets edge dots drift onto white "
-        "paper)", lo=0, hi=1, group=_STIPPLING, metavar="S")
+        "moves towards the cell's centroid instead, by S times how far it left, at most all "
+        "the way (default: the schedule's, 8 for default, 0 for the others; 0 lets edge dots "
+        "drift onto white paper and blurs edges)", lo=0, hi=16, group=_STIPPLING, metavar="S")
     paper_tone: float = option(
         0.0, "darkness T added under the whole image, so that white paper gets sparse dots "
         "too (default 0: white stays white)", lo=0, hi=1, hi_open=True, group=_STIPPLING,

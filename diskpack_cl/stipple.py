@@ -59,9 +59,9 @@ last step at blend 0.5; from 3 to 6 px 18 + 6 mix steps, feature-aware, and
 a last one at 0.5; from 6 px on 20 + 6 mix steps, feature-aware, radii
 blurred by 2 px, and a last step all the way to the centroids. All use
 density radii (floor 0.01), centroid density blurred by 0.5 px, ``k`` from
-the 15% quantile of ``R_i / r_i``, ``support=1`` (a dot whose largest empty
-disk leaves its cell's ink goes to the centroid: white paper stays white,
-outlines stay sharp) and ``capacity=0.1`` (equal ink per dot). The former
+the 15% quantile of ``R_i / r_i``, ``support=8`` (a dot whose largest empty
+disk leaves its cell's ink, or loses an eighth of its tone, goes to the
+centroid: white paper stays white, outlines stay sharp) and ``capacity=0.1`` (equal ink per dot). The former
 defaults remain as ``"classic"`` and ``"detail"``. Options that come with a
 named schedule are in :data:`SCHEDULE_OPTIONS`; explicit keyword arguments
 override them. Measured in ``docs/stipple_quality.md``.
@@ -258,26 +258,30 @@ def _cell_centroids(stage, x, w, entry):
     return cen, mass
 
 
-def off_support(ink, mic_centers, centroids):
+def off_support(ink, mic_centers, centroids, gain=1.0):
     """How far each MIC centre has left the ink of its cell, in [0, 1].
 
-    ``1 - D(m) / D(c)`` clipped to [0, 1], ``D`` the darkness field `ink`
-    at the MIC centre ``m`` and at the cell's density-weighted centroid
-    ``c``: 0 where the centre lies in the tone of the cell's ink, 1 where it
-    lies on white paper. A power cell that straddles the outline of a dark
-    shape has its largest empty disk on the white side, where nothing
-    bounds it; its centroid stays on the ink.
+    ``gain * (1 - D(m) / D(c))`` clipped to [0, 1], ``D`` the darkness field
+    `ink` at the MIC centre ``m`` and at the cell's density-weighted
+    centroid ``c``: 0 where the centre lies in the tone of the cell's ink, 1
+    where it lies on white paper, or, with ``gain > 1``, where it has lost
+    a fraction ``1 / gain`` of the tone. A power cell that straddles the
+    outline of a dark shape has its largest empty disk on the white side,
+    where nothing bounds it; its centroid stays on the ink.
 
     Examples
     --------
-    >>> ink = np.zeros((4, 8)); ink[:, :4] = 1.0
-    >>> off_support(ink, np.array([[6.0, 2.0], [1.0, 2.0]]), np.array([[2.0, 2.0], [2.0, 1.0]])).tolist()
-    [1.0, 0.0]
+    >>> ink = np.zeros((4, 8)); ink[:, :4] = 1.0; ink[:, 4] = 0.5
+    >>> m, c = np.array([[6.0, 2.0], [1.0, 2.0], [4.5, 2.0]]), np.array([[2.0, 2.0]] * 3)
+    >>> off_support(ink, m, c).tolist()
+    [1.0, 0.0, 0.5]
+    >>> off_support(ink, m, c, gain=4).tolist()
+    [1.0, 0.0, 1.0]
     """
     dm, dc = field_at(ink, mic_centers), field_at(ink, centroids)
     # a centroid off the ink (the cell of a curved thin line): only a centre off the ink too moves
     ratio = np.divide(dm, dc, out=(dm > 0).astype(np.float64), where=dc > 0)
-    return np.clip(1.0 - ratio, 0.0, 1.0)
+    return np.clip(gain * (1.0 - ratio), 0.0, 1.0)
 
 
 def _blend_weights(stage, x, mic_centers, cen, blend):
@@ -286,7 +290,7 @@ def _blend_weights(stage, x, mic_centers, cen, blend):
     if blend > 0 and stage.blend_weight is not None:
         a = blend + (1.0 - blend) * field_at(stage.blend_weight, x)
     if stage.options.support > 0:
-        a = np.maximum(a, stage.options.support * off_support(stage.ink, mic_centers, cen))
+        a = np.maximum(a, off_support(stage.ink, mic_centers, cen, gain=stage.options.support))
     return a
 
 

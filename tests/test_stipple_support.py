@@ -26,13 +26,17 @@ def test_off_support_reads_the_ink_at_centre_and_centroid():
     # white paper; the same tone; a quarter of the tone; centre and centroid both
     # off the ink (a curved thin line's cell): all the way; centre on the ink: no pull
     assert off_support(ink, m, c).tolist() == [1.0, 0.0, 0.75, 1.0, 0.0]
+    # a gain sends a centre that lost a quarter of the tone all the way, and is clipped
+    assert off_support(ink, m, c, gain=4.0).tolist() == [1.0, 0.0, 1.0, 1.0, 0.0]
+    ink[:, 5:7] = 0.9
+    assert off_support(ink, m, c, gain=4.0)[2] == pytest.approx(0.4)
 
 
 def test_support_options_resolved_and_checked():
     opt = StippleOptions.resolve(500, 64, 48)
-    assert (opt.support, opt.capacity, opt.paper_tone) == (1.0, 0.1, 0.0)
+    assert (opt.support, opt.capacity, opt.paper_tone) == (8.0, 0.1, 0.0)
     assert StippleOptions.resolve(500, 64, 48, schedule="classic").support == 0.0
-    for name, bad, text in (("support", 1.5, r"in \[0, 1\]"), ("support", np.nan, r"in \[0, 1\]"),
+    for name, bad, text in (("support", 16.5, r"in \[0, 16\]"), ("support", np.nan, r"in \[0, 16\]"),
                             ("paper_tone", 1.0, r"in \[0, 1\)"), ("paper_tone", -0.1, r"in \[0, 1\)")):
         with pytest.raises(ValueError, match=f"{name} must be {text}"):
             StippleOptions.resolve(500, 64, 48, **{name: bad})
@@ -41,14 +45,14 @@ def test_support_options_resolved_and_checked():
 @pytest.fixture(scope="module")
 def runs():
     g = drawing()
-    return g, {s: stipple(g, 400, seed=1, support=s) for s in (0.0, 1.0)}
+    return g, {s: stipple(g, 400, seed=1, support=s) for s in (0.0, 8.0)}
 
 
 def test_default_keeps_white_paper_white(runs):
     g, res = runs
     dark = 1.0 - g
-    assert res[1.0].certificate.valid
-    assert stray_dots(res[1.0].points, dark).count == 0
+    assert res[8.0].certificate.valid
+    assert stray_dots(res[8.0].points, dark).count == 0
     # without the rule, outline dots drift out to the middle of the paper
     assert stray_dots(res[0.0].points, dark).count >= 3
 
@@ -57,7 +61,7 @@ def test_default_keeps_outlines_sharp(runs):
     g, res = runs
     dark = 1.0 - g
     lloyd = stipple(g, 400, seed=1, method="lloyd")
-    sharp = edge_fidelity(res[1.0].points, dark)
+    sharp = edge_fidelity(res[8.0].points, dark)
     assert sharp >= edge_fidelity(lloyd.points, dark) - 0.01
     assert sharp > edge_fidelity(res[0.0].points, dark) + 0.03
 
@@ -73,3 +77,16 @@ def test_paper_tone_puts_sparse_dots_on_white():
     assert res.certificate.valid and res.params["paper_tone"] == 0.1
     blank = stipple(np.ones((40, 40)), 50, seed=0, paper_tone=0.2)
     assert blank.n == 50 and blank.certificate.valid
+
+
+def test_support_gain_sharpens_edges_between_two_grays():
+    # gray shapes on a light gray paper: no centre leaves the ink altogether, it
+    # only loses part of the tone, which a gain above 1 turns into a full pull
+    yy, xx = np.mgrid[0:96, 0:96] + 0.5
+    g = np.full((96, 96), 0.75)
+    g[np.hypot(xx - 30, yy - 34) < 20] = 0.15
+    g[56:88, 46:90] = 0.35
+    for seed in (0, 1):
+        edge = {s: edge_fidelity(stipple(g, 600, seed=seed, support=s).points, 1.0 - g)
+                for s in (1.0, 8.0)}
+        assert edge[8.0] > edge[1.0] + 0.005
