@@ -1,14 +1,16 @@
 """Numbers users judge blue noise and stipplings by.
 
 Point sets on the unit torus [0,1)^2: the mean periodogram, its radial mean
-power and anisotropy (Lagae and Dutre 2008; Schlomer and Deussen 2011), the
-normalized Poisson disk radius rho and its mean-nearest-neighbour variant, and
-the local hexatic order |psi_6|.
+power and anisotropy (Lagae and Dutre 2008 [1]_; Schlomer and Deussen 2011
+[2]_; Heck, Schlomer and Deussen 2013 [3]_), the normalized Poisson disk
+radius rho and its mean-nearest-neighbour variant, and the local hexatic
+order ``|psi_6|``.
 
 Stipplings in pixel units (origin at the top-left pixel corner, x to the right,
 y down, pixel (row r, col c) covers [c, c+1) x [r, r+1)) against a darkness
-image (2-D float array in [0, 1], 1 = black): the tone SSIM, the density
-normalized spacing and :func:`stipple_measures`, which gathers them.
+image (2-D float array in [0, 1], 1 = black), as in weighted Voronoi
+stippling [4]_: the tone SSIM [5]_, the density normalized spacing and
+:func:`stipple_measures`, which gathers them.
 
 Everything here is numpy/scipy only and float64.
 
@@ -430,7 +432,7 @@ def mean_normalized_radius(points):
 
 
 class HexaticOrder(NamedTuple):
-    """Per-point |psi_6| and their mean."""
+    """Per-point ``|psi_6|`` and their mean."""
 
     psi6: np.ndarray
     mean: float
@@ -473,11 +475,11 @@ def _circumcircles(a, b, c):
 
 
 def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
-    """Local hexatic order |psi_6| of every point, and its mean.
+    """Local hexatic order ``|psi_6|`` of every point, and its mean.
 
     ``psi_6(j) = (1 / N_j) sum_k exp(6 i theta_jk)`` over the N_j Voronoi
     neighbours k of point j (the points sharing a Delaunay edge with it),
-    theta_jk the direction from j to k. |psi_6| is 1 for a point with six
+    theta_jk the direction from j to k. ``|psi_6|`` is 1 for a point with six
     neighbours at multiples of 60 degrees (a hexagonal lattice) and about 0.3
     to 0.4 for uniform random points. Neighbours are counted with equal
     weights (not weighted by Voronoi edge length).
@@ -500,7 +502,7 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
     Returns
     -------
     HexaticOrder
-        ``psi6`` (n,) per-point |psi_6| and ``mean``. A point that coincides
+        ``psi6`` (n,) per-point ``|psi_6|`` and ``mean``. A point that coincides
         with another has no neighbours of its own and gets 0.
 
     Raises

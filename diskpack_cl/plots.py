@@ -204,7 +204,7 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     (dashed: ``-10 log10(K)``, the value of K averaged isotropic
     realizations). The title carries n, rho (exact, from
     :func:`diskpack_cl.normalized_radius`), the mean nearest-neighbour
-    rho and the mean |psi_6|.
+    rho and the mean ``|psi_6|``.
 
     Parameters
     ----------

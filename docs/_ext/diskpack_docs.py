@@ -23,6 +23,7 @@ import dataclasses
 import importlib
 import importlib.util
 import io
+import json
 from pathlib import Path
 
 from docutils import nodes
@@ -178,8 +179,35 @@ def _color_table():
     return _markdown_rows(_benchmark("color_quality").table(ROOT / "docs" / "color_quality.jsonl"))
 
 
+def _pen_range(row):
+    vals = [v for v in row["p01"] if v is not None]
+    return f"{min(vals):.2f}-{max(vals):.2f}"
+
+
+def _color_summary():
+    """Per image, pens and n: Delta E and P01 of the naive overlay, its overprint and the multi-class packing."""
+    groups = {}
+    for line in (ROOT / "docs" / "color_quality.jsonl").read_text().splitlines():
+        if line.strip():
+            r = json.loads(line)
+            groups.setdefault((r["image"], r["palette"], r["n"]), {})[r["method"]] = r
+    rows = []
+    for (image, palette, n), m in groups.items():
+        naive, over, multi = m["naive"], m.get("naive-overprint"), m["multi-class"]
+        pens = "CMYK" if palette == "cmyk" else "/".join(p.split("=")[0] for p in palette.split(","))
+        over_e = "-" if over is None else f"{over['delta_e']:.1f}"
+        rows.append((f"{image} {pens}, {n}",
+                     f"{naive['delta_e']:.1f} / {over_e} / {multi['delta_e']:.1f}",
+                     f"{naive['p01_joint']:.2f} / {multi['p01_joint']:.2f} (mono {multi['mono_p01']:.2f})",
+                     f"{_pen_range(naive)} / {_pen_range(multi)}"))
+    header = ("image, n", "Delta E: naive / overprint / multi-class",
+              "P01 of all dots: naive / multi-class", "P01 per pen (min-max): naive / multi-class")
+    return header, rows
+
+
 #: The tables ``diskpack-table`` builds: name -> () -> (header, rows).
-TABLES = {"stipple-tally": _stipple_tally, "color-quality": _color_table}
+TABLES = {"stipple-tally": _stipple_tally, "color-quality": _color_table,
+          "color-summary": _color_summary}
 
 
 class BenchmarkTableDirective(Directive):
