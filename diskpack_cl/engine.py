@@ -3,17 +3,17 @@
 Both algorithms ask their engine one question per disk-packing step:
 ``engine.mic(points, weights)``, the certified MIC of every power cell.
 
-=========  ==============================================================
-engine     how
-=========  ==============================================================
-``cells``  OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
-           re-solved and checked on the host; the default on devices with
-           ``cl_khr_fp64``
-``raster`` OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
-           refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
-           devices without float64
-``exact``  :func:`diskpack_cl.geometry.exact_mic` alone (numpy/scipy, no OpenCL)
-=========  ==============================================================
+==========  ==============================================================
+engine      how
+==========  ==============================================================
+``cells``   OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
+            re-solved and checked on the host; the default on devices with
+            ``cl_khr_fp64``
+``raster``  OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
+            refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
+            devices without float64
+``exact``   :func:`diskpack_cl.geometry.exact_mic` alone (numpy/scipy, no OpenCL)
+==========  ==============================================================
 
 All three return the same MICs (to rounding, and exactly the same vertex
 where the MIC is unique): every answer is an LP optimum certified in float64.
