@@ -39,6 +39,7 @@ OPENCL_DOCTESTS = {
     "diskpack_cl._device.describe",
     "diskpack_cl._device.group_size",
     "diskpack_cl.raster.PowerRaster",
+    "diskpack_cl.raster.RasterResult",
     "diskpack_cl.cells.CellMIC",
     "diskpack_cl.cells3.CellMIC3",
 }

@@ -432,7 +432,14 @@ def mean_normalized_radius(points):
 
 
 class HexaticOrder(NamedTuple):
-    """Per-point ``|psi_6|`` and their mean."""
+    """Per-point ``|psi_6|`` and their mean.
+
+    Examples
+    --------
+    >>> order = hexatic_order(np.random.default_rng(0).random((200, 2)))
+    >>> order.psi6.shape, bool(0 < order.mean < 1)
+    ((200,), True)
+    """
 
     psi6: np.ndarray
     mean: float
@@ -780,7 +787,15 @@ def _stipple_inputs(points, darkness):
 
 
 class Spacing(NamedTuple):
-    """Per-point density-normalized spacing, its summary, and the expected density it used."""
+    """Per-point density-normalized spacing, its summary, and the expected density it used.
+
+    Examples
+    --------
+    >>> p = np.random.default_rng(1).random((400, 2)) * 40
+    >>> s = spacing(p, np.full((40, 40), 0.5))
+    >>> s.values.shape, bool(s.p01 < s.median)
+    ((400,), True)
+    """
 
     values: np.ndarray
     p01: float
@@ -859,7 +874,19 @@ def spacing(points, darkness, *, sigma=3.0, normalize="dot"):
 
 
 class StrayDots(NamedTuple):
-    """Dots with no ink near them: a mask, their count and their rate per 10 000 dots."""
+    """Dots with no ink near them: a mask, their count and their rate per 10 000 dots.
+
+    Examples
+    --------
+    Ink on the left half only; 100 dots there and one on the white right half:
+
+    >>> d = np.zeros((40, 40))
+    >>> d[:, :20] = 1.0
+    >>> p = np.vstack([np.random.default_rng(0).random((100, 2)) * [20, 40], [[35.0, 20.0]]])
+    >>> s = stray_dots(p, d)
+    >>> s.count, np.flatnonzero(s.mask).tolist()
+    (1, [100])
+    """
 
     mask: np.ndarray
     count: int
@@ -1015,7 +1042,17 @@ def _edge(p, d, drawing, sigma, edge, band):
 
 
 class Holes(NamedTuple):
-    """Solid-dark pixels far from every dot: a mask, their count and rate per 10 000."""
+    """Solid-dark pixels far from every dot: a mask, their count and rate per 10 000.
+
+    Examples
+    --------
+    Solid black, dots on the left half only: the right half is a hole.
+
+    >>> p = np.random.default_rng(0).random((200, 2)) * [20, 40]
+    >>> h = holes(p, np.ones((40, 40)))
+    >>> h.mask.shape, bool(h.mask[:, 35].all()), bool(h.mask[:, 5].any())
+    ((40, 40), True, False)
+    """
 
     mask: np.ndarray
     count: int

@@ -125,6 +125,15 @@ class StippleResult:
         Radius (px) at which n equal dots hold the image's darkness as ink
         (:func:`diskpack_cl.analysis.tone_radius`): what the writers draw by
         default.
+
+    Examples
+    --------
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> res = stipple(g, 60, schedule=[("mix", 3, 0.5)], backend="exact")
+    >>> res.points.shape, res.radii.shape, (res.width, res.height), len(res.history)
+    ((60, 2), (60,), (48, 32), 3)
+    >>> res.summary()["certificate"]["valid"]
+    True
     """
 
     points: np.ndarray
