@@ -58,3 +58,35 @@ def test_results_tables_build_from_the_stored_rows():
     assert {r[0] for r in rows} == {"before", "default"}
     header, rows = ext.TABLES["color-summary"]()
     assert len(rows) == 8 and rows[0][0] == "astronaut CMYK, 5000"
+
+
+def _guide_commands():
+    """``diskpack`` commands of the guide's bash blocks, less those with placeholders (``IMAGE``, ``...``)."""
+    import re
+    import shlex
+
+    out = []
+    for page in sorted((ROOT / "docs" / "guide").glob("*.md")):
+        for block in re.findall(r"^```bash\n(.*?)^```", page.read_text(encoding="utf-8"), flags=re.S | re.M):
+            for line in block.splitlines():
+                line = line.split(" #")[0].strip()
+                if not line.startswith("diskpack ") or "..." in line or "[" in line:
+                    continue
+                argv = shlex.split(line)[1:]
+                if any(re.fullmatch(r"[A-Z][A-Z0-9_]*", a) for a in argv):
+                    continue
+                out.append((page.name, argv))
+    return out
+
+
+def test_guide_commands_parse():
+    from diskpack_cl.cli import build_parser
+
+    commands = _guide_commands()
+    assert len(commands) >= 25
+    parser = build_parser()
+    for page, argv in commands:
+        try:
+            parser.parse_args(argv)
+        except SystemExit as exc:  # pragma: no cover - shown on failure
+            pytest.fail(f"{page}: diskpack {' '.join(argv)} does not parse (status {exc.code})")
