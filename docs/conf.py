@@ -34,6 +34,10 @@ extensions = [
     "diskpack_docs",
 ]
 
+# Option names such as --pen-mm appear in plain text (help strings in the
+# generated tables): smart quotes would turn their "--" into dashes.
+smartquotes = False
+
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py",
                     "auto_examples/*.zip", "auto_examples/*.md5", "auto_examples/*.json"]
