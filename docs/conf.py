@@ -8,7 +8,6 @@ the stored benchmark rows at build time, so they cannot drift from them.
 
 from __future__ import annotations
 
-import os
 import pkgutil
 import sys
 from pathlib import Path
@@ -26,7 +25,6 @@ release = version = diskpack_cl.__version__
 extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
-    "sphinx.ext.intersphinx",
     "sphinx.ext.mathjax",
     "numpydoc",
     "myst_parser",
@@ -54,13 +52,6 @@ autodoc_typehints = "none"
 numpydoc_show_class_members = False
 numpydoc_validation_checks: set = set()
 numpydoc_xref_param_type = False
-
-intersphinx_mapping = {
-    "python": ("https://docs.python.org/3", None),
-}
-# The build runs offline in CI: no inventory is fetched there.
-if os.environ.get("DISKPACK_DOCS_OFFLINE", "1") == "1":
-    intersphinx_mapping = {}
 
 html_theme = "pydata_sphinx_theme"
 html_title = "diskpack_cl"
