@@ -7,7 +7,7 @@ the SVG. Orders: Hilbert curve, greedy nearest neighbour, each improved by
 :func:`diskpack_cl.pen_path.two_opt` within a time budget, and the default
 (``method="auto"``). Each row: travel in mm, its ratio to Hilbert, seconds,
 and the plot time (:func:`diskpack_cl.export.plot_time`, every dot one pen
-touch). ``--markdown`` prints the README's table rows.
+touch). ``--markdown`` prints the table rows of docs/guide/plotters.md.
 
     python benchmarks/pen_path.py [-n 2000 20000 100000] [--budget 2] [--json out.json]
         [--markdown]
@@ -58,7 +58,7 @@ def main(argv=None):
     ap.add_argument("-n", type=int, nargs="+", default=[2000, 20000, 100000])
     ap.add_argument("--budget", type=float, default=2.0, help="2-opt time budget, s")
     ap.add_argument("--json", default=None, help="also write the rows here")
-    ap.add_argument("--markdown", action="store_true", help="print the README's table rows")
+    ap.add_argument("--markdown", action="store_true", help="print the table rows of docs/guide/plotters.md")
     args = ap.parse_args(argv)
     out, table = [], []
     for n in args.n:

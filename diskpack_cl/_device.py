@@ -31,7 +31,18 @@ _FIX = (
 
 
 class NoOpenCLError(RuntimeError):
-    """No usable OpenCL platform or device was found."""
+    """No usable OpenCL platform or device was found.
+
+    Examples
+    --------
+    Raised for a device that does not exist, and where OpenCL has no platform:
+
+    >>> try:
+    ...     get_context("no-such-device")
+    ... except NoOpenCLError as exc:
+    ...     print(type(exc).__name__, isinstance(exc, RuntimeError))
+    NoOpenCLError True
+    """
 
 
 def _platforms():
@@ -79,6 +90,17 @@ def list_devices():
     ------
     NoOpenCLError
         When there is no OpenCL platform.
+
+    Examples
+    --------
+    Empty where OpenCL has no platform; otherwise one row per device:
+
+    >>> try:
+    ...     rows = list_devices()
+    ... except NoOpenCLError:
+    ...     rows = []
+    >>> all(len(row) == 4 and row[3] for row in rows)
+    True
     """
     import pyopencl as cl
 

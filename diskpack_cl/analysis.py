@@ -1,14 +1,16 @@
 """Numbers users judge blue noise and stipplings by.
 
 Point sets on the unit torus [0,1)^2: the mean periodogram, its radial mean
-power and anisotropy (Lagae and Dutre 2008; Schlomer and Deussen 2011), the
-normalized Poisson disk radius rho and its mean-nearest-neighbour variant, and
-the local hexatic order |psi_6|.
+power and anisotropy (Lagae and Dutre 2008 [1]_; Schlomer and Deussen 2011
+[2]_; Heck, Schlomer and Deussen 2013 [3]_), the normalized Poisson disk
+radius rho and its mean-nearest-neighbour variant, and the local hexatic
+order ``|psi_6|``.
 
 Stipplings in pixel units (origin at the top-left pixel corner, x to the right,
 y down, pixel (row r, col c) covers [c, c+1) x [r, r+1)) against a darkness
-image (2-D float array in [0, 1], 1 = black): the tone SSIM, the density
-normalized spacing and :func:`stipple_measures`, which gathers them.
+image (2-D float array in [0, 1], 1 = black), as in weighted Voronoi
+stippling [4]_: the tone SSIM [5]_, the density normalized spacing and
+:func:`stipple_measures`, which gathers them.
 
 Everything here is numpy/scipy only and float64.
 
@@ -430,7 +432,14 @@ def mean_normalized_radius(points):
 
 
 class HexaticOrder(NamedTuple):
-    """Per-point |psi_6| and their mean."""
+    """Per-point ``|psi_6|`` and their mean.
+
+    Examples
+    --------
+    >>> order = hexatic_order(np.random.default_rng(0).random((200, 2)))
+    >>> order.psi6.shape, bool(0 < order.mean < 1)
+    ((200,), True)
+    """
 
     psi6: np.ndarray
     mean: float
@@ -473,11 +482,11 @@ def _circumcircles(a, b, c):
 
 
 def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
-    """Local hexatic order |psi_6| of every point, and its mean.
+    """Local hexatic order ``|psi_6|`` of every point, and its mean.
 
     ``psi_6(j) = (1 / N_j) sum_k exp(6 i theta_jk)`` over the N_j Voronoi
     neighbours k of point j (the points sharing a Delaunay edge with it),
-    theta_jk the direction from j to k. |psi_6| is 1 for a point with six
+    theta_jk the direction from j to k. ``|psi_6|`` is 1 for a point with six
     neighbours at multiples of 60 degrees (a hexagonal lattice) and about 0.3
     to 0.4 for uniform random points. Neighbours are counted with equal
     weights (not weighted by Voronoi edge length).
@@ -500,7 +509,7 @@ def hexatic_order(points, *, periodic=True, width=1.0, height=1.0):
     Returns
     -------
     HexaticOrder
-        ``psi6`` (n,) per-point |psi_6| and ``mean``. A point that coincides
+        ``psi6`` (n,) per-point ``|psi_6|`` and ``mean``. A point that coincides
         with another has no neighbours of its own and gets 0.
 
     Raises
@@ -778,7 +787,15 @@ def _stipple_inputs(points, darkness):
 
 
 class Spacing(NamedTuple):
-    """Per-point density-normalized spacing, its summary, and the expected density it used."""
+    """Per-point density-normalized spacing, its summary, and the expected density it used.
+
+    Examples
+    --------
+    >>> p = np.random.default_rng(1).random((400, 2)) * 40
+    >>> s = spacing(p, np.full((40, 40), 0.5))
+    >>> s.values.shape, bool(s.p01 < s.median)
+    ((400,), True)
+    """
 
     values: np.ndarray
     p01: float
@@ -857,7 +874,19 @@ def spacing(points, darkness, *, sigma=3.0, normalize="dot"):
 
 
 class StrayDots(NamedTuple):
-    """Dots with no ink near them: a mask, their count and their rate per 10 000 dots."""
+    """Dots with no ink near them: a mask, their count and their rate per 10 000 dots.
+
+    Examples
+    --------
+    Ink on the left half only; 100 dots there and one on the white right half:
+
+    >>> d = np.zeros((40, 40))
+    >>> d[:, :20] = 1.0
+    >>> p = np.vstack([np.random.default_rng(0).random((100, 2)) * [20, 40], [[35.0, 20.0]]])
+    >>> s = stray_dots(p, d)
+    >>> s.count, np.flatnonzero(s.mask).tolist()
+    (1, [100])
+    """
 
     mask: np.ndarray
     count: int
@@ -1013,7 +1042,17 @@ def _edge(p, d, drawing, sigma, edge, band):
 
 
 class Holes(NamedTuple):
-    """Solid-dark pixels far from every dot: a mask, their count and rate per 10 000."""
+    """Solid-dark pixels far from every dot: a mask, their count and rate per 10 000.
+
+    Examples
+    --------
+    Solid black, dots on the left half only: the right half is a hole.
+
+    >>> p = np.random.default_rng(0).random((200, 2)) * [20, 40]
+    >>> h = holes(p, np.ones((40, 40)))
+    >>> h.mask.shape, bool(h.mask[:, 35].all()), bool(h.mask[:, 5].any())
+    ((40, 40), True, False)
+    """
 
     mask: np.ndarray
     count: int

@@ -93,6 +93,13 @@ class Item:
     error : str or None
         Set when planning already failed (the item is recorded as failed
         without running).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> item = plan_poisson(3, 64, [os.path.join(tempfile.mkdtemp(), "{i:02d}.npz")], seed=1)[2]
+    >>> item.kind, item.i, item.input, os.path.basename(item.outputs[0])
+    ('poisson', 2, None, '02.npz')
     """
 
     kind: str
@@ -833,6 +840,17 @@ def run_batch(items, *, manifest=None, overwrite=False, jobs=1, devices=None, cl
     dict
         The record (see :func:`run_item`); ``"skipped"`` ones hold the
         identity and the earlier record's ``summary``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> out = tempfile.mkdtemp()
+    >>> items = plan_poisson(2, 64, [os.path.join(out, "{i}.npz")], seed=1)
+    >>> manifest = os.path.join(out, "manifest.jsonl")
+    >>> [r["status"] for r in run_batch(items, manifest=manifest)]
+    ['ok', 'ok']
+    >>> [r["status"] for r in run_batch(items, manifest=manifest)]   # done already
+    ['skipped', 'skipped']
     """
     man = Manifest(manifest) if manifest is not None else None
     folder = os.path.dirname(manifest or "")
@@ -922,6 +940,15 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
     ------
     ValueError
         No or several dot counts, a bad template, or two items sharing an output.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from diskpack_cl import sample_image_path
+    >>> items = plan_stipple([sample_image_path()], [os.path.join(tempfile.mkdtemp(), "{stem}_{n}.svg")],
+    ...                      density=400)
+    >>> [(it.kind, os.path.basename(it.outputs[0])) for it in items]
+    [('stipple', 'astronaut_105.svg')]
     """
     if sum(v is not None for v in (n, density, dots_per_cm2)) != 1:
         raise ValueError("give exactly one of n, density (dots per megapixel) and dots_per_cm2")
@@ -977,6 +1004,13 @@ def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
     a fresh one. ``init`` is ``"dart"`` or ``"random"``. ``relax`` (a
     :class:`~diskpack_cl.relax.RelaxOptions`) with ``overrides`` (its
     fields: ``eps``, ``max_iter``, ...) relaxes every set.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> items = plan_poisson(3, 64, [os.path.join(tempfile.mkdtemp(), "{i}.npz")], seed=7)
+    >>> [it.seed for it in items] == derive_seeds(7, 3)
+    True
     """
     if init not in ("dart", "random"):
         raise ValueError(f"init must be 'dart' or 'random' for many sets, got {init!r}")
@@ -996,7 +1030,19 @@ def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
 
 def plan_relax(inputs, outputs, relax=None, **overrides):
     """Items for relaxing every point file of ``inputs`` (see :func:`plan_poisson` for
-    ``relax`` and ``overrides``)."""
+    ``relax`` and ``overrides``).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from diskpack_cl.io import write_points
+    >>> folder = tempfile.mkdtemp()
+    >>> write_points(os.path.join(folder, "a.npy"), np.random.default_rng(0).random((64, 2)))
+    >>> items = plan_relax([os.path.join(folder, "a.npy")], [os.path.join(folder, "{stem}_relaxed.npz")])
+    >>> [(it.kind, os.path.basename(it.outputs[0])) for it in items]
+    [('relax', 'a_relaxed.npz')]
+    """
     params = _relax_params(relax, overrides)
     items = [Item("relax", i, os.fspath(path), None, params,
                   tuple(render_template(t, input=path, i=i) for t in outputs))
@@ -1014,6 +1060,14 @@ class Batch:
     manifest : str or None
     progress : callable or None
         ``progress(item, iteration, text)``, see :func:`run_batch`.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> out = tempfile.mkdtemp()
+    >>> batch = poisson_many(2, 64, [os.path.join(out, "{i}.npz")], seed=1)
+    >>> len(batch.items), [r["status"] for r in batch]
+    (2, ['ok', 'ok'])
     """
 
     def __init__(self, items, outputs, manifest, **run):
@@ -1072,6 +1126,14 @@ def poisson_many(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
     record's ``seed`` recreates its set alone. Without ``seed``, a rerun
     takes the seed of the run recorded in the manifest (else a fresh one). See :func:`plan_poisson` and
     :func:`run_batch`; the module's example shows a run and its resume.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> out = tempfile.mkdtemp()
+    >>> recs = list(poisson_many(2, 64, [os.path.join(out, "{i}.npz")], seed=1))
+    >>> sorted(os.path.basename(r["outputs"][0]) for r in recs)
+    ['0.npz', '1.npz']
     """
     if manifest is None:
         manifest = default_manifest(list(outputs))
@@ -1087,7 +1149,19 @@ def poisson_many(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
 
 def relax_many(inputs, outputs, relax=None, *, manifest=None, overwrite=False, jobs=1,
                devices=None, client=None, collect=False, progress=None, **overrides):
-    """Relax many point files; yield records as they finish (see :func:`plan_relax`)."""
+    """Relax many point files; yield records as they finish (see :func:`plan_relax`).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from diskpack_cl.io import write_points
+    >>> folder = tempfile.mkdtemp()
+    >>> write_points(os.path.join(folder, "a.npy"), np.random.default_rng(0).random((64, 2)))
+    >>> recs = list(relax_many([os.path.join(folder, "a.npy")], [os.path.join(folder, "{stem}.npz")], eps=0.7))
+    >>> [(r["status"], r["summary"]["rho_final"] >= 0.7) for r in recs]
+    [('ok', True)]
+    """
     items = plan_relax(inputs, outputs, relax, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)

@@ -78,7 +78,14 @@ def _keep_freed_memory():
 
 
 def has_fp64(ctx):
-    """True when the context's device supports double precision (``cl_khr_fp64``)."""
+    """True when the context's device supports double precision (``cl_khr_fp64``).
+
+    Examples
+    --------
+    >>> from diskpack_cl import get_context
+    >>> has_fp64(get_context()) in (True, False)
+    True
+    """
     return "cl_khr_fp64" in ctx.devices[0].extensions
 
 
@@ -106,6 +113,15 @@ class CellResult:
         Seconds: ``buckets``, ``device`` (upload, kernel, readback),
         ``refine`` (host re-solve and check), ``fallback``; with profiling,
         ``kernel`` (device time of the kernel alone).
+
+    Examples
+    --------
+    On an OpenCL device with float64:
+
+    >>> from diskpack_cl.domain import Domain
+    >>> res = CellMIC(Domain.torus()).solve(np.random.default_rng(0).random((100, 2)))
+    >>> res.centers.shape, bool(np.all(res.radii > 0)), bool(res.empty.any())
+    ((100, 2), True, False)
     """
 
     centers: np.ndarray

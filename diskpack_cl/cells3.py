@@ -109,7 +109,15 @@ class Domain3:
 
 @dataclass
 class MIS:
-    """Maximal inscribed spheres: ``centers (n, 3)``, ``radii (n,)``, ``stats``, ``timings``."""
+    """Maximal inscribed spheres: ``centers (n, 3)``, ``radii (n,)``, ``stats``, ``timings``.
+
+    Examples
+    --------
+    >>> X = np.random.default_rng(0).random((50, 3))
+    >>> mis = exact_mis(X, Domain3.torus())
+    >>> mis.centers.shape, bool(np.all(mis.radii > 0))
+    ((50, 3), True)
+    """
 
     centers: np.ndarray
     radii: np.ndarray

@@ -179,6 +179,12 @@ class Separation:
         Pen colours, sRGB in [0, 1].
     rgb : (H, W, 3) float64
         The image separated (sRGB in [0, 1], after the clean tolerances).
+
+    Examples
+    --------
+    >>> sep = separate(np.array([[[1.0, 0.0, 0.0], [1.0, 1.0, 1.0]]]), "cmy")
+    >>> sep.names, sep.layers.shape, sep.layers[:, 0, 1].tolist()
+    (('yellow', 'cyan', 'magenta'), (3, 1, 2), [0.0, 0.0, 0.0])
     """
 
     layers: np.ndarray
@@ -407,7 +413,16 @@ def render_pens(points, pen, radii, colors, shape, *, scale=3):
 
 
 def pen_tone_radii(layers, counts):
-    """Dot radius per pen at which its dots hold its layer's ink (1 where a pen has no dots)."""
+    """Dot radius per pen at which its dots hold its layer's ink (1 where a pen has no dots).
+
+    Examples
+    --------
+    Half coverage on 10 x 10 pixels is 50 pixels of ink: 50 dots of radius
+    ``1 / sqrt(pi)`` hold it; a pen without dots gets 1.
+
+    >>> pen_tone_radii(np.full((2, 10, 10), 0.5), [50, 0]).round(4).tolist()
+    [0.5642, 1.0]
+    """
     from .analysis import tone_radius
 
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
@@ -442,6 +457,15 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         (:func:`diskpack_cl.analysis.spacing`) of its dots against its
         layer (both None for a pen of fewer than :data:`MIN_DOTS` dots);
         ``p01_joint``: of all dots against all layers' coverage.
+
+    Examples
+    --------
+    >>> from diskpack_cl import stipple_colors
+    >>> img = np.dstack([np.tile(np.linspace(0, 1, 32), (24, 1)), np.full((24, 32), 0.3), np.full((24, 32), 0.8)])
+    >>> res = stipple_colors(img, 80, "cmyk", backend="exact", schedule=[("mix", 3, 0.5)])
+    >>> m = color_measures(res.points, res.pen, res.layers, res.colors, img)
+    >>> sorted(m), len(m["p01"]) == len(res.names)
+    (['delta_e', 'p01', 'p01_joint', 'sigma', 'ssim'], True)
     """
     from scipy import ndimage
 

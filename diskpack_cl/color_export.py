@@ -80,6 +80,19 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     dict
         As :func:`diskpack_cl.export.write_svg`'s (all layers together), and
         ``layers`` (name, colour, n, in drawing order).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from diskpack_cl import stipple_colors
+    >>> img = np.dstack([np.tile(np.linspace(0, 1, 32), (24, 1)), np.full((24, 32), 0.3), np.full((24, 32), 0.8)])
+    >>> res = stipple_colors(img, 80, "cmyk", backend="exact", schedule=[("mix", 3, 0.5)])
+    >>> path = os.path.join(tempfile.mkdtemp(), "dots.svg")
+    >>> _ = write_color_svg(path, res, width_mm=64)
+    >>> with open(path, encoding="utf-8") as fh:
+    ...     text = fh.read()
+    >>> [name for name in res.names if f'inkscape:label="{name}"' in text] == list(res.names)
+    True
     """
     from .multipen import hex_color
 
@@ -133,6 +146,19 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     -------
     dict
         ``width``, ``height`` (output pixels), ``n``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from PIL import Image
+    >>> from diskpack_cl import stipple_colors
+    >>> img = np.dstack([np.tile(np.linspace(0, 1, 32), (24, 1)), np.full((24, 32), 0.3), np.full((24, 32), 0.8)])
+    >>> res = stipple_colors(img, 80, "cmyk", backend="exact", schedule=[("mix", 3, 0.5)])
+    >>> path = os.path.join(tempfile.mkdtemp(), "dots.png")
+    >>> _ = write_color_png(path, res, scale=2.0)
+    >>> with Image.open(path) as im:
+    ...     im.mode, im.size
+    ('RGB', (64, 48))
     """
     from PIL import Image
 

@@ -3,17 +3,17 @@
 Both algorithms ask their engine one question per disk-packing step:
 ``engine.mic(points, weights)``, the certified MIC of every power cell.
 
-=========  ==============================================================
-engine     how
-=========  ==============================================================
-``cells``  OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
-           re-solved and checked on the host; the default on devices with
-           ``cl_khr_fp64``
-``raster`` OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
-           refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
-           devices without float64
-``exact``  :func:`diskpack_cl.geometry.exact_mic` alone (numpy/scipy, no OpenCL)
-=========  ==============================================================
+==========  ==============================================================
+engine      how
+==========  ==============================================================
+``cells``   OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
+            re-solved and checked on the host; the default on devices with
+            ``cl_khr_fp64``
+``raster``  OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
+            refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
+            devices without float64
+``exact``   :func:`diskpack_cl.geometry.exact_mic` alone (numpy/scipy, no OpenCL)
+==========  ==============================================================
 
 All three return the same MICs (to rounding, and exactly the same vertex
 where the MIC is unique): every answer is an LP optimum certified in float64.
@@ -56,6 +56,13 @@ class MICStep:
         Counts, summed by the caller over iterations.
     timings : dict
         Seconds per stage.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> step = ExactEngine(Domain.torus()).mic(np.array([[0.25, 0.5], [0.75, 0.5]]))
+    >>> step.radii.tolist(), step.empty.tolist()
+    ([0.25, 0.25], [False, False])
     """
 
     centers: np.ndarray
@@ -99,6 +106,16 @@ class RasterEngine:
 
     The route for devices without float64: the raster's argmax of the
     distance to the cell boundary starts the exact solver.
+
+    Examples
+    --------
+    On an OpenCL device:
+
+    >>> from diskpack_cl.domain import Domain
+    >>> pts = np.random.default_rng(0).random((100, 2))
+    >>> step = RasterEngine(Domain.torus(), 100).mic(pts)
+    >>> bool(np.allclose(step.radii, ExactEngine(Domain.torus()).mic(pts).radii, atol=1e-9))
+    True
     """
 
     name = "raster"
@@ -126,7 +143,18 @@ class RasterEngine:
 
 
 class CellEngine:
-    """MICs from the float64 per-cell kernel, checked on the host."""
+    """MICs from the float64 per-cell kernel, checked on the host.
+
+    Examples
+    --------
+    On an OpenCL device with float64:
+
+    >>> from diskpack_cl.domain import Domain
+    >>> pts = np.random.default_rng(0).random((100, 2))
+    >>> step = CellEngine(Domain.torus()).mic(pts)
+    >>> bool(np.allclose(step.radii, ExactEngine(Domain.torus()).mic(pts).radii, atol=1e-9))
+    True
+    """
 
     name = "cells"
     gives_nn = True
@@ -152,6 +180,16 @@ def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
     An independent check of any engine's answer: the same cells must be
     empty, and the radius of every other cell's maximal inscribed circle,
     which is unique, must equal scipy's to within `tol` times the domain size.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> pts = np.array([[0.25, 0.5], [0.75, 0.5]])
+    >>> check_against_exact(pts, None, Domain.torus(), np.array([0.25, 0.25]), np.array([False, False]))
+    >>> check_against_exact(pts, None, Domain.torus(), np.array([0.25, 0.2]), np.array([False, False]))
+    Traceback (most recent call last):
+    ...
+    RuntimeError: ...
     """
     ref = exact_mic(points, weights, domain)
     scale = max(domain.width, domain.height)

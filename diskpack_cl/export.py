@@ -654,6 +654,17 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
     -------
     dict
         ``width``, ``height`` (output pixels), ``n``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from PIL import Image
+    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> path = os.path.join(tempfile.mkdtemp(), "dots.png")
+    >>> info = write_png(path, res, scale=4.0, dots="packing")
+    >>> with Image.open(path) as im:
+    ...     im.size
+    (16, 8)
     """
     from PIL import Image
 
@@ -707,6 +718,15 @@ def write_npz(path, result):
     Also ``base_radii``, ``tone_radius`` and a JSON ``params`` string when
     the result has them, and ``certificate_<field>`` for each scalar field
     of the certificate.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> path = os.path.join(tempfile.mkdtemp(), "dots.npz")
+    >>> _ = write_npz(path, res)
+    >>> np.load(path)["radii"].tolist()
+    [0.5, 0.5]
     """
     p, r, W, H = _arrays(result)
     data = {
@@ -749,6 +769,15 @@ def write_csv(path, result):
     then ``width=W height=H`` and, when known, ``k=`` and ``tone_radius=``),
     so that :func:`read_stipple` reads the stippling back; CSV readers skip
     it with ``comment="#"`` (numpy, pandas).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> path = os.path.join(tempfile.mkdtemp(), "dots.csv")
+    >>> _ = write_csv(path, res)
+    >>> Path(path).read_text().splitlines()[1:]
+    ['x,y,r', '1,1,0.5', '3,1,0.5']
     """
     p, r, W, H = _arrays(result)
     tone = getattr(result, "tone_radius", None)
@@ -790,6 +819,16 @@ def check_output_path(path):
         there and removed, see :func:`diskpack_cl.io.check_writable`).
     FileNotFoundError
         The output directory does not exist.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> check_output_path(os.path.join(tempfile.mkdtemp(), "out.svg"))
+    '.svg'
+    >>> check_output_path("out.bmp")
+    Traceback (most recent call last):
+    ...
+    ValueError: ...
     """
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
@@ -811,6 +850,15 @@ def write_stipple(path, result, **opts):
     ``.svg`` (:func:`write_svg`), ``.png`` (:func:`write_png`), ``.npz``
     (:func:`write_npz`), ``.csv`` (:func:`write_csv`); ``opts`` go to the
     writer. Returns the writer's info dict.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> path = os.path.join(tempfile.mkdtemp(), "dots.svg")
+    >>> info = write_stipple(path, res, width_mm=40, dots="packing")
+    >>> read_stipple(path).points.tolist()
+    [[1.0, 1.0], [3.0, 1.0]]
     """
     ext = check_output_path(path)
     if getattr(result, "pen", None) is not None and ext in (".svg", ".png"):

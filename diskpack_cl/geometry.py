@@ -174,7 +174,15 @@ _COVER_RTOL = 1e-12
 
 @dataclass
 class MIC:
-    """Certified maximal inscribed circles of power cells (see :func:`exact_mic`)."""
+    """Certified maximal inscribed circles of power cells (see :func:`exact_mic`).
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> mic = exact_mic(np.array([[0.25, 0.5], [0.75, 0.5]]), domain=Domain.torus())
+    >>> mic.radii.tolist(), mic.empty.tolist()
+    ([0.25, 0.25], [False, False])
+    """
 
     centers: np.ndarray
     radii: np.ndarray
@@ -734,6 +742,15 @@ def chebyshev_center_linprog(normals, beta):
     `normals` must be unit vectors.  Returns ``(center (2,), radius)``; the
     radius is negative when the set is empty.  The independent reference for
     :func:`exact_mic`.
+
+    Examples
+    --------
+    The unit square as ``x <= 1, -x <= 0, y <= 1, -y <= 0``:
+
+    >>> centre, radius = chebyshev_center_linprog(np.array([[1.0, 0], [-1, 0], [0, 1], [0, -1]]),
+    ...                                           np.array([1.0, 0, 1, 0]))
+    >>> centre.tolist(), float(radius)
+    ([0.5, 0.5], 0.5)
     """
     from scipy.optimize import linprog
 
@@ -750,6 +767,14 @@ class CertificateError(ValueError):
     Attributes
     ----------
     certificate : Certificate
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> touching = certify_disks(np.array([[1.0, 1.0], [2.0, 1.0]]), np.array([0.5, 0.5]), Domain.rect(4, 2))
+    >>> exc = CertificateError("disks overlap", touching)
+    >>> isinstance(exc, ValueError), exc.certificate.disjoint
+    (True, False)
     """
 
     def __init__(self, message, certificate):
@@ -759,7 +784,15 @@ class CertificateError(ValueError):
 
 @dataclass
 class Certificate:
-    """Exact float64 check that disks lie in the domain and are pairwise disjoint."""
+    """Exact float64 check that disks lie in the domain and are pairwise disjoint.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> c = certify_disks(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.9, 0.9]), Domain.rect(4, 2))
+    >>> c.valid, c.inside, c.disjoint, round(c.min_gap, 6)
+    (True, True, True, 0.1)
+    """
 
     valid: bool
     min_gap: float          # smallest d_ij - r_i - r_j over checked pairs (and edge clearances)

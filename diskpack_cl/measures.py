@@ -78,7 +78,17 @@ PLANE = Domain(float("inf"), float("inf"), False)
 
 
 def as_domain(domain):
-    """The domain ``domain`` names: a Domain, True (unit torus), (W, H) (torus) or False (plane)."""
+    """The domain ``domain`` names: a Domain, True (unit torus), (W, H) (torus) or False (plane).
+
+    Examples
+    --------
+    >>> as_domain(True)
+    Domain(width=1.0, height=1.0, periodic=True)
+    >>> as_domain((2, 1)).area
+    2.0
+    >>> as_domain(False).periodic
+    False
+    """
     if isinstance(domain, Domain):
         return domain
     if domain is True:

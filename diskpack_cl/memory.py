@@ -23,11 +23,25 @@ HOST_BYTES_PER_PNG_PIXEL = 32  # ink coverage, gray values, the encoded image
 
 
 class MemoryLimit(NamedOptionError):
-    """A size that memory cannot hold; the message names the option to lower."""
+    """A size that memory cannot hold; the message names the option to lower.
+
+    Examples
+    --------
+    >>> exc = MemoryLimit("lower {}", "supersample")
+    >>> str(exc), isinstance(exc, ValueError)
+    ('lower supersample', True)
+    """
 
 
 def available_memory():
-    """Bytes of memory the machine has available now (MemAvailable), or None."""
+    """Bytes of memory the machine has available now (MemAvailable), or None.
+
+    Examples
+    --------
+    >>> free = available_memory()
+    >>> free is None or free > 0
+    True
+    """
     try:
         with open("/proc/meminfo") as fh:
             for line in fh:
@@ -75,6 +89,16 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
     ------
     MemoryLimit
         Naming the option to lower and the largest value that fits.
+
+    Examples
+    --------
+    With ``free`` given (bytes), the check does not read the machine:
+
+    >>> check_stipple_memory(512, 512, 20000, free=8 * 2**30)
+    >>> check_stipple_memory(512, 512, 20000, free=10**6)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.memory.MemoryLimit: supersample 2 makes a 1024x1024 raster ...
     """
     from .schedule import auto_supersample
 

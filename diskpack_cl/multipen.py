@@ -84,6 +84,16 @@ class ColorStippleResult:
     pen_radius : (P,) float64
         Drawn dot radius per pen (px): its dots then hold its layer's ink
         (:func:`diskpack_cl.color.pen_tone_radii`); what the writers draw.
+
+    Examples
+    --------
+    >>> from diskpack_cl import stipple_colors
+    >>> img = np.dstack([np.tile(np.linspace(0, 1, 32), (24, 1)), np.full((24, 32), 0.3), np.full((24, 32), 0.8)])
+    >>> res = stipple_colors(img, 80, "cmyk", backend="exact", schedule=[("mix", 3, 0.5)])
+    >>> res.names, int(res.counts.sum()), res.certificate.valid
+    (('yellow', 'cyan', 'magenta', 'black'), 80, True)
+    >>> sorted(set(res.pen.tolist())) == list(range(len(res.names)))
+    True
     """
 
     points: np.ndarray

@@ -37,6 +37,12 @@ class NamedOptionError(ValueError):
 
     The message is a template whose ``{}`` are option names; :meth:`render`
     spells them, as Python names (``str``) or as command-line flags.
+
+    Examples
+    --------
+    >>> exc = NamedOptionError("{} must be at most 1", "k_quantile")
+    >>> str(exc), exc.render(flag_name)
+    ('k_quantile must be at most 1', '--k-quantile must be at most 1')
     """
 
     def __init__(self, template, *names):
@@ -60,7 +66,13 @@ class OptionConflict(NamedOptionError):
 
 
 def flag_name(name):
-    """The command-line flag of a field: ``k_quantile`` -> ``--k-quantile``."""
+    """The command-line flag of a field: ``k_quantile`` -> ``--k-quantile``.
+
+    Examples
+    --------
+    >>> flag_name("k_quantile")
+    '--k-quantile'
+    """
     return "--" + name.replace("_", "-")
 
 
@@ -94,6 +106,16 @@ def option(default, help, *, unit=None, lo=None, hi=None, lo_open=False, hi_open
     cli_choices, cli_type : optional
         What the command line takes where the library takes more (a
         schedule name, not a list of phases; a seed, not a generator).
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass, fields
+    >>> @dataclass(frozen=True)
+    ... class Pen:
+    ...     width_mm: float = option(0.5, "pen width", unit="mm", lo=0, lo_open=True)
+    >>> m = fields(Pen)[0].metadata
+    >>> m["unit"], m["help"], Pen().width_mm
+    ('mm', 'pen width', 0.5)
     """
     meta = dict(help=help, unit=unit, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open,
                 integer=integer, choices=choices, check=check, metavar=metavar, cli=cli,
@@ -150,6 +172,16 @@ def check_fields(obj):
     """Validate every field of the frozen dataclass ``obj`` (None passes where it is the default).
 
     Converts in place: integers to int, ranged numbers to float, flags to bool.
+
+    Examples
+    --------
+    ``ToneOptions`` calls it from ``__post_init__``:
+
+    >>> from diskpack_cl import ToneOptions
+    >>> ToneOptions(black_point=2)
+    Traceback (most recent call last):
+    ...
+    ValueError: black_point must be in [0, 1], got 2.0
     """
     for f in dataclasses.fields(obj):
         if "help" not in f.metadata:
@@ -165,7 +197,15 @@ def check_fields(obj):
 
 
 def describe(cls):
-    """``{name: {default, help, unit, range, choices}}`` of the options of ``cls``."""
+    """``{name: {default, help, unit, range, choices}}`` of the options of ``cls``.
+
+    Examples
+    --------
+    >>> from diskpack_cl import ToneOptions
+    >>> d = describe(ToneOptions)
+    >>> list(d), d["black_point"]["range"]
+    (['black_point', 'white_point', 'tone_gamma'], 'in [0, 1]')
+    """
     out = {}
     for f in dataclasses.fields(cls):
         m = f.metadata
@@ -208,6 +248,16 @@ def add_arguments(parser, cls, *, groups=None, skip=()):
     ``groups`` maps a field's ``group`` title to an argument group (created
     on ``parser`` when missing). A field already on the parser (``invert``
     of two dataclasses) is added once. Every default is the field's.
+
+    Examples
+    --------
+    >>> from diskpack_cl import ToneOptions
+    >>> parser = argparse.ArgumentParser()
+    >>> _ = add_arguments(parser, ToneOptions)
+    >>> parser.parse_args(["--black-point", "0.1"]).black_point
+    0.1
+    >>> parser.parse_args([]).white_point
+    1.0
     """
     groups = {} if groups is None else groups
     have = {a.dest for a in parser._actions}
@@ -234,13 +284,29 @@ def add_arguments(parser, cls, *, groups=None, skip=()):
 
 def changed(obj):
     """``{name: value}`` of the fields of ``obj`` that differ from their defaults (JSON-ready
-    when the values are); ``type(obj)(**changed(obj)) == obj``."""
+    when the values are); ``type(obj)(**changed(obj)) == obj``.
+
+    Examples
+    --------
+    >>> from diskpack_cl import ToneOptions
+    >>> changed(ToneOptions(tone_gamma=1.5))
+    {'tone_gamma': 1.5}
+    """
     return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)
             if getattr(obj, f.name) != f.default}
 
 
 def from_namespace(cls, args, **overrides):
-    """An instance of ``cls`` from the parsed ``args`` (its command-line fields)."""
+    """An instance of ``cls`` from the parsed ``args`` (its command-line fields).
+
+    Examples
+    --------
+    >>> from diskpack_cl import ToneOptions
+    >>> parser = argparse.ArgumentParser()
+    >>> _ = add_arguments(parser, ToneOptions)
+    >>> from_namespace(ToneOptions, parser.parse_args(["--tone-gamma", "2"]))
+    ToneOptions(black_point=0.0, white_point=1.0, tone_gamma=2.0)
+    """
     values = {f.name: getattr(args, f.name) for f in dataclasses.fields(cls)
               if f.metadata.get("cli") and hasattr(args, f.name)}
     values.update(overrides)

@@ -228,7 +228,7 @@ def pen_path_order(points, *, method="auto", start=(0.0, 0.0), budget_s=2.0):
         of the two (Hilbert only above :data:`GREEDY_MAX` dots), then
         :func:`two_opt` for at most ``budget_s`` seconds: on stipplings of
         2 000 and 20 000 dots 7 % shorter than Hilbert and 13 % than greedy
-        (``benchmarks/pen_path.py`` and the README);
+        (``benchmarks/pen_path.py``; the table is in the docs' plotter guide);
         ``"none"``: as given. Every method keeps the given order when it is
         not longer.
     start : (2,) array_like

@@ -204,7 +204,7 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     (dashed: ``-10 log10(K)``, the value of K averaged isotropic
     realizations). The title carries n, rho (exact, from
     :func:`diskpack_cl.normalized_radius`), the mean nearest-neighbour
-    rho and the mean |psi_6|.
+    rho and the mean ``|psi_6|``.
 
     Parameters
     ----------
@@ -393,6 +393,15 @@ def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0
         :func:`diskpack_cl.analysis.stipple_measures` plus ``tone_radius``,
         ``radius_min``, ``radius_median``, ``radius_max`` (when radii are
         given) and ``certificate`` (a dict of its fields, when given).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> p = np.random.default_rng(0).random((60, 2)) * 20
+    >>> numbers = stipple_report(p, np.full(60, 0.5), np.full((20, 20), 0.5),
+    ...                          os.path.join(tempfile.mkdtemp(), "report.png"))
+    >>> numbers["n"], "radius_max" in numbers
+    (60, True)
     """
     fmt = figure_format(path)
     numbers = stipple_numbers(points, radii, darkness, certificate, sigma=sigma)

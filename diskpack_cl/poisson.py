@@ -63,6 +63,12 @@ class PoissonDiskResult:
         Wall time of the relaxation and of the start set.
     eps : float
         The rho the relaxation aimed at.
+
+    Examples
+    --------
+    >>> res = poisson_disk(200, seed=0, backend="exact")
+    >>> res.points.shape, res.reached, bool(res.rho >= 0.8), res.stop_reason
+    ((200, 2), True, True, 'eps')
     """
 
     points: np.ndarray

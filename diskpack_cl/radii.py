@@ -24,6 +24,14 @@ def base_radii(gray, points, *, gamma=3.0, floor=0.1):
 
     The paper's mapping (w_i = k^2 I_i^gamma) with a floor so that black
     regions keep a positive radius.
+
+    Examples
+    --------
+    The paper's mapping: a black pixel gets ``floor ** 1.5``, a white one 1.
+
+    >>> gray = np.array([[0.0, 1.0]])
+    >>> base_radii(gray, np.array([[0.5, 0.5], [1.5, 0.5]])).round(4).tolist()
+    [0.0316, 1.0]
     """
     g = np.asarray(gray, dtype=np.float64)
     H, W = g.shape
@@ -178,6 +186,13 @@ def largest_valid_k(points, r, width, height):
     k : float
         ``min(min_i edge_i / r_i, min_ij d_ij / (r_i + r_j))``; 0 when two
         points coincide or a point lies on the border.
+
+    Examples
+    --------
+    Two unit disks 2 apart in a 4 x 2 box: they touch each other and the walls at k = 1.
+
+    >>> largest_valid_k(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([1.0, 1.0]), 4, 2)
+    1.0
     """
     from scipy.spatial import cKDTree
 

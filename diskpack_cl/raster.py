@@ -44,6 +44,11 @@ def auto_grid(n, domain, cells_per_site=16):
     about half a grid cell of the exact one (median), close enough for the
     exact stage to find the active constraints among the six least slack on
     almost every cell; finer grids cost raster time and save little there.
+
+    Examples
+    --------
+    >>> auto_grid(1024, Domain.torus())
+    (128, 128)
     """
     h = np.sqrt(domain.area / (max(int(n), 1) * cells_per_site))
     return (max(int(np.ceil(domain.height / h)), 4), max(int(np.ceil(domain.width / h)), 4))
@@ -62,6 +67,15 @@ class RasterResult:
         owns no grid cell (empty, or smaller than the raster resolves).
     timings : dict
         Seconds spent in ``raster_labels`` and ``mic_estimate``.
+
+    Examples
+    --------
+    Made by :meth:`PowerRaster.compute` (on an OpenCL device):
+
+    >>> raster = PowerRaster(Domain.torus(), (64, 64))
+    >>> res = raster.compute(np.random.default_rng(0).random((50, 2)))
+    >>> res.centers.shape, res.radii.shape, res.shape
+    ((50, 2), (50,), (64, 64))
     """
 
     centers: np.ndarray

@@ -89,6 +89,13 @@ class RelaxResult:
         ``auto`` chose exact, if it did), and the engine's counts summed over
         iterations (cells the device could not prove and their fallback; for
         the exact solver, widened and linprog cells).
+
+    Examples
+    --------
+    >>> from diskpack_cl.sampling import dart_throwing
+    >>> res = relax_poisson(dart_throwing(200, seed=0), eps=0.8, backend="exact")
+    >>> res.stop_reason, bool(res.rho[-1] >= 0.8), len(res.rho) == res.iterations + 1
+    ('eps', True, True)
     """
 
     points: np.ndarray
@@ -286,6 +293,12 @@ class RadiusResult:
         ``rho`` (final), ``iterations``, ``stop_reason``, ``seconds``.
     seconds : float
         Wall time of the whole search.
+
+    Examples
+    --------
+    >>> res = max_points_for_radius(0.06, seed=0, backend="exact")
+    >>> bool(res.achieved_radius >= 0.06), res.n == len(res.points), res.n > 0
+    (True, True, True)
     """
 
     points: np.ndarray

@@ -17,7 +17,13 @@ PLOT_HINT = 'figures need matplotlib: pip install "diskpack_cl[plot]"'
 
 
 def have_matplotlib():
-    """Whether matplotlib can be imported (the report figures need it)."""
+    """Whether matplotlib can be imported (the report figures need it).
+
+    Examples
+    --------
+    >>> have_matplotlib()
+    True
+    """
     try:
         return importlib.util.find_spec("matplotlib.figure") is not None
     except (ImportError, ValueError):
@@ -35,6 +41,15 @@ def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, 
     ValueError
         A stippling with other files, without `image` or of another size; an
         `image` for point sets; points off the unit torus or coinciding.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from diskpack_cl.io import write_points
+    >>> path = os.path.join(tempfile.mkdtemp(), "points.csv")
+    >>> write_points(path, np.random.default_rng(1).random((50, 2)))
+    >>> analyze([path], kmax=8)["n"]
+    50
     """
     from .export import read_stipple
 
@@ -52,7 +67,22 @@ def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, 
 
 def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large=False,
                       sigma=3.0, title=None):
-    """Tone, spacing and the certificate (re-checked) of the stippling `st` read from `path`."""
+    """Tone, spacing and the certificate (re-checked) of the stippling `st` read from `path`.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from PIL import Image
+    >>> from diskpack_cl import stipple, write_stipple, read_stipple
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> folder = tempfile.mkdtemp()
+    >>> image, path = os.path.join(folder, "ramp.png"), os.path.join(folder, "s.npz")
+    >>> Image.fromarray((g * 255).astype(np.uint8)).save(image)
+    >>> _ = write_stipple(path, stipple(image, 60, schedule=[("mix", 3, 0.5)], backend="exact"))
+    >>> numbers = analyze_stippling(path, read_stipple(path), image)
+    >>> numbers["n"], numbers["certificate"]["valid"]
+    (60, True)
+    """
     from .geometry import Domain, certify_disks
     from .image import load_gray
 
@@ -80,7 +110,18 @@ def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large
 
 
 def analyze_point_sets(paths, *, output=None, kmax=None, title=None):
-    """Spectra and measures of the point files `paths` (realizations of one process)."""
+    """Spectra and measures of the point files `paths` (realizations of one process).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from diskpack_cl.io import write_points
+    >>> path = os.path.join(tempfile.mkdtemp(), "points.npy")
+    >>> write_points(path, np.random.default_rng(0).random((100, 2)))
+    >>> numbers = analyze_point_sets([path], kmax=8)
+    >>> numbers["n"], numbers["realizations"]
+    (100, 1)
+    """
     from .io import read_points
     from .measures import nearest_neighbor_distances
 

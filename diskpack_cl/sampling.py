@@ -28,7 +28,19 @@ __all__ = [
 
 
 class DartThrowingWarning(UserWarning):
-    """Dart throwing could not place n points at the requested radius and shrank it."""
+    """Dart throwing could not place n points at the requested radius and shrank it.
+
+    Examples
+    --------
+    Above the saturation of dart throwing (about rho 0.78) it warns at once:
+
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     points = dart_throwing(200, rel_radius=0.9, seed=0)
+    >>> points.shape, {w.category.__name__ for w in caught}
+    ((200, 2), {'DartThrowingWarning'})
+    """
 
 
 #: Relative radius at which maximal dart throwing saturates (0.77 to 0.78 with n):

@@ -125,6 +125,15 @@ class StippleResult:
         Radius (px) at which n equal dots hold the image's darkness as ink
         (:func:`diskpack_cl.analysis.tone_radius`): what the writers draw by
         default.
+
+    Examples
+    --------
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> res = stipple(g, 60, schedule=[("mix", 3, 0.5)], backend="exact")
+    >>> res.points.shape, res.radii.shape, (res.width, res.height), len(res.history)
+    ((60, 2), (60,), (48, 32), 3)
+    >>> res.summary()["certificate"]["valid"]
+    True
     """
 
     points: np.ndarray
@@ -169,6 +178,20 @@ class StippleState:
 
     ``ink`` (``capacity > 0``): per-dot factors on the radius field that
     :func:`equal_ink` adjusts each step; None means all 1.
+
+    Examples
+    --------
+    The start of a stippling loop, as :func:`stipple` makes it (exact engine):
+
+    >>> from diskpack_cl.stipple_engine import make_stipple_engine
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> opt = StippleOptions().plan(60, 48, 32)
+    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> stage = _make_stage(g, opt, engine)
+    >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
+
+    >>> state.points.shape, state.packs
+    ((60, 2), 0)
     """
 
     points: np.ndarray
@@ -179,7 +202,22 @@ class StippleState:
 
 @dataclass(frozen=True)
 class StippleStage:
-    """What every step works against: engine, options, radius field, centroid density."""
+    """What every step works against: engine, options, radius field, centroid density.
+
+    Examples
+    --------
+    The stage of a 48 x 32 gray ramp, as :func:`stipple` makes it (exact engine):
+
+    >>> from diskpack_cl.stipple_engine import make_stipple_engine
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> opt = StippleOptions().plan(60, 48, 32)
+    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> stage = _make_stage(g, opt, engine)
+    >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
+
+    >>> stage.size, stage.radius_field.shape == stage.density.shape == g.shape
+    ((48, 32), True)
+    """
 
     engine: object
     options: StipplePlan
@@ -301,6 +339,19 @@ def pack_step(state, stage, blend=0.0):
     towards the centroid instead (:func:`off_support`). Returns ``(state,
     entry)``: the next state and this step's measurements (``moved``,
     ``empty``, stage seconds); see the module docstring.
+
+    Examples
+    --------
+    >>> from diskpack_cl.stipple_engine import make_stipple_engine
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> opt = StippleOptions().plan(60, 48, 32)
+    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> stage = _make_stage(g, opt, engine)
+    >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
+
+    >>> state, entry = pack_step(state, stage, blend=0.5)
+    >>> state.packs, entry["empty"], entry["moved"] > 0
+    (1, 0, True)
     """
     x, opt = state.points, stage.options
     r = dot_radii(state, stage, x)
@@ -340,6 +391,19 @@ def lloyd_step(state, stage, new_k=True):
     (at least 1e-6), which the next disk-packing step starts from; without,
     it is kept (Lloyd steps do not use it, and finding it is an exact pair
     search).  Returns ``(state, entry)`` like :func:`pack_step`.
+
+    Examples
+    --------
+    >>> from diskpack_cl.stipple_engine import make_stipple_engine
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> opt = StippleOptions().plan(60, 48, 32)
+    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> stage = _make_stage(g, opt, engine)
+    >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
+
+    >>> new, entry = lloyd_step(state, stage)
+    >>> new.packs, entry["empty"], bool(new.k > 0)
+    (0, 0, True)
     """
     x = state.points
     cen, mass, seconds = stage.engine.centroids(x, np.zeros(len(x)), stage.density)

@@ -47,6 +47,14 @@ class CellMICs:
 
     ``radii`` < 0 or ``empty``: no circle (the centre is then the site);
     ``timings``: seconds per stage (``raster``, ``exact``).
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> engine = make_stipple_engine(Domain.rect(48, 32), (64, 96), "exact")
+    >>> mics = engine.mic(np.random.default_rng(0).random((30, 2)) * [48, 32], np.zeros(30))
+    >>> mics.centers.shape, bool(np.all(mics.radii > 0)), bool(mics.empty.any())
+    ((30, 2), True, False)
     """
 
     centers: np.ndarray
@@ -86,6 +94,17 @@ class OpenCLStippleEngine:
     profile : bool
         Time the kernels with OpenCL events: every answer's timings then
         hold ``kernel``, the device seconds of its kernels.
+
+    Examples
+    --------
+    On an OpenCL device:
+
+    >>> from diskpack_cl.domain import Domain
+    >>> pts = np.random.default_rng(0).random((30, 2)) * [48, 32]
+    >>> mics = OpenCLStippleEngine(Domain.rect(48, 32), (64, 96)).mic(pts, np.zeros(30))
+    >>> exact = make_stipple_engine(Domain.rect(48, 32), (64, 96), "exact").mic(pts, np.zeros(30))
+    >>> bool(np.allclose(mics.radii, exact.radii, atol=1e-9))
+    True
     """
 
     name = "opencl"
@@ -195,7 +214,16 @@ class ExactStippleEngine:
 
 class VerifiedEngine:
     """An engine whose every MIC answer is checked against :func:`exact_mic`
-    (``stipple(verify=True)``): RuntimeError on a mismatch."""
+    (``stipple(verify=True)``): RuntimeError on a mismatch.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> engine = VerifiedEngine(make_stipple_engine(Domain.rect(48, 32), (64, 96), "exact"))
+    >>> mics = engine.mic(np.random.default_rng(0).random((30, 2)) * [48, 32], np.zeros(30))
+    >>> mics.radii.shape
+    (30,)
+    """
 
     def __init__(self, engine):
         self.engine = engine

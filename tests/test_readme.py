@@ -1,98 +1,129 @@
-"""The README's option tables state the defaults the command-line parser has."""
+"""The README: short, a picture first, live links, and code blocks that run.
 
-import inspect
+Its option tables moved to the docs, where they are generated from the
+parser and the option dataclasses (``docs/_ext/diskpack_docs.py``, checked in
+``tests/test_docs.py``); what stays in the README is run here: every Python
+block, every ``diskpack`` command parsed by the real parser, and the set-up
+command (a) and the plotter quickstart run end to end on the bundled sample.
+"""
+
+import os
 import re
+import shlex
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-from diskpack_cl.cli import build_parser
-from diskpack_cl.export import write_svg
-from diskpack_cl.relax import relax_poisson
-from diskpack_cl.schedule import GAMMA_DEFAULT
+from diskpack_cl.cli import build_parser, main
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
 
 
-def _table_after(text, marker):
-    """Rows ``(options cell, meaning cell)`` of the first table after `marker`."""
-    lines = text[text.index(marker):].splitlines()
-    start = next(i for i, line in enumerate(lines) if line.startswith("| option"))
-    rows = []
-    for line in lines[start + 2:]:
-        if not line.startswith("|"):
-            break
-        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
-        rows.append((cells[0], cells[1]))
-    return rows
+def _blocks(lang):
+    """The bodies of the README's fenced code blocks in ``lang``."""
+    text = README.read_text(encoding="utf-8")
+    return re.findall(rf"^```{lang}\n(.*?)^```", text, flags=re.S | re.M)
 
 
-def _subparser(name):
-    parser = build_parser()
-    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
-    return sub.choices[name]
-
-
-def _stated_defaults(first, meaning):
-    """``{option: default}`` a row states: a number or a backticked choice.
-
-    A ``(default X)`` right after a backticked ``--option`` is that option's;
-    one with no option named before it in the cell is the row's own (first)
-    option's; others (a default of another mode) are not read.
-    """
-    out = {}
-    for m in re.finditer(r"`([\w-]+)` \(default\)|\(default:? (-?[0-9][0-9.e+-]*)[;:,)\s]", meaning):
-        before = meaning[:m.start()]
-        if m.group(1):
-            out[first] = m.group(1)
-        elif re.search(r"`(--[\w-]+)`\s*$", before):       # "`--dart-radius` (default 0.74)"
-            out[re.search(r"`(--[\w-]+)`\s*$", before).group(1)] = float(m.group(2))
-        elif "`--" not in before:                             # the row's own option
-            out[first] = float(m.group(2))
+def _commands(block):
+    """Shell commands of a block: one per line, split at ``&&``, comments dropped."""
+    out = []
+    for line in block.splitlines():
+        line = line.split(" #")[0].strip()
+        if line and not line.startswith("#"):
+            out += [shlex.split(part) for part in line.split("&&")]
     return out
 
 
-#: Where an option the parser leaves as None gets its default.
-LIBRARY = {"poisson": [relax_poisson], "relax": [relax_poisson],
-           "stipple": [{"gamma": GAMMA_DEFAULT}, write_svg]}
+def _diskpack_commands():
+    """Arguments of every ``diskpack`` (or ``.venv/bin/diskpack``) command in the README's bash
+    blocks and inline code (those that elide arguments with ``...`` left out)."""
+    blocks = [argv[1:] for block in _blocks("bash") for argv in _commands(block)
+              if argv and Path(argv[0]).name == "diskpack"]
+    inline = re.findall(r"`diskpack ([^`]+)`", README.read_text(encoding="utf-8"))
+    return blocks + [shlex.split(c) for c in inline if "..." not in c]
 
 
-def _effective_default(command, action):
-    if action.default is not None:
-        return action.default
-    for func in LIBRARY[command]:
-        if isinstance(func, dict):      # a default the options resolve (None: 3.0)
-            if action.dest in func:
-                return func[action.dest]
-            continue
-        p = inspect.signature(func).parameters.get(action.dest)
-        if p is not None and p.default is not inspect.Parameter.empty:
-            return p.default
-    return None
+def test_readme_is_short_with_a_picture_first():
+    text = README.read_text(encoding="utf-8")
+    assert len(text.encode("utf-8")) < 10_000, "the README is over 10 KB: move detail into docs/"
+    first = next(line for line in text.splitlines()[1:] if line.strip())
+    m = re.fullmatch(r"!\[[^\]]+\]\(([^)]+)\)", first)
+    assert m, f"the README's first line after the title is not a picture: {first!r}"
+    assert (ROOT / m.group(1)).is_file(), m.group(1)
 
 
-def _rows(marker, command):
-    sub = _subparser(command)
-    options = {s: a for a in sub._actions for s in a.option_strings}
-    for cell, meaning in _table_after(README.read_text(encoding="utf-8"), marker):
-        first = next(iter(re.findall(r"`(--[\w-]+)", cell)), None)
-        for opt, stated in _stated_defaults(first, meaning).items():
-            if opt in options:
-                yield opt, stated, _effective_default(command, options[opt])
+def test_readme_links_point_at_files():
+    targets = re.findall(r"\]\((?!https?://)([^)#]+)", README.read_text(encoding="utf-8"))
+    assert len(targets) >= 10
+    missing = [t for t in targets if not (ROOT / t).exists()]
+    assert not missing, f"README links to missing files: {missing}"
 
 
-@pytest.mark.parametrize("marker, command", [
-    ("Options of `poisson` and `relax`:", "poisson"),
-    ("Options of `poisson` and `relax`:", "relax"),
-    ("### `diskpack stipple`", "stipple"),
-])
-def test_readme_defaults_are_the_parser_defaults(marker, command):
-    checked = 0
-    for opt, stated, default in _rows(marker, command):
-        if default is None and isinstance(stated, str):
-            continue      # a choice the command resolves itself (``--dots``: tone unless --dot-mm)
-        checked += 1
-        assert default is not None, f"README states a default {stated!r} for {command} {opt}; there is none"
-        want = float(default) if isinstance(stated, float) else str(default)
-        assert stated == want, (command, opt, stated, default)
-    assert checked >= 3
+def test_readme_keeps_the_ci_test_command():
+    """Command (b) is what ``.ci/run`` runs; the docs command is what it builds with."""
+    (a, b), = [re.findall(r"^python3 -m venv .*$", blk, flags=re.M) for blk in _blocks("bash")[:1]]
+    assert b == 'python3 -m venv .venv && .venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest -q'
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert '.venv/bin/pip install -e ".[test]"' in ci and "-m pytest -q" in ci
+    docs = next(c for blk in _blocks("bash") for c in _commands(blk) if "sphinx" in c)
+    assert docs[-5:] == ["-W", "-b", "html", "docs", "docs/_build/html"]
+    assert "-m sphinx -W -b html docs" in ci, ".ci/run does not build the docs with -W"
+
+
+def test_readme_diskpack_commands_parse():
+    commands = _diskpack_commands()
+    assert len(commands) >= 4
+    parser = build_parser()
+    for argv in commands:
+        try:
+            parser.parse_args(argv)
+        except SystemExit as exc:  # pragma: no cover - shown on failure
+            pytest.fail(f"README command does not parse (status {exc.code}): diskpack {shlex.join(argv)}")
+
+
+@pytest.mark.parametrize("index", range(len(_blocks("python"))))
+def test_readme_python_block_runs(index, ctx, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code = _blocks("python")[index]
+    exec(compile(code, f"README.md python block {index}", "exec"), {"__name__": "__readme__"})
+
+
+def test_readme_setup_command_a_runs(ctx, tmp_path, monkeypatch):
+    """Command (a) without the install: the stippling and the point set it promises."""
+    monkeypatch.chdir(tmp_path)
+    first = _blocks("bash")[0].splitlines()
+    line = next(x for x in first if x.startswith("python3") and "pytest" not in x)
+    runs = [argv[1:] for argv in _commands(line) if Path(argv[0]).name == "diskpack"]
+    assert [r[0] for r in runs] == ["stipple", "poisson"]
+    (tmp_path / "out").mkdir()
+    for argv in runs:
+        assert main([*argv, "--quiet"]) == 0, argv
+    for name in ("out/stipple.svg", "out/stipple.png", "out/points.npz"):
+        assert (tmp_path / name).stat().st_size > 0, name
+
+
+def test_readme_plotter_quickstart_runs(ctx, tmp_path, monkeypatch):
+    """The plotter quickstart on the sample at 300 dots (the README's 20 000 take longer), then its vpype lines."""
+    monkeypatch.chdir(tmp_path)
+    block = next(b for b in _blocks("bash") if "vpype" in b)
+    commands = _commands(block)
+    (stipple,) = [argv[1:] for argv in commands if Path(argv[0]).name == "diskpack"]
+    argv = ["sample" if a == "photo.jpg" else a for a in stipple]
+    argv[argv.index("-n") + 1] = "300"
+    (tmp_path / "out").mkdir()
+    assert main([*argv, "--quiet"]) == 0
+    vpype = shutil.which("vpype", path=os.pathsep.join([str(Path(sys.executable).parent),
+                                                         os.environ.get("PATH", "")]))
+    if vpype is None:  # pragma: no cover - vpype is in the test extra
+        pytest.skip("vpype is not installed")
+    lines = [c for c in commands if c[0] == "vpype"]
+    assert len(lines) == 2
+    for c in lines:
+        done = subprocess.run([vpype, *c[1:]], capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, (c, done.stderr)
+    assert (tmp_path / "out" / "photo.hpgl").stat().st_size > 0

@@ -44,7 +44,14 @@ _SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_expor
 
 
 def build_parser():
-    """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`."""
+    """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`.
+
+    Examples
+    --------
+    >>> args = build_parser().parse_args(["poisson", "-n", "64", "-o", "points.npz"])
+    >>> args.command, args.n
+    ('poisson', 64)
+    """
     parser = _Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
@@ -101,6 +108,15 @@ def main(argv=None):
     0 ok, 1 error, 2 usage error, 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (an
     interrupted run writes none of its outputs and leaves earlier files as
     they were), 141 when stdout was closed.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "points.npz")
+    >>> main(["poisson", "-n", "64", "--eps", "0.7", "-o", path, "--quiet"])
+    0
+    >>> main(["poisson", "-n", "64", "--eps", "2", "-o", path, "--quiet"])
+    2
     """
     import signal
 
