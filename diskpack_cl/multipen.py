@@ -43,7 +43,7 @@ from .domain import Domain
 from .radii import certified_k, field_at
 from .schedule import StippleOptions
 from .stipple import StippleState, _centroid_density, _make_stage, _run, dot_radii, lloyd_step, pack_step
-from .stipple_engine import make_stipple_engine
+from .engine import make_engine
 
 __all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
 
@@ -230,7 +230,7 @@ def _pen_centroids(engine, dens, x, pen):
     for p in np.unique(pen):
         m = np.flatnonzero(pen == p)
         if len(m) > 1:
-            cp, mass, _ = engine.centroids(x[m], np.zeros(len(m)), dens[p])
+            cp, mass = engine.centroids(x[m], np.zeros(len(m)), dens[p])
             ok = (mass > 0) & np.all(np.isfinite(cp), axis=1)
             c[m[ok]] = cp[ok]
     return c
@@ -371,17 +371,18 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     P, H, W = sep.layers.shape
     gray = 1.0 - sep.darkness
     timings = {"separate": time.perf_counter() - t_start}
-    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
+    engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device, grid=opt.grid_shape(W, H))
     stage = _make_stage(gray, opt, engine)
     head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
     start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))
-    state, history, _ = _run(start, _phases(stage, head), callback)
+    state, history = _run(start, _phases(stage, head), callback)
     t0 = time.perf_counter()
     pen = assign_pens(state.points, _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)),
                       counts)
     timings["assign"] = time.perf_counter() - t0
     coarse = replace(opt, supersample=max(1, opt.supersample // PEN_COARSEN))
-    pens = (make_stipple_engine(Domain.rect(W, H), coarse.grid_shape(W, H), backend, device),
+    pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                        grid=coarse.grid_shape(W, H)),
             [_centroid_density(a, coarse) for a in sep.layers])
     state, more = _run_pens(state, _phases(stage, tail), pen, pens, pen_pull, callback, len(history))
     t0 = time.perf_counter()
@@ -395,5 +396,5 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
         base_radii=r, certificate=cert, layers=sep.layers,
         pen_radius=pen_tone_radii(sep.layers, counts), width=W, height=H, history=history + more,
-        timings=timings, params=params, engine=engine.name,
+        timings=timings, params=params, engine=engine.backend,
         tone_radius=tone_radius(opt.n, sep.darkness))
