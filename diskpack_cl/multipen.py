@@ -32,7 +32,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,7 +42,8 @@ from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
 from .schedule import StippleOptions
-from .stipple import StippleState, _centroid_density, _make_stage, _run, dot_radii, lloyd_step, pack_step
+from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
+                      dot_radii, lloyd_step, pack_step, result_summary)
 from .engine import make_engine
 
 __all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
@@ -63,8 +64,8 @@ DIFFUSE = 6
 COLOR_CAPACITY = 0.0
 
 
-@dataclass
-class ColorStippleResult:
+@dataclass(kw_only=True)
+class ColorStippleResult(StippleResult):
     """Result of :func:`stipple_colors`: all dots, each with its pen.
 
     Attributes
@@ -86,27 +87,11 @@ class ColorStippleResult:
         (:func:`diskpack_cl.color.pen_tone_radii`); what the writers draw.
     """
 
-    points: np.ndarray
-    radii: np.ndarray
     pen: np.ndarray
     names: tuple
     colors: np.ndarray
-    k: float
-    base_radii: np.ndarray
-    certificate: object
     layers: np.ndarray
     pen_radius: np.ndarray
-    width: int
-    height: int
-    history: list = field(default_factory=list)
-    timings: dict = field(default_factory=dict)
-    params: dict = field(default_factory=dict)
-    engine: str = "opencl"
-    tone_radius: float = None
-
-    @property
-    def n(self):
-        return len(self.points)
 
     @property
     def counts(self):
@@ -115,16 +100,9 @@ class ColorStippleResult:
 
     def summary(self):
         """A JSON-ready dict: sizes, k, pens and their counts, certificate, timings."""
-        return {
-            "n": int(self.n), "width": int(self.width), "height": int(self.height),
-            "k": float(self.k), "min_radius": float(self.radii.min()),
-            "max_radius": float(self.radii.max()), "iterations": len(self.history),
-            "pens": [{"name": name, "color": hex_color(c), "n": int(m)}
-                     for name, c, m in zip(self.names, self.colors, self.counts)],
-            "certificate": self.certificate.as_dict(),
-            "timings": {k: float(v) for k, v in self.timings.items()},
-            "params": self.params,
-        }
+        return result_summary(self, pens=[{"name": name, "color": hex_color(c), "n": int(m)}
+                                          for name, c, m in zip(self.names, self.colors,
+                                                                self.counts)])
 
 
 def hex_color(rgb):

@@ -149,19 +149,26 @@ class StippleResult:
 
     def summary(self):
         """A JSON-ready dict: sizes, k, certificate fields, timings."""
-        return {
-            "n": int(self.n),
-            "width": int(self.width),
-            "height": int(self.height),
-            "k": float(self.k),
-            "min_radius": float(self.radii.min()),
-            "max_radius": float(self.radii.max()),
-            "iterations": len(self.history),
-            "empty_cells_total": int(sum(h.get("empty", 0) for h in self.history)),
-            "certificate": self.certificate.as_dict(),
-            "timings": {k: float(v) for k, v in self.timings.items()},
-            "params": self.params,
-        }
+        return result_summary(
+            self, empty_cells_total=int(sum(h.get("empty", 0) for h in self.history)))
+
+
+def result_summary(result, **extra):
+    """The JSON-ready summary of a stippling (one pen or several): sizes, k, radii,
+    iterations, `extra`, the certificate's fields, timings and params."""
+    return {
+        "n": int(result.n),
+        "width": int(result.width),
+        "height": int(result.height),
+        "k": float(result.k),
+        "min_radius": float(result.radii.min()),
+        "max_radius": float(result.radii.max()),
+        "iterations": len(result.history),
+        **extra,
+        "certificate": result.certificate.as_dict(),
+        "timings": {k: float(v) for k, v in result.timings.items()},
+        "params": result.params,
+    }
 
 
 
