@@ -54,18 +54,24 @@ def test_engines_agree_on_power_cells_in_a_rectangle(ctx, name):
     assert np.abs(step.centers[live] - ref.centers[live]).max() <= 1e-9
 
 
-def test_verify_catches_a_wrong_engine(ctx, monkeypatch):
-    """verify=True is a real check: an engine whose radii are off fails."""
+def _radii_off(monkeypatch, engine_class):
+    """Make every answer of ``diskpack_cl.engine.<engine_class>`` off by 1e-6 of its radii."""
     from diskpack_cl import engine as engine_mod
 
-    real = engine_mod.OpenCLEngine._mic
+    cls = getattr(engine_mod, engine_class)
+    real = cls._mic
 
     def off(self, points, weights, exact):
-        step = real(self, points, weights, exact)
-        step.radii = step.radii * (1 + 1e-6)
-        return step
+        m = real(self, points, weights, exact)
+        m.radii = m.radii * (1 + 1e-6)
+        return m
 
-    monkeypatch.setattr(engine_mod.OpenCLEngine, "_mic", off)
+    monkeypatch.setattr(cls, "_mic", off)
+
+
+def test_verify_catches_a_wrong_engine(ctx, monkeypatch):
+    """verify=True is a real check: an engine whose radii are off fails."""
+    _radii_off(monkeypatch, "OpenCLEngine")
     pts = dart_throwing(300, seed=14)
     with pytest.raises(RuntimeError, match="differ from exact_mic"):
         relax_poisson(pts, eps=0.99, max_iter=3, backend="opencl", device=ctx, verify=True)
@@ -103,16 +109,8 @@ def test_stipple_verify_runs_every_step_against_exact_mic(ctx):
 
 def test_stipple_verify_catches_a_wrong_engine(ctx, monkeypatch):
     from diskpack_cl import stipple
-    from diskpack_cl import engine as engine_mod
 
-    real = engine_mod.OpenCLEngine._mic
-
-    def off(self, points, weights, exact):
-        m = real(self, points, weights, exact)
-        m.radii = m.radii * (1 + 1e-6)
-        return m
-
-    monkeypatch.setattr(engine_mod.OpenCLEngine, "_mic", off)
+    _radii_off(monkeypatch, "OpenCLEngine")
     gray = np.linspace(0.05, 0.95, 48 * 64).reshape(48, 64)
     with pytest.raises(RuntimeError, match="differ from exact_mic"):
         stipple(gray, 300, device=ctx, verify=True, schedule=[("pack", 2)])
@@ -215,16 +213,7 @@ def test_the_collector_holds_every_stage_once(ctx, route):
 def test_verify_is_the_factory_s_switch_on_every_engine(ctx, monkeypatch):
     """``verify=True`` checks the answers of whatever engine the factory chose;
     without it a wrong answer passes (so the check is the switch's)."""
-    from diskpack_cl import engine as engine_mod
-
-    real = engine_mod.ExactEngine._mic
-
-    def off(self, points, weights, exact):
-        m = real(self, points, weights, exact)
-        m.radii = m.radii * (1 + 1e-6)
-        return m
-
-    monkeypatch.setattr(engine_mod.ExactEngine, "_mic", off)
+    _radii_off(monkeypatch, "ExactEngine")
     pts = np.random.default_rng(23).random((50, 2))
     make_engine(Domain.torus(), 50, "exact").mic(pts)
     with pytest.raises(RuntimeError, match="differ from exact_mic"):

@@ -124,8 +124,6 @@ def _stipple_progress(args):
         if bars and bars[0] is not None:
             bars[0].close()
 
-    if args.quiet or not sys.stderr.isatty():
-        return None, close
     return callback, close
 
 
@@ -148,7 +146,7 @@ def _stipple_objects(args):
 
 def _refuse_mixed(args, options, tone, write, separation):
     """Usage errors of options that do not go together: one pen's with several, a pen
-    order without pens, -n tone without a dot size or in a batch."""
+    order without pens, -n tone without a dot size."""
     from diskpack_cl.options import changed, flag_name
 
     if separation is not None:
