@@ -97,12 +97,12 @@ class _Engine:
     fallback = None
     gives_nn = False
 
-    def __init__(self, domain, *, verify=False, fallback=None):
+    def __init__(self, domain, *, verify=False, fallback=None, timings=None):
         self.domain = domain
         self.verify = verify
         if fallback is not None:
             self.fallback = fallback   # why ``auto`` chose this engine
-        self.timings = Stopwatch()
+        self.timings = Stopwatch() if timings is None else timings
 
     def mic(self, points, weights=None, *, exact=True):
         """MICs of the power cells (a :class:`~diskpack_cl.geometry.MIC`); with
@@ -126,6 +126,8 @@ class ExactEngine(_Engine):
         the OpenCL engine; this engine's answers are its own).
     fallback : str, optional
         Why ``auto`` chose this engine.
+    timings : Stopwatch, optional
+        The collector of the stages' seconds (default: a new one).
 
     Examples
     --------
@@ -142,8 +144,8 @@ class ExactEngine(_Engine):
     device = "cpu (scipy)"
     profile = False   # no kernels to time
 
-    def __init__(self, domain, grid=None, *, verify=False, fallback=None):
-        super().__init__(domain, verify=verify, fallback=fallback)
+    def __init__(self, domain, grid=None, *, verify=False, fallback=None, timings=None):
+        super().__init__(domain, verify=verify, fallback=fallback, timings=timings)
         self.grid = None if grid is None else tuple(grid)
 
     def _mic(self, points, weights, exact):
@@ -184,15 +186,18 @@ class OpenCLEngine(_Engine):
         in :attr:`timings`).
     verify : bool
         Check every MIC answer against :func:`exact_mic`.
+    timings : Stopwatch, optional
+        The collector of the stages' seconds (default: a new one).
     """
 
     backend = "opencl"
 
-    def __init__(self, domain, ctx, route, *, grid=None, n=None, profile=False, verify=False):
+    def __init__(self, domain, ctx, route, *, grid=None, n=None, profile=False, verify=False,
+                 timings=None):
         from ._device import describe
         from .cells import CellMIC
 
-        super().__init__(domain, verify=verify)
+        super().__init__(domain, verify=verify, timings=timings)
         self.ctx, self.name, self.profile = ctx, route, profile
         self.device = describe(ctx)
         self.gives_nn = route == "cells"
@@ -254,7 +259,7 @@ def _auto_grid(n, domain):
 
 
 def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route="auto",
-                profile=False, verify=False):
+                profile=False, verify=False, timings=None):
     """The engine for `backend` (``opencl``, ``exact`` or ``auto``): the one factory.
 
     Parameters
@@ -277,6 +282,9 @@ def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route
         Profile the kernels with OpenCL events.
     verify : bool
         Check every MIC answer against :func:`exact_mic` (slow; for testing).
+    timings : Stopwatch, optional
+        The collector the engine adds its stages' seconds to (default: a new
+        one): a caller that times stages of its own passes its collector.
 
     Returns
     -------
@@ -294,19 +302,20 @@ def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if route not in ROUTES:
         raise ValueError(f"route must be one of {ROUTES}, got {route!r}")
+    common = dict(verify=verify, timings=timings)
     if backend == "exact":
-        return ExactEngine(domain, grid, verify=verify)
+        return ExactEngine(domain, grid, **common)
     try:
         ctx = get_context(device)
     except NoOpenCLError as exc:
         if backend == "opencl" or device is not None:
             raise
-        return ExactEngine(domain, grid, verify=verify, fallback=f"no OpenCL device ({exc})")
+        return ExactEngine(domain, grid, fallback=f"no OpenCL device ({exc})", **common)
     route = _route(ctx, backend, route)
     if route == "exact":
-        return ExactEngine(domain, grid, verify=verify,
+        return ExactEngine(domain, grid, **common,
                            fallback="a CPU device without float64: scipy alone is faster")
-    return OpenCLEngine(domain, ctx, route, grid=grid, n=n, profile=profile, verify=verify)
+    return OpenCLEngine(domain, ctx, route, grid=grid, n=n, profile=profile, **common)
 
 
 def _route(ctx, backend, route):

@@ -78,6 +78,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._timing import Stopwatch
 from .analysis import tone_radius
 from .dithering import error_diffusion
 from .domain import Domain
@@ -418,17 +419,18 @@ def _make_stage(gray, opt, engine):
     return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight, ink)
 
 
-def _certified_result(state, stage, history, timings, t_start, darkness):
+def _certified_result(state, stage, history, t_start, darkness):
     """The :class:`StippleResult` of the final state: radii at the largest certified k."""
     W, H = stage.size
-    t0 = time.perf_counter()
-    r = dot_radii(state, stage, state.points)
-    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
-    timings["certify"] = time.perf_counter() - t0
-    timings["total"] = time.perf_counter() - t_start
+    watch = stage.engine.timings
+    with watch("certify"):
+        r = dot_radii(state, stage, state.points)
+        k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    watch.add("total", time.perf_counter() - t_start)
     return StippleResult(
         points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
-        history=history, width=W, height=H, timings=timings, params=stage.options.params(),
+        history=history, width=W, height=H, timings=watch.seconds,
+        params=stage.options.params(),
         engine=stage.engine.backend, tone_radius=tone_radius(len(state.points), darkness),
     )
 
@@ -496,18 +498,18 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     from .image import to_gray
 
     t_start = time.perf_counter()
-    options = (options or StippleOptions()).replace(**overrides)
-    gray = to_gray(image, invert=options.invert)
-    H, W = gray.shape
-    opt = options.plan(n, W, H)
-    gray, darkness = _toned(gray, opt)
-    timings = {"load": time.perf_counter() - t_start}
-    t0 = time.perf_counter()
-    x = _start_points(gray, opt, start)
-    timings["start"] = time.perf_counter() - t0
+    watch = Stopwatch()   # the run's one collector: its own stages and the engine's
+    with watch("load"):
+        options = (options or StippleOptions()).replace(**overrides)
+        gray = to_gray(image, invert=options.invert)
+        H, W = gray.shape
+        opt = options.plan(n, W, H)
+        gray, darkness = _toned(gray, opt)
+    with watch("start"):
+        x = _start_points(gray, opt, start)
     engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                         grid=opt.grid_shape(W, H), profile=profile, verify=verify)
+                         grid=opt.grid_shape(W, H), profile=profile, verify=verify,
+                         timings=watch)
     stage = _make_stage(gray, opt, engine)
     state, history = _run(StippleState(x, float(opt.k0)), stage, callback)
-    timings.update(engine.timings.seconds)
-    return _certified_result(state, stage, history, timings, t_start, darkness)
+    return _certified_result(state, stage, history, t_start, darkness)

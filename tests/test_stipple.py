@@ -484,3 +484,36 @@ def test_largest_valid_k_finds_a_binding_pair_that_no_nearest_neighbour_forms():
     assert brute == 0.5
     assert largest_valid_k(p, r, 100.0, 100.0) == 0.5
     assert largest_valid_k(p[[2, 0, 3, 1]], r[[2, 0, 3, 1]], 100.0, 100.0) == 0.5
+
+
+# -- one timing collector for the whole run (issue 18) -----------------------
+
+ENGINE_STAGES = ("exact", "raster_labels", "centroids")
+
+
+def _check_one_collector(res, own):
+    """`own` stages first and last, the engine's stages as the steps' sum, no stage
+    counted twice (they are disjoint in time, so they fit in the total)."""
+    assert list(res.timings)[:len(own[0])] == list(own[0])
+    assert list(res.timings)[-len(own[1]):] == list(own[1])
+    for stage in ENGINE_STAGES:
+        steps = sum(h.get(f"{stage}_s", 0.0) for h in res.history)
+        assert steps > 0 and res.timings[stage] == pytest.approx(steps)
+    assert sum(v for k, v in res.timings.items() if k != "total") <= res.timings["total"]
+
+
+def test_one_collector_times_a_stippling():
+    res = stipple(gradient(32, 48), 60, schedule=[("mix", 2, 0.5), ("lloyd", 1), ("pack", 1)],
+                  backend="exact")
+    _check_one_collector(res, (("load", "start"), ("certify", "total")))
+
+
+def test_one_collector_times_a_colour_stippling():
+    from diskpack_cl.multipen import stipple_colors
+
+    img = np.zeros((32, 48, 3))
+    img[..., 0] = np.linspace(0, 1, 48)
+    img[..., 2] = 0.6
+    res = stipple_colors(img, 120, "cmy", schedule=[("mix", 4, 0.5)], backend="exact")
+    # the pens' own centroids count in the steps and the totals alike
+    _check_one_collector(res, (("separate",), ("certify", "total")))
