@@ -40,11 +40,8 @@ OPENCL_DOCTESTS = {
     "diskpack_cl._device.group_size",
     "diskpack_cl.raster.PowerRaster",
     "diskpack_cl.raster.RasterResult",
-    "diskpack_cl.cells.CellResult",
     "diskpack_cl.cells.has_fp64",
-    "diskpack_cl.engine.CellEngine",
-    "diskpack_cl.engine.RasterEngine",
-    "diskpack_cl.stipple_engine.OpenCLStippleEngine",
+    "diskpack_cl.engine.OpenCLEngine",
     "diskpack_cl.cells.CellMIC",
     "diskpack_cl.cells3.CellMIC3",
 }

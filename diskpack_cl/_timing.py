@@ -1,4 +1,12 @@
-"""One timing helper: seconds per named stage, summed over calls."""
+"""The one timing collector: seconds per named stage, summed over calls.
+
+An engine owns one :class:`Stopwatch` and hands it to the processing
+objects it drives (:class:`~diskpack_cl.cells.CellMIC`,
+:class:`~diskpack_cl.raster.PowerRaster`), so that every stage and every
+profiled kernel lands in one place. A caller that wants one step's share
+takes a :meth:`Stopwatch.mark` before the step and :meth:`Stopwatch.since`
+after it; the totals are :attr:`Stopwatch.seconds`.
+"""
 
 from __future__ import annotations
 
@@ -16,6 +24,10 @@ class Stopwatch:
     ...     pass
     >>> sorted(watch.seconds), watch.seconds["exact"]
     (['exact', 'raster'], 0.0)
+    >>> mark = watch.mark()
+    >>> watch.kernel("labels", 0.5)
+    >>> watch.since(mark)
+    {'kernel': 0.5, 'kernel_labels': 0.5}
     """
 
     def __init__(self, names=()):
@@ -32,3 +44,26 @@ class Stopwatch:
     def add(self, name, seconds):
         """Add `seconds` to stage `name`."""
         self.seconds[name] = self.seconds.get(name, 0.0) + seconds
+
+    def kernel(self, name, seconds):
+        """Add the device `seconds` of kernel `name` to ``kernel_<name>`` and to ``kernel``."""
+        self.add("kernel", seconds)
+        self.add(f"kernel_{name}", seconds)
+
+    @contextmanager
+    def discarded(self):
+        """Drop whatever is added inside (a warm-up run is no caller's work)."""
+        keep = self.mark()
+        try:
+            yield
+        finally:
+            self.seconds = keep
+
+    def mark(self):
+        """The totals now, for :meth:`since`."""
+        return dict(self.seconds)
+
+    def since(self, mark):
+        """Seconds per stage added after `mark`; only the stages that ran."""
+        return {name: secs - mark.get(name, 0.0) for name, secs in self.seconds.items()
+                if secs != mark.get(name, 0.0)}

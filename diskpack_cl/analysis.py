@@ -776,11 +776,12 @@ def _tone(drawing, d, sigma):
     return ssim(*_blurred_pair(drawing, d, sigma), data_range=1.0)
 
 
-def _stipple_inputs(points, darkness):
+def _stipple_inputs(points, darkness, minimum=1):
+    """The dots and the darkness of a stippling measure, checked (at least `minimum` dots)."""
     p = _as_points(points)
     d = _as_darkness(darkness)
-    if len(p) == 0:
-        raise ValueError("need at least one point")
+    if len(p) < minimum:
+        raise ValueError("need at least one point" if minimum == 1 else f"need at least {minimum} points")
     if d.sum() <= 0:
         raise ValueError("darkness is all zero (a white image): nothing to stipple")
     return p, d
@@ -857,9 +858,7 @@ def spacing(points, darkness, *, sigma=3.0, normalize="dot"):
     """
     if normalize not in ("dot", "pair"):
         raise ValueError(f"normalize must be 'dot' or 'pair', got {normalize!r}")
-    p, d = _stipple_inputs(points, darkness)
-    if len(p) < 2:
-        raise ValueError("need at least 2 points")
+    p, d = _stipple_inputs(points, darkness, minimum=2)
     nn, j = measures.nearest_neighbors(p, _PLANE)
     blurred = ndimage.gaussian_filter(d, sigma, mode="reflect")
     local = ndimage.map_coordinates(blurred, [p[:, 1] - 0.5, p[:, 0] - 0.5], order=1, mode="nearest")
@@ -907,10 +906,8 @@ def stray_dots(points, darkness, *, threshold=0.02):
 
     Parameters
     ----------
-    points : array_like, shape (n, 2), n >= 2
-        Dots in pixel units.
-    darkness : ndarray, shape (ny, nx)
-        Darkness in [0, 1], 1 = black.
+    points, darkness
+        The dots and the darkness, as for :func:`spacing`.
     threshold : float
         Darkness above which a pixel counts as inked.
 
@@ -925,9 +922,7 @@ def stray_dots(points, darkness, *, threshold=0.02):
     >>> stray_dots([[3.0, 5.0], [5.0, 5.0], [17.0, 12.0]], dark).mask.tolist()
     [False, False, True]
     """
-    p, d = _stipple_inputs(points, darkness)
-    if len(p) < 2:
-        raise ValueError("need at least 2 points")
+    p, d = _stipple_inputs(points, darkness, minimum=2)
     nn, _ = measures.nearest_neighbors(p, _PLANE)
     rows, cols = np.nonzero(d > threshold)
     mask = np.ones(len(p), dtype=bool)
@@ -997,10 +992,8 @@ def edge_fidelity(points, darkness, *, sigma=1.0, edge=0.25, band=2.0):
 
     Parameters
     ----------
-    points : array_like, shape (n, 2)
-        Dots in pixel units.
-    darkness : ndarray, shape (ny, nx)
-        Darkness in [0, 1], 1 = black.
+    points, darkness
+        The dots and the darkness, as for :func:`spacing` (one dot is enough).
     sigma : float
         Blur (px) of drawing and darkness before the comparison.
     edge : float
@@ -1071,10 +1064,8 @@ def holes(points, darkness, *, solid=0.5, sigma=3.0):
 
     Parameters
     ----------
-    points : array_like, shape (n, 2)
-        Dots in pixel units.
-    darkness : ndarray, shape (ny, nx)
-        Darkness in [0, 1], 1 = black.
+    points, darkness
+        The dots and the darkness, as for :func:`spacing` (one dot is enough).
     solid : float
         Darkness from which a pixel is solid-dark.
     sigma : float
@@ -1113,10 +1104,8 @@ def stipple_measures(points, darkness, *, sigma=3.0):
 
     Parameters
     ----------
-    points : array_like, shape (n, 2)
-        Dots in pixel units.
-    darkness : ndarray, shape (ny, nx)
-        Darkness in [0, 1], 1 = black.
+    points, darkness
+        The dots and the darkness, as for :func:`spacing` (one dot is enough).
     sigma : float
         Blur in pixels for tone and spacing.
 

@@ -28,7 +28,6 @@ Examples
 from __future__ import annotations
 
 import contextlib
-import functools
 import json
 import os
 import signal
@@ -44,7 +43,7 @@ __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "POCL_THREAD_VARS", "DASK_HINT",
     "Batch", "Item", "Manifest", "expand_inputs", "render_template", "check_outputs",
     "derive_seeds", "default_manifest", "json_default", "default_jobs", "dots_for_image",
-    "write_stipple_outputs", "run_item", "run_batch",
+    "write_stipple_outputs", "stipple_item", "run_item", "run_batch",
     "plan_stipple", "plan_poisson", "plan_relax",
     "stipple_many", "poisson_many", "relax_many",
 ]
@@ -209,11 +208,12 @@ def render_template(template, *, input=None, n=None, seed=None, i=0):
         raise ValueError(f"output template {template!r}: {exc}") from None
 
 
-def check_outputs(items, check_path):
+def check_outputs(items, check_path, *, make_folders=True):
     """Refuse, before any work, outputs that two items (or one item twice) would write.
 
-    ``check_path(path)`` checks each path (extension, folder); missing
-    folders of the rendered paths are created first.
+    ``check_path(path)`` checks each path (extension, folder); with
+    `make_folders` (a batch) missing folders of the rendered paths are
+    created first, without (a single input) a missing folder is refused.
 
     Raises
     ------
@@ -245,7 +245,7 @@ def check_outputs(items, check_path):
     for item in items:
         for out in item.outputs:
             folder = os.path.dirname(out)
-            if folder:
+            if folder and make_folders:
                 os.makedirs(folder, exist_ok=True)
             check_path(out)
 
@@ -479,7 +479,8 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     >>> written[0]["format"], round(dot_mm, 3) > 0
     ('svg', True)
     """
-    from diskpack_cl.export import WriteOptions, check_output_path, preview_scale, write_stipple
+    from diskpack_cl.export import (WriteOptions, check_output_path, preview_scale, tone_dot_size,
+                                    write_stipple)
     from diskpack_cl.io import atomic_writes
 
     o = (options or WriteOptions()).replace(**overrides)
@@ -489,7 +490,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     dot_mm = o.dot_mm
     color = getattr(result, "pen", None) is not None   # one tone dot size per pen
     if dot_mm is None and dots == "tone" and not color:
-        dot_mm = 2.0 * _tone_radius(result, gray, o.invert) * o.radius_scale * scale
+        dot_mm = tone_dot_size(result, scale, o.radius_scale, gray=gray, invert=o.invert)
     svg_opts = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, pen_path=o.pen_path,
                     invert=o.invert, pen_mm=o.pen_mm, dots=dots,
                     plot_speed_mm_s=o.plot_speed_mm_s, **o.layout(),
@@ -510,53 +511,132 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     return dot_mm, written
 
 
-def _tone_radius(result, gray, invert):
-    """The equal-ink dot radius (px): from ``gray`` when given, else the result's own."""
-    if gray is None:
-        if getattr(result, "tone_radius", None) is None:
-            raise ValueError("the stippling has no tone_radius (an older file): give the dot "
-                             "size (--dot-mm) or draw the packing disks (--dots packing)")
-        return float(result.tone_radius)
-    from diskpack_cl.analysis import tone_radius
-
-    return tone_radius(len(result.points), gray if invert else 1.0 - gray)
-
-
 def _item_image(path, params):
     """``(gray, image, run)`` of an item: the toned gray image and :func:`diskpack_cl.stipple`,
-    or (with ``params["color"]``) the colour image and :func:`diskpack_cl.stipple_colors`."""
+    or (with ``params["color"]``) the colour image and :func:`diskpack_cl.stipple_colors`;
+    ``run(image, n, options, **keywords)``."""
     color = params.get("color")
     if color is None:
-        from diskpack_cl import load_gray, stipple
+        from diskpack_cl import load_gray
         from diskpack_cl.image import ToneOptions
+        from diskpack_cl.stipple import stipple
 
         gray = ToneOptions(**params.get("tone", {})).adjust(
             load_gray(path, allow_large=params.get("allow_large", False)))
         return gray, gray, stipple
     from diskpack_cl.color import load_rgb
     from diskpack_cl.multipen import stipple_colors
+    from diskpack_cl.options import changed
 
-    return None, load_rgb(path), functools.partial(stipple_colors, **color)
+    def run(image, n, options, **keywords):
+        return stipple_colors(image, n, **color, **keywords, **changed(options))
+
+    return None, load_rgb(path), run
+
+
+def _item_dots(params, write, gray, width, height, note):
+    """``(n, tone_n)`` of an item: its dot count, and with a dot or pen size (one pen) the
+    count whose ink is the image's on paper (``-n tone``), a note when n is far from it."""
+    n, tone_n = params.get("n"), None
+    dot = write.dot_mm or write.pen_mm
+    if gray is not None and dot is not None:
+        from diskpack_cl.export import tone_dot_count
+
+        tone = tone_dot_count(gray if write.invert else 1.0 - gray, write.scale(width, height), dot)
+        if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and note is not None:
+            note(f"{tone} dots of {dot:g} mm give the image's ink on this paper; -n {n} will "
+                 f"look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})")
+        n, tone_n = (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
+    elif n == "tone":
+        raise ValueError("n='tone' needs the dot size: give dot_mm or pen_mm")
+    n = dots_for_image(width, height, n=n, density=params.get("density"),
+                       dots_per_cm2=params.get("dots_per_cm2"), **write.layout())
+    return n, tone_n
+
+
+def stipple_item(item, *, device=None, callback=None, verify=False, profile=False, note=None):
+    """Stipple the image of one item: what a single input and every item of a batch run.
+
+    Loads the image (tone controls applied, or the colour image with
+    ``params["color"]``), counts its dots, checks that the machine and the
+    device can hold the work (:func:`diskpack_cl.memory.check_stipple_memory`),
+    and stipples. Writing the outputs is :func:`write_stipple_outputs`.
+
+    Parameters
+    ----------
+    item : Item
+        A ``stipple`` item (:func:`plan_stipple`).
+    device : str, optional
+        OpenCL device.
+    callback : callable, optional
+        ``callback(entry, total)`` after each iteration: the history entry and
+        the number of iterations of the schedule.
+    verify, profile : bool
+        As for :func:`diskpack_cl.stipple` (one pen).
+    note : callable, optional
+        ``note(text)`` for advice that is no error (a dot count far from the
+        one whose ink is the image's).
+
+    Returns
+    -------
+    result : StippleResult or ColorStippleResult
+        With ``params["tone"]`` (one pen): the tone controls applied.
+    gray : (H, W) array or None
+        The toned gray image (None for colour).
+    summary : dict
+        ``result.summary()`` with ``image`` and ``tone_n`` (the count whose
+        ink is the image's with a dot size, else None).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from diskpack_cl import sample_image_path
+    >>> item, = plan_stipple([sample_image_path()], [os.path.join(tempfile.mkdtemp(), "a.svg")],
+    ...                      n=300, method="lloyd")
+    >>> result, gray, summary = stipple_item(item)
+    >>> result.n, result.certificate.valid, summary["image"].endswith("astronaut.png")
+    (300, True, True)
+    """
+    from diskpack_cl.export import WriteOptions, preview_scale
+    from diskpack_cl.memory import check_stipple_memory
+    from diskpack_cl.schedule import StippleOptions
+
+    params = item.params
+    write = WriteOptions(**item.write)
+    options = StippleOptions(**params.get("options", {}))
+    gray, image, run = _item_image(item.input, params)
+    H, W = image.shape[:2]
+    n, tone_n = _item_dots(params, write, gray, W, H, note)
+    check_stipple_memory(W, H, n, supersample=options.supersample,
+                         png_scale=preview_scale(W, H, write.png_scale), device=device,
+                         outputs=item.outputs)
+    each = None
+    if callback is not None:
+        total = sum(ph[1] for ph in options.plan(n, W, H).phases)
+
+        def each(entry):
+            callback(entry, total)
+
+    extra = {} if gray is None else {"verify": verify, "profile": profile}
+    res = run(image, n, options, device=device, callback=each,
+              backend=params.get("backend", "auto"), **extra)
+    if gray is not None:   # recorded in the .npz and the --json params
+        from diskpack_cl.image import ToneOptions
+
+        res.params["tone"] = ToneOptions(**params.get("tone", {})).params()
+    return res, gray, dict(res.summary(), image=item.input, tone_n=tone_n)
 
 
 def _stipple_item(item, device, progress):
-    from diskpack_cl.export import WriteOptions
-
-    params = item.params
-    count = {k: params.get(k) for k in ("n", "density", "dots_per_cm2")}
-    write = WriteOptions(**item.write)
-    gray, image, run = _item_image(item.input, params)
-    n = dots_for_image(image.shape[1], image.shape[0], **count, **write.layout())
+    """A batch's stipple item: :func:`stipple_item`, its outputs written; its summary."""
     callback = None
     if progress is not None:
-        def callback(entry):
+        def callback(entry, total):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
-    res = run(image, n, device=device, callback=callback, backend=params.get("backend", "auto"),
-              **params.get("options", {}))
+    res, gray, summary = stipple_item(item, device=device, callback=callback)
     t = time.perf_counter()
-    dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), write)
-    summary = res.summary()
+    dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), **item.write)
     summary.pop("params", None)
     summary.update(dot_mm=dot_mm, files=written, write_seconds=time.perf_counter() - t)
     return summary
@@ -906,7 +986,7 @@ def _image_dots(path, count, write):
 
 def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_per_cm2=None,
                  recursive=False, allow_large=False, write=None, tone=None, color=None,
-                 backend="auto", **overrides):
+                 backend="auto", make_folders=True, **overrides):
     """Items for stippling every image of ``inputs`` (files or folders).
 
     Parameters
@@ -916,8 +996,10 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
     outputs : list of str
         Output templates (:data:`TEMPLATE_FIELDS`).
     n, density, dots_per_cm2 : optional
-        Exactly one: dots per image, per megapixel, or per cm^2 of the print
-        (with ``width_mm``/``height_mm``/``dpi`` in ``write``).
+        Exactly one: dots per image (or ``"tone"``: as many as give the
+        image's ink with ``dot_mm`` or ``pen_mm`` in ``write``), per
+        megapixel, or per cm^2 of the print (with ``width_mm``/``height_mm``/``dpi``
+        in ``write``).
     options : StippleOptions, optional
         The options of :func:`diskpack_cl.stipple` for every image (its
         ``seed`` is the items' seed).
@@ -935,6 +1017,8 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
         (:class:`diskpack_cl.color.ColorOptions`, or a dict of ``colors``,
         ``black_generation``, ``clean_black``, ``clean_white``) makes every
         item a colour stippling.
+    make_folders : bool
+        Create the missing folders of the outputs (see :func:`check_outputs`).
 
     Raises
     ------
@@ -985,7 +1069,7 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
                                     seed=seed, i=i) for t in outputs]
         items.append(Item("stipple", i, path, seed, json.loads(json.dumps(params)),
                           tuple(rendered), changed(write), error))
-    check_outputs(items, _paths_check("stipple"))
+    check_outputs(items, _paths_check("stipple"), make_folders=make_folders)
     return items
 
 

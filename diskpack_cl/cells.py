@@ -18,18 +18,16 @@ tells, and the engines fall back to the raster estimate refined by
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from ._checks import check_sites
 from ._device import describe, get_context, group_size, padded, preferred_multiple
 from ._kernels import build_program
+from ._timing import Stopwatch
 from .domain import Domain
-from .geometry import _cramer, _vertex, exact_mic
+from .geometry import MIC, _cramer, _vertex, exact_mic
 
-__all__ = ["CellMIC", "CellResult", "has_fp64", "FLAGS"]
+__all__ = ["CellMIC", "has_fp64", "FLAGS"]
 
 MAXC = 64        # constraint list capacity per work item
 MAXNEAR = 8      # near-tight constraints reported besides the basis
@@ -89,54 +87,6 @@ def has_fp64(ctx):
     return "cl_khr_fp64" in ctx.devices[0].extensions
 
 
-@dataclass
-class CellResult:
-    """Output of :meth:`CellMIC.solve`.
-
-    Attributes
-    ----------
-    centers : (n, 2) float64
-        MIC centres (wrapped into the torus when periodic; the site itself
-        where the cell is empty).
-    radii : (n,) float64
-        MIC radii; negative where the power cell is empty.
-    empty : (n,) bool
-    nn : (n,) float64
-        Distance from each site to its nearest other site (periodic on a
-        torus), exact.
-    stats : dict
-        ``flagged`` (cells the device could not prove), ``rejected`` (cells
-        the host check refused), ``fallback`` (cells solved by
-        ``exact_mic``), flag counts by reason, ``bytes_to_device`` and
-        ``bytes_from_device`` (the transfers of this call).
-    timings : dict
-        Seconds: ``buckets``, ``device`` (upload, kernel, readback),
-        ``refine`` (host re-solve and check), ``fallback``; with profiling,
-        ``kernel`` (device time of the kernel alone).
-
-    Examples
-    --------
-    On an OpenCL device with float64:
-
-    >>> from diskpack_cl.domain import Domain
-    >>> res = CellMIC(Domain.torus()).solve(np.random.default_rng(0).random((100, 2)))
-    >>> res.centers.shape, bool(np.all(res.radii > 0)), bool(res.empty.any())
-    ((100, 2), True, False)
-    """
-
-    centers: np.ndarray
-    radii: np.ndarray
-    empty: np.ndarray
-    nn: np.ndarray
-    stats: dict = field(default_factory=dict)
-    timings: dict = field(default_factory=dict)
-
-    @property
-    def min_distance(self):
-        """Smallest distance between two sites."""
-        return float(self.nn.min())
-
-
 class CellMIC:
     """OpenCL processing object for the exact MICs of all power cells.
 
@@ -147,9 +97,15 @@ class CellMIC:
     device : str or pyopencl.Context, optional
         See :func:`diskpack_cl.get_context`.
     profile : bool, optional
-        Profile the kernel with OpenCL events (``timings["kernel"]``).
+        Profile the kernel with OpenCL events (``kernel_cell_mic`` and
+        ``kernel`` in `timings`).
     sites_per_bucket : float, optional
         Mean occupancy of the bucket grid that the gather walks.
+    timings : Stopwatch, optional
+        Where the seconds of each stage go: ``buckets``, ``device``
+        (upload, kernel, readback), ``refine`` (host re-solve and check),
+        ``fallback`` (default: a new one, :attr:`timings`); an engine
+        passes its own.
 
     Raises
     ------
@@ -168,10 +124,12 @@ class CellMIC:
     True
     """
 
-    def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=2.0):
+    def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=2.0,
+                 timings=None):
         import pyopencl as cl
 
         self.domain = domain
+        self.timings = Stopwatch() if timings is None else timings
         self.ctx = get_context(device)
         if not has_fp64(self.ctx):
             raise RuntimeError(f"{describe(self.ctx)} has no float64 support (cl_khr_fp64)")
@@ -196,7 +154,8 @@ class CellMIC:
         is not charged to the first real call."""
         dom = self.domain
         pts = (np.random.default_rng(0).random((16, 2)) * (dom.width, dom.height))
-        self.solve(pts)
+        with self.timings.discarded():
+            self.solve(pts)
         self._order = None
 
     # -- buffers -----------------------------------------------------------
@@ -276,7 +235,12 @@ class CellMIC:
 
         Returns
         -------
-        CellResult
+        MIC
+            With ``nn``, and ``stats``: ``flagged`` (cells the device could
+            not prove), ``rejected`` (cells the host check refused),
+            ``fallback`` (cells solved by ``exact_mic``), flag counts by
+            reason, ``bytes_to_device`` and ``bytes_from_device`` (the
+            transfers of this call).
 
         Raises
         ------
@@ -286,17 +250,13 @@ class CellMIC:
         """
         X, w = check_sites(points, weights, self.domain, minimum=2)
         w -= w.min()   # as exact_mic: the diagram ignores a common shift
-        timings = {}
-        t0 = time.perf_counter()
         # everything below runs in bucket order: neighbours sit close in memory
-        order, start, bwmax, grid = self._buckets(X, w)
-        Xs, ws = X[order], w[order]
-        t1 = time.perf_counter()
-        timings["buckets"] = t1 - t0
-        out = self._run(Xs, ws, start, bwmax, grid, timings)
-        t2 = time.perf_counter()
-        timings["device"] = t2 - t1
-        res = self._finish(Xs, ws, out, timings, t2)
+        with self.timings("buckets"):
+            order, start, bwmax, grid = self._buckets(X, w)
+            Xs, ws = X[order], w[order]
+        with self.timings("device"):
+            out = self._run(Xs, ws, start, bwmax, grid)
+        res = self._finish(Xs, ws, out)
         for name in ("centers", "radii", "empty", "nn"):
             a = getattr(res, name)
             back = np.empty_like(a)
@@ -304,7 +264,7 @@ class CellMIC:
             setattr(res, name, back)
         return res
 
-    def _run(self, Xs, ws, start, bwmax, grid, timings):
+    def _run(self, Xs, ws, start, bwmax, grid):
         """The kernel on the sorted sites; outputs in sorted order."""
         import pyopencl as cl
 
@@ -333,7 +293,8 @@ class CellMIC:
             # answers Ctrl-C in time without wait_for's helper thread
             ev.wait()
         if self.profile:
-            timings["kernel"] = sum((ev.profile.end - ev.profile.start) * 1e-9 for ev in events)
+            self.timings.kernel("cell_mic", sum((ev.profile.end - ev.profile.start) * 1e-9
+                                                for ev in events))
         for k, v in outs.items():
             cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
         self.queue.finish()
@@ -341,24 +302,23 @@ class CellMIC:
                           "bytes_from_device": int(sum(v.nbytes for v in outs.values()))}
         return outs
 
-    def _finish(self, X, w, out, timings, t_start):
+    def _finish(self, X, w, out):
         """Host re-solve and check (sorted order), exact_mic for the rest."""
         flags = out["codes"][:, 3]
         proven = (flags & ~_NN) == 0
-        q, R, ok = refine_active(X, w, self.domain, out["codes"][:, :3], out["codes"][:, 4:])
-        # the device and the host solved the same 3 x 3 system: same radius, same centre
-        scale = max(self.domain.width, self.domain.height)
-        agree = ((np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale)
-                 & np.all(np.abs(X + q - out["mic"][:, :2]) <= 1e-9 * scale, axis=1))
-        good = proven & ok & agree
-        t1 = time.perf_counter()
-        timings["refine"] = t1 - t_start
+        with self.timings("refine"):
+            q, R, ok = refine_active(X, w, self.domain, out["codes"][:, :3], out["codes"][:, 4:])
+            # the device and the host solved the same 3 x 3 system: same radius, same centre
+            scale = max(self.domain.width, self.domain.height)
+            agree = ((np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale)
+                     & np.all(np.abs(X + q - out["mic"][:, :2]) <= 1e-9 * scale, axis=1))
+            good = proven & ok & agree
         bad = np.nonzero(~good)[0]
-        if len(bad):
-            mic = exact_mic(X, w, self.domain, cells=bad)
-            q[bad] = mic.centers - X[bad]
-            R[bad] = mic.radii
-        timings["fallback"] = time.perf_counter() - t1
+        with self.timings("fallback"):
+            if len(bad):
+                mic = exact_mic(X, w, self.domain, cells=bad)
+                q[bad] = mic.centers - X[bad]
+                R[bad] = mic.radii
         empty = R < 0
         centers = X + q
         centers[empty] = X[empty]
@@ -371,7 +331,7 @@ class CellMIC:
                  "fallback": int(len(bad)), "empty": int(empty.sum())}
         stats.update({name: int(np.count_nonzero(flags & bit)) for name, bit in FLAGS.items()})
         stats.update(self.transfers)
-        return CellResult(centers, R, empty, nn, stats, timings)
+        return MIC(centers, R, empty, stats, nn)
 
 
 _SHIFT = np.array([-1 - 1j, -1, -1 + 1j, -1j, 0, 1j, 1 - 1j, 1, 1 + 1j])   # code % 9 -> (sx, sy)

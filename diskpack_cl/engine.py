@@ -1,177 +1,69 @@
-"""Engines: who computes the maximal inscribed circles (MICs) of a power diagram.
+"""Engines: who computes the maximal inscribed circles (MICs) and centroids of power cells.
 
-Both algorithms ask their engine one question per disk-packing step:
-``engine.mic(points, weights)``, the certified MIC of every power cell.
+Relaxation and stippling ask their engine the same questions, through one
+protocol:
 
-==========  ==============================================================
-engine      how
-==========  ==============================================================
-``cells``   OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
-            re-solved and checked on the host; the default on devices with
-            ``cl_khr_fp64``
-``raster``  OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
-            refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
-            devices without float64
-``exact``   :func:`diskpack_cl.geometry.exact_mic` alone (numpy/scipy, no OpenCL)
-==========  ==============================================================
+- ``engine.mic(points, weights=None, *, exact=True)``: the certified MIC of
+  every power cell, a :class:`~diskpack_cl.geometry.MIC` (``exact=False``:
+  the raster estimate alone, where the engine has one);
+- ``engine.centroids(points, weights, density)``: ``(centroids, mass)``,
+  the density-weighted centroids and masses of the power cells on the
+  engine's grid (engines made with a ``grid``).
+
+Every engine has ``name`` (its route), ``backend`` (``opencl`` or
+``exact``), ``device``, ``fallback`` (None, or why ``auto`` chose the exact
+engine), ``gives_nn`` (its MICs carry nearest-neighbour distances),
+``profile`` and ``timings``, the one :class:`~diskpack_cl._timing.Stopwatch`
+that every stage of the engine adds its seconds to. :func:`make_engine`
+makes them all.
+
+=========  ==============================================================
+route      how
+=========  ==============================================================
+``cells``  OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
+           re-solved and checked on the host; the default on devices with
+           ``cl_khr_fp64``
+``raster`` OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
+           refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
+           devices without float64
+``exact``  :func:`diskpack_cl.geometry.exact_mic` alone and exact float64
+           grid labels (:func:`diskpack_cl.labels.grid_power_labels`); no OpenCL
+=========  ==============================================================
 
 All three return the same MICs (to rounding, and exactly the same vertex
 where the MIC is unique): every answer is an LP optimum certified in float64.
+The OpenCL routes label the grid for the centroids on the device (reusing the
+labels of the MIC step when it labelled the same power diagram); they agree
+with the exact labels except at grid cells where float32 power distances tie.
 Every engine checks its sites first (:func:`diskpack_cl._checks.check_sites`:
 a ValueError for no sites, NaN or infinite points or weights, weights out
 of range), so that no kernel sees sites it cannot bound its work on.
+
+Stages in ``timings``: ``buckets``, ``device``, ``refine``, ``fallback``
+(the per-cell kernel); ``raster_labels``, ``mic_estimate`` (the raster);
+``exact`` (:func:`~diskpack_cl.geometry.exact_mic`); ``centroids`` (the
+sums over the labels); with ``profile``, ``kernel`` and ``kernel_<name>``
+(device seconds, all and per kernel).
 """
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from ._checks import check_sites
-from .geometry import exact_mic
+from ._timing import Stopwatch
+from .geometry import MIC, exact_mic
+from .labels import cell_centroids, grid_power_labels
 
-__all__ = ["BACKENDS", "ROUTES", "MICStep", "make_engine", "check_against_exact", "ExactEngine",
-           "RasterEngine", "CellEngine"]
+__all__ = ["BACKENDS", "ROUTES", "make_engine", "check_against_exact", "ExactEngine",
+           "OpenCLEngine"]
 
 BACKENDS = ("opencl", "exact", "auto")
 ROUTES = ("auto", "cells", "raster")
 
-
-@dataclass
-class MICStep:
-    """One answer of an engine.
-
-    Attributes
-    ----------
-    centers : (n, 2) float64
-    radii : (n,) float64
-        Negative where the power cell is empty (``centers`` is the site there).
-    empty : (n,) bool
-    nn : (n,) float64 or None
-        Distance from each site to its nearest other site, when the engine
-        computed it on the way (the ``cells`` engine does).
-    stats : dict
-        Counts, summed by the caller over iterations.
-    timings : dict
-        Seconds per stage.
-
-    Examples
-    --------
-    >>> from diskpack_cl.domain import Domain
-    >>> step = ExactEngine(Domain.torus()).mic(np.array([[0.25, 0.5], [0.75, 0.5]]))
-    >>> step.radii.tolist(), step.empty.tolist()
-    ([0.25, 0.25], [False, False])
-    """
-
-    centers: np.ndarray
-    radii: np.ndarray
-    empty: np.ndarray
-    nn: np.ndarray | None = None
-    stats: dict = field(default_factory=dict)
-    timings: dict = field(default_factory=dict)
-
-
-class ExactEngine:
-    """MICs by :func:`diskpack_cl.geometry.exact_mic` (numpy/scipy only).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from diskpack_cl.domain import Domain
-    >>> step = ExactEngine(Domain.torus()).mic(np.random.default_rng(0).random((64, 2)))
-    >>> step.radii.shape
-    (64,)
-    """
-
-    name = "exact"
-    device = "cpu (scipy)"
-    gives_nn = False
-
-    def __init__(self, domain, *, fallback=None):
-        self.domain = domain
-        self.fallback = fallback   # None, or why ``auto`` chose this engine
-
-    def mic(self, points, weights=None):
-        t0 = time.perf_counter()
-        check_sites(points, weights, self.domain)
-        m = exact_mic(points, weights, self.domain)
-        stats = {k: m.stats[k] for k in ("widened", "grown", "linprog")}
-        return MICStep(m.centers, m.radii, m.empty, None, stats, {"exact": time.perf_counter() - t0})
-
-
-class RasterEngine:
-    """MICs from the OpenCL raster estimate, refined by ``exact_mic``.
-
-    The route for devices without float64: the raster's argmax of the
-    distance to the cell boundary starts the exact solver.
-
-    Examples
-    --------
-    On an OpenCL device:
-
-    >>> from diskpack_cl.domain import Domain
-    >>> pts = np.random.default_rng(0).random((100, 2))
-    >>> step = RasterEngine(Domain.torus(), 100).mic(pts)
-    >>> bool(np.allclose(step.radii, ExactEngine(Domain.torus()).mic(pts).radii, atol=1e-9))
-    True
-    """
-
-    name = "raster"
-    gives_nn = False
-    fallback = None
-
-    def __init__(self, domain, n, *, device=None, grid=None, profile=False):
-        from .raster import PowerRaster, auto_grid
-
-        shape = auto_grid(n, domain) if grid is None else grid
-        self.domain = domain
-        self.raster = PowerRaster(domain, shape, device=device, profile=profile)
-        self.device = self.raster.device_name
-
-    def mic(self, points, weights=None):
-        before = sum(self.raster.kernel_seconds.values())
-        est = self.raster.compute(points, weights)
-        t0 = time.perf_counter()
-        m = exact_mic(points, weights, self.domain, estimate=(est.centers, est.radii))
-        timings = dict(est.timings, exact=time.perf_counter() - t0)
-        if self.raster.profile:
-            timings["kernel"] = sum(self.raster.kernel_seconds.values()) - before
-        stats = {k: m.stats[k] for k in ("widened", "grown", "linprog")}
-        return MICStep(m.centers, m.radii, m.empty, None, stats, timings)
-
-
-class CellEngine:
-    """MICs from the float64 per-cell kernel, checked on the host.
-
-    Examples
-    --------
-    On an OpenCL device with float64:
-
-    >>> from diskpack_cl.domain import Domain
-    >>> pts = np.random.default_rng(0).random((100, 2))
-    >>> step = CellEngine(Domain.torus()).mic(pts)
-    >>> bool(np.allclose(step.radii, ExactEngine(Domain.torus()).mic(pts).radii, atol=1e-9))
-    True
-    """
-
-    name = "cells"
-    gives_nn = True
-    fallback = None
-
-    def __init__(self, domain, *, device=None, profile=False):
-        from .cells import CellMIC
-
-        self.domain = domain
-        self.solver = CellMIC(domain, device=device, profile=profile)
-        self.device = self.solver.device_name
-
-    def mic(self, points, weights=None):
-        r = self.solver.solve(points, weights)
-        stats = {k: r.stats[k] for k in ("flagged", "rejected", "fallback", "bytes_to_device",
-                                         "bytes_from_device")}
-        return MICStep(r.centers, r.radii, r.empty, r.nn, stats, r.timings)
+#: The solver counts an engine's answers carry (``MIC.stats``), per solver.
+_COUNTS = {"exact": ("widened", "grown", "linprog"),
+           "cells": ("flagged", "rejected", "fallback", "bytes_to_device", "bytes_from_device")}
 
 
 def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
@@ -189,7 +81,7 @@ def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
     >>> check_against_exact(pts, None, Domain.torus(), np.array([0.25, 0.2]), np.array([False, False]))
     Traceback (most recent call last):
     ...
-    RuntimeError: ...
+    RuntimeError: 1 MIC radii differ from exact_mic's (cell 1: ...)
     """
     ref = exact_mic(points, weights, domain)
     scale = max(domain.width, domain.height)
@@ -201,48 +93,221 @@ def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
                            f"{radii[i]!r} against {ref.radii[i]!r})")
 
 
-def _opencl_engine(ctx, domain, n, backend, route, grid, profile):
-    """The OpenCL route for `ctx`: the per-cell kernel where the device has
-    float64; else the raster route on GPUs, and for ``auto`` on CPUs without
-    float64 the exact engine."""
-    import pyopencl as cl
-
-    from .cells import has_fp64
-
-    if route == "cells" or (route == "auto" and has_fp64(ctx)):
-        return CellEngine(domain, device=ctx, profile=profile)
-    if route == "raster" or backend == "opencl" or ctx.devices[0].type & cl.device_type.GPU:
-        return RasterEngine(domain, n, device=ctx, grid=grid, profile=profile)
-    return ExactEngine(domain, fallback="a CPU device without float64: scipy alone is faster")
+def _answer(mic, solver, nn=None):
+    """The engine's :class:`MIC`: a cell without a finite radius counts as empty; the
+    solver's counts only."""
+    R = np.asarray(mic.radii)
+    return MIC(np.asarray(mic.centers), R, np.asarray(mic.empty, bool) | ~np.isfinite(R),
+               {k: mic.stats[k] for k in _COUNTS[solver]}, nn)
 
 
-def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="auto", profile=False):
-    """The engine for `backend` (``opencl``, ``exact`` or ``auto``).
+class _Engine:
+    """The protocol both engines share: :meth:`mic` with the verify switch, the timings."""
+
+    fallback = None
+    gives_nn = False
+
+    def __init__(self, domain, *, verify=False, fallback=None, timings=None):
+        self.domain = domain
+        self.verify = verify
+        if fallback is not None:
+            self.fallback = fallback   # why ``auto`` chose this engine
+        self.timings = Stopwatch() if timings is None else timings
+
+    def mic(self, points, weights=None, *, exact=True):
+        """MICs of the power cells (a :class:`~diskpack_cl.geometry.MIC`); with
+        ``verify``, checked against :func:`exact_mic` (RuntimeError on a mismatch)."""
+        m = self._mic(points, weights, exact)
+        if self.verify and exact:
+            check_against_exact(points, weights, self.domain, m.radii, m.empty)
+        return m
+
+
+class ExactEngine(_Engine):
+    """The host engine: exact MICs and exact float64 grid labels, no OpenCL.
 
     Parameters
     ----------
     domain : Domain
-    n : int
-        Number of sites (sizes the raster of the ``raster`` route).
+    grid : tuple of int, optional
+        Grid ``(ny, nx)`` of :meth:`centroids`.
+    verify : bool
+        Check every MIC answer against :func:`exact_mic` (for symmetry with
+        the OpenCL engine; this engine's answers are its own).
+    fallback : str, optional
+        Why ``auto`` chose this engine.
+    timings : Stopwatch, optional
+        The collector of the stages' seconds (default: a new one).
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> eng = ExactEngine(Domain.rect(8, 8), (16, 16))
+    >>> pts = np.array([[2.0, 2.0], [6.0, 5.0], [3.0, 6.5]])
+    >>> mic = eng.mic(pts, np.zeros(3))
+    >>> c, mass = eng.centroids(pts, np.zeros(3), None)
+    >>> bool(np.all(mic.radii > 0)), float(mass.sum())
+    (True, 256.0)
+    """
+
+    name = backend = "exact"
+    device = "cpu (scipy)"
+    profile = False   # no kernels to time
+
+    def __init__(self, domain, grid=None, *, verify=False, fallback=None, timings=None):
+        super().__init__(domain, verify=verify, fallback=fallback, timings=timings)
+        self.grid = None if grid is None else tuple(grid)
+
+    def _mic(self, points, weights, exact):
+        # there is no estimate to stop at: `exact` changes nothing here
+        check_sites(points, weights, self.domain)
+        with self.timings("exact"):
+            m = exact_mic(points, weights, self.domain)
+        return _answer(m, "exact")
+
+    def centroids(self, points, weights, density):
+        """``(centroids, mass)`` of the power cells on the grid."""
+        if self.grid is None:
+            raise ValueError("this engine has no grid for centroids: make it with grid=(ny, nx)")
+        check_sites(points, weights, self.domain)
+        with self.timings("raster_labels"):
+            lab = grid_power_labels(points, weights, self.domain, self.grid)
+        with self.timings("centroids"):
+            return cell_centroids(lab, points, density, self.domain)
+
+
+class OpenCLEngine(_Engine):
+    """The OpenCL engine: the ``cells`` or the ``raster`` route (see the module docstring).
+
+    Parameters
+    ----------
+    domain : Domain
+    ctx : pyopencl.Context
+    route : {"cells", "raster"}
+        Where the MICs come from: the float64 per-cell kernel, or the
+        raster estimate refined by :func:`exact_mic`.
+    grid : tuple of int, optional
+        Raster ``(ny, nx)``: the grid of :meth:`centroids` and of the raster
+        route (default: :func:`diskpack_cl.raster.auto_grid` of `n`).
+    n : int, optional
+        Number of sites, for the default grid.
+    profile : bool
+        Time the kernels with OpenCL events (``kernel`` and ``kernel_<name>``
+        in :attr:`timings`).
+    verify : bool
+        Check every MIC answer against :func:`exact_mic`.
+    timings : Stopwatch, optional
+        The collector of the stages' seconds (default: a new one).
+
+    Examples
+    --------
+    On an OpenCL device (:func:`make_engine` picks the route):
+
+    >>> from diskpack_cl.domain import Domain
+    >>> engine = make_engine(Domain.torus(), 64, "opencl")
+    >>> type(engine).__name__, engine.mic(np.random.default_rng(0).random((64, 2))).radii.shape
+    ('OpenCLEngine', (64,))
+    """
+
+    backend = "opencl"
+
+    def __init__(self, domain, ctx, route, *, grid=None, n=None, profile=False, verify=False,
+                 timings=None):
+        from ._device import describe
+        from .cells import CellMIC
+
+        super().__init__(domain, verify=verify, timings=timings)
+        self.ctx, self.name, self.profile = ctx, route, profile
+        self.device = describe(ctx)
+        self.gives_nn = route == "cells"
+        self._grid = grid if grid is not None else None if n is None else _auto_grid(n, domain)
+        self._raster = None
+        self._labelled = None   # (points, weights, raster result) of the last labels
+        self.cells = None
+        if route == "cells":
+            self.cells = CellMIC(domain, device=ctx, profile=profile, timings=self.timings)
+        else:   # every answer of the raster route needs the raster: built now
+            self._build_raster()
+
+    def _build_raster(self):
+        from .raster import PowerRaster
+
+        if self._grid is None:
+            raise ValueError("this engine has no grid: make it with grid=(ny, nx) or n")
+        self._raster = PowerRaster(self.domain, self._grid, device=self.ctx,
+                                   profile=self.profile, timings=self.timings)
+
+    @property
+    def raster(self):
+        """The :class:`~diskpack_cl.raster.PowerRaster` of the grid, built on first use."""
+        if self._raster is None:
+            self._build_raster()
+        return self._raster
+
+    def _label(self, points, weights, distance):
+        est = self.raster.compute(points, weights, distance=distance)
+        self._labelled = (np.array(points), np.array(weights), est)
+        return est
+
+    def _mic(self, points, weights, exact):
+        if exact and self.cells is not None:
+            r = self.cells.solve(points, weights)
+            return _answer(r, "cells", r.nn)
+        est = self._label(points, weights, True)
+        if not exact:
+            R = np.asarray(est.radii)
+            return MIC(np.asarray(est.centers), R, ~(R > 0))
+        with self.timings("exact"):
+            m = exact_mic(points, weights, self.domain, estimate=(est.centers, est.radii))
+        return _answer(m, "exact")
+
+    def centroids(self, points, weights, density):
+        """``(centroids, mass)`` of the power cells (labels reused from :meth:`mic`)."""
+        last = self._labelled
+        if last is None or not (np.array_equal(last[0], points) and np.array_equal(last[1], weights)):
+            last = (None, None, self._label(points, weights, False))
+        with self.timings("centroids"):
+            c, mass = last[2].centroids(density)
+        return np.asarray(c), np.asarray(mass)
+
+
+def _auto_grid(n, domain):
+    from .raster import auto_grid
+
+    return auto_grid(n, domain)
+
+
+def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route="auto",
+                profile=False, verify=False, timings=None):
+    """The engine for `backend` (``opencl``, ``exact`` or ``auto``): the one factory.
+
+    Parameters
+    ----------
+    domain : Domain
+    n : int, optional
+        Number of sites (sizes the raster when `grid` is not given).
     backend : {"auto", "opencl", "exact"}
-        ``auto``: OpenCL when a device exists, else exact (see
-        :attr:`fallback` on the returned engine for why).
+        ``auto``: OpenCL when a device exists, else exact (the engine's
+        ``fallback`` says why). A `device` asked for and not found raises
+        :class:`diskpack_cl.NoOpenCLError`, as ``opencl`` does.
     device : str or pyopencl.Context, optional
     grid : tuple of int, optional
-        Raster shape ``(ny, nx)`` of the ``raster`` route.
+        Grid ``(ny, nx)`` of the centroids and of the raster route.
     route : {"auto", "cells", "raster"}
         OpenCL route: ``auto`` takes ``cells`` on devices with float64,
-        ``raster`` on GPUs
-        without float64, and with ``backend="auto"`` the exact engine on a
-        CPU without float64.
+        ``raster`` on GPUs without float64, and with ``backend="auto"`` the
+        exact engine on a CPU without float64 (scipy alone is faster there).
     profile : bool
         Profile the kernels with OpenCL events.
+    verify : bool
+        Check every MIC answer against :func:`exact_mic` (slow; for testing).
+    timings : Stopwatch, optional
+        The collector the engine adds its stages' seconds to (default: a new
+        one): a caller that times stages of its own passes its collector.
 
     Returns
     -------
-    ExactEngine, RasterEngine or CellEngine
-        With an attribute ``fallback``: None, or the reason ``auto`` chose
-        the exact engine.
+    ExactEngine or OpenCLEngine
 
     Examples
     --------
@@ -256,12 +321,31 @@ def make_engine(domain, n, backend="auto", *, device=None, grid=None, route="aut
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if route not in ROUTES:
         raise ValueError(f"route must be one of {ROUTES}, got {route!r}")
+    common = dict(verify=verify, timings=timings)
     if backend == "exact":
-        return ExactEngine(domain)
+        return ExactEngine(domain, grid, **common)
     try:
         ctx = get_context(device)
     except NoOpenCLError as exc:
         if backend == "opencl" or device is not None:
             raise
-        return ExactEngine(domain, fallback=f"no OpenCL device ({exc})")
-    return _opencl_engine(ctx, domain, n, backend, route, grid, profile)
+        return ExactEngine(domain, grid, fallback=f"no OpenCL device ({exc})", **common)
+    route = _route(ctx, backend, route)
+    if route == "exact":
+        return ExactEngine(domain, grid, **common,
+                           fallback="a CPU device without float64: scipy alone is faster")
+    return OpenCLEngine(domain, ctx, route, grid=grid, n=n, profile=profile, **common)
+
+
+def _route(ctx, backend, route):
+    """The route for `ctx`: the per-cell kernel where the device has float64; else the
+    raster route on GPUs (and whenever OpenCL was asked for), the exact engine on CPUs."""
+    import pyopencl as cl
+
+    from .cells import has_fp64
+
+    if route == "cells" or (route == "auto" and has_fp64(ctx)):
+        return "cells"
+    if route == "raster" or backend == "opencl" or ctx.devices[0].type & cl.device_type.GPU:
+        return "raster"
+    return "exact"

@@ -27,7 +27,9 @@ __all__ = [
     "WRITERS",
     "WriteOptions",
     "check_output_path",
+    "check_size",
     "mm_per_px",
+    "tone_dot_size",
     "pen_path_order",
     "path_travel",
     "read_stipple",
@@ -72,11 +74,52 @@ def _dot_radii(result, radii, scale, dots, radius_scale):
         raise ValueError(f"radius_scale must be > 0, got {radius_scale}")
     if dots == "packing":
         return radii * scale * float(radius_scale)
-    tone = getattr(result, "tone_radius", None)
-    if tone is None:
-        raise ValueError("dots='tone' needs the result's tone_radius (a StippleResult has "
-                         "it); pass dots='packing' or a fixed dot size")
-    return np.full(len(radii), float(tone) * scale * float(radius_scale))
+    return np.full(len(radii), 0.5 * tone_dot_size(result, scale, radius_scale))
+
+
+def tone_dot_size(result, scale, radius_scale=1.0, *, gray=None, invert=False):
+    """Diameter of the tone dots in output units (``scale`` of them per pixel).
+
+    The one place it is derived: twice the radius at which ``n`` equal dots
+    hold the image's darkness as ink (:func:`diskpack_cl.analysis.tone_radius`),
+    from ``gray`` (the image stippled, before ``invert``) when given, else
+    the result's own ``tone_radius``; times ``radius_scale``.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> tone_dot_size(SimpleNamespace(points=np.zeros((4, 2)), tone_radius=1.5), 0.2)
+    0.6000000000000001
+    """
+    if gray is not None:
+        from .analysis import tone_radius
+
+        tone = tone_radius(len(result.points), gray if invert else 1.0 - gray)
+    elif getattr(result, "tone_radius", None) is None:
+        raise ValueError("dots='tone' needs the result's tone_radius (a StippleResult has it; "
+                         "an older file may not): give the dot size (dot_mm, --dot-mm) or draw "
+                         "the packing disks (dots='packing', --dots packing)")
+    else:
+        tone = float(result.tone_radius)
+    return 2.0 * tone * float(radius_scale) * scale
+
+
+def check_size(width_mm=None, height_mm=None, dpi=None):
+    """The one check of a physical size: by width/height or by dpi, not both.
+
+    Raises :class:`~diskpack_cl.options.OptionConflict` (a ValueError that
+    the command line spells with its flags).
+
+    Examples
+    --------
+    >>> check_size(dpi=300, width_mm=100)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.options.OptionConflict: give the SVG size either by width_mm/height_mm or by dpi, not both
+    """
+    if dpi is not None and (width_mm is not None or height_mm is not None):
+        raise OptionConflict("give the SVG size either by {}/{} or by {}, not both",
+                             "width_mm", "height_mm", "dpi")
 
 
 def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
@@ -92,9 +135,8 @@ def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
     >>> mm_per_px(512, 512, dpi=25.4)
     1.0
     """
+    check_size(width_mm, height_mm, dpi)
     if width_mm is not None or height_mm is not None:
-        if dpi is not None:
-            raise ValueError("give the physical size either by width_mm/height_mm or by dpi, not both")
         scales = []
         if width_mm is not None:
             if not width_mm > 0:
@@ -301,9 +343,7 @@ class WriteOptions:
         if self.dot_mm is not None and self.dots is not None:
             raise OptionConflict(f"{{}} {self.dot_mm:g} and {{}} {self.dots} both set the dot "
                                  f"size; give one", "dot_mm", "dots")
-        if self.dpi is not None and (self.width_mm is not None or self.height_mm is not None):
-            raise OptionConflict("give the SVG size either by {}/{} or by {}, not both",
-                                 "width_mm", "height_mm", "dpi")
+        check_size(self.width_mm, self.height_mm, self.dpi)
         for name in ("margin_mm", "landscape"):
             if getattr(self, name) not in (None, False) and self.page is None:
                 raise OptionConflict("{} is for a {} paper: give {} too (e.g. {} a4)",

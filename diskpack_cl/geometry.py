@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -174,7 +174,26 @@ _COVER_RTOL = 1e-12
 
 @dataclass
 class MIC:
-    """Certified maximal inscribed circles of power cells (see :func:`exact_mic`).
+    """Certified maximal inscribed circles of power cells: the one answer of every engine.
+
+    :func:`exact_mic`, :meth:`diskpack_cl.cells.CellMIC.solve` and every
+    engine's ``mic`` (:mod:`diskpack_cl.engine`) return it.
+
+    Attributes
+    ----------
+    centers : (n, 2) float64
+        MIC centres (wrapped into the torus when periodic; the site itself
+        where the cell is empty).
+    radii : (n,) float64
+        MIC radii; negative where the power cell is empty.
+    empty : (n,) bool
+        The power cell is empty (or its radius is not finite).
+    stats : dict
+        Counts of the solver (see the function that made it).
+    nn : (n,) float64 or None
+        Distance from each site to its nearest other site, exact (periodic
+        on a torus), when the solver found it on the way (the per-cell
+        kernel does).
 
     Examples
     --------
@@ -187,7 +206,8 @@ class MIC:
     centers: np.ndarray
     radii: np.ndarray
     empty: np.ndarray
-    stats: dict
+    stats: dict = field(default_factory=dict)
+    nn: np.ndarray | None = None
 
 
 def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=12, cells=None):

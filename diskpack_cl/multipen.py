@@ -32,18 +32,20 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ._timing import Stopwatch
 from .analysis import tone_radius
 from .color import pen_tone_radii, separate
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
 from .schedule import StippleOptions
-from .stipple import StippleState, _centroid_density, _make_stage, _run, dot_radii, lloyd_step, pack_step
-from .stipple_engine import make_stipple_engine
+from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
+                      dot_radii, lloyd_step, pack_step, result_summary)
+from .engine import make_engine
 
 __all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
 
@@ -63,8 +65,8 @@ DIFFUSE = 6
 COLOR_CAPACITY = 0.0
 
 
-@dataclass
-class ColorStippleResult:
+@dataclass(kw_only=True)
+class ColorStippleResult(StippleResult):
     """Result of :func:`stipple_colors`: all dots, each with its pen.
 
     Attributes
@@ -96,27 +98,11 @@ class ColorStippleResult:
     True
     """
 
-    points: np.ndarray
-    radii: np.ndarray
     pen: np.ndarray
     names: tuple
     colors: np.ndarray
-    k: float
-    base_radii: np.ndarray
-    certificate: object
     layers: np.ndarray
     pen_radius: np.ndarray
-    width: int
-    height: int
-    history: list = field(default_factory=list)
-    timings: dict = field(default_factory=dict)
-    params: dict = field(default_factory=dict)
-    engine: str = "opencl"
-    tone_radius: float = None
-
-    @property
-    def n(self):
-        return len(self.points)
 
     @property
     def counts(self):
@@ -125,16 +111,9 @@ class ColorStippleResult:
 
     def summary(self):
         """A JSON-ready dict: sizes, k, pens and their counts, certificate, timings."""
-        return {
-            "n": int(self.n), "width": int(self.width), "height": int(self.height),
-            "k": float(self.k), "min_radius": float(self.radii.min()),
-            "max_radius": float(self.radii.max()), "iterations": len(self.history),
-            "pens": [{"name": name, "color": hex_color(c), "n": int(m)}
-                     for name, c, m in zip(self.names, self.colors, self.counts)],
-            "certificate": self.certificate.as_dict(),
-            "timings": {k: float(v) for k, v in self.timings.items()},
-            "params": self.params,
-        }
+        return result_summary(self, pens=[{"name": name, "color": hex_color(c), "n": int(m)}
+                                          for name, c, m in zip(self.names, self.colors,
+                                                                self.counts)])
 
 
 def hex_color(rgb):
@@ -240,7 +219,7 @@ def _pen_centroids(engine, dens, x, pen):
     for p in np.unique(pen):
         m = np.flatnonzero(pen == p)
         if len(m) > 1:
-            cp, mass, _ = engine.centroids(x[m], np.zeros(len(m)), dens[p])
+            cp, mass = engine.centroids(x[m], np.zeros(len(m)), dens[p])
             ok = (mass > 0) & np.all(np.isfinite(cp), axis=1)
             c[m[ok]] = cp[ok]
     return c
@@ -258,7 +237,7 @@ def _run_pens(state, stage, pen, pens, pull, callback, first):
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
         for it in range(iters):
-            t0 = time.perf_counter()
+            t0, mark = time.perf_counter(), stage.engine.timings.mark()
             b = pull * max(0.0, 1.0 - len(history) / (PULL_UNTIL * total))
             c = _pen_centroids(*pens, state.points, pen) if b > 0 else None
             if kind == "lloyd":
@@ -267,8 +246,10 @@ def _run_pens(state, stage, pen, pens, pull, callback, first):
                 state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
             if b > 0:
                 state = replace(state, points=state.points + b * (c - state.points))
-            entry = {"kind": kind, "iteration": first + len(history), **step, "k": float(state.k),
-                     "seconds": time.perf_counter() - t0}
+            entry = {"kind": kind, "iteration": first + len(history), **step, "k": float(state.k)}
+            entry.update({f"{name}_s": secs
+                          for name, secs in stage.engine.timings.since(mark).items()})
+            entry["seconds"] = time.perf_counter() - t0
             history.append(entry)
             if callback is not None:
                 callback(entry)
@@ -375,29 +356,31 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     (('yellow', 'cyan', 'magenta'), 120, True)
     """
     t_start = time.perf_counter()
-    sep, opt, counts = _separate(image, n, colors, counts, joint, pen_pull, options,
-                                 dict(black_generation=black_generation, clean_black=clean_black,
-                                      clean_white=clean_white))
+    watch = Stopwatch()   # the run's one collector: its stages and both engines'
+    with watch("separate"):
+        sep, opt, counts = _separate(image, n, colors, counts, joint, pen_pull, options,
+                                     dict(black_generation=black_generation,
+                                          clean_black=clean_black, clean_white=clean_white))
     P, H, W = sep.layers.shape
     gray = 1.0 - sep.darkness
-    timings = {"separate": time.perf_counter() - t_start}
-    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device)
+    engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                         grid=opt.grid_shape(W, H), timings=watch)
     stage = _make_stage(gray, opt, engine)
     head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
     start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))
-    state, history, _ = _run(start, _phases(stage, head), callback)
-    t0 = time.perf_counter()
-    pen = assign_pens(state.points, _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)),
-                      counts)
-    timings["assign"] = time.perf_counter() - t0
+    state, history = _run(start, _phases(stage, head), callback)
+    with watch("assign"):
+        pen = assign_pens(state.points,
+                          _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)), counts)
     coarse = replace(opt, supersample=max(1, opt.supersample // PEN_COARSEN))
-    pens = (make_stipple_engine(Domain.rect(W, H), coarse.grid_shape(W, H), backend, device),
+    pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                        grid=coarse.grid_shape(W, H), timings=watch),
             [_centroid_density(a, coarse) for a in sep.layers])
     state, more = _run_pens(state, _phases(stage, tail), pen, pens, pen_pull, callback, len(history))
-    t0 = time.perf_counter()
-    r = dot_radii(state, stage, state.points)
-    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
-    timings.update(certify=time.perf_counter() - t0, total=time.perf_counter() - t_start)
+    with watch("certify"):
+        r = dot_radii(state, stage, state.points)
+        k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    watch.add("total", time.perf_counter() - t_start)
     params = dict(opt.params(), colors=list(sep.names), black_generation=black_generation,
                   clean_black=clean_black, clean_white=clean_white, joint=joint, pen_pull=pen_pull,
                   counts=counts.tolist())
@@ -405,5 +388,5 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
         base_radii=r, certificate=cert, layers=sep.layers,
         pen_radius=pen_tone_radii(sep.layers, counts), width=W, height=H, history=history + more,
-        timings=timings, params=params, engine=engine.name,
+        timings=watch.seconds, params=params, engine=engine.backend,
         tone_radius=tone_radius(opt.n, sep.darkness))

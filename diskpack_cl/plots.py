@@ -297,7 +297,8 @@ def stipple_numbers(points, radii, darkness, certificate=None, *, sigma=3.0):
     Returns
     -------
     dict
-        The dict :func:`stipple_report` returns (non-finite values None).
+        The numbers of :func:`stipple_report`'s figure; a value that is not
+        finite is None.
 
     Examples
     --------

@@ -19,6 +19,7 @@ from . import _device
 from ._checks import check_sites
 from ._device import describe, get_context, group_size, padded, wait_for
 from ._kernels import build_program
+from ._timing import Stopwatch
 from .domain import Domain
 from .labels import cell_centroids
 
@@ -65,8 +66,6 @@ class RasterResult:
     radii : (n,) float64
         That peak distance (raster MIC radius estimate); -1 where the cell
         owns no grid cell (empty, or smaller than the raster resolves).
-    timings : dict
-        Seconds spent in ``raster_labels`` and ``mic_estimate``.
 
     Examples
     --------
@@ -82,7 +81,6 @@ class RasterResult:
     radii: np.ndarray
     shape: tuple
     cell_size: tuple
-    timings: dict = field(default_factory=dict)
     _owner: object = None
 
     _maps: dict = field(default_factory=dict)
@@ -176,7 +174,11 @@ class PowerRaster:
         See :func:`diskpack_cl.get_context`.
     profile : bool
         Profile the kernels with OpenCL events: device seconds per kernel
-        accumulate in :attr:`kernel_seconds` (off by default).
+        accumulate in `timings` as ``kernel_<name>`` and ``kernel`` (off by default).
+    timings : Stopwatch, optional
+        Where the seconds of ``raster_labels``, ``mic_estimate`` and the
+        profiled kernels go (default: a new one,
+        :attr:`timings`); an engine passes its own.
     max_groups : int
         Grid cells per enqueue of the labelling kernel, in units of 8 x 8:
         the raster is labelled in bands of tile rows, each waited for in a
@@ -203,10 +205,11 @@ class PowerRaster:
     """
 
     def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None,
-                 profile=False):
+                 profile=False, timings=None):
         import pyopencl as cl
 
         self.domain = domain
+        self.timings = Stopwatch() if timings is None else timings
         self.shape = (int(shape[0]), int(shape[1]))
         if min(self.shape) < 1:
             raise ValueError(f"raster shape must be positive, got {shape}")
@@ -215,8 +218,6 @@ class PowerRaster:
         props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
         self.queue = cl.CommandQueue(self.ctx, properties=props)
         self.profile = profile
-        #: with `profile`: device seconds per kernel name, summed over calls
-        self.kernel_seconds = {}
         self.max_groups = int(max_groups)
         if self.max_groups < 1:
             raise ValueError(f"max_groups must be at least 1, got {max_groups}")
@@ -271,7 +272,8 @@ class PowerRaster:
         compilation is not charged to the first real iteration."""
         shape, self.shape = self.shape, (1, 1)
         try:
-            self.compute(np.full((1, 2), 0.5 * self.domain.width))
+            with self.timings.discarded():
+                self.compute(np.full((1, 2), 0.5 * self.domain.width))
         finally:
             self.shape = shape
 
@@ -292,8 +294,7 @@ class PowerRaster:
         """Wait for kernel `name` (signals get through); with `profile`, add its device time."""
         wait_for(event)
         if self.profile:
-            secs = (event.profile.end - event.profile.start) * 1e-9
-            self.kernel_seconds[name] = self.kernel_seconds.get(name, 0.0) + secs
+            self.timings.kernel(name, (event.profile.end - event.profile.start) * 1e-9)
 
     def _map_buffer(self, name, nbytes):
         import pyopencl as cl
@@ -403,13 +404,13 @@ class PowerRaster:
         self._label(distance, (b_site, b_w, b_id, b_start, b_wmax), (nbx, nby, bw, bh),
                     float(wmax_b.max()), maps)
         t1 = time.perf_counter()
+        self.timings.add("raster_labels", t1 - t0)
         if not (distance and neighbors):
             del maps["nbr"]     # the kernel writes it with the distances; kept on request
         if not distance:
             del maps["dist"]
             return RasterResult(pts.copy(), np.full(n, -1.0), self.shape,
-                                      (dom.width / nx, dom.height / ny),
-                                      {"raster_labels": t1 - t0, "mic_estimate": 0.0}, self, maps,
+                                      (dom.width / nx, dom.height / ny), self, maps,
                                       self._generation, pts)
         rbits, argpix = self._cell_maxima(maps, n)
         has = rbits >= 0
@@ -421,8 +422,8 @@ class PowerRaster:
         centers[has, 0] = (ix + 0.5) * hx
         centers[has, 1] = (iy + 0.5) * hy
         t2 = time.perf_counter()
-        return RasterResult(centers, radii, self.shape, (hx, hy),
-                                  {"raster_labels": t1 - t0, "mic_estimate": t2 - t1}, self, maps,
+        self.timings.add("mic_estimate", t2 - t1)
+        return RasterResult(centers, radii, self.shape, (hx, hy), self, maps,
                                   self._generation, pts)
 
     def _map_buffers(self, npix):

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .domain import Domain
-from .engine import BACKENDS, check_against_exact, make_engine
+from .engine import BACKENDS, make_engine
 from .options import check_fields, option
 from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
@@ -79,9 +79,9 @@ class RelaxResult:
     seconds : float
         Wall time of the iterations.
     timings : dict
-        Seconds per stage, summed over iterations; the stages are the
-        engine's (:mod:`diskpack_cl.engine`): ``buckets``, ``device``,
-        ``refine``, ``fallback`` for the per-cell kernel; ``raster_labels``,
+        Seconds per stage, summed over iterations: the engine's
+        (:mod:`diskpack_cl.engine`), ``buckets``, ``device``, ``refine``,
+        ``fallback`` for the per-cell kernel; ``raster_labels``,
         ``mic_estimate``, ``exact`` for the raster route; ``exact`` for scipy.
     backend, device : str
     stats : dict
@@ -175,7 +175,8 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         radii against :func:`diskpack_cl.geometry.exact_mic` (to 1e-9) and
         rho against a scipy KD-tree; raises RuntimeError on a mismatch.
     profile : bool
-        Profile the OpenCL kernels (``timings["kernel"]``).
+        Profile the OpenCL kernels (``timings["kernel"]`` and
+        ``timings["kernel_<name>"]``).
     domain : Domain, optional
         ``Domain.torus()`` (default) or a box ``Domain.rect(W, H)``: there
         each point moves to the centre of the largest disk inside its
@@ -204,34 +205,33 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         raise ValueError(f"max_iter must be >= 0, got {max_iter}")
     n = len(X)
     shape = None if grid is None else (int(grid), int(grid))
-    engine = make_engine(dom, n, backend, device=device, grid=shape, route=route, profile=profile)
-    timings, stats = {}, {"engine": engine.name}
+    engine = make_engine(dom, n, backend, device=device, grid=shape, route=route, profile=profile,
+                         verify=verify)
+    stats = {"engine": engine.name}
     if engine.fallback:
         stats["fallback"] = engine.fallback
     t_start = time.perf_counter()
     X, rho, it, reason = _iterate(engine, dom, X, eps, int(max_iter), patience, callback, verify,
-                                  timings, stats)
+                                  stats)
     seconds = time.perf_counter() - t_start
     _certify_rho(X, rho[-1], dom)
-    return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
-                       "exact" if engine.name == "exact" else "opencl", engine.device, stats)
+    return RelaxResult(X, np.array(rho), it, reason, seconds, engine.timings.seconds,
+                       engine.backend, engine.device, stats)
 
 
-def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings, stats):
+def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats):
     """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason)``."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
-    step = _mic(engine, X, timings, stats) if engine.gives_nn else None
+    step = _mic(engine, X, stats) if engine.gives_nn else None
     rho = [_rho(X, step, verify, dom)]
     best_at = 0
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
     while rho[-1] < eps and it < max_iter:
         it += 1
-        step = step or _mic(engine, X, timings, stats)
-        if verify:
-            check_against_exact(X, None, dom, step.radii, step.empty)
+        step = step or _mic(engine, X, stats)
         X = step.centers
-        step = _mic(engine, X, timings, stats) if engine.gives_nn else None
+        step = _mic(engine, X, stats) if engine.gives_nn else None
         rho.append(_rho(X, step, verify, dom))
         if callback is not None:
             callback(it, rho[-1])
@@ -245,11 +245,9 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings,
     return X, rho, it, reason
 
 
-def _mic(engine, X, timings, stats):
-    """One engine call, its stage seconds and counts added up."""
+def _mic(engine, X, stats):
+    """One engine call, its counts added up (its seconds are in ``engine.timings``)."""
     step = engine.mic(X)
-    for k, v in step.timings.items():
-        timings[k] = timings.get(k, 0.0) + v
     for k, v in step.stats.items():
         stats[k] = stats.get(k, 0) + v
     return step

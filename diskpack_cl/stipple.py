@@ -11,7 +11,7 @@ The stage is split by concept:
   certified scale ``k`` (:func:`largest_valid_k`, :func:`certified_k`).
 - :mod:`diskpack_cl.schedule`: named schedules, their option defaults and
   :class:`StippleOptions`, every option resolved and checked at once.
-- :mod:`diskpack_cl.stipple_engine`: MICs and centroids, OpenCL or exact.
+- :mod:`diskpack_cl.engine`: MICs and centroids, OpenCL or exact.
 - this module: :func:`stipple`, a short driver over the steps
   :func:`pack_step` (disk packing, and mix) and :func:`lloyd_step`, each
   taking a :class:`StippleState` and returning the next one with its
@@ -84,7 +84,7 @@ from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
-from .stipple_engine import VerifiedEngine, make_stipple_engine
+from .engine import make_engine
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
            "equal_ink", "off_support"]
@@ -111,16 +111,20 @@ class StippleResult:
     history : list of dict
         One entry per iteration: ``kind`` ("pack", "mix" or "lloyd"),
         ``iteration``, ``k``, ``empty`` (empty power cells), ``moved`` (mean
-        displacement, px), ``seconds`` and per-stage seconds (``raster_s``,
-        ``exact_s``, ``centroids_s``; with ``profile``, ``kernel_s``).
+        displacement, px), ``seconds`` and the seconds of each engine stage
+        that ran in it, ``<stage>_s`` (the stages of
+        :mod:`diskpack_cl.engine`: ``raster_labels_s``, ``exact_s``,
+        ``centroids_s``, ...; with ``profile``, ``kernel_s`` and
+        ``kernel_<name>_s``).
     width, height : int
         Image size in pixels.
     timings : dict
-        Total seconds per stage.
+        Total seconds per stage: ``load``, ``start``, the engine's stages,
+        ``certify`` and ``total``.
     params : dict
         The parameters used (for reports and ``--json``).
     engine : str
-        ``"opencl"`` or ``"exact"`` (see :mod:`diskpack_cl.stipple_engine`).
+        ``"opencl"`` or ``"exact"``: the engine's backend (see :mod:`diskpack_cl.engine`).
     tone_radius : float
         Radius (px) at which n equal dots hold the image's darkness as ink
         (:func:`diskpack_cl.analysis.tone_radius`): what the writers draw by
@@ -155,19 +159,26 @@ class StippleResult:
 
     def summary(self):
         """A JSON-ready dict: sizes, k, certificate fields, timings."""
-        return {
-            "n": int(self.n),
-            "width": int(self.width),
-            "height": int(self.height),
-            "k": float(self.k),
-            "min_radius": float(self.radii.min()),
-            "max_radius": float(self.radii.max()),
-            "iterations": len(self.history),
-            "empty_cells_total": int(sum(h.get("empty", 0) for h in self.history)),
-            "certificate": self.certificate.as_dict(),
-            "timings": {k: float(v) for k, v in self.timings.items()},
-            "params": self.params,
-        }
+        return result_summary(
+            self, empty_cells_total=int(sum(h.get("empty", 0) for h in self.history)))
+
+
+def result_summary(result, **extra):
+    """The JSON-ready summary of a stippling (one pen or several): sizes, k, radii,
+    iterations, `extra`, the certificate's fields, timings and params."""
+    return {
+        "n": int(result.n),
+        "width": int(result.width),
+        "height": int(result.height),
+        "k": float(result.k),
+        "min_radius": float(result.radii.min()),
+        "max_radius": float(result.radii.max()),
+        "iterations": len(result.history),
+        **extra,
+        "certificate": result.certificate.as_dict(),
+        "timings": {k: float(v) for k, v in result.timings.items()},
+        "params": result.params,
+    }
 
 
 
@@ -183,10 +194,9 @@ class StippleState:
     --------
     The start of a stippling loop, as :func:`stipple` makes it (exact engine):
 
-    >>> from diskpack_cl.stipple_engine import make_stipple_engine
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
-    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
     >>> stage = _make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
@@ -208,10 +218,9 @@ class StippleStage:
     --------
     The stage of a 48 x 32 gray ramp, as :func:`stipple` makes it (exact engine):
 
-    >>> from diskpack_cl.stipple_engine import make_stipple_engine
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
-    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
     >>> stage = _make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
@@ -234,15 +243,6 @@ class StippleStage:
 
 def _moved(old, new):
     return float(np.mean(np.hypot(*(new - old).T)))
-
-
-def _add_timings(entry, seconds, names):
-    for name in names:
-        if name in seconds:
-            entry[f"{name}_s"] = seconds[name]
-    for name, secs in seconds.items():   # profiled: device seconds, all and per kernel
-        if name.startswith("kernel"):
-            entry[f"{name}_s"] = entry.get(f"{name}_s", 0.0) + secs
 
 
 #: Blur (px) of the darkness that :func:`off_support` reads: a thin line's
@@ -287,15 +287,6 @@ def equal_ink(ink, mass, gain):
     return ink / np.exp(np.mean(np.log(ink)))
 
 
-def _cell_centroids(stage, x, w, entry):
-    """``(centroids, mass)`` of the cells of weights `w`; their seconds go into `entry`."""
-    cen, mass, seconds = stage.engine.centroids(x, w, stage.density)
-    entry["centroids_s"] = (entry.get("centroids_s", 0.0) + seconds.get("raster", 0.0)
-                            + seconds.get("centroids", 0.0))
-    _add_timings(entry, seconds, ())
-    return cen, mass
-
-
 def off_support(ink, mic_centers, centroids, gain=1.0):
     """How far each MIC centre has left the ink of its cell, in [0, 1].
 
@@ -338,14 +329,13 @@ def pack_step(state, stage, blend=0.0):
     With ``support > 0`` a dot whose MIC centre leaves its cell's ink moves
     towards the centroid instead (:func:`off_support`). Returns ``(state,
     entry)``: the next state and this step's measurements (``moved``,
-    ``empty``, stage seconds); see the module docstring.
+    ``empty``); see the module docstring.
 
     Examples
     --------
-    >>> from diskpack_cl.stipple_engine import make_stipple_engine
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
-    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
     >>> stage = _make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
@@ -359,19 +349,18 @@ def pack_step(state, stage, blend=0.0):
     refine = bool(opt.refine_every) and state.packs % opt.refine_every == 0
     mic = stage.engine.mic(x, w, exact=refine)
     entry = {}
-    _add_timings(entry, mic.timings, ("raster", "exact"))
     ok = ~mic.empty & np.all(np.isfinite(mic.centers), axis=1)
     newx = x.copy()
     newx[ok] = mic.centers[ok]
     need_power = opt.capacity > 0 or opt.support > 0 or (blend > 0 and opt.blend_cell == "power")
-    power = _cell_centroids(stage, x, w, entry) if need_power else None
+    power = stage.engine.centroids(x, w, stage.density) if need_power else None
     ink = state.ink
     if opt.capacity > 0:
         ink = equal_ink(ink, power[1], opt.capacity)
         entry["ink_spread"] = float(np.std(power[1]) / np.mean(power[1]))
     if blend > 0 or opt.support > 0:
         cen, mass = power if opt.blend_cell == "power" or blend == 0 else \
-            _cell_centroids(stage, x, np.zeros(len(x)), entry)
+            stage.engine.centroids(x, np.zeros(len(x)), stage.density)
         okc = ok & (mass > 0) & np.all(np.isfinite(cen), axis=1)
         a = _blend_weights(stage, x[okc], newx[okc], cen[okc], blend)
         newx[okc] += a[:, None] * (cen[okc] - newx[okc])
@@ -394,10 +383,9 @@ def lloyd_step(state, stage, new_k=True):
 
     Examples
     --------
-    >>> from diskpack_cl.stipple_engine import make_stipple_engine
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
-    >>> engine = make_stipple_engine(Domain.rect(48, 32), opt.grid_shape(48, 32), "exact")
+    >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
     >>> stage = _make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
@@ -406,9 +394,8 @@ def lloyd_step(state, stage, new_k=True):
     (0, 0, True)
     """
     x = state.points
-    cen, mass, seconds = stage.engine.centroids(x, np.zeros(len(x)), stage.density)
+    cen, mass = stage.engine.centroids(x, np.zeros(len(x)), stage.density)
     entry = {}
-    _add_timings(entry, seconds, ("raster", "centroids"))
     ok = (mass > 0) & np.all(np.isfinite(cen), axis=1)
     newx = x.copy()
     newx[ok] = cen[ok]
@@ -422,31 +409,29 @@ def lloyd_step(state, stage, new_k=True):
 
 
 def _run(state, stage, callback):
-    """Every phase of the schedule; returns (final state, history, seconds per stage)."""
+    """Every phase of the schedule; returns (final state, history).
+
+    Each history entry holds the seconds of the engine stages that ran in
+    its step (``<stage>_s``), read off the engine's one collector."""
     history = []
-    stages = ["raster", "exact", "centroids"] + (["kernel"] if stage.engine.profile else [])
-    totals = Stopwatch(stages)
+    watch = stage.engine.timings
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
         for it in range(iters):
-            t0 = time.perf_counter()
+            t0, mark = time.perf_counter(), watch.mark()
             if kind == "lloyd":
                 # only the phase's last step sets k, for the packing after it
                 state, step = lloyd_step(state, stage, new_k=it == iters - 1)
             else:
                 state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
             entry = {"kind": kind, "iteration": len(history), **step, "k": float(state.k)}
+            entry.update({f"{name}_s": secs for name, secs in watch.since(mark).items()})
             entry["seconds"] = time.perf_counter() - t0
-            for name in stages:
-                totals.add(name, entry.get(f"{name}_s", 0.0))
-            for key in entry:   # per kernel, when profiled
-                if key.startswith("kernel_") and key.endswith("_s") and key != "kernel_s":
-                    totals.add(key[:-2], entry[key])
             history.append(entry)
             if callback is not None:
                 callback(entry)
-    return state, history, totals.seconds
+    return state, history
 
 
 def _start_points(gray, opt, start):
@@ -498,18 +483,19 @@ def _make_stage(gray, opt, engine):
     return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight, ink)
 
 
-def _certified_result(state, stage, history, timings, t_start, darkness):
+def _certified_result(state, stage, history, t_start, darkness):
     """The :class:`StippleResult` of the final state: radii at the largest certified k."""
     W, H = stage.size
-    t0 = time.perf_counter()
-    r = dot_radii(state, stage, state.points)
-    k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
-    timings["certify"] = time.perf_counter() - t0
-    timings["total"] = time.perf_counter() - t_start
+    watch = stage.engine.timings
+    with watch("certify"):
+        r = dot_radii(state, stage, state.points)
+        k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    watch.add("total", time.perf_counter() - t_start)
     return StippleResult(
         points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
-        history=history, width=W, height=H, timings=timings, params=stage.options.params(),
-        engine=stage.engine.name, tone_radius=tone_radius(len(state.points), darkness),
+        history=history, width=W, height=H, timings=watch.seconds,
+        params=stage.options.params(),
+        engine=stage.engine.backend, tone_radius=tone_radius(len(state.points), darkness),
     )
 
 
@@ -535,7 +521,7 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     device : str or pyopencl.Context, optional
         OpenCL device (see :func:`diskpack_cl.get_context`).
     backend : {"auto", "opencl", "exact"}
-        Engine (:mod:`diskpack_cl.stipple_engine`): ``opencl`` (MICs from
+        Engine (:mod:`diskpack_cl.engine`): ``opencl`` (MICs from
         the float64 per-cell kernel checked on the host, or on devices
         without float64 raster estimates refined exactly; labels and
         centroids on the device), ``exact`` (no OpenCL: exact MICs and host
@@ -576,19 +562,18 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     from .image import to_gray
 
     t_start = time.perf_counter()
-    options = (options or StippleOptions()).replace(**overrides)
-    gray = to_gray(image, invert=options.invert)
-    H, W = gray.shape
-    opt = options.plan(n, W, H)
-    gray, darkness = _toned(gray, opt)
-    timings = {"load": time.perf_counter() - t_start}
-    t0 = time.perf_counter()
-    x = _start_points(gray, opt, start)
-    timings["start"] = time.perf_counter() - t0
-    engine = make_stipple_engine(Domain.rect(W, H), opt.grid_shape(W, H), backend, device, profile)
-    if verify:
-        engine = VerifiedEngine(engine)
+    watch = Stopwatch()   # the run's one collector: its own stages and the engine's
+    with watch("load"):
+        options = (options or StippleOptions()).replace(**overrides)
+        gray = to_gray(image, invert=options.invert)
+        H, W = gray.shape
+        opt = options.plan(n, W, H)
+        gray, darkness = _toned(gray, opt)
+    with watch("start"):
+        x = _start_points(gray, opt, start)
+    engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                         grid=opt.grid_shape(W, H), profile=profile, verify=verify,
+                         timings=watch)
     stage = _make_stage(gray, opt, engine)
-    state, history, stage_seconds = _run(StippleState(x, float(opt.k0)), stage, callback)
-    timings.update(stage_seconds)
-    return _certified_result(state, stage, history, timings, t_start, darkness)
+    state, history = _run(StippleState(x, float(opt.k0)), stage, callback)
+    return _certified_result(state, stage, history, t_start, darkness)

@@ -372,3 +372,61 @@ def test_collision_hint_names_the_field_that_differs(tmp_path):
     b = Item("stipple", 1, str(tmp_path / "cat.png"), 0, {}, (str(tmp_path / "cat.svg"),))
     with pytest.raises(ValueError, match=r"add \{name\} or \{i\} to tell them apart"):
         check_outputs([a, b], lambda p: None)
+
+
+# ------------------------------------------- one input: a one-item plan (issue 18)
+
+def test_one_input_and_the_same_image_in_a_batch_write_the_same_bytes(ctx, tmp_path, capsys):
+    """A single input and a batch item run the same code (batch.stipple_item): the
+    same image gives the same files, tone controls and all. (The batch once
+    dropped the tone controls from the .npz params that the single run wrote.)"""
+    img = _photos(tmp_path / "in")[1]
+    opts = ["-n", 60, "--schedule", "pack", "--black-point", "0.1", "--seed", "3"]
+    one = tmp_path / "one"
+    one.mkdir()
+    rc, _, _ = _cli(["stipple", img, *opts, "-o", one / "camera.npz", "-o", one / "camera.svg",
+                     "-q"], capsys)
+    assert rc == 0
+    many = tmp_path / "many"
+    rc, _, _ = _cli(["stipple", tmp_path / "in", *opts, "-o", f"{many}/{{stem}}.npz",
+                     "-o", f"{many}/{{stem}}.svg", "-q"], capsys)
+    assert rc == 0
+    got = _files(many)
+    assert {k: got[k] for k in ("camera.npz", "camera.svg")} == _files(one)
+
+
+def test_the_batch_rule_one_input_runs_here_a_template_makes_a_batch(ctx, tmp_path, capsys):
+    """The rule (BATCH_RULE): one input and a plain output run here, no manifest; the
+    same input with an output template is a batch, with its manifest."""
+    img = _photos(tmp_path / "in")[0]
+    rc, _, _ = _cli(["stipple", img, "-n", 40, "-o", tmp_path / "plain.npz", *QUICK_CLI, "-q"],
+                    capsys)
+    assert rc == 0 and sorted(p.name for p in tmp_path.iterdir()) == ["in", "plain.npz"]
+    rc, _, _ = _cli(["stipple", img, "-n", 40, "-o", tmp_path / "t" / "{stem}_{n}.npz",
+                     *QUICK_CLI, "-q"], capsys)
+    assert rc == 0
+    assert sorted(p.name for p in (tmp_path / "t").iterdir()) == ["astronaut_40.npz",
+                                                                  "manifest.jsonl"]
+
+
+def test_a_device_list_does_not_make_a_batch(tmp_path, capsys):
+    """A comma in --device no longer turns one input into a batch behind the user's
+    back: the list is for a batch's workers, and one input says so."""
+    img = _photos(tmp_path / "in")[0]
+    rc, _, err = _cli(["stipple", img, "-n", 40, "-o", tmp_path / "o.npz", "--device",
+                       "cpu,cpu"], capsys)
+    assert rc == 2 and "a device list is for the workers of a batch" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in"]
+
+
+@pytest.mark.parametrize("command", ["stipple", "poisson", "relax"])
+def test_the_batch_rule_is_in_help(command, capsys):
+    from diskpack_cl.cli._batches import BATCH_OPTIONS, BATCH_RULE
+
+    assert main([command, "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert " ".join(BATCH_RULE.split()) in text
+    # every option the rule names is in the group that --help shows under it
+    group = text[text.index(" ".join(BATCH_RULE.split())):]
+    shown = [k for k in BATCH_OPTIONS if f"--{k}" in group]
+    assert set(shown) == set(BATCH_OPTIONS) - ({"count"} if command != "poisson" else set())

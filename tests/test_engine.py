@@ -54,18 +54,24 @@ def test_engines_agree_on_power_cells_in_a_rectangle(ctx, name):
     assert np.abs(step.centers[live] - ref.centers[live]).max() <= 1e-9
 
 
-def test_verify_catches_a_wrong_engine(ctx, monkeypatch):
-    """verify=True is a real check: an engine whose radii are off fails."""
+def _radii_off(monkeypatch, engine_class):
+    """Make every answer of ``diskpack_cl.engine.<engine_class>`` off by 1e-6 of its radii."""
     from diskpack_cl import engine as engine_mod
 
-    real = engine_mod.CellEngine.mic
+    cls = getattr(engine_mod, engine_class)
+    real = cls._mic
 
-    def off(self, points, weights=None):
-        step = real(self, points, weights)
-        step.radii = step.radii * (1 + 1e-6)
-        return step
+    def off(self, points, weights, exact):
+        m = real(self, points, weights, exact)
+        m.radii = m.radii * (1 + 1e-6)
+        return m
 
-    monkeypatch.setattr(engine_mod.CellEngine, "mic", off)
+    monkeypatch.setattr(cls, "_mic", off)
+
+
+def test_verify_catches_a_wrong_engine(ctx, monkeypatch):
+    """verify=True is a real check: an engine whose radii are off fails."""
+    _radii_off(monkeypatch, "OpenCLEngine")
     pts = dart_throwing(300, seed=14)
     with pytest.raises(RuntimeError, match="differ from exact_mic"):
         relax_poisson(pts, eps=0.99, max_iter=3, backend="opencl", device=ctx, verify=True)
@@ -79,14 +85,12 @@ def test_bad_route():
 def test_stipple_engine_routes_agree(ctx):
     """The stippling engine's float64 per-cell route and its raster route (for
     devices without float64), forced on PoCL, give the same power-cell MICs."""
-    from diskpack_cl.stipple_engine import OpenCLStippleEngine
-
     rng = np.random.default_rng(15)
     dom, shape = Domain.rect(90.0, 60.0), (120, 180)
     pts = rng.random((900, 2)) * (90.0, 60.0)
     w = (0.8 * rng.random(900)) ** 2
-    cells = OpenCLStippleEngine(dom, shape, device=ctx, route="cells")
-    raster = OpenCLStippleEngine(dom, shape, device=ctx, route="raster")
+    cells = make_engine(dom, None, "opencl", device=ctx, grid=shape, route="cells")
+    raster = make_engine(dom, None, "opencl", device=ctx, grid=shape, route="raster")
     assert cells.cells is not None and raster.cells is None
     a, b = cells.mic(pts, w), raster.mic(pts, w)
     assert np.array_equal(a.empty, b.empty)
@@ -105,16 +109,8 @@ def test_stipple_verify_runs_every_step_against_exact_mic(ctx):
 
 def test_stipple_verify_catches_a_wrong_engine(ctx, monkeypatch):
     from diskpack_cl import stipple
-    from diskpack_cl import stipple_engine as se
 
-    real = se.OpenCLStippleEngine.mic
-
-    def off(self, points, weights, *, exact=True):
-        m = real(self, points, weights, exact=exact)
-        m.radii = m.radii * (1 + 1e-6)
-        return m
-
-    monkeypatch.setattr(se.OpenCLStippleEngine, "mic", off)
+    _radii_off(monkeypatch, "OpenCLEngine")
     gray = np.linspace(0.05, 0.95, 48 * 64).reshape(48, 64)
     with pytest.raises(RuntimeError, match="differ from exact_mic"):
         stipple(gray, 300, device=ctx, verify=True, schedule=[("pack", 2)])
@@ -152,3 +148,73 @@ def test_every_engine_refuses_sites_it_cannot_bound(ctx, name, periodic, pts, w,
         pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
     with pytest.raises(ValueError, match=match):
         _engine(name, dom, ctx).mic(pts, w)
+
+
+# -- one protocol, one result type, one factory, one collector (issue 18) ----
+
+def _protocol_engines(ctx, dom, grid):
+    """Every engine the one factory makes, by route."""
+    engines = {"exact": make_engine(dom, 60, "exact", grid=grid)}
+    for route in ("cells", "raster"):
+        engines[route] = make_engine(dom, 60, "opencl", device=ctx, grid=grid, route=route)
+    return engines
+
+
+def test_every_engine_answers_the_one_protocol_with_the_one_result_type(ctx):
+    """Relaxation and stippling call the same engines: each answers ``mic`` with a
+    geometry.MIC and ``centroids`` with (centroids, mass), and says which
+    backend it is; a result type or factory of its own would fail here."""
+    from diskpack_cl.geometry import MIC
+
+    dom, grid = Domain.rect(30.0, 20.0), (40, 60)
+    rng = np.random.default_rng(21)
+    pts, w = rng.random((60, 2)) * (30.0, 20.0), (0.6 * rng.random(60)) ** 2
+    dens = rng.random(grid) + 0.1
+    ref = None
+    for route, eng in _protocol_engines(ctx, dom, grid).items():
+        assert eng.name == route and eng.backend == ("exact" if route == "exact" else "opencl")
+        m = eng.mic(pts, w)
+        assert type(m) is MIC and (m.nn is not None) == eng.gives_nn == (route == "cells")
+        ref = ref or m
+        assert np.array_equal(m.empty, ref.empty) and np.abs(m.radii - ref.radii).max() <= 1e-9
+        c, mass = eng.centroids(pts, w, dens)
+        assert c.shape == (60, 2) and mass.shape == (60,) and mass.sum() > 0
+
+
+@pytest.mark.parametrize("route", ["exact", "cells", "raster"])
+def test_the_collector_holds_every_stage_once(ctx, route):
+    """The engine's one Stopwatch: a step's share (since a mark) plus the rest is
+    the total, each kernel's seconds add up to ``kernel``, and the warm-up runs
+    of the constructors are not counted."""
+    dom, grid = Domain.rect(30.0, 20.0), (40, 60)
+    if route == "exact":
+        eng = make_engine(dom, 60, "exact", grid=grid)
+    else:
+        eng = make_engine(dom, 60, "opencl", device=ctx, grid=grid, route=route, profile=True)
+    assert eng.timings.seconds == {}                     # nothing before the first call
+    rng = np.random.default_rng(22)
+    pts, w = rng.random((60, 2)) * (30.0, 20.0), (0.6 * rng.random(60)) ** 2
+    eng.mic(pts, w)
+    first = eng.timings.mark()
+    eng.centroids(pts, np.zeros(60), np.ones(grid))
+    step = eng.timings.since(first)
+    assert "centroids" in step and not {"exact", "buckets"} & set(step)   # only what ran
+    total = eng.timings.seconds
+    for name, secs in step.items():
+        assert total[name] == pytest.approx(first.get(name, 0.0) + secs)
+    want = {"exact": {"exact"}, "cells": {"buckets", "device", "refine", "fallback"},
+            "raster": {"raster_labels", "mic_estimate", "exact"}}[route]
+    assert want <= set(first)
+    if route != "exact":
+        kernels = {k: v for k, v in total.items() if k.startswith("kernel_")}
+        assert kernels and total["kernel"] == pytest.approx(sum(kernels.values()))
+
+
+def test_verify_is_the_factory_s_switch_on_every_engine(ctx, monkeypatch):
+    """``verify=True`` checks the answers of whatever engine the factory chose;
+    without it a wrong answer passes (so the check is the switch's)."""
+    _radii_off(monkeypatch, "ExactEngine")
+    pts = np.random.default_rng(23).random((50, 2))
+    make_engine(Domain.torus(), 50, "exact").mic(pts)
+    with pytest.raises(RuntimeError, match="differ from exact_mic"):
+        make_engine(Domain.torus(), 50, "exact", verify=True).mic(pts)

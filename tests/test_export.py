@@ -289,3 +289,36 @@ def test_png_preview_progress_and_default_size(tmp_path, result):
     write_png(tmp_path / "a.png", result, progress=done.append)
     assert sum(done) == 200
     assert preview_scale(80, 60) == 2.0 and preview_scale(12000, 8000) * 12000 == 4096
+
+
+# -- each derived quantity in one place (issue 18) ---------------------------
+
+@pytest.mark.parametrize("radius_scale", [1.0, 0.7])
+def test_the_tone_dot_is_the_same_size_through_every_writer_path(tmp_path, result, radius_scale):
+    """The tone dot size comes from export.tone_dot_size alone: the writers without a
+    dot size and write_stipple_outputs (which hands them one) draw the same dots; a
+    second formula that forgot radius_scale or the factor 2 would differ."""
+    from diskpack_cl.batch import write_stipple_outputs
+
+    a, b = tmp_path / "a.svg", tmp_path / "b.svg"
+    write_svg(a, result, width_mm=160, radius_scale=radius_scale, pen_path="none")
+    dot_mm, _ = write_stipple_outputs(result, None, [str(b)], width_mm=160,
+                                      radius_scale=radius_scale, pen_path="none")
+    assert dot_mm == export.tone_dot_size(result, 2.0, radius_scale)   # 160 mm / 80 px
+    ra = {c.get("r") for c in _svg_circles(a)[2]}
+    rb = {c.get("r") for c in _svg_circles(b)[2]}
+    assert ra == rb and len(ra) == 1 and float(ra.pop()) == pytest.approx(0.6 * 2.0 * radius_scale,
+                                                                          abs=1e-4)
+
+
+def test_the_size_conflict_is_one_rule():
+    """dpi against width/height: WriteOptions and mm_per_px refuse it with one message."""
+    from diskpack_cl.options import OptionConflict
+
+    with pytest.raises(OptionConflict) as by_options:
+        export.WriteOptions(dpi=300, height_mm=100)
+    with pytest.raises(OptionConflict) as by_layout:
+        export.mm_per_px(10, 10, height_mm=100, dpi=300)
+    assert str(by_options.value) == str(by_layout.value)
+    assert by_options.value.render(lambda n: "--" + n.replace("_", "-")) == \
+        "give the SVG size either by --width-mm/--height-mm or by --dpi, not both"

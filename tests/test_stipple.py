@@ -9,7 +9,7 @@ from diskpack_cl.geometry import exact_mic
 from diskpack_cl.radii import base_radii, detail_fields, field_at, largest_valid_k, radius_field
 from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, make_schedule
 from diskpack_cl.stipple import INK_RANGE, StippleStage, StippleState, lloyd_step, pack_step, stipple
-from diskpack_cl.stipple_engine import ExactStippleEngine
+from diskpack_cl.engine import ExactEngine
 
 SHORT = [("pack", 6), ("lloyd", 3), ("pack", 4)]
 
@@ -395,7 +395,7 @@ def test_pack_step_k_is_the_quantile_of_mic_over_base_radius(q):
     opt = StippleOptions.resolve(60, 32, 32, schedule=[("pack", 1)], radii="density", floor=0.01,
                                  k_quantile=q)
     dom = Domain.rect(32, 32)
-    stage = StippleStage(ExactStippleEngine(dom, opt.grid_shape(32, 32)), opt, rfield, None)
+    stage = StippleStage(ExactEngine(dom, opt.grid_shape(32, 32)), opt, rfield, None)
     state, entry = pack_step(StippleState(x, 0.05), stage)
     r = field_at(rfield, x)
     mic = exact_mic(x, (0.05 * r) ** 2, dom)
@@ -417,7 +417,7 @@ def test_mix_step_blends_the_mic_towards_the_cell_centroid(blend_cell):
     rfield = radius_field(g, radii="density", floor=0.01, sigma=opt.radius_sigma)
     dom, shape = Domain.rect(32, 24), opt.grid_shape(32, 24)
     dens = np.random.default_rng(6).random(shape) + 0.01
-    stage = StippleStage(ExactStippleEngine(dom, shape), opt, rfield, dens)
+    stage = StippleStage(ExactEngine(dom, shape), opt, rfield, dens)
     state, _ = pack_step(StippleState(x, 0.2), stage, blend=0.3)
     w = (0.2 * field_at(rfield, x)) ** 2
     mic = exact_mic(x, w, dom)
@@ -439,7 +439,7 @@ def test_lloyd_step_moves_to_the_voronoi_centroids_and_takes_the_largest_k(seed)
     rfield = radius_field(g, radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
     dom, shape = Domain.rect(32, 24), opt.grid_shape(32, 24)
     dens = np.random.default_rng(3).random(shape) + 0.01
-    stage = StippleStage(ExactStippleEngine(dom, shape), opt, rfield, dens)
+    stage = StippleStage(ExactEngine(dom, shape), opt, rfield, dens)
     state, entry = lloyd_step(StippleState(x, 0.5, packs=3), stage)
     want, mass = cell_centroids(grid_power_labels(x, None, dom, shape), x, dens, dom)
     np.testing.assert_array_equal(state.points, np.where((mass > 0)[:, None], want, x))
@@ -484,3 +484,36 @@ def test_largest_valid_k_finds_a_binding_pair_that_no_nearest_neighbour_forms():
     assert brute == 0.5
     assert largest_valid_k(p, r, 100.0, 100.0) == 0.5
     assert largest_valid_k(p[[2, 0, 3, 1]], r[[2, 0, 3, 1]], 100.0, 100.0) == 0.5
+
+
+# -- one timing collector for the whole run (issue 18) -----------------------
+
+ENGINE_STAGES = ("exact", "raster_labels", "centroids")
+
+
+def _check_one_collector(res, own):
+    """`own` stages first and last, the engine's stages as the steps' sum, no stage
+    counted twice (they are disjoint in time, so they fit in the total)."""
+    assert list(res.timings)[:len(own[0])] == list(own[0])
+    assert list(res.timings)[-len(own[1]):] == list(own[1])
+    for stage in ENGINE_STAGES:
+        steps = sum(h.get(f"{stage}_s", 0.0) for h in res.history)
+        assert steps > 0 and res.timings[stage] == pytest.approx(steps)
+    assert sum(v for k, v in res.timings.items() if k != "total") <= res.timings["total"]
+
+
+def test_one_collector_times_a_stippling():
+    res = stipple(gradient(32, 48), 60, schedule=[("mix", 2, 0.5), ("lloyd", 1), ("pack", 1)],
+                  backend="exact")
+    _check_one_collector(res, (("load", "start"), ("certify", "total")))
+
+
+def test_one_collector_times_a_colour_stippling():
+    from diskpack_cl.multipen import stipple_colors
+
+    img = np.zeros((32, 48, 3))
+    img[..., 0] = np.linspace(0, 1, 48)
+    img[..., 2] = 0.6
+    res = stipple_colors(img, 120, "cmy", schedule=[("mix", 4, 0.5)], backend="exact")
+    # the pens' own centroids count in the steps and the totals alike
+    _check_one_collector(res, (("separate",), ("certify", "total")))

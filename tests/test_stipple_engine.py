@@ -10,7 +10,7 @@ import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.labels import cell_centroids, grid_power_labels
 from diskpack_cl.stipple import stipple
-from diskpack_cl.stipple_engine import ExactStippleEngine, OpenCLStippleEngine, make_stipple_engine
+from diskpack_cl.engine import ExactEngine, make_engine
 
 
 def _sites(seed, dom, n=40, heavy=0.5):
@@ -52,8 +52,8 @@ def test_exact_and_opencl_engines_agree(ctx):
     dom, shape = Domain.rect(48.0, 32.0), (64, 96)
     pts, w = _sites(7, dom, n=120)
     dens = np.random.default_rng(8).random(shape) + 0.1
-    cl = OpenCLStippleEngine(dom, shape, device=ctx)
-    ex = ExactStippleEngine(dom, shape)
+    cl = make_engine(dom, None, "opencl", device=ctx, grid=shape)
+    ex = ExactEngine(dom, shape)
     a, b = cl.mic(pts, w), ex.mic(pts, w)
     np.testing.assert_array_equal(a.empty, b.empty)
     np.testing.assert_allclose(a.radii, b.radii, rtol=0, atol=1e-9)
@@ -62,8 +62,8 @@ def test_exact_and_opencl_engines_agree(ctx):
     _, gap = ref.power_labels_ref(pts, w, dom, shape)
     differ = lab_cl != lab_ex
     assert np.all(gap[differ] < 1e-4 * 48.0 ** 2)          # float32 ties only
-    ca, ma, _ = cl.centroids(pts, w, dens)
-    cb, mb, _ = ex.centroids(pts, w, dens)
+    ca, ma = cl.centroids(pts, w, dens)
+    cb, mb = ex.centroids(pts, w, dens)
     touched = np.unique(np.concatenate([lab_cl[differ], lab_ex[differ]]))
     same = np.setdiff1d(np.arange(len(pts)), touched)
     same = same[mb[same] > 0]
@@ -75,7 +75,7 @@ def test_exact_and_opencl_engines_agree(ctx):
 def test_opencl_engine_reuses_the_labels_of_its_mic(ctx, monkeypatch):
     dom, shape = Domain.rect(16.0, 16.0), (32, 32)
     pts, w = _sites(1, dom, n=20)
-    eng = OpenCLStippleEngine(dom, shape, device=ctx, route="raster")   # MICs from the raster's labels
+    eng = make_engine(dom, None, "opencl", device=ctx, grid=shape, route="raster")   # MICs from the raster's labels
     eng.mic(pts, w)
     calls = []
     real = eng.raster.compute
@@ -105,14 +105,14 @@ def test_stipple_exact_backend_runs_without_opencl(monkeypatch):
     with pytest.raises(NoOpenCLError, match="no OpenCL platform found"):
         stipple(g, 80, backend="opencl")
     with pytest.raises(NoOpenCLError):
-        make_stipple_engine(Domain.rect(40, 30), (30, 40), "auto", device="0:0")
+        make_engine(Domain.rect(40, 30), None, "auto", device="0:0", grid=(30, 40))
 
 
-def test_make_stipple_engine_checks_the_backend():
-    eng = make_stipple_engine(Domain.rect(8, 8), (8, 8), "exact")
+def test_make_engine_checks_the_backend():
+    eng = make_engine(Domain.rect(8, 8), None, "exact", grid=(8, 8))
     assert eng.name == "exact" and eng.fallback is None
     with pytest.raises(ValueError, match=r"backend must be one of \('opencl', 'exact', 'auto'\), got 'gpu'"):
-        make_stipple_engine(Domain.rect(8, 8), (8, 8), "gpu")
+        make_engine(Domain.rect(8, 8), None, "gpu", grid=(8, 8))
 
 
 def test_profiled_stippling_reports_kernel_time_and_the_same_result(ctx):
@@ -146,9 +146,9 @@ def test_profiled_stippling_reports_kernel_time_and_the_same_result(ctx):
 def test_stipple_engines_refuse_sites_they_cannot_bound(ctx, route, method, pts, w, match):
     dom = Domain.rect(8.0, 8.0)
     if route == "exact":
-        eng = ExactStippleEngine(dom, (8, 8))
+        eng = ExactEngine(dom, (8, 8))
     else:
-        eng = OpenCLStippleEngine(dom, (8, 8), device=ctx, route=route)
+        eng = make_engine(dom, None, "opencl", device=ctx, grid=(8, 8), route=route)
     if pts is None:
         pts = np.random.default_rng(0).random((5, 2)) * 8.0
     args = (pts, np.asarray(w)) + ((np.ones((8, 8)),) if method == "centroids" else ())

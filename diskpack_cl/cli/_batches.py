@@ -12,21 +12,33 @@ from diskpack_cl.batch import json_default
 from ._common import PROG, _UsageError, _bar
 
 
+#: The options of the batch group (:func:`~._common._batch_options`): any of them makes a batch.
+BATCH_OPTIONS = ("jobs", "manifest", "overwrite", "scheduler", "collect", "count")
+
+#: The rule, as ``--help`` states it.
+BATCH_RULE = ("A command is a batch when it has several inputs, a folder, an output template "
+              "({...}) or any option of this group; otherwise its one input runs in this process, "
+              "with no manifest.")
+
+
 def _batch_mode(args, inputs, outputs):
-    """Whether the command is a batch (else it runs exactly as for one input).
+    """Whether the command is a batch (:data:`BATCH_RULE`).
 
     Raises _UsageError for a batch with --verify or --profile, which apply
-    to one input.
+    to one input, and for a device list (``--device A,B``, the workers'
+    devices) without a batch.
     """
     batch = (len(inputs) > 1 or any(os.path.isdir(x) for x in inputs)
-             or any("{" in str(o) for o in outputs) or "," in (args.device or "")
-             or any(getattr(args, k, None) for k in ("jobs", "manifest", "overwrite",
-                                                      "scheduler", "collect", "count")))
+             or any("{" in str(o) for o in outputs)
+             or any(getattr(args, k, None) for k in BATCH_OPTIONS))
     single = [f"--{k}" for k in ("verify", "profile") if getattr(args, k, False)]
     if batch and single:
         verb = "apply" if len(single) > 1 else "applies"
         raise _UsageError(f"{' and '.join(single)} {verb} to one input; this command is a batch "
                           "(several inputs, a folder, a template or a batch option)")
+    if not batch and "," in (args.device or ""):
+        raise _UsageError(f"--device {args.device}: a device list is for the workers of a batch; "
+                          "one input runs on one device")
     return batch
 
 

@@ -79,14 +79,17 @@ def _output_options(p):
 
 
 def _batch_options(p):
+    from ._batches import BATCH_RULE
+
     g = p.add_argument_group(
-        "batch (several inputs, a folder, --count, an output template, or any of these)",
-        "Output templates: {stem} {name} {parent} (of the input), {n}, {seed}, {i} (item "
-        "index, e.g. {i:04d}). Each item writes its outputs atomically, then one line of the "
-        "manifest; a rerun of the same command skips the items done.")
+        "batch",
+        BATCH_RULE + " Output templates: {stem} {name} {parent} (of the input), {n}, {seed}, "
+        "{i} (item index, e.g. {i:04d}). Each item writes its outputs atomically, then one "
+        "line of the manifest; a rerun of the same command skips the items done.")
     g.add_argument("--jobs", "-j", type=_positive_int, default=None, metavar="N",
                    help="worker processes (spawned; PoCL threads per worker capped to "
-                        "cores/N; default: one per --device listed, else one per core)")
+                        "cores/N; default: one per --device listed (--device A,B), else one "
+                        "per core)")
     g.add_argument("--manifest", default=None, metavar="PATH",
                    help="manifest file (default: manifest.jsonl in the folder of the first -o)")
     g.add_argument("--overwrite", action="store_true",

@@ -7,7 +7,7 @@ import sys
 import time
 
 from ._batches import _batch_mode, _batch_run, _report_batch
-from ._common import PROG, _UsageError, _bar, _batch_options, _checked_outputs, _device_options, _dot_count, _image_path, _positive_float
+from ._common import PROG, _UsageError, _bar, _batch_options, _device_options, _dot_count, _image_path, _positive_float
 from ._drawing import _drawing_options, _write_and_report
 
 
@@ -103,20 +103,28 @@ def _add_stipple(subparsers):
     p.set_defaults(run=_run_stipple)
 
 
-def _stipple_progress(args, total):
-    """Return (callback, close): a tqdm bar (iteration, phase kind, k) on a terminal."""
-    bar = _bar(args, "stipple", "it", total or None)
-    if bar is None:
-        return None, lambda: None
+def _stipple_progress(args):
+    """Return (callback, close): a tqdm bar (iteration, phase kind, k) on a terminal,
+    made at the first iteration, when the schedule's length is known."""
+    bars = []
 
-    def callback(entry):
+    def callback(entry, total):
+        if not bars:
+            bars.append(_bar(args, "stipple", "it", total or None))
+        bar = bars[0]
+        if bar is None:
+            return
         post = f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}"
         if entry.get("empty"):
             post += f" empty={entry['empty']}"
         bar.set_postfix_str(post, refresh=False)
         bar.update(int(entry.get("iteration", bar.n)) + 1 - bar.n)
 
-    return callback, bar.close
+    def close():
+        if bars and bars[0] is not None:
+            bars[0].close()
+
+    return callback, close
 
 
 def _stipple_objects(args):
@@ -136,120 +144,73 @@ def _stipple_objects(args):
             from_namespace(ColorOptions, args))
 
 
-def _tone_count(args, write, gray, n):
-    """With --dot-mm/--pen-mm: the dots whose ink is the image's (a note when far from n).
+def _refuse_mixed(args, options, tone, write, separation):
+    """Usage errors of options that do not go together: one pen's with several, a pen
+    order without pens, -n tone without a dot size."""
+    from diskpack_cl.options import changed, flag_name
 
-    Returns ``(n, info)``: ``n`` itself unless it is ``"tone"``, and the
-    ``tone_n`` summary (None without a pen or dot size).
-    """
-    from diskpack_cl.export import tone_dot_count
-
-    dot = write.dot_mm or write.pen_mm
-    if dot is None:
-        if n == "tone":
-            raise _UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
-        return n, None
-    h, w = gray.shape
-    tone = tone_dot_count(gray if write.invert else 1.0 - gray, write.scale(w, h), dot)
-    if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and not args.quiet:
-        print(f"{PROG}: note: {tone} dots of {dot:g} mm give the image's ink on this paper; "
-              f"-n {n} will look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})",
-              file=sys.stderr)
-    return (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
+    if separation is not None:
+        mono = [flag_name(k) for k in ("invert", "paper_tone") if getattr(options, k)]
+        mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
+        if mono:
+            raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
+    elif write.pen_order is not None:
+        raise _UsageError("--pen-order orders the pens of --colors or --pens")
+    if args.n == "tone" and write.dot_mm is None and write.pen_mm is None:
+        raise _UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
 
 
 def _run_stipple(args):
-    from diskpack_cl.batch import dots_for_image
-    from diskpack_cl.export import preview_scale
-    from diskpack_cl.image import load_gray
-    from diskpack_cl.memory import check_stipple_memory
-    from diskpack_cl.stipple import stipple
-
     options, tone, write, color = _stipple_objects(args)
-    if color.separation() is not None:
-        return _run_stipple_colors(args, options, tone, write, color)
-    if write.pen_order is not None:
-        raise _UsageError("--pen-order orders the pens of --colors or --pens")
+    separation = color.separation()
+    _refuse_mixed(args, options, tone, write, separation)
     if _batch_mode(args, args.images, args.output):
         if args.n == "tone":
             raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
-        return _run_stipple_batch(args, options, tone, write)
+        return _run_stipple_batch(args, options, tone, write, separation)
+    return _run_stipple_one(args, options, tone, write, separation)
+
+
+def _run_stipple_one(args, options, tone, write, separation):
+    """One input: a one-item plan, run here (:func:`diskpack_cl.batch.stipple_item`)
+    without a manifest; every refusal comes before the computation."""
+    from diskpack_cl.batch import plan_stipple, stipple_item
+
     t0 = time.perf_counter()
-    # everything that can be refused is refused before the computation
-    outputs = _checked_outputs(args)
-    image = _image_path(args.images[0])
-    gray = tone.adjust(load_gray(image, allow_large=args.allow_large))
-    h, w = gray.shape
-    n, tone_n = _tone_count(args, write, gray, args.n)
-    n = dots_for_image(w, h, n=n, density=args.density, dots_per_cm2=args.dots_per_cm2,
-                       **write.layout())
-    write = write.replace(png_scale=preview_scale(w, h, write.png_scale))
-    check_stipple_memory(w, h, n, supersample=options.supersample, png_scale=write.png_scale,
-                         device=args.device, outputs=outputs)
-    # the phases (for the progress total) follow n and the image size
-    plan = options.plan(n, w, h)
-    callback, close = _stipple_progress(args, sum(ph[1] for ph in plan.phases))
+    (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
+                           options, n=args.n, density=args.density,
+                           dots_per_cm2=args.dots_per_cm2, allow_large=args.allow_large,
+                           write=write, tone=tone, color=separation, make_folders=False)
+    callback, close = _stipple_progress(args)
     try:
-        res = stipple(gray, n, options, device=args.device, callback=callback,
-                      verify=args.verify, profile=args.profile)
+        res, gray, summary = stipple_item(item, device=args.device, callback=callback,
+                                          verify=args.verify, profile=args.profile,
+                                          note=None if args.quiet else _note)
     finally:
         close()
-    res.params["tone"] = tone.params()  # recorded in the .npz and the --json params
-    summary = res.summary()
-    summary.update(image=str(image), tone_n=tone_n)
-    tail = _write_and_report(args, write, res, gray, outputs, summary, t0)
-    if res.engine == "exact" and not args.quiet:
-        print(f"{PROG}: note: no OpenCL device: stippled with the exact (scipy) engine",
-              file=sys.stderr)
+    tail = _write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
     if not args.quiet:
-        cert = res.certificate
-        print(f"{PROG}: {res.n} dots on {res.width}x{res.height} px, k = {res.k:.4g}, "
-              f"radii {summary['min_radius']:.3g}..{summary['max_radius']:.3g} px, "
-              f"certified {'valid' if cert.valid else 'INVALID'} (min gap {cert.min_gap:.3g} px), "
-              f"{summary['iterations']} iterations in {summary['seconds']:.3g} s{tail}",
-              file=sys.stderr)
+        if res.engine == "exact":
+            _note("no OpenCL device: stippled with the exact (scipy) engine")
+        print(f"{PROG}: {_result_text(res, summary)}, {summary['iterations']} iterations in "
+              f"{summary['seconds']:.3g} s{tail}", file=sys.stderr)
     return 0
 
 
-def _run_stipple_colors(args, options, tone, write, color):
-    """``diskpack stipple --colors/--pens``: one image, every pen's dots in one certified packing."""
-    from diskpack_cl.batch import dots_for_image
-    from diskpack_cl.color import load_rgb
-    from diskpack_cl.export import preview_scale
-    from diskpack_cl.image import ToneOptions
-    from diskpack_cl.memory import check_stipple_memory
-    from diskpack_cl.multipen import stipple_colors
-    from diskpack_cl.options import changed, flag_name
+def _note(text):
+    print(f"{PROG}: note: {text}", file=sys.stderr)
 
-    mono = [flag_name(k) for k in ("invert", "paper_tone") if getattr(options, k)]
-    mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
-    if mono:
-        raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
-    if _batch_mode(args, args.images, args.output):
-        return _run_stipple_batch(args, options, ToneOptions(), write, color.separation())
-    t0 = time.perf_counter()
-    outputs = _checked_outputs(args)
-    rgb = load_rgb(_image_path(args.images[0]))
-    H, W = rgb.shape[:2]
-    n = dots_for_image(W, H, n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
-                       **write.layout())
-    write = write.replace(png_scale=preview_scale(W, H, write.png_scale))
-    check_stipple_memory(W, H, n, supersample=options.supersample, png_scale=write.png_scale,
-                         device=args.device, outputs=outputs)
-    callback, close = _stipple_progress(args, sum(ph[1] for ph in options.plan(n, W, H).phases))
-    try:
-        res = stipple_colors(rgb, n, device=args.device, callback=callback,
-                             **color.separation(), **changed(options))
-    finally:
-        close()
-    summary = dict(res.summary(), image=str(args.images[0]))
-    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
-    if not args.quiet:
+
+def _result_text(res, summary):
+    """What the summary line says of the result: dots, pens, size, certificate."""
+    cert = res.certificate
+    if "pens" in summary:
         pens = ", ".join(f"{p['name']} {p['n']}" for p in summary["pens"])
-        print(f"{PROG}: {res.n} dots ({pens}) on {W}x{H} px, certified valid over all pens "
-              f"(min gap {res.certificate.min_gap:.3g} px), {summary['iterations']} iterations "
-              f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
-    return 0
+        return (f"{res.n} dots ({pens}) on {res.width}x{res.height} px, certified valid over "
+                f"all pens (min gap {cert.min_gap:.3g} px)")
+    return (f"{res.n} dots on {res.width}x{res.height} px, k = {res.k:.4g}, radii "
+            f"{summary['min_radius']:.3g}..{summary['max_radius']:.3g} px, certified "
+            f"{'valid' if cert.valid else 'INVALID'} (min gap {cert.min_gap:.3g} px)")
 
 
 def _run_stipple_batch(args, options, tone, write, color=None):

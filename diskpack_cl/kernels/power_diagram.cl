@@ -212,18 +212,35 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
     return U2 + pad + 1e-5f * fabs(U2);
 }
 
+/* The first arguments of both labelling kernels (power_labels and
+ * power_labels_tile): the sorted sites, their bucket grid and the raster. */
+#define LABEL_ARGS \
+    __global const float2 *site,        /* sites sorted by bucket */ \
+    __global const float *weight,       /* their weights (squared radii) */ \
+    __global const int *site_id,        /* sorted position -> caller's index */ \
+    __global const int *bucket_start,   /* nbx*nby + 1 offsets into site[] */ \
+    __global const float *bucket_wmax,  /* largest weight in each bucket */ \
+    const int nbx, const int nby,       /* bucket grid size */ \
+    const float bw, const float bh,     /* bucket size */ \
+    const float W, const float H,       /* domain size */ \
+    const float wmax,                   /* largest weight overall */ \
+    const int nx, const int ny          /* raster size */
+
+/* Both passes of power_labels: chunk `chunk` of the candidates into local
+ * memory (work item 0 gathers, every work item waits); `total` counts all
+ * candidates, `m` those of this chunk. */
+#define GATHER_CHUNK(mode, a, b)                                                        \
+    if (lid == 0)                                                                       \
+        count_l = gather(mode, a, b, chunk * CAP, x0, y0, x1, y1, site, weight,         \
+                         site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H,    \
+                         wmax, cpos, cw, cid, status);                                  \
+    barrier(CLK_LOCAL_MEM_FENCE);                                                       \
+    const int total = count_l;                                                          \
+    const int m = min(total - chunk * CAP, CAP)
+
 __kernel __attribute__((reqd_work_group_size(TILE, TILE, 1)))
 void power_labels(
-    __global const float2 *site,        /* sites sorted by bucket */
-    __global const float *weight,       /* their weights (squared radii) */
-    __global const int *site_id,        /* sorted position -> caller's index */
-    __global const int *bucket_start,   /* nbx*nby + 1 offsets into site[] */
-    __global const float *bucket_wmax,  /* largest weight in each bucket */
-    const int nbx, const int nby,       /* bucket grid size */
-    const float bw, const float bh,     /* bucket size */
-    const float W, const float H,       /* domain size */
-    const float wmax,                   /* largest weight overall */
-    const int nx, const int ny,         /* raster size */
+    LABEL_ARGS,
     const int with_dist,                /* 0: labels only (Lloyd needs no distances) */
     __global int *label,                /* out: caller's index of the owning site */
     __global float *dist,               /* out: distance to the power cell boundary */
@@ -267,13 +284,7 @@ void power_labels(
     float2 best_x = (float2)(0.0f), second_x = (float2)(0.0f);
     float best_w = 0.0f, second_w = 0.0f;
     for (int chunk = 0; ; ++chunk) {
-        if (lid == 0)
-            count_l = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
-                             site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
-                             cpos, cw, cid, status);
-        barrier(CLK_LOCAL_MEM_FENCE);
-        const int total = count_l;
-        const int m = min(total - chunk * CAP, CAP);
+        GATHER_CHUNK(GATHER_OWNER, U, 0.0f);
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
             const float pw = len2(px - s.x, py - s.y) - cw[c];
@@ -337,13 +348,7 @@ void power_labels(
     const float g1 = A * (1.0f + 1e-5f) + sqrt(pad), g2 = A * A * (1.0f + 1e-4f) + pad - wlo;
     for (int chunk = 0; ; ++chunk) {
         barrier(CLK_LOCAL_MEM_FENCE);
-        if (lid == 0)
-            count_l = gather(GATHER_DIST, g1, g2, chunk * CAP, x0, y0, x1, y1, site, weight,
-                             site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
-                             cpos, cw, cid, status);
-        barrier(CLK_LOCAL_MEM_FENCE);
-        const int total = count_l;
-        const int m = min(total - chunk * CAP, CAP);
+        GATHER_CHUNK(GATHER_DIST, g1, g2);
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
             const float sep = sqrt(len2(s.x - xi, s.y - yi));
@@ -373,16 +378,7 @@ void power_labels(
 
 __kernel __attribute__((reqd_work_group_size(1, 1, 1)))
 void power_labels_tile(
-    __global const float2 *site,        /* sites sorted by bucket */
-    __global const float *weight,       /* their weights (squared radii) */
-    __global const int *site_id,        /* sorted position -> caller's index */
-    __global const int *bucket_start,   /* nbx*nby + 1 offsets into site[] */
-    __global const float *bucket_wmax,  /* largest weight in each bucket */
-    const int nbx, const int nby,       /* bucket grid size */
-    const float bw, const float bh,     /* bucket size */
-    const float W, const float H,       /* domain size */
-    const float wmax,                   /* largest weight overall */
-    const int nx, const int ny,         /* raster size */
+    LABEL_ARGS,
     __global int *label,                /* out: caller's index of the owning site */
     __global int *status)               /* in/out: ST_* bits (common.h), init 0 */
 {

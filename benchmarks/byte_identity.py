@@ -1,0 +1,91 @@
+"""Outputs of ``diskpack stipple`` on the sample and the test photographs, for a byte comparison.
+
+A structural change must not change a result. Run this once with the tree
+before the change and once with the tree after it, then compare::
+
+    git worktree add /tmp/base 96d3bd5
+    cp benchmarks/byte_identity.py /tmp && cd /tmp   # so that '' on sys.path is not the tree
+    PYTHONPATH=/tmp/base DISKPACK_TEST_DATA=$OLDPWD/tests/data python byte_identity.py make /tmp/out_base
+    cd -
+    python benchmarks/byte_identity.py make /tmp/out_new
+    python benchmarks/byte_identity.py compare /tmp/out_base /tmp/out_new
+
+``make`` writes, per image and case, the ``.npz``, ``.svg``, ``.png`` and
+``.csv`` outputs and the ``--json`` line without its timings (``timings``,
+``seconds``, ``write_seconds``: they differ between any two runs).
+``compare`` prints each file as identical or different and the count, and
+exits 1 when any differs or is missing. The cases keep the SVG's dot order
+independent of the machine's speed (``--pen-path auto`` is given 2 s, which
+a few thousand dots need not reach).
+"""
+
+from __future__ import annotations
+
+import argparse
+import filecmp
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+#: The test photographs; the script may run from a copy outside the tree (see above).
+DATA = Path(os.environ.get("DISKPACK_TEST_DATA", Path(__file__).resolve().parents[1] / "tests" / "data"))
+IMAGES = {"sample": "sample", "astronaut": str(DATA / "astronaut.png"),
+          "camera": str(DATA / "camera.png"), "coffee": str(DATA / "coffee.png")}
+CASES = {"default": ["-n", "2000"],
+         "pen": ["-n", "6000", "--pen-path", "hilbert", "--width-mm", "150", "--pen-mm", "0.4"]}
+EXTENSIONS = (".npz", ".svg", ".png", ".csv")
+UNTIMED = ("timings", "seconds", "write_seconds")
+
+
+def make(folder):
+    """Stipple every image in every case into `folder`."""
+    folder = os.path.abspath(folder)
+    os.makedirs(folder, exist_ok=True)
+    for name, image in IMAGES.items():
+        for case, args in CASES.items():
+            stem = os.path.join(folder, f"{name}_{case}")
+            # outputs named relative to the folder, so that two folders' summaries compare
+            cmd = [sys.executable, "-m", "diskpack_cl.cli", "stipple", image, *args, "--json",
+                   "-q", *(arg for ext in EXTENSIONS for arg in ("-o", f"{name}_{case}{ext}"))]
+            line = subprocess.run(cmd, check=True, capture_output=True, text=True,
+                                  cwd=folder).stdout
+            summary = json.loads(line)
+            for key in UNTIMED:
+                summary.pop(key, None)
+            summary["image"] = os.path.basename(summary["image"])   # the tree's sample or not
+            with open(stem + ".json", "w") as fh:
+                json.dump(summary, fh, indent=1, sort_keys=True)
+            print(stem, flush=True)
+
+
+def compare(a, b):
+    """The exit status: 0 when every file of `a` is in `b` with the same bytes."""
+    names = sorted(set(os.listdir(a)) | set(os.listdir(b)))
+    same = 0
+    for name in names:
+        pa, pb = os.path.join(a, name), os.path.join(b, name)
+        ok = os.path.exists(pa) and os.path.exists(pb) and filecmp.cmp(pa, pb, shallow=False)
+        same += ok
+        print(f"{'identical' if ok else 'DIFFERENT'} {name}")
+    print(f"{same} of {len(names)} files identical")
+    return 0 if same == len(names) else 1
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    sub.add_parser("make").add_argument("folder")
+    c = sub.add_parser("compare")
+    c.add_argument("a")
+    c.add_argument("b")
+    args = p.parse_args(argv)
+    if args.command == "make":
+        make(args.folder)
+        return 0
+    return compare(args.a, args.b)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
