@@ -54,7 +54,7 @@ import numpy as np
 
 from .options import OptionConflict, check_fields, option
 
-__all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "separate", "load_rgb", "srgb_to_linear",
+__all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
            "color_measures"]
 
@@ -153,6 +153,37 @@ def parse_pens(text):
     if len(set(names)) != len(names):
         raise ValueError(f"pen names must differ, got {', '.join(names)}")
     return tuple(names), np.array(colors)
+
+
+def parse_pen_dots(text):
+    """``"cyan=12000,black=8000"`` to ``{"cyan": 12000, "black": 8000}``: dots per pen.
+
+    Raises
+    ------
+    ValueError
+        An item that is not ``NAME=N``, a count that is not a non-negative
+        integer, or a pen named twice.
+
+    Examples
+    --------
+    >>> parse_pen_dots("cyan=12000, black=8000")
+    {'cyan': 12000, 'black': 8000}
+    """
+    out = {}
+    for item in str(text).split(","):
+        name, sep, value = (part.strip() for part in item.partition("="))
+        if not sep or not name or not value:
+            raise ValueError(f"bad pen count {item.strip()!r}: give NAME=N, e.g. cyan=12000")
+        try:
+            count = int(value)
+        except ValueError:
+            raise ValueError(f"the dots of pen {name} must be an integer, got {value!r}") from None
+        if count < 0:
+            raise ValueError(f"the dots of pen {name} must be >= 0, got {count}")
+        if name in out:
+            raise ValueError(f"pen {name} is given twice")
+        out[name] = count
+    return out
 
 
 def _palette(colors):
@@ -496,16 +527,52 @@ class ColorOptions:
                                 "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
     clean_white: float = option(0.0, "pixels with R, G, B all within T of white get no ink "
                                 "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+    pen_dots: str = option(None, "dots of some or all pens, e.g. cyan=12000,black=8000: the pens "
+                           "named get that many, the others share the rest of the dots in "
+                           "proportion to their ink (default: every pen by its ink)",
+                           metavar="NAME=N,...", check=parse_pen_dots, group=_COLOUR)
 
     def __post_init__(self):
         check_fields(self)
         if self.colors is not None and self.pens is not None:
             raise OptionConflict(f"{{}} {self.colors} and {{}} both name the pens; give one",
                                  "colors", "pens")
+        if self.pen_dots is not None and self.colors is None and self.pens is None:
+            raise OptionConflict("{} needs the pens: give {} or {}", "pen_dots", "colors", "pens")
+        if self.pen_dots is not None:
+            names = _palette(self.pens or self.colors)[0]
+            unknown = [name for name in parse_pen_dots(self.pen_dots) if name not in names]
+            if unknown:
+                text = f"{', '.join(unknown)}, not one of the pens ({', '.join(names)})"
+                raise OptionConflict("{} names " + text.replace("{", "{{").replace("}", "}}"),
+                                     "pen_dots")
+
+    def check_pen_dots(self, n):
+        """Refuse dots per pen that cannot add up to `n` dots in all (more than n, or every
+        pen named and another sum), before any work.
+
+        Examples
+        --------
+        >>> ColorOptions(colors="cmy", pen_dots="cyan=10,yellow=5,magenta=5").check_pen_dots(20)
+        >>> ColorOptions(colors="cmy", pen_dots="cyan=30").check_pen_dots(20)
+        Traceback (most recent call last):
+        ...
+        diskpack_cl.options.OptionConflict: pen_dots gives 30 dots, more than the 20 in all
+        """
+        if self.pen_dots is None:
+            return
+        dots = parse_pen_dots(self.pen_dots)
+        given, every = sum(dots.values()), len(dots) == len(_palette(self.pens or self.colors)[0])
+        if given > n or (every and given != n):
+            raise OptionConflict(f"{{}} gives {given} dots, {'more than' if given > n else 'not'} "
+                                 f"the {n} in all" + ("; leave a pen out to give it the rest"
+                                                      if every and given < n else ""), "pen_dots")
 
     def separation(self):
-        """The separation arguments of :func:`diskpack_cl.stipple_colors`, or None (one pen)."""
+        """The arguments of :func:`diskpack_cl.stipple_colors` (pens, separation and dots per
+        pen), or None (one pen)."""
         if self.colors is None and self.pens is None:
             return None
+        counts = None if self.pen_dots is None else parse_pen_dots(self.pen_dots)
         return dict(colors=self.pens or self.colors, black_generation=self.black_generation,
-                    clean_black=self.clean_black, clean_white=self.clean_white)
+                    clean_black=self.clean_black, clean_white=self.clean_white, counts=counts)

@@ -32,6 +32,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -45,7 +46,7 @@ from .schedule import StippleOptions
 from .stipple import StippleState, _centroid_density, _make_stage, _run, dot_radii, lloyd_step, pack_step
 from .stipple_engine import make_stipple_engine
 
-__all__ = ["ColorStippleResult", "assign_pens", "pen_counts", "stipple_colors"]
+__all__ = ["ColorStippleResult", "assign_pens", "dots_per_pen", "pen_counts", "stipple_colors"]
 
 #: Share of the class-aware phases over which the pull towards the pens' own
 #: centroids falls to 0 (the rest restores the spacing of all dots together).
@@ -333,14 +334,63 @@ def _pen_share(layers, points, sigma):
     return ink / ink.sum(axis=1, keepdims=True)
 
 
-def _pen_numbers(counts, P, n, layers):
-    """Dots per pen: given (checked) or from the ink (:func:`pen_counts`)."""
+def dots_per_pen(names, layers, n, counts=None):
+    """Dots per pen: by the ink of each layer, or as given (all pens, or some by name).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The pens.
+    layers : (P, H, W) array_like
+        Their layers (:func:`pen_counts` shares dots by their ink).
+    n : int
+        Dots of all pens together.
+    counts : sequence of int or mapping of str to int, optional
+        ``None``: every pen by its ink (:func:`pen_counts`). A sequence: the
+        dots of every pen, summing to n. A mapping ``{name: dots}``: those
+        pens get that many and the others share the rest by their ink; when
+        it names every pen it must sum to n.
+
+    Returns
+    -------
+    (P,) int64
+
+    Raises
+    ------
+    ValueError
+        A pen not in `names`, a negative or non-integer count, counts that
+        do not add up to n, or dots left for pens without ink.
+
+    Examples
+    --------
+    >>> layers = np.array([np.full((2, 2), 0.1), np.full((2, 2), 0.3), np.full((2, 2), 0.2)])
+    >>> dots_per_pen(("cyan", "magenta", "black"), layers, 100, {"cyan": 40}).tolist()
+    [40, 36, 24]
+    """
+    P = len(names)
     if counts is None:
         return pen_counts(layers, n)
-    c = np.asarray(counts)
-    if c.shape != (P,) or not np.issubdtype(c.dtype, np.integer) or np.any(c < 0) or c.sum() != n:
-        raise ValueError(f"counts must be {P} non-negative integers summing to n = {n}, got {counts}")
-    return c.astype(np.int64)
+    if not isinstance(counts, Mapping):
+        c = np.asarray(counts)
+        if c.shape != (P,) or not np.issubdtype(c.dtype, np.integer) or np.any(c < 0) or c.sum() != n:
+            raise ValueError(f"counts must be {P} non-negative integers summing to n = {n}, got {counts}")
+        return c.astype(np.int64)
+    unknown = [name for name in counts if name not in names]
+    if unknown:
+        raise ValueError(f"counts name {', '.join(map(str, unknown))}, not one of the pens "
+                         f"({', '.join(names)})")
+    bad = {k: v for k, v in counts.items() if isinstance(v, bool) or int(v) != v or v < 0}
+    if bad:
+        raise ValueError(f"dots per pen must be non-negative integers, got {bad}")
+    given = sum(int(v) for v in counts.values())
+    rest = [p for p, name in enumerate(names) if name not in counts]
+    if given > n or (not rest and given != n):
+        raise ValueError(f"the dots per pen sum to {given}, but n = {n}"
+                         + ("" if given > n else "; name fewer pens or give n = the sum"))
+    out = np.array([int(counts.get(name, 0)) for name in names], dtype=np.int64)
+    if rest and n > given:
+        out[rest] = pen_counts(np.asarray(layers)[rest], n - given)
+    return out
 
 
 def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
@@ -357,7 +407,7 @@ def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
     if options.get("capacity") is None:   # measured: equal ink per dot costs tone per pen
         options = dict(options, capacity=COLOR_CAPACITY)
     opt = StippleOptions.resolve(n, sep.layers.shape[2], sep.layers.shape[1], **options)
-    return sep, opt, _pen_numbers(counts, len(sep.names), opt.n, sep.layers)
+    return sep, opt, dots_per_pen(sep.names, sep.layers, opt.n, counts)
 
 
 def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0, clean_black=0.0,
@@ -374,8 +424,10 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     colors : str or sequence of (name, colour)
         ``"cmyk"``, ``"cmy"`` or pens ``"NAME=COLOR,..."``
         (:func:`diskpack_cl.color.separate`).
-    counts : sequence of int, optional
-        Dots per pen (summing to n); default: in proportion to each layer's ink.
+    counts : sequence of int or mapping of str to int, optional
+        Dots per pen (:func:`dots_per_pen`): all (summing to n), or some by
+        name, the others sharing the rest by their ink; default: every pen
+        in proportion to its layer's ink.
     black_generation, clean_black, clean_white : float
         Separation options (:func:`diskpack_cl.color.separate`).
     joint : float in [0, 1]

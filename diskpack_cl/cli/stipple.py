@@ -226,6 +226,8 @@ def _run_stipple_colors(args, options, tone, write, color):
     if mono:
         raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
     if _batch_mode(args, args.images, args.output):
+        if args.n is not None:   # with --density each image has its own n, checked there
+            color.check_pen_dots(args.n)
         return _run_stipple_batch(args, options, ToneOptions(), write, color.separation())
     t0 = time.perf_counter()
     outputs = _checked_outputs(args)
@@ -233,6 +235,7 @@ def _run_stipple_colors(args, options, tone, write, color):
     H, W = rgb.shape[:2]
     n = dots_for_image(W, H, n=args.n, density=args.density, dots_per_cm2=args.dots_per_cm2,
                        **write.layout())
+    color.check_pen_dots(n)
     write = write.replace(png_scale=preview_scale(W, H, write.png_scale))
     check_stipple_memory(W, H, n, supersample=options.supersample, png_scale=write.png_scale,
                          device=args.device, outputs=outputs)
