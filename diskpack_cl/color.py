@@ -56,7 +56,7 @@ from .options import OptionConflict, check_fields, option
 
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
-           "color_measures"]
+           "pen_spacing", "color_measures", "palette_of"]
 
 #: Named palettes: (name, sRGB hex) per pen, lightest first.
 PALETTES = {
@@ -308,6 +308,25 @@ def _separate_unique(rgb, names, colors, black_generation, model):
     return np.clip(out, 0.0, 1.0)
 
 
+def palette_of(names, colors):
+    """What :func:`separate` takes for pens read back from a file: ``"cmyk"`` or ``"cmy"``
+    where they are that palette (so that CMYK separates black first), else the pairs.
+
+    Examples
+    --------
+    >>> palette_of(("yellow", "cyan", "magenta"), [[1, 1, 0], [0, 1, 1], [1, 0, 1]])
+    'cmy'
+    >>> palette_of(("ink",), [[0.0, 0.0, 0.0]])
+    [('ink', (0.0, 0.0, 0.0))]
+    """
+    colors = np.asarray(colors, dtype=np.float64)
+    for key in PALETTES:
+        names_p, colors_p = _palette(key)
+        if tuple(names) == names_p and colors.shape == colors_p.shape and np.allclose(colors, colors_p):
+            return key
+    return [(name, tuple(float(v) for v in c)) for name, c in zip(names, colors)]
+
+
 def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, clean_white=0.0,
              model="area"):
     """Separate a colour image into pen layers (see the module docstring).
@@ -444,7 +463,75 @@ def pen_tone_radii(layers, counts):
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
 
 
-def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
+def _own_density(points, shape):
+    """The density of `points` themselves on the pixel grid, blurred over two of their
+    spacings and scaled to a maximum of 1 (the reference of :func:`pen_spacing`
+    without layers)."""
+    from scipy import ndimage
+
+    H, W = shape
+    hist = np.histogram2d(points[:, 1], points[:, 0], bins=(H, W), range=((0, H), (0, W)))[0]
+    blurred = ndimage.gaussian_filter(hist, 2.0 * np.sqrt(W * H / len(points)), mode="constant")
+    return blurred / blurred.max()
+
+
+def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
+    """Spacing P01 of each pen's dots and of all dots together.
+
+    Each set's nearest-neighbour distances are read against the spacing its
+    density asks for (:func:`diskpack_cl.analysis.spacing`, 1st percentile):
+    with `layers`, a pen's layer and, for all dots, all layers' coverage
+    (what the dots were placed to follow); without, the density of the dots
+    themselves (histogram blurred over two of their spacings), which needs
+    no image but forgives dots that drift from their tone.
+
+    Parameters
+    ----------
+    points : (n, 2) array_like
+        All dots, pixel units.
+    pen : (n,) array_like of int
+        Pen per dot.
+    shape : (int, int)
+        Image height and width in pixels.
+    layers : (P, H, W) array_like, optional
+        The separated layers (coverage in [0, 1]).
+    pens : int, optional
+        Number of pens (default: the layers', else the largest pen + 1).
+    sigma : float
+        Blur in pixels of the expected density.
+
+    Returns
+    -------
+    dict
+        ``p01``: per pen (None for a pen of fewer than :data:`MIN_DOTS`
+        dots); ``p01_joint``: of all dots.
+
+    Examples
+    --------
+    >>> x, y = np.meshgrid(np.arange(2.0, 64, 4), np.arange(2.0, 64, 4))
+    >>> pts = np.column_stack([x.ravel(), y.ravel()])
+    >>> out = pen_spacing(pts, np.arange(256) % 2, (64, 64))
+    >>> out["p01"][0] > 0.5, round(out["p01_joint"], 2) > 0.5
+    (True, True)
+    """
+    from .analysis import spacing
+
+    p, pen = np.asarray(points, float), np.asarray(pen)
+    P = pens or (int(pen.max()) + 1 if layers is None else len(layers))
+    mine = [pen == q for q in range(P)]
+    if layers is None:
+        dens = [_own_density(p[m], shape) if np.count_nonzero(m) else None for m in mine]
+        total = _own_density(p, shape)
+    else:
+        dens = list(np.asarray(layers, float))
+        total = np.sum(dens, axis=0)
+        total = total / max(float(total.max()), 1.0)   # over 1 where overprinting layers add up
+    return {"p01": [spacing(p[m], d, sigma=sigma).p01 if np.count_nonzero(m) >= MIN_DOTS else None
+                    for m, d in zip(mine, dens)],
+            "p01_joint": spacing(p, total, sigma=sigma).p01}
+
+
+def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3.0):
     """Colour fidelity and spacing of a colour stippling.
 
     Parameters
@@ -461,6 +548,8 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         The photograph, sRGB in [0, 1].
     sigma : float, optional
         Blur in pixels for Delta E; default one dot spacing ``sqrt(W H / n)``.
+    tone_sigma : float
+        Blur in pixels for the SSIM and the spacing.
 
     Returns
     -------
@@ -469,14 +558,13 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         drawing (:func:`render_pens`, each pen's dots at the radius holding
         its layer's ink), both blurred by `sigma` in linear light;
         ``ssim``: per pen, :func:`diskpack_cl.analysis.tone_ssim` of its
-        dots against its layer; ``p01``: per pen, the spacing P01
-        (:func:`diskpack_cl.analysis.spacing`) of its dots against its
-        layer (both None for a pen of fewer than :data:`MIN_DOTS` dots);
-        ``p01_joint``: of all dots against all layers' coverage.
+        dots against its layer; ``p01`` and ``p01_joint``: :func:`pen_spacing`
+        against the layers (SSIM and P01 None for a pen of fewer than
+        :data:`MIN_DOTS` dots).
     """
     from scipy import ndimage
 
-    from .analysis import spacing, tone_ssim
+    from .analysis import tone_ssim
 
     p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
     P, H, W = layers.shape
@@ -488,12 +576,11 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         return linear_to_srgb(ndimage.gaussian_filter(lin, (sigma, sigma, 0), mode="reflect"))
 
     mine = [pen == q for q in range(P)]
-    total = layers.sum(axis=0)   # over 1 where overprinting layers add up
     return {
         "delta_e": delta_e(blur(drawn), blur(srgb_to_linear(rgb))),
-        "ssim": [tone_ssim(p[m], a) if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
-        "p01": [spacing(p[m], a).p01 if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
-        "p01_joint": spacing(p, total / max(float(total.max()), 1.0)).p01,
+        "ssim": [tone_ssim(p[m], a, sigma=tone_sigma) if c >= MIN_DOTS else None
+                 for m, a, c in zip(mine, layers, counts)],
+        **pen_spacing(p, pen, (H, W), layers=layers, sigma=tone_sigma),
         "sigma": sigma,
     }
 

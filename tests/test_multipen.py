@@ -222,6 +222,38 @@ def test_cli_pen_dots_reach_the_result(tmp_path, capsys):
     assert "--pen-dots needs the pens: give --colors or --pens" in capsys.readouterr().err
 
 
+def test_cli_analyze_colour_npz_and_csv(tmp_path, capsys):
+    import json
+
+    from diskpack_cl.color import color_measures, load_rgb, separate
+
+    src = tmp_path / "in.png"
+    Image.fromarray(np.round(_image() * 255).astype(np.uint8)).save(src)
+    npz, csv_ = str(tmp_path / "c.npz"), str(tmp_path / "c.csv")
+    assert main(["stipple", str(src), "--colors", "cmyk", "-n", "300", "--black-generation", "0.5",
+                 "-o", npz, "-o", csv_, "-q"]) == 0
+    capsys.readouterr()
+    assert main(["analyze", npz, "--image", str(src), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    res = read_stipple(npz)
+    want = color_measures(res.points, res.pen, separate(src, "cmyk", black_generation=0.5).layers,
+                          res.colors, load_rgb(src))
+    assert got["reference"] == "image" and got["delta_e"] == pytest.approx(want["delta_e"])
+    assert [p["p01"] for p in got["pens"]] == pytest.approx(want["p01"])
+    assert [p["ssim"] for p in got["pens"]] == pytest.approx(want["ssim"])
+    assert got["p01_joint"] == pytest.approx(want["p01_joint"])
+    assert [p["n"] for p in got["pens"]] == np.bincount(res.pen, minlength=4).tolist()
+    assert got["certificate"]["valid"]
+    for path in (npz, csv_):   # without the image: against the dots' own density
+        assert main(["analyze", path, "--json"]) == 0
+        alone = json.loads(capsys.readouterr().out)
+        assert alone["reference"] == "dots" and alone["certificate"]["valid"]
+        assert [p["name"] for p in alone["pens"]] == ["yellow", "cyan", "magenta", "black"]
+        assert 0.3 < alone["p01_joint"] < 1.2 and "delta_e" not in alone
+    assert main(["analyze", csv_, "-o", str(tmp_path / "r.png")]) == 1
+    assert "colour stippling: its numbers print with --json" in capsys.readouterr().err
+
+
 def _two_images(folder):
     folder.mkdir()
     for name, img in (("a", _image()), ("b", _image()[::-1])):
