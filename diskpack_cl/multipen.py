@@ -59,8 +59,10 @@ PEN_COARSEN = 2
 #: Nearest dots that a dot's error goes to in :func:`assign_pens`.
 DIFFUSE = 6
 #: Dots per piece of the Hilbert path in :func:`assign_pens`: the pieces are
-#: walked at once, one wave per dot of a piece.
-SEGMENT = 64
+#: walked at once, one wave per dot of a piece. With 64 the per-layer SSIM of
+#: black on chelsea (5000 dots) was 0.01 below the unbroken path's; 256 and
+#: 1024 matched it within the spread over seeds.
+SEGMENT = 256
 #: ``capacity`` of colour stippling unless given: off. The one-pen default
 #: (0.1) lowered every measure of docs/color.md here (per-pen SSIM of black
 #: by 0.04 to 0.06, Delta E by 0.2 to 0.6 at 5000 dots).
@@ -207,16 +209,14 @@ def _diffuse(nbr, dist, q, left, rank):
     to, w = _receivers(nbr, dist, rank)
     order = np.lexsort((rank, rank % SEGMENT))
     bounds = np.searchsorted((rank % SEGMENT)[order], np.arange(SEGMENT + 1))
-    err = np.zeros((P, n))   # per pen: one bincount adds a wave's errors
+    err = np.zeros((n, P))
     pen = np.empty(n, dtype=np.int64)
     for a, b in zip(bounds[:-1], bounds[1:]):
         dots = order[a:b]
-        e = err[:, dots].T + q[dots]
+        e = err[dots] + q[dots]
         pen[dots] = _take(e, left)
         e[np.arange(len(dots)), pen[dots]] -= 1.0
-        t, wd = to[dots].ravel(), w[dots].ravel()
-        for p in range(P):
-            err[p] += np.bincount(t, weights=wd * np.repeat(e[:, p], to.shape[1]), minlength=n)
+        np.add.at(err, to[dots].ravel(), w[dots].reshape(-1, 1) * np.repeat(e, to.shape[1], axis=0))
     return pen
 
 
