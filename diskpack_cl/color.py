@@ -487,10 +487,8 @@ def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
 
     Parameters
     ----------
-    points : (n, 2) array_like
-        All dots, pixel units.
-    pen : (n,) array_like of int
-        Pen per dot.
+    points, pen
+        As :func:`color_measures`: all dots (pixel units) and the pen of each.
     shape : (int, int)
         Image height and width in pixels.
     layers : (P, H, W) array_like, optional

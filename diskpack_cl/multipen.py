@@ -12,10 +12,12 @@
    diffusion on the dots (Floyd-Steinberg on a point set): visited along a
    Hilbert path, each dot takes the pen most owed there (its layer's share
    of the local ink plus the error it received), and passes what is left
-   to its nearest dots not yet visited, so that every neighbourhood holds
+   to its nearest dots visited after it, so that every neighbourhood holds
    each pen in its layer's share, spread out as error diffusion spreads
-   dots. Dot counts per pen follow the ink of the layers
-   (:func:`pen_counts`) or are given.
+   dots. The path is cut into pieces of :data:`SEGMENT` dots walked side
+   by side, so that one numpy step visits a dot of every piece. Dot counts
+   per pen follow the ink of the layers (:func:`pen_counts`) or are given
+   (:func:`dots_per_pen`).
 3. **Class-aware moves.** The rest of the schedule runs on the power
    diagram over all dots with the joint radii (the packing keeps every pair
    apart); after each step every dot also moves towards the centroid of its
@@ -477,8 +479,7 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     pens = (make_stipple_engine(Domain.rect(W, H), coarse.grid_shape(W, H), backend, device),
             [_centroid_density(a, coarse) for a in sep.layers])
     state, more = _run_pens(state, _phases(stage, tail), pen, pens, pen_pull, callback, len(history))
-    timings["pens"] = sum(h["pens_s"] for h in more)
-    t0 = time.perf_counter()
+    t0, timings["pens"] = time.perf_counter(), sum(h["pens_s"] for h in more)
     r = dot_radii(state, stage, state.points)
     k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     timings.update(certify=time.perf_counter() - t0, total=time.perf_counter() - t_start)

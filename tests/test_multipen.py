@@ -127,6 +127,38 @@ def test_assign_pens_works_in_waves_not_dot_by_dot(monkeypatch):
     assert len(calls) <= multipen.SEGMENT and sum(calls) == 5000
 
 
+def _sequential_pens(x, share, counts, k=6):
+    """The oracle: Floyd-Steinberg on the dots one at a time along the Hilbert path, each
+    dot's error to those of its k nearest not yet visited, else on to the next dot."""
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.pen_path import pen_path_order
+
+    dist, nbr = cKDTree(x).query(x, k=list(range(2, k + 2)))
+    left, err = np.array(counts), np.zeros_like(share)
+    pen, carry = np.full(len(x), -1), np.zeros(share.shape[1])
+    for i in pen_path_order(x, method="hilbert")[0]:
+        e = carry + err[i] + share[i]
+        pen[i] = np.argmax(np.where(left > 0, e, -np.inf))
+        left[pen[i]] -= 1
+        e[pen[i]] -= 1.0
+        todo = pen[nbr[i]] < 0
+        w = 1.0 / np.maximum(dist[i][todo], 1e-12)
+        err[nbr[i][todo]] += (w / w.sum())[:, None] * e if todo.any() else 0.0
+        carry = np.zeros_like(e) if todo.any() else e
+    return pen
+
+
+def test_assign_pens_in_one_piece_is_the_sequential_diffusion(monkeypatch):
+    rng = np.random.default_rng(4)
+    x = rng.random((600, 2)) * 25
+    share = rng.random((600, 3)) ** 2
+    share /= share.sum(axis=1, keepdims=True)
+    counts = pen_counts(share.T[:, :, None], 600)
+    monkeypatch.setattr(multipen, "SEGMENT", 600)   # one piece: the path walked dot by dot
+    assert np.array_equal(assign_pens(x, share, counts), _sequential_pens(x, share, counts))
+
+
 def test_same_seed_same_colour_stippling(result):
     again = stipple_colors(_image(), 300, "cmyk", seed=1)
     assert np.array_equal(again.points, result.points) and np.array_equal(again.pen, result.pen)
