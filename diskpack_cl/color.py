@@ -263,20 +263,24 @@ def _unmix(targets, pens):
     from itertools import combinations
 
     V = np.vstack([np.ones(3), pens])                                   # paper, then the pens
-    best = np.full(len(targets), np.inf)
-    ink = np.full(len(targets), np.inf)
     out = np.zeros((len(targets), len(pens)))
+    rest = np.arange(len(targets))
+    if len(V) == 4:   # paper and 3 pens: a colour in their tetrahedron is its one mix
+        bary, _ = _face(V, targets)
+        inside = np.all(bary >= -1e-12, axis=1)
+        out[inside], rest = bary[inside, 1:], rest[~inside]
+    best, ink = np.full(len(rest), np.inf), np.full(len(rest), np.inf)
     for s in range(1, min(4, len(V)) + 1):                              # faces of <= 4 vertices
         for face in combinations(range(len(V)), s):
-            bary, dist = _face(V[list(face)], targets)
+            bary, dist = _face(V[list(face)], targets[rest])
             ok = np.all(bary >= -1e-12, axis=1)
             used = bary[:, [i for i, f in enumerate(face) if f > 0]].sum(axis=1)
             better = ok & ((dist < best - _TIE) | ((dist < best + _TIE) & (used < ink - _TIE)))
             best[better], ink[better] = np.minimum(dist[better], best[better]), used[better]
-            out[better] = 0.0
+            out[rest[better]] = 0.0
             for i, f in enumerate(face):
                 if f > 0:
-                    out[better, f - 1] = bary[better, i]
+                    out[rest[better], f - 1] = bary[better, i]
     return np.clip(out, 0.0, 1.0)
 
 
