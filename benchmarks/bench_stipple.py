@@ -19,6 +19,17 @@ With ``--end-to-end N``: whole runs at N dots on the sample instead, the
 default schedule, the default as before issue 17 and the paper's Fig. 8
 schedule (180 disk-packing and 30 Lloyd iterations: three rounds of 60 +
 10), seconds from the image to the certified result.
+
+With ``--color``: whole CMYK stipplings (:func:`diskpack_cl.stipple_colors`)
+against mono ones of the same n on the same joint density (the coverage of
+all pens, what the colour run's first phases stipple), of the colour
+photographs of ``tests/data/color/`` resized to each of ``--sizes``, each n
+of ``--n``; ``--reps`` rounds, mono and CMYK interleaved (which runs first
+alternates), each round's CMYK seconds over its mono seconds. Prints the
+medians of the seconds and of those ratios, and the colour run's own stages
+(separation, pen assignment, the pens' centroids):
+
+    python benchmarks/bench_stipple.py --color --n 20000 50000 --sizes 512 --reps 5
 """
 
 from __future__ import annotations
@@ -60,9 +71,14 @@ def main(argv=None):
     ap.add_argument("--json")
     ap.add_argument("--end-to-end", type=int, metavar="N")
     ap.add_argument("--profile", action="store_true", help="device seconds of the kernels")
+    ap.add_argument("--color", action="store_true", help="CMYK against mono, interleaved")
+    ap.add_argument("--images", nargs="+", default=["astronaut"], help="--color: photographs")
+    ap.add_argument("--reps", type=int, default=5, help="--color: rounds")
     a = ap.parse_args(argv)
     if a.end_to_end:
         return end_to_end(a.end_to_end, a.device)
+    if a.color:
+        return color_against_mono(a)
     rows = []
     hdr = f"{'size':>5s} {'n':>7s} {'method':8s} {'start':>7s} {'s/iter':>7s} {'raster':>7s} {'exact':>7s} {'centr':>7s}"
     hdr += f" {'kernel':>7s}" if a.profile else ""
@@ -97,6 +113,52 @@ def main(argv=None):
                 print(f"{size:5d} {n:7d} {method:8s} {t_start:7.3f} {row['s_per_iter']:7.3f} "
                       f"{row['raster_s']:7.3f} {row['exact_s']:7.3f} {row['centroids_s']:7.3f}"
                       + (f" {row['kernel_s']:7.3f}" if a.profile else ""), flush=True)
+    if a.json:
+        with open(a.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    return 0
+
+
+def color_image(name, size):
+    """A colour photograph of ``tests/data/color`` at `size` px (bicubic), sRGB in [0, 1]."""
+    from pathlib import Path
+
+    from PIL import Image
+
+    im = Image.open(Path(__file__).resolve().parents[1] / "tests/data/color" / f"{name}.png").convert("RGB")
+    return np.asarray(im.resize((size, size), Image.BICUBIC), dtype=np.float64) / 255.0
+
+
+def color_against_mono(a):
+    """CMYK stipplings against mono ones of the same n, interleaved (see the module docstring)."""
+    from diskpack_cl.color import separate
+    from diskpack_cl.multipen import stipple_colors
+
+    rows = []
+    print(f"{'image':10s} {'size':>5s} {'n':>7s} {'mono s':>7s} {'cmyk s':>7s} {'ratio':>6s} "
+          f"{'min':>5s} {'max':>5s}  cmyk stages (s)")
+    for name, size, n in ((i, s, n) for i in a.images for s in a.sizes for n in a.n):
+        rgb = color_image(name, size)
+        gray = 1.0 - separate(rgb, "cmyk").darkness
+        stipple(gray, n, device=a.device)   # buffers of this size made before any clock
+        mono, cmyk, stages = [], [], []
+        for rep in range(a.reps):
+            for kind in ("mono", "cmyk") if rep % 2 == 0 else ("cmyk", "mono"):
+                t = time.perf_counter()
+                if kind == "mono":
+                    stipple(gray, n, device=a.device)
+                    mono.append(time.perf_counter() - t)
+                else:
+                    res = stipple_colors(rgb, n, "cmyk", device=a.device)
+                    cmyk.append(time.perf_counter() - t)
+                    stages.append(res.timings)
+        ratio = np.array(cmyk) / np.array(mono)
+        st = {k: float(np.median([s.get(k, 0.0) for s in stages])) for k in stages[0]}
+        rows.append({"image": name, "size": size, "n": n, "reps": a.reps, "mono_s": mono, "cmyk_s": cmyk,
+                     "ratio_median": float(np.median(ratio)), "cmyk_stages_median": st})
+        print(f"{name:10s} {size:5d} {n:7d} {np.median(mono):7.2f} {np.median(cmyk):7.2f} "
+              f"{np.median(ratio):6.2f} {ratio.min():5.2f} {ratio.max():5.2f}  "
+              + " ".join(f"{k} {v:.2f}" for k, v in st.items() if k != "total"), flush=True)
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh, indent=1)

@@ -28,6 +28,7 @@ neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import time
 from pathlib import Path
@@ -91,28 +92,28 @@ def crop(name, results, box, out, scale=2):
 BOXES = {"astronaut": (50, 10, 128), "coffee": (64, 40, 128), "chelsea": (70, 20, 128)}
 
 
-def run(name, palette, n, figures):
+def run(name, palette, n, figures, seed=0, overlays=True):
     path = ROOT / "tests/data/color" / f"{name}.png"
     rgb = load_rgb(path)
     gray = 1.0 - separate(path, palette).darkness
     stipple(gray, n)   # OpenCL buffers of this size allocated before either clock
     t = time.perf_counter()
-    multi = stipple_colors(path, n, palette)
+    multi = stipple_colors(path, n, palette, seed=seed)
     t_multi = time.perf_counter() - t
     assert multi.certificate.valid
     t = time.perf_counter()
-    mono = stipple(gray, n)
+    mono = stipple(gray, n, seed=seed)
     t_mono = time.perf_counter() - t
-    rows, overlays = [], []
-    for model in ("area", "overprint") if palette in PALETTES else ("area",):
+    rows, naives = [], []
+    for model in ("area", "overprint") if overlays and palette in PALETTES else ("area",) * overlays:
         t = time.perf_counter()
-        overlays.append(naive(path, palette, multi.counts, model))
+        naives.append(naive(path, palette, multi.counts, model, seed=seed))
         method = "naive" if model == "area" else "naive-overprint"
-        rows.append(_row(name, palette, n, method, overlays[-1], rgb, time.perf_counter() - t))
+        rows.append(_row(name, palette, n, method, naives[-1], rgb, time.perf_counter() - t))
     rows.append(dict(_row(name, palette, n, "multi-class", multi, rgb, t_multi), mono_seconds=t_mono,
-                     mono_p01=spacing(mono.points, 1.0 - gray).p01))
+                     mono_p01=spacing(mono.points, 1.0 - gray).p01, seed=seed))
     if figures:
-        crop(name, overlays + [multi], BOXES[name], ROOT / "docs/figures" / f"color_crop_{name}.png")
+        crop(name, naives + [multi], BOXES[name], ROOT / "docs/figures" / f"color_crop_{name}.png")
     return rows
 
 
@@ -141,6 +142,10 @@ def main(argv=None):
     ap.add_argument("--images", nargs="+", default=list(IMAGES))
     ap.add_argument("--out", default=str(ROOT / "docs/color_quality.jsonl"))
     ap.add_argument("--no-figures", action="store_true")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0],
+                    help="stipple each pair with these seeds (the spread over seeds is the noise)")
+    ap.add_argument("--multi-only", action="store_true",
+                    help="the multi-class runs alone, without the naive overlays")
     args = ap.parse_args(argv)
     if args.table:
         print(table(args.table))
@@ -148,13 +153,13 @@ def main(argv=None):
     jobs = [(name, "cmyk", n) for name in args.images for n in args.n]
     jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in args.images]
     with open(args.out, "w") as fh:
-        for name, palette, n in jobs:
-            figures = not args.no_figures and palette == "cmyk" and n == max(args.n)
-            for row in run(name, palette, n, figures):
+        for (name, palette, n), seed in itertools.product(jobs, args.seeds):
+            figures = not args.no_figures and palette == "cmyk" and n == max(args.n) and seed == args.seeds[0]
+            for row in run(name, palette, n, figures, seed, not args.multi_only):
                 fh.write(json.dumps(row) + "\n")
                 fh.flush()
                 r = lambda v: "-" if v is None else f"{v:.3f}"   # noqa: E731
-                print(f"{name} {palette} n={n} {row['method']}: dE {row['delta_e']:.2f} "
+                print(f"{name} {palette} n={n} seed={seed} {row['method']}: dE {row['delta_e']:.2f} "
                       f"P01 joint {row['p01_joint']:.3f} per pen "
                       + " ".join(map(r, row["p01"])) + " SSIM " + " ".join(map(r, row["ssim"]))
                       + f" {row['seconds']:.1f} s", flush=True)

@@ -54,9 +54,9 @@ import numpy as np
 
 from .options import OptionConflict, check_fields, option
 
-__all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "separate", "load_rgb", "srgb_to_linear",
+__all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
-           "color_measures"]
+           "pen_spacing", "color_measures", "palette_of"]
 
 #: Named palettes: (name, sRGB hex) per pen, lightest first.
 PALETTES = {
@@ -155,6 +155,37 @@ def parse_pens(text):
     return tuple(names), np.array(colors)
 
 
+def parse_pen_dots(text):
+    """``"cyan=12000,black=8000"`` to ``{"cyan": 12000, "black": 8000}``: dots per pen.
+
+    Raises
+    ------
+    ValueError
+        An item that is not ``NAME=N``, a count that is not a non-negative
+        integer, or a pen named twice.
+
+    Examples
+    --------
+    >>> parse_pen_dots("cyan=12000, black=8000")
+    {'cyan': 12000, 'black': 8000}
+    """
+    out = {}
+    for item in str(text).split(","):
+        name, sep, value = (part.strip() for part in item.partition("="))
+        if not sep or not name or not value:
+            raise ValueError(f"bad pen count {item.strip()!r}: give NAME=N, e.g. cyan=12000")
+        try:
+            count = int(value)
+        except ValueError:
+            raise ValueError(f"the dots of pen {name} must be an integer, got {value!r}") from None
+        if count < 0:
+            raise ValueError(f"the dots of pen {name} must be >= 0, got {count}")
+        if name in out:
+            raise ValueError(f"pen {name} is given twice")
+        out[name] = count
+    return out
+
+
 def _palette(colors):
     """``(names, colors)`` of a palette name or a ``NAME=COLOR,...`` text."""
     if isinstance(colors, str) and colors.lower() in PALETTES:
@@ -238,20 +269,24 @@ def _unmix(targets, pens):
     from itertools import combinations
 
     V = np.vstack([np.ones(3), pens])                                   # paper, then the pens
-    best = np.full(len(targets), np.inf)
-    ink = np.full(len(targets), np.inf)
     out = np.zeros((len(targets), len(pens)))
+    rest = np.arange(len(targets))
+    if len(V) == 4:   # paper and 3 pens: a colour in their tetrahedron is its one mix
+        bary, _ = _face(V, targets)
+        inside = np.all(bary >= -1e-12, axis=1)
+        out[inside], rest = bary[inside, 1:], rest[~inside]
+    best, ink = np.full(len(rest), np.inf), np.full(len(rest), np.inf)
     for s in range(1, min(4, len(V)) + 1):                              # faces of <= 4 vertices
         for face in combinations(range(len(V)), s):
-            bary, dist = _face(V[list(face)], targets)
+            bary, dist = _face(V[list(face)], targets[rest])
             ok = np.all(bary >= -1e-12, axis=1)
             used = bary[:, [i for i, f in enumerate(face) if f > 0]].sum(axis=1)
             better = ok & ((dist < best - _TIE) | ((dist < best + _TIE) & (used < ink - _TIE)))
             best[better], ink[better] = np.minimum(dist[better], best[better]), used[better]
-            out[better] = 0.0
+            out[rest[better]] = 0.0
             for i, f in enumerate(face):
                 if f > 0:
-                    out[better, f - 1] = bary[better, i]
+                    out[rest[better], f - 1] = bary[better, i]
     return np.clip(out, 0.0, 1.0)
 
 
@@ -281,6 +316,25 @@ def _separate_unique(rgb, names, colors, black_generation, model):
         out[:, names.index("black")] = k
     out[out < 1e-9] = 0.0   # the solver's rounding: no ink
     return np.clip(out, 0.0, 1.0)
+
+
+def palette_of(names, colors):
+    """What :func:`separate` takes for pens read back from a file: ``"cmyk"`` or ``"cmy"``
+    where they are that palette (so that CMYK separates black first), else the pairs.
+
+    Examples
+    --------
+    >>> palette_of(("yellow", "cyan", "magenta"), [[1, 1, 0], [0, 1, 1], [1, 0, 1]])
+    'cmy'
+    >>> palette_of(("ink",), [[0.0, 0.0, 0.0]])
+    [('ink', (0.0, 0.0, 0.0))]
+    """
+    colors = np.asarray(colors, dtype=np.float64)
+    for key in PALETTES:
+        names_p, colors_p = _palette(key)
+        if tuple(names) == names_p and colors.shape == colors_p.shape and np.allclose(colors, colors_p):
+            return key
+    return [(name, tuple(float(v) for v in c)) for name, c in zip(names, colors)]
 
 
 def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, clean_white=0.0,
@@ -428,7 +482,73 @@ def pen_tone_radii(layers, counts):
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
 
 
-def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
+def _own_density(points, shape):
+    """The density of `points` themselves on the pixel grid, blurred over two of their
+    spacings and scaled to a maximum of 1 (the reference of :func:`pen_spacing`
+    without layers)."""
+    from scipy import ndimage
+
+    H, W = shape
+    hist = np.histogram2d(points[:, 1], points[:, 0], bins=(H, W), range=((0, H), (0, W)))[0]
+    blurred = ndimage.gaussian_filter(hist, 2.0 * np.sqrt(W * H / len(points)), mode="constant")
+    return blurred / blurred.max()
+
+
+def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
+    """Spacing P01 of each pen's dots and of all dots together.
+
+    Each set's nearest-neighbour distances are read against the spacing its
+    density asks for (:func:`diskpack_cl.analysis.spacing`, 1st percentile):
+    with `layers`, a pen's layer and, for all dots, all layers' coverage
+    (what the dots were placed to follow); without, the density of the dots
+    themselves (histogram blurred over two of their spacings), which needs
+    no image but forgives dots that drift from their tone.
+
+    Parameters
+    ----------
+    points, pen
+        As :func:`color_measures`: all dots (pixel units) and the pen of each.
+    shape : (int, int)
+        Image height and width in pixels.
+    layers : (P, H, W) array_like, optional
+        The separated layers (coverage in [0, 1]).
+    pens : int, optional
+        Number of pens (default: the layers', else the largest pen + 1).
+    sigma : float
+        Blur in pixels of the expected density.
+
+    Returns
+    -------
+    dict
+        ``p01``: per pen (None for a pen of fewer than :data:`MIN_DOTS`
+        dots); ``p01_joint``: of all dots.
+
+    Examples
+    --------
+    >>> x, y = np.meshgrid(np.arange(2.0, 64, 4), np.arange(2.0, 64, 4))
+    >>> pts = np.column_stack([x.ravel(), y.ravel()])
+    >>> out = pen_spacing(pts, np.arange(256) % 2, (64, 64))
+    >>> out["p01"][0] > 0.5, round(out["p01_joint"], 2) > 0.5
+    (True, True)
+    """
+    from .analysis import spacing
+
+    p, pen = np.asarray(points, float), np.asarray(pen)
+    P = pens or (int(pen.max()) + 1 if layers is None else len(layers))
+    mine = [pen == q for q in range(P)]
+    if layers is None:
+        dens = [_own_density(p[m], shape) if np.count_nonzero(m) else None for m in mine]
+        total = _own_density(p, shape)
+    else:
+        dens = list(np.asarray(layers, float))
+        total = np.sum(dens, axis=0)
+        total = total / max(float(total.max()), 1.0)   # over 1 where overprinting layers add up
+    return {"p01": [spacing(p[m], d, sigma=sigma).p01 if np.count_nonzero(m) >= MIN_DOTS else None
+                    for m, d in zip(mine, dens)],
+            "p01_joint": spacing(p, total, sigma=sigma).p01}
+
+
+def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3.0):
     """Colour fidelity and spacing of a colour stippling.
 
     Parameters
@@ -445,6 +565,8 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         The photograph, sRGB in [0, 1].
     sigma : float, optional
         Blur in pixels for Delta E; default one dot spacing ``sqrt(W H / n)``.
+    tone_sigma : float
+        Blur in pixels for the SSIM and the spacing.
 
     Returns
     -------
@@ -453,10 +575,9 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         drawing (:func:`render_pens`, each pen's dots at the radius holding
         its layer's ink), both blurred by `sigma` in linear light;
         ``ssim``: per pen, :func:`diskpack_cl.analysis.tone_ssim` of its
-        dots against its layer; ``p01``: per pen, the spacing P01
-        (:func:`diskpack_cl.analysis.spacing`) of its dots against its
-        layer (both None for a pen of fewer than :data:`MIN_DOTS` dots);
-        ``p01_joint``: of all dots against all layers' coverage.
+        dots against its layer; ``p01`` and ``p01_joint``: :func:`pen_spacing`
+        against the layers (SSIM and P01 None for a pen of fewer than
+        :data:`MIN_DOTS` dots).
 
     Examples
     --------
@@ -469,7 +590,7 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
     """
     from scipy import ndimage
 
-    from .analysis import spacing, tone_ssim
+    from .analysis import tone_ssim
 
     p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
     P, H, W = layers.shape
@@ -481,12 +602,11 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None):
         return linear_to_srgb(ndimage.gaussian_filter(lin, (sigma, sigma, 0), mode="reflect"))
 
     mine = [pen == q for q in range(P)]
-    total = layers.sum(axis=0)   # over 1 where overprinting layers add up
     return {
         "delta_e": delta_e(blur(drawn), blur(srgb_to_linear(rgb))),
-        "ssim": [tone_ssim(p[m], a) if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
-        "p01": [spacing(p[m], a).p01 if c >= MIN_DOTS else None for m, a, c in zip(mine, layers, counts)],
-        "p01_joint": spacing(p, total / max(float(total.max()), 1.0)).p01,
+        "ssim": [tone_ssim(p[m], a, sigma=tone_sigma) if c >= MIN_DOTS else None
+                 for m, a, c in zip(mine, layers, counts)],
+        **pen_spacing(p, pen, (H, W), layers=layers, sigma=tone_sigma),
         "sigma": sigma,
     }
 
@@ -520,16 +640,52 @@ class ColorOptions:
                                 "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
     clean_white: float = option(0.0, "pixels with R, G, B all within T of white get no ink "
                                 "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+    pen_dots: str = option(None, "dots of some or all pens, e.g. cyan=12000,black=8000: the pens "
+                           "named get that many, the others share the rest of the dots in "
+                           "proportion to their ink (default: every pen by its ink)",
+                           metavar="NAME=N,...", check=parse_pen_dots, group=_COLOUR)
 
     def __post_init__(self):
         check_fields(self)
         if self.colors is not None and self.pens is not None:
             raise OptionConflict(f"{{}} {self.colors} and {{}} both name the pens; give one",
                                  "colors", "pens")
+        if self.pen_dots is not None and self.colors is None and self.pens is None:
+            raise OptionConflict("{} needs the pens: give {} or {}", "pen_dots", "colors", "pens")
+        if self.pen_dots is not None:
+            names = _palette(self.pens or self.colors)[0]
+            unknown = [name for name in parse_pen_dots(self.pen_dots) if name not in names]
+            if unknown:
+                text = f"{', '.join(unknown)}, not one of the pens ({', '.join(names)})"
+                raise OptionConflict("{} names " + text.replace("{", "{{").replace("}", "}}"),
+                                     "pen_dots")
+
+    def check_pen_dots(self, n):
+        """Refuse dots per pen that cannot add up to `n` dots in all (more than n, or every
+        pen named and another sum), before any work.
+
+        Examples
+        --------
+        >>> ColorOptions(colors="cmy", pen_dots="cyan=10,yellow=5,magenta=5").check_pen_dots(20)
+        >>> ColorOptions(colors="cmy", pen_dots="cyan=30").check_pen_dots(20)
+        Traceback (most recent call last):
+        ...
+        diskpack_cl.options.OptionConflict: pen_dots gives 30 dots, more than the 20 in all
+        """
+        if self.pen_dots is None:
+            return
+        dots = parse_pen_dots(self.pen_dots)
+        given, every = sum(dots.values()), len(dots) == len(_palette(self.pens or self.colors)[0])
+        if given > n or (every and given != n):
+            raise OptionConflict(f"{{}} gives {given} dots, {'more than' if given > n else 'not'} "
+                                 f"the {n} in all" + ("; leave a pen out to give it the rest"
+                                                      if every and given < n else ""), "pen_dots")
 
     def separation(self):
-        """The separation arguments of :func:`diskpack_cl.stipple_colors`, or None (one pen)."""
+        """The arguments of :func:`diskpack_cl.stipple_colors` (pens, separation and dots per
+        pen), or None (one pen)."""
         if self.colors is None and self.pens is None:
             return None
+        counts = None if self.pen_dots is None else parse_pen_dots(self.pen_dots)
         return dict(colors=self.pens or self.colors, black_generation=self.black_generation,
-                    clean_black=self.clean_black, clean_white=self.clean_white)
+                    clean_black=self.clean_black, clean_white=self.clean_white, counts=counts)

@@ -11,7 +11,8 @@ import importlib.util
 
 import numpy as np
 
-__all__ = ["PLOT_HINT", "have_matplotlib", "analyze", "analyze_stippling", "analyze_point_sets"]
+__all__ = ["PLOT_HINT", "have_matplotlib", "analyze", "analyze_stippling", "analyze_color_stippling",
+           "analyze_point_sets"]
 
 PLOT_HINT = 'figures need matplotlib: pip install "diskpack_cl[plot]"'
 
@@ -53,11 +54,17 @@ def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, 
     """
     from .export import read_stipple
 
-    stipplings = [read_stipple(p) if str(p).lower().endswith(".npz") else None for p in paths]
+    stipplings = [read_stipple(p) if str(p).lower().endswith(".npz") or _pen_csv(p) else None
+                  for p in paths]
     if any(s is not None for s in stipplings):
         if len(paths) != 1:
             raise ValueError("a stippling .npz (with radii, width, height) is analyzed alone; "
                              "give one file")
+        if getattr(stipplings[0], "pen", None) is not None:
+            if output is not None:
+                raise ValueError(f"{paths[0]} is a colour stippling: its numbers print with "
+                                 f"--json; the report figure is for one pen")
+            return analyze_color_stippling(paths[0], stipplings[0], image, sigma=sigma)
         return analyze_stippling(paths[0], stipplings[0], image, output=output, invert=invert,
                                  allow_large=allow_large, sigma=sigma, title=title)
     if image is not None:
@@ -107,6 +114,91 @@ def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large
     from .plots import stipple_numbers
 
     return stipple_numbers(points, radii, darkness, cert, sigma=sigma)
+
+
+def _pen_csv(path):
+    """Whether `path` is a colour stippling's CSV (its first line names the pens)."""
+    from .export import CSV_TAG
+
+    if not str(path).lower().endswith(".csv"):
+        return False
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        first = fh.readline()
+    return first.startswith(CSV_TAG) and " pens=" in first
+
+
+def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
+    """Spacing per pen and of all dots, the certificate, and with `image` the colour measures.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file `st` was read from (for messages).
+    st : types.SimpleNamespace
+        A colour stippling read by :func:`diskpack_cl.read_stipple` (``points``,
+        ``radii``, ``pen``, ``names``, ``colors``, ``width``, ``height``,
+        ``params``).
+    image : str, Path or array_like, optional
+        The colour image it was stippled from. It is separated again into
+        the pens' layers (CMYK and CMY as such, with the black generation and
+        clean tolerances recorded in an ``.npz``; other pens by their colours).
+    sigma : float
+        Blur in pixels for the spacing and SSIM.
+
+    Returns
+    -------
+    dict
+        ``n``, ``width``, ``height``; ``pens``: per pen its ``name``,
+        ``color``, ``n`` and ``p01`` (and ``ssim`` with `image`); ``p01_joint``
+        of all dots; ``reference``: ``"image"`` (P01 against the layers,
+        :func:`diskpack_cl.color.color_measures`, with ``delta_e``) or ``"dots"``
+        (against the dots' own density, :func:`diskpack_cl.color.pen_spacing`);
+        ``certificate``: re-checked over all dots together.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> x, y = np.meshgrid(np.arange(2.0, 64, 4), np.arange(2.0, 64, 4))
+    >>> st = SimpleNamespace(points=np.column_stack([x.ravel(), y.ravel()]), radii=np.full(256, 1.5),
+    ...                      pen=np.arange(256) % 2, names=("cyan", "black"), width=64, height=64,
+    ...                      colors=np.array([[0.0, 1.0, 1.0], [0.0, 0.0, 0.0]]), params={})
+    >>> out = analyze_color_stippling("grid.npz", st)
+    >>> [p["n"] for p in out["pens"]], out["reference"], out["certificate"]["valid"]
+    ([128, 128], 'dots', True)
+    """
+    from .color import color_measures, load_rgb, palette_of, pen_spacing, separate
+    from .geometry import Domain, certify_disks
+    from .multipen import hex_color
+    from .plots import _certificate_items, _num
+
+    points, pen, names = np.asarray(st.points, np.float64), np.asarray(st.pen), tuple(st.names)
+    W, H = int(st.width), int(st.height)
+    if points.ndim != 2 or points.shape[1:] != (2,) or pen.shape != (len(points),):
+        raise ValueError(f"{path}: points must be (n, 2) and pen (n,)")
+    numbers = {"n": len(points), "width": W, "height": H}
+    if image is None:
+        measures, numbers["reference"] = pen_spacing(points, pen, (H, W), pens=len(names),
+                                                  sigma=sigma), "dots"
+    else:
+        rgb = load_rgb(image)
+        if rgb.shape[:2] != (H, W):
+            raise ValueError(f"the image is {rgb.shape[1]}x{rgb.shape[0]} px but {path} is a "
+                             f"stippling of a {W}x{H} px image")
+        kw = {k: st.params[k] for k in ("black_generation", "clean_black", "clean_white")
+              if k in st.params}
+        sep = separate(rgb, palette_of(names, st.colors), **kw)
+        measures = color_measures(points, pen, sep.layers, st.colors, rgb, tone_sigma=sigma)
+        numbers.update(reference="image", delta_e=_num(measures["delta_e"]),
+                       delta_e_sigma=_num(measures["sigma"]))
+    counts = np.bincount(pen, minlength=len(names))
+    numbers["pens"] = [dict(name=name, color=hex_color(c), n=int(m),
+                            p01=_num(p01) if p01 is not None else None)
+                       for name, c, m, p01 in zip(names, st.colors, counts, measures["p01"])]
+    for entry, ssim in zip(numbers["pens"], measures.get("ssim", [])):
+        entry["ssim"] = None if ssim is None else _num(ssim)
+    numbers["p01_joint"] = _num(measures["p01_joint"])
+    numbers["certificate"] = _certificate_items(certify_disks(points, st.radii, Domain.rect(W, H)))
+    return numbers
 
 
 def analyze_point_sets(paths, *, output=None, kmax=None, title=None):

@@ -148,3 +148,17 @@ def test_unmixing_is_as_near_as_nnls(seed, P):
         d_ref = np.linalg.norm(A[:3] @ ref - t)
         d_got = np.linalg.norm((1 - got.sum()) + pens.T @ got - t)
         assert d_got <= d_ref + 1e-6
+
+
+@settings(max_examples=20)
+@given(st.integers(0, 2**32 - 1))
+def test_unmixing_three_pens_gives_back_the_mix(seed):
+    """Paper and three pens: a colour mixed from them (inside their tetrahedron, where
+    the mix is the one answer) separates into the coverages it was mixed from."""
+    rng = np.random.default_rng(seed)
+    pens = rng.random((3, 3))
+    a = rng.dirichlet(np.ones(4), 50)[:, 1:]                 # paper's share first, dropped
+    targets = (1 - a.sum(axis=1))[:, None] + a @ pens
+    if abs(np.linalg.det(pens - 1.0)) < 1e-3:                 # nearly flat: mixes not unique
+        return
+    assert np.allclose(color._unmix(targets, pens), a, atol=1e-6)

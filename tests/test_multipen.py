@@ -11,7 +11,8 @@ from PIL import Image
 
 from diskpack_cl.cli import main
 from diskpack_cl.export import read_stipple, write_stipple
-from diskpack_cl.multipen import assign_pens, pen_counts, stipple_colors
+from diskpack_cl import multipen
+from diskpack_cl.multipen import assign_pens, dots_per_pen, pen_counts, stipple_colors
 
 SVG = "{http://www.w3.org/2000/svg}"
 INK = "{http://www.inkscape.org/namespaces/inkscape}"
@@ -76,6 +77,91 @@ def test_assign_pens_gives_exact_counts(n, ink, seed):
     counts = pen_counts(np.array(ink)[:, None], n)
     assert counts.sum() == n and np.all(np.abs(counts - n * np.array(ink) / sum(ink)) < 1)
     assert np.bincount(assign_pens(x, share, counts), minlength=len(ink)).tolist() == counts.tolist()
+
+
+def test_dots_per_pen_by_name_the_rest_by_ink():
+    layers = np.array([np.full((2, 2), 0.1), np.full((2, 2), 0.3), np.full((2, 2), 0.2)])
+    names = ("cyan", "magenta", "black")
+    assert dots_per_pen(names, layers, 100, {"cyan": 40}).tolist() == [40, 36, 24]
+    assert dots_per_pen(names, layers, 100, {"cyan": 40, "magenta": 0}).tolist() == [40, 0, 60]
+    assert dots_per_pen(names, layers, 90, dict(zip(names, (30, 30, 30)))).tolist() == [30] * 3
+    assert dots_per_pen(names, layers, 60, None).tolist() == [10, 30, 20]
+    for counts, match in (({"cyann": 5}, "counts name cyann, not one of the pens"),
+                          ({"cyan": -5}, "non-negative integers"),
+                          ({"cyan": 2.5}, "non-negative integers"),
+                          ({"cyan": 101}, "sum to 101, but n = 100"),
+                          (dict(zip(names, (30, 30, 30))), "sum to 90, but n = 100")):
+        with pytest.raises(ValueError, match=match):
+            dots_per_pen(names, layers, 100, counts)
+
+
+def _uniform_share_points(n=2000, seed=3):
+    x = np.random.default_rng(seed).random((n, 2)) * np.sqrt(n)
+    return x, np.tile([0.5, 0.3, 0.2], (n, 1))
+
+
+def test_assign_pens_spreads_each_pen_and_is_reproducible():
+    from scipy.spatial import cKDTree
+
+    x, share = _uniform_share_points()
+    counts = np.array([1000, 600, 400])
+    pen = assign_pens(x, share, counts)
+    assert np.array_equal(pen, assign_pens(x, share, counts))
+    # error diffusion: among each dot's 12 nearest, every pen near its share (a random
+    # assignment of the same counts is off by more than 0.2 at 1 dot in 10)
+    _, nbr = cKDTree(x).query(x, k=13)
+    local = np.stack([np.mean(pen[nbr] == p, axis=1) for p in range(3)], axis=1)
+    assert np.quantile(np.abs(local - share).max(axis=1), 0.9) < 0.2
+    rand = np.random.default_rng(0).permutation(np.repeat(np.arange(3), counts))
+    local = np.stack([np.mean(rand[nbr] == p, axis=1) for p in range(3)], axis=1)
+    assert np.quantile(np.abs(local - share).max(axis=1), 0.9) >= 0.2
+
+
+def test_assign_pens_works_in_waves_not_dot_by_dot(monkeypatch):
+    calls = []
+    take = multipen._take
+    monkeypatch.setattr(multipen, "_take", lambda e, left: calls.append(len(e)) or take(e, left))
+    x, share = _uniform_share_points(5000)
+    pen = assign_pens(x, share, [2500, 1500, 1000])
+    assert np.bincount(pen).tolist() == [2500, 1500, 1000]
+    assert len(calls) <= multipen.SEGMENT and sum(calls) == 5000
+
+
+def _sequential_pens(x, share, counts, k=6):
+    """The oracle: Floyd-Steinberg on the dots one at a time along the Hilbert path, each
+    dot's error to those of its k nearest not yet visited, else on to the next dot."""
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.pen_path import pen_path_order
+
+    dist, nbr = cKDTree(x).query(x, k=list(range(2, k + 2)))
+    left, err = np.array(counts), np.zeros_like(share)
+    pen, carry = np.full(len(x), -1), np.zeros(share.shape[1])
+    for i in pen_path_order(x, method="hilbert")[0]:
+        e = carry + err[i] + share[i]
+        pen[i] = np.argmax(np.where(left > 0, e, -np.inf))
+        left[pen[i]] -= 1
+        e[pen[i]] -= 1.0
+        todo = pen[nbr[i]] < 0
+        w = 1.0 / np.maximum(dist[i][todo], 1e-12)
+        err[nbr[i][todo]] += (w / w.sum())[:, None] * e if todo.any() else 0.0
+        carry = np.zeros_like(e) if todo.any() else e
+    return pen
+
+
+def test_assign_pens_in_one_piece_is_the_sequential_diffusion(monkeypatch):
+    rng = np.random.default_rng(4)
+    x = rng.random((600, 2)) * 25
+    share = rng.random((600, 3)) ** 2
+    share /= share.sum(axis=1, keepdims=True)
+    counts = pen_counts(share.T[:, :, None], 600)
+    monkeypatch.setattr(multipen, "SEGMENT", 600)   # one piece: the path walked dot by dot
+    assert np.array_equal(assign_pens(x, share, counts), _sequential_pens(x, share, counts))
+
+
+def test_same_seed_same_colour_stippling(result):
+    again = stipple_colors(_image(), 300, "cmyk", seed=1)
+    assert np.array_equal(again.points, result.points) and np.array_equal(again.pen, result.pen)
 
 
 def test_npz_csv_round_trip(tmp_path, result):
@@ -144,6 +230,60 @@ def test_cli_colors_and_pens(tmp_path, capsys):
                  "--invert", "-q"]) == 2
     assert main(["stipple", str(tmp_path / "in.png"), "--colors", "cmyk", "-n", "tone",
                  "--dot-mm", "0.5", "-o", svg, "-q"]) == 2
+
+
+def test_cli_pen_dots_reach_the_result(tmp_path, capsys):
+    Image.fromarray(np.round(_image() * 255).astype(np.uint8)).save(tmp_path / "in.png")
+    head = ["stipple", str(tmp_path / "in.png"), "--colors", "cmy", "-n", "200",
+            "-o", str(tmp_path / "c.npz"), "-q", "--schedule", "classic"]
+    assert main([*head, "--pen-dots", "cyan=50,yellow=30"]) == 0
+    back = read_stipple(tmp_path / "c.npz")
+    assert np.bincount(back.pen, minlength=3).tolist() == [30, 50, 120]   # magenta: the rest
+    assert back.params["counts"] == [30, 50, 120]
+    capsys.readouterr()
+    for extra, message in (
+            (["--pen-dots", "cyann=50"], "--pen-dots names cyann, not one of the pens"),
+            (["--pen-dots", "cyan=-5"], "the dots of pen cyan must be >= 0, got -5"),
+            (["--pen-dots", "cyan=5x"], "the dots of pen cyan must be an integer"),
+            (["--pen-dots", "cyan=300"], "--pen-dots gives 300 dots, more than the 200 in all"),
+            (["--pen-dots", "cyan=50,yellow=30,magenta=100"], "gives 180 dots, not the 200")):
+        assert main([*head, *extra]) == 2, extra
+        assert message in capsys.readouterr().err
+    assert main(["stipple", str(tmp_path / "in.png"), "-n", "200", "-o", str(tmp_path / "m.npz"),
+                 "--pen-dots", "cyan=5", "-q"]) == 2
+    assert "--pen-dots needs the pens: give --colors or --pens" in capsys.readouterr().err
+
+
+def test_cli_analyze_colour_npz_and_csv(tmp_path, capsys):
+    import json
+
+    from diskpack_cl.color import color_measures, load_rgb, separate
+
+    src = tmp_path / "in.png"
+    Image.fromarray(np.round(_image() * 255).astype(np.uint8)).save(src)
+    npz, csv_ = str(tmp_path / "c.npz"), str(tmp_path / "c.csv")
+    assert main(["stipple", str(src), "--colors", "cmyk", "-n", "300", "--black-generation", "0.5",
+                 "-o", npz, "-o", csv_, "-q"]) == 0
+    capsys.readouterr()
+    assert main(["analyze", npz, "--image", str(src), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    res = read_stipple(npz)
+    want = color_measures(res.points, res.pen, separate(src, "cmyk", black_generation=0.5).layers,
+                          res.colors, load_rgb(src))
+    assert got["reference"] == "image" and got["delta_e"] == pytest.approx(want["delta_e"])
+    assert [p["p01"] for p in got["pens"]] == pytest.approx(want["p01"])
+    assert [p["ssim"] for p in got["pens"]] == pytest.approx(want["ssim"])
+    assert got["p01_joint"] == pytest.approx(want["p01_joint"])
+    assert [p["n"] for p in got["pens"]] == np.bincount(res.pen, minlength=4).tolist()
+    assert got["certificate"]["valid"]
+    for path in (npz, csv_):   # without the image: against the dots' own density
+        assert main(["analyze", path, "--json"]) == 0
+        alone = json.loads(capsys.readouterr().out)
+        assert alone["reference"] == "dots" and alone["certificate"]["valid"]
+        assert [p["name"] for p in alone["pens"]] == ["yellow", "cyan", "magenta", "black"]
+        assert 0.3 < alone["p01_joint"] < 1.2 and "delta_e" not in alone
+    assert main(["analyze", csv_, "-o", str(tmp_path / "r.png")]) == 1
+    assert "colour stippling: its numbers print with --json" in capsys.readouterr().err
 
 
 def _two_images(folder):

@@ -43,6 +43,8 @@ def _example(f):
         value = "black=#000,red=#c00"
     elif f.name == "pen_order":
         return ["cyan", "yellow", "magenta"], ["--pen-order", "cyan,yellow,magenta"]
+    elif f.name == "pen_dots":
+        return {"cyan": 20, "yellow": 5}, ["--pen-dots", "cyan=20,yellow=5"]
     elif f.name == "seed":
         value = 7
     elif m["integer"]:
@@ -149,7 +151,7 @@ def test_every_color_option_reaches_stipple_colors(f, monkeypatch, tmp_path):
     monkeypatch.setattr(MULTIPEN_MODULE, "stipple_colors", fake)
     pens = [] if f.name in ("colors", "pens") else ["--colors", "cmy"]
     _run(["stipple", "sample", "-n", "50", "-o", str(tmp_path / "o.svg"), *argv, *pens])
-    assert seen["colors" if f.name == "pens" else f.name] == value
+    assert seen[{"pens": "colors", "pen_dots": "counts"}.get(f.name, f.name)] == value
 
 
 @pytest.mark.parametrize("command", ["poisson", "relax"])

@@ -20,14 +20,21 @@ def _add_analyze(subparsers):
                     "rho and the mean nearest-neighbour rho. A stippling (.npz written by "
                     "'diskpack stipple', with --image): the rendering beside the input, both "
                     "blurred with the tone SSIM, the spacing histogram and the certificate "
-                    "(re-checked from the file). Figures need matplotlib: "
+                    "(re-checked from the file). A colour stippling (.npz or .csv with a pen "
+                    "column, written by 'diskpack stipple --colors/--pens'; --json): the "
+                    "spacing P01 of each pen and of all dots, against the layers of --image "
+                    "separated again (with the CIELAB Delta E of the drawing and the SSIM of "
+                    "each layer), or without --image against the dots' own density; and the "
+                    "certificate over all dots. Figures need matplotlib: "
                     "pip install \"diskpack_cl[plot]\".",
         epilog="examples:\n"
                "  diskpack analyze a.npz b.npz c.npz -o report.png --json\n"
-               "  diskpack analyze stipple.npz --image sample -o stipple_report.png",
+               "  diskpack analyze stipple.npz --image sample -o stipple_report.png\n"
+               "  diskpack analyze colour.npz --image photo.png --json",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="POINTS",
-                   help="point files (realizations of one process), or one stippling .npz")
+                   help="point files (realizations of one process), or one stippling .npz "
+                        "(or a colour stippling's .csv)")
     p.add_argument("-o", "--output", default=None, metavar="REPORT",
                    help="figure file (.png, .pdf or .svg); written atomically")
     p.add_argument("--json", action="store_true",

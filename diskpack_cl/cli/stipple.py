@@ -164,6 +164,8 @@ def _run_stipple(args):
     options, tone, write, color = _stipple_objects(args)
     separation = color.separation()
     _refuse_mixed(args, options, tone, write, separation)
+    if isinstance(args.n, int):   # with --density each image has its own n, checked there
+        color.check_pen_dots(args.n)
     if _batch_mode(args, args.images, args.output):
         if args.n == "tone":
             raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
