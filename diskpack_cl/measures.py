@@ -13,7 +13,7 @@ from .domain import Domain
 
 __all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "hexagonal_radius", "nearest_neighbors",
            "nearest_neighbor_distances",
-           "min_distance", "normalized_radius", "coincident_pairs", "kdtree"]
+           "min_distance", "min_distance_at_most", "normalized_radius", "coincident_pairs", "kdtree"]
 
 #: Area per point of the densest (hexagonal) packing of unit disks, ``2 sqrt(3)``:
 #: n disks of radius r pack at best into area ``2 sqrt(3) n r^2``.
@@ -123,6 +123,30 @@ def min_distance(points, domain=Domain.torus()):
     0.1
     """
     return float(nearest_neighbor_distances(points, domain).min())
+
+
+def min_distance_at_most(points, bound, domain=Domain.torus()):
+    """Smallest pairwise distance if it is at most `bound` (else ``inf``), exact.
+
+    One KD-tree query for the pairs within ``bound (1 + 1e-9)``: at a million
+    points, a few times faster than every point's nearest neighbour when few
+    pairs are that close.
+
+    Examples
+    --------
+    >>> p = [[0.05, 0.5], [0.95, 0.5], [0.5, 0.5]]
+    >>> round(min_distance_at_most(p, 0.2), 12), min_distance_at_most(p, 0.05)
+    (0.1, inf)
+    """
+    X, tree = kdtree(points, domain)
+    pairs = tree.query_pairs(bound * (1 + 1e-9), output_type="ndarray")
+    if not len(pairs):
+        return float("inf")
+    d = X[pairs[:, 0]] - X[pairs[:, 1]]
+    if domain.periodic:
+        d -= np.round(d / domain.size) * domain.size
+    dmin = float(np.sqrt((d * d).sum(axis=1)).min())
+    return dmin if dmin <= bound else float("inf")
 
 
 def normalized_radius(points, domain=Domain.torus()):

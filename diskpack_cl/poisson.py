@@ -132,7 +132,10 @@ def count_for_distance(min_distance, area, rho_max=0.8):
 def start_points(n, domain, seed=None):
     """A dart-throwing start set of `n` points on the torus or in a box.
 
-    In a box ``W x H`` the darts are thrown on a square torus of side
+    The darts are thrown in parallel rounds
+    (:func:`diskpack_cl.parallel_darts.parallel_darts`, relative radius
+    0.7): at a million points a few seconds, where sequential dart throwing
+    to 0.74 took 17 s.  In a box ``W x H`` the darts are thrown on a square torus of side
     ``max(W, H)`` with enough points that at least `n` fall in the box
     inset by a disk radius (where relaxed points end up: the walls push
     them that far in, so the relaxation saves most of its iterations); the
@@ -144,17 +147,18 @@ def start_points(n, domain, seed=None):
     >>> start_points(100, Domain.rect(2, 1), seed=0).max(axis=0) <= (2, 1)
     array([ True,  True])
     """
-    from .sampling import _rng, dart_throwing
+    from .parallel_darts import parallel_darts
+    from .sampling import _rng
 
     rng = _rng(seed)
     if domain.periodic:
-        return dart_throwing(n, seed=rng)
+        return parallel_darts(n, seed=rng)
     inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
     inner = domain.size - 2.0 * inset
     side = max(inner)
     m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
     while True:
-        pts = dart_throwing(m, seed=rng) * side
+        pts = parallel_darts(m, seed=rng) * side
         pts = pts[np.all(pts <= inner, axis=1)]
         if len(pts) >= n:
             return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
@@ -343,7 +347,7 @@ def _relaxed(n, domain, eps, seed, inside, distance, options):
     t0 = time.perf_counter()
     start = start_points(n, domain, seed)
     t_start = time.perf_counter() - t0
-    res = relax_poisson(start, eps, domain=domain, **options)
+    res = relax_poisson(start, eps, domain=domain, local=True, **options)
     pts = res.points
     rho = float(res.rho[-1])   # certified by relax_poisson's KD-tree
     d_min = 2.0 * rho * hexagonal_radius(len(pts), domain.area)

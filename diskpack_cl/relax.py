@@ -133,7 +133,7 @@ def _check_points(points, domain):
 
 def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, device=None,
                   callback=None, patience=100, route="auto", verify=False, profile=False,
-                  domain=None):
+                  domain=None, local=False):
     """Relax a point set on the unit torus (or in a box) by disk packing until rho >= eps.
 
     Parameters
@@ -176,6 +176,16 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         and rho is normalized by the box's area.  There rho may drop in
         an iteration (a wall cuts the disk a cell had around its site);
         the smallest MIC radius still never does after the first.
+    local : bool
+        Once at most :data:`diskpack_cl.relax_local.LOCAL_SHARE` of the
+        points are closer than ``2 eps r_max`` to another, go on with local
+        iterations (:func:`diskpack_cl.relax_local.relax_local`): only the
+        neighbourhoods of those points move, each to its exact MIC centre,
+        so rho still never decreases, at a small part of a global
+        iteration's cost.  The iterates then differ from Algorithm 1's.
+        Torus only (ignored in a box, where a wall can hold a MIC radius
+        below half the nearest-neighbour distance, and a local step could
+        then lower rho).
 
     Returns
     -------
@@ -202,16 +212,22 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     if engine.fallback:
         stats["fallback"] = engine.fallback
     t_start = time.perf_counter()
-    X, rho, it, reason = _iterate(engine, dom, X, eps, int(max_iter), patience, callback, verify,
-                                  timings, stats)
+    X, rho, it, reason, nn = _iterate(engine, dom, X, eps, int(max_iter), patience, callback,
+                                      verify, timings, stats, local)
+    measured = reason == "local"   # the local route measures the last rho by the KD-tree
+    if measured:
+        X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience, callback,
+                                       timings, stats)
     seconds = time.perf_counter() - t_start
-    _certify_rho(X, rho[-1], dom)
+    if not (measured and reason == "eps"):
+        _certify_rho(X, rho[-1], dom)
     return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
                        "exact" if engine.name == "exact" else "opencl", engine.device, stats)
 
 
-def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings, stats):
-    """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason)``."""
+def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings, stats, local):
+    """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason,
+    nearest-neighbour distances)``; the reason ``"local"`` hands over to local iterations."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     step = _mic(engine, X, timings, stats) if engine.gives_nn else None
     rho = [_rho(X, step, verify, dom)]
@@ -219,6 +235,9 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings,
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
     while rho[-1] < eps and it < max_iter:
+        nn = _local_ready(X, step, eps, dom) if local and dom.periodic else None
+        if nn is not None:
+            return X, rho, it, "local", nn
         it += 1
         step = step or _mic(engine, X, timings, stats)
         if verify:
@@ -235,7 +254,36 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings,
         elif it - best_at >= patience:
             reason = "stalled"
             break
-    return X, rho, it, reason
+    return X, rho, it, reason, None
+
+
+def _local_ready(X, step, eps, dom):
+    """Nearest-neighbour distances of X when few enough points are bad to go local, else None."""
+    from .measures import nearest_neighbor_distances
+    from .relax_local import LOCAL_SHARE, bad_points
+
+    nn = step.nn if step is not None and step.nn is not None else nearest_neighbor_distances(X, dom)
+    return nn if len(bad_points(nn, eps, dom.area)) <= LOCAL_SHARE * len(X) else None
+
+
+def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, timings, stats):
+    """Local iterations after `it` global ones; the last rho measured by a KD-tree."""
+    from .measures import min_distance_at_most
+    from .relax_local import relax_local
+
+    t0 = time.perf_counter()
+    X, more, reason = relax_local(X, nn, eps, dom, max_iter=max_iter - it, patience=patience,
+                                  callback=callback, first=it + 1, stall_gain=STALL_GAIN)
+    stats["local_iterations"] = len(more)
+    rho = rho + more
+    if reason == "eps":   # no pair left below 2 eps r_max: the exact rho is just above
+        r_max = hexagonal_radius(len(X), dom.area)
+        bound = 2 * eps * r_max
+        while (d := min_distance_at_most(X, bound, dom)) == np.inf:
+            bound *= 1.05
+        rho[-1] = 0.5 * d / r_max
+    timings["local"] = time.perf_counter() - t0
+    return X, rho, it + len(more), reason
 
 
 def _mic(engine, X, timings, stats):
@@ -259,8 +307,13 @@ def _rho(X, step, verify, domain):
 
 
 def _certify_rho(X, rho, domain):
-    """The independent check of rho: scipy's KD-tree (periodic on a torus)."""
-    exact = normalized_radius(X, domain)
+    """The independent check of rho: scipy's KD-tree (periodic on a torus), asked for
+    the pairs within the distance rho claims (all points' neighbours if none is)."""
+    from .measures import min_distance_at_most
+
+    r_max = hexagonal_radius(len(X), domain.area)
+    d = min_distance_at_most(X, 2 * rho * r_max * (1 + 1e-9), domain)
+    exact = 0.5 * d / r_max if np.isfinite(d) else normalized_radius(X, domain)
     if not abs(exact - rho) <= 1e-12:
         raise RuntimeError(f"rho {rho!r} from the engine disagrees with the KD-tree's {exact!r}")
 
