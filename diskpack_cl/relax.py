@@ -278,10 +278,7 @@ def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, timings, s
     rho = rho + more
     if reason == "eps":   # no pair left below 2 eps r_max: the exact rho is just above
         r_max = hexagonal_radius(len(X), dom.area)
-        bound = 2 * eps * r_max
-        while (d := min_distance_at_most(X, bound, dom)) == np.inf:
-            bound *= 1.05
-        rho[-1] = 0.5 * d / r_max
+        rho[-1] = 0.5 * min_distance_at_most(X, 2 * eps * r_max, dom, grow=True) / r_max
     timings["local"] = time.perf_counter() - t0
     return X, rho, it + len(more), reason
 
