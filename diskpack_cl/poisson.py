@@ -23,7 +23,7 @@ search over n.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -63,6 +63,9 @@ class PoissonDiskResult:
         Wall time of the relaxation and of the start set.
     eps : float
         The rho the relaxation aimed at.
+    timings : dict
+        Seconds per stage of the relaxation (:attr:`RelaxResult.timings`;
+        ``local``: the local tail iterations and the final KD-tree measure).
     """
 
     points: np.ndarray
@@ -75,6 +78,7 @@ class PoissonDiskResult:
     seconds: float
     start_seconds: float
     eps: float
+    timings: dict = field(default_factory=dict)
 
 
 def as_box(box):
@@ -356,7 +360,7 @@ def _relaxed(n, domain, eps, seed, inside, distance, options):
         pts = pts[inside(pts)]
         d_min = _min_distance(pts, domain) if len(pts) >= 2 else float("inf")
     return PoissonDiskResult(pts, domain, rho, float(d_min), reached, res.stop_reason,
-                             res.iterations, res.seconds, t_start, float(eps))
+                             res.iterations, res.seconds, t_start, float(eps), res.timings)
 
 
 def _with_density(n, density, domain, seed, backend, device):
