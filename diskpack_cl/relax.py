@@ -177,15 +177,9 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         an iteration (a wall cuts the disk a cell had around its site);
         the smallest MIC radius still never does after the first.
     local : bool
-        Once at most :data:`diskpack_cl.relax_local.LOCAL_SHARE` of the
-        points are closer than ``2 eps r_max`` to another, go on with local
-        iterations (:func:`diskpack_cl.relax_local.relax_local`): only the
-        neighbourhoods of those points move, each to its exact MIC centre,
-        so rho still never decreases, at a small part of a global
-        iteration's cost.  The iterates then differ from Algorithm 1's.
-        Torus only (ignored in a box, where a wall can hold a MIC radius
-        below half the nearest-neighbour distance, and a local step could
-        then lower rho).
+        Once few points are closer than ``2 eps r_max``, move only their
+        neighbourhoods (:mod:`diskpack_cl.relax_local`; torus only): rho never
+        decreases, far cheaper, but the iterates differ from Algorithm 1's.
 
     Returns
     -------
@@ -201,28 +195,29 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     """
     dom = Domain.torus() if domain is None else domain
     X = _check_points(points, dom)
+    _check_run(eps, max_iter)
+    shape = None if grid is None else (int(grid), int(grid))
+    engine = make_engine(dom, len(X), backend, device=device, grid=shape, route=route,
+                         profile=profile)
+    timings, stats = {}, {"engine": engine.name, **({"fallback": engine.fallback} if engine.fallback else {})}
+    t_start = time.perf_counter()
+    X, rho, it, reason, nn = _iterate(engine, dom, X, eps, int(max_iter), patience, callback,
+                                      verify, timings, stats, local)
+    if reason == "local":   # the local route measures its last rho by the KD-tree itself
+        X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience, callback,
+                                       timings, stats)
+    seconds = time.perf_counter() - t_start
+    if "local" not in timings or reason != "eps":
+        _certify_rho(X, rho[-1], dom)
+    return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
+                       "exact" if engine.name == "exact" else "opencl", engine.device, stats)
+
+
+def _check_run(eps, max_iter):
     if not (0.0 < eps < 1.0):
         raise ValueError(f"eps must be in (0, 1), got {eps}")
     if int(max_iter) < 0:
         raise ValueError(f"max_iter must be >= 0, got {max_iter}")
-    n = len(X)
-    shape = None if grid is None else (int(grid), int(grid))
-    engine = make_engine(dom, n, backend, device=device, grid=shape, route=route, profile=profile)
-    timings, stats = {}, {"engine": engine.name}
-    if engine.fallback:
-        stats["fallback"] = engine.fallback
-    t_start = time.perf_counter()
-    X, rho, it, reason, nn = _iterate(engine, dom, X, eps, int(max_iter), patience, callback,
-                                      verify, timings, stats, local)
-    measured = reason == "local"   # the local route measures the last rho by the KD-tree
-    if measured:
-        X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience, callback,
-                                       timings, stats)
-    seconds = time.perf_counter() - t_start
-    if not (measured and reason == "eps"):
-        _certify_rho(X, rho[-1], dom)
-    return RelaxResult(X, np.array(rho), it, reason, seconds, timings,
-                       "exact" if engine.name == "exact" else "opencl", engine.device, stats)
 
 
 def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, timings, stats, local):
