@@ -234,7 +234,7 @@ def _region(mask, polygon, domain):
 
 def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None, density=None,
                  seed=None, eps=0.8, rho_max=0.8, backend="auto", device=None, max_iter=1000,
-                 patience=100, callback=None, dim=2):
+                 patience=100, callback=None, dim=2, local=True):
     """A Poisson disk set by disk packing: a count or a minimum distance, torus or box.
 
     Parameters
@@ -265,6 +265,9 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         With `min_distance`: the largest rho the distance may ask for.
     backend, device, max_iter, patience, callback :
         Passed to :func:`diskpack_cl.relax_poisson`.
+    local : bool
+        Torus: end with local iterations (:func:`diskpack_cl.relax_poisson`),
+        2-3x faster from 10k points; ``False``: Algorithm 1 throughout.
     dim : {2, 3}
         3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
         centres of the maximal inscribed spheres of their 3D Voronoi cells
@@ -308,7 +311,7 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
             raise ValueError("a mask or polygon needs a box (box='WxH')")
         inside, share = _region(mask, polygon, domain)
     n_all, eps = _count_and_eps(n, min_distance, domain.area, share, eps, rho_max)
-    return _relaxed(n_all, domain, eps, seed, inside, min_distance, options)
+    return _relaxed(n_all, domain, eps, seed, inside, min_distance, dict(options, local=local))
 
 
 def _count_and_eps(n, distance, area, share, eps, rho_max):
@@ -351,7 +354,7 @@ def _relaxed(n, domain, eps, seed, inside, distance, options):
     t0 = time.perf_counter()
     start = start_points(n, domain, seed)
     t_start = time.perf_counter() - t0
-    res = relax_poisson(start, eps, domain=domain, local=True, **options)
+    res = relax_poisson(start, eps, domain=domain, **options)
     pts = res.points
     rho = float(res.rho[-1])   # certified by relax_poisson's KD-tree
     d_min = 2.0 * rho * hexagonal_radius(len(pts), domain.area)

@@ -113,3 +113,12 @@ def test_min_distance_at_most_is_the_brute_force_minimum(n, seed, periodic, scal
     if scale >= 1 or scale < 1 - 1e-8:
         assert got == (pytest.approx(best, rel=1e-14) if scale >= 1 else np.inf)
     assert min_distance_at_most(X, 0.2 * best, dom, grow=True) == pytest.approx(best, rel=1e-14)
+
+
+def test_poisson_disk_goes_local_on_the_torus_unless_told_not_to():
+    from diskpack_cl.poisson import poisson_disk
+
+    a = poisson_disk(3000, seed=0, backend="exact")
+    b = poisson_disk(3000, seed=0, backend="exact", local=False)
+    assert "local" in a.timings and "local" not in b.timings
+    assert a.rho >= 0.8 and b.rho >= 0.8
