@@ -121,6 +121,9 @@ class _Grid:
         ij = np.minimum((pts / self.c).astype(np.int64), self.g - 1)
         return ij[:, 1] * self.g + ij[:, 0]
 
+    def throw(self, live, rng, room, empty):
+        return _round(self, live, rng, room, empty)
+
 
 def _round(grid, live, rng, room, empty):
     """One round: a dart into every live cell at once, with a random priority each
@@ -145,6 +148,72 @@ def _round(grid, live, rng, room, empty):
     return live[~gone], keep.size
 
 
+class _DeviceGrid:
+    """The grid of :class:`_Grid` on an OpenCL device (``kernels/dart_round.cl``).
+
+    The host draws the darts and priorities with the same generator calls
+    and keeps the points; the kernels do the distance tests in the same
+    float64 operations, so both give the same points for a seed.
+    """
+
+    def __init__(self, d, ctx):
+        import pyopencl as cl
+
+        from ._kernels import build_program
+
+        self.d, self.d2 = d, d * d
+        self.g = g = max(1, int(np.ceil(np.sqrt(2.0) / d)))
+        self.c = 1.0 / g
+        self.ctx, self.queue = ctx, cl.CommandQueue(ctx)
+        self.k = build_program(ctx, "dart_round")
+        self.pt = np.full((g * g, 2), _EMPTY)
+
+    def _run(self, name, size, *args, out):
+        import pyopencl as cl
+
+        mf = cl.mem_flags
+        bufs = [cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))
+                if isinstance(a, np.ndarray) else a for a in args]
+        b_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, max(out.nbytes, 1))
+        self.k[name](self.queue, (max(size, 1),), None, *bufs, b_out)
+        cl.enqueue_copy(self.queue, out, b_out)
+        return out.astype(bool)
+
+    def throw(self, live, rng, room, empty):
+        """One round (as :func:`_round`): the cells still live and the points placed."""
+        g, n2 = self.g, self.g * self.g
+        row, col = np.divmod(live, g)
+        x = (col + rng.random(live.size)) * self.c
+        y = (row + rng.random(live.size)) * self.c
+        dart = np.full((n2, 2), _EMPTY)
+        dart[live, 0], dart[live, 1] = x, y
+        free = self._run("dart_free", n2, self.pt, dart, np.int32(g), np.float64(self.d2),
+                         out=np.empty(n2, np.int8))
+        keep = np.flatnonzero(free[live])
+        prio = np.full(n2, -1.0)
+        prio[live[keep]] = rng.random(keep.size)
+        kept = self._run("dart_keep", n2, dart, prio, np.int32(g), np.float64(self.d2),
+                         out=np.empty(n2, np.int8))
+        keep = keep[kept[live[keep]]][:room]
+        self.insert(live[keep], x[keep], y[keep])
+        gone = np.zeros(live.size, dtype=bool)
+        gone[keep] = True
+        return live[~gone], keep.size
+
+    def insert(self, cells, x, y):
+        self.pt[cells, 0], self.pt[cells, 1] = x, y
+
+    def covered(self, cells):
+        return self._run("cell_covered", cells.size, self.pt, cells.astype(np.int32),
+                         np.int32(cells.size), np.int32(self.g), np.float64(self.c),
+                         np.float64(self.d2), out=np.empty(cells.size, np.int8))
+
+    def points(self):
+        return self.pt[self.pt[:, 0] < _EMPTY].copy()
+
+    cells_of = _Grid.cells_of
+
+
 def _throw_rounds(grid, n, rng, max_rounds):
     """Rounds until the grid holds `n` points (or `max_rounds`); the points."""
     taken = np.zeros(grid.g * grid.g, dtype=bool)
@@ -152,7 +221,7 @@ def _throw_rounds(grid, n, rng, max_rounds):
     taken[grid.cells_of(pts)] = True
     live, m = np.flatnonzero(~taken), len(pts)
     for r in range(max_rounds):
-        live, placed = _round(grid, live, rng, n - m, m == 0)
+        live, placed = grid.throw(live, rng, n - m, m == 0)
         m += placed
         if m >= n or not live.size:
             break
@@ -161,7 +230,22 @@ def _throw_rounds(grid, n, rng, max_rounds):
     return grid.points()
 
 
-def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16):
+def _grid_for(d, device):
+    """The device grid where `device` (a context or name; None: the default) has float64
+    and the grid is large enough to gain, else the numpy grid."""
+    if device is not False and np.sqrt(2.0) / d >= 64:
+        from ._device import NoOpenCLError, get_context
+
+        try:
+            ctx = get_context(None if device is True else device)
+        except NoOpenCLError:
+            ctx = None
+        if ctx is not None and "cl_khr_fp64" in ctx.devices[0].extensions:
+            return _DeviceGrid(d, ctx)
+    return _Grid(d)
+
+
+def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16, device=None):
     """`n` points on the unit torus by parallel dart throwing at a relative radius.
 
     Rounds of parallel dart throwing at the minimum distance
@@ -180,6 +264,11 @@ def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16):
     seed : int, numpy.random.Generator or None, optional
     max_rounds : int, optional
         Rounds at one radius before it shrinks.
+    device : str, pyopencl.Context, bool or None, optional
+        Where the distance tests run: an OpenCL device with float64
+        (``kernels/dart_round.cl``; None: the default one, if any), or
+        numpy (False, or without a device, or for grids under 64 x 64).
+        Both give the same points for a seed.
 
     Returns
     -------
@@ -200,7 +289,7 @@ def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16):
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     rel, pts = float(rel_radius), np.empty((0, 2))
     while True:
-        grid = _Grid(2.0 * rel * hexagonal_radius(n))
+        grid = _grid_for(2.0 * rel * hexagonal_radius(n), device)
         if len(pts):
             grid.insert(grid.cells_of(pts), pts[:, 0], pts[:, 1])
         pts = _throw_rounds(grid, n, rng, max_rounds)

@@ -135,6 +135,13 @@ def cells3_torus(ctx):
     return _cells3(ctx, Domain3.torus(), 36)
 
 
+def dart_round(ctx):
+    """dart_free, dart_keep and cell_covered: parallel dart throwing on a 64 x 64 grid."""
+    from diskpack_cl.parallel_darts import parallel_darts
+
+    return {"points": parallel_darts(1300, seed=0, device=ctx, max_rounds=3)}
+
+
 def end_to_end(ctx):
     """Relaxation on both engine routes and a short stippling, as the public functions run them."""
     from diskpack_cl import relax_poisson, stipple
@@ -210,8 +217,8 @@ def unowned(ctx):
 
 
 SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
-                                     cells_torus, cells_full, cells3_box, cells3_torus, end_to_end,
-                                     refused, bad_labels, unowned)}
+                                     cells_torus, cells_full, cells3_box, cells3_torus,
+                                     dart_round, end_to_end, refused, bad_labels, unowned)}
 
 
 def main(argv):

@@ -54,3 +54,16 @@ def test_no_lattice_peaks_in_the_spectrum():
     _, aniso = anisotropy(P, freqs)
     assert np.max(aniso[f > 4]) < 6.0, (f[np.argmax(aniso)], np.max(aniso))
     assert power.max() < 3.0
+
+
+@settings(max_examples=6, deadline=None)
+@given(n=st.integers(1200, 6000), rel=st.floats(0.5, 0.74), seed=st.integers(0, 2**32 - 1))
+def test_the_device_kernels_give_the_numpy_points(ctx, n, rel, seed):
+    """kernels/dart_round.cl does the distance tests of the numpy path in the same float64
+    operations, on the same host-drawn darts: the same points, bit for bit."""
+    from diskpack_cl import parallel_darts as pd
+
+    assert isinstance(pd._grid_for(2 * rel * hexagonal_radius(n), ctx), pd._DeviceGrid)
+    a = parallel_darts(n, rel_radius=rel, seed=seed, device=ctx)
+    b = parallel_darts(n, rel_radius=rel, seed=seed, device=False)
+    np.testing.assert_array_equal(a, b)
