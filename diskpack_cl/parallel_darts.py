@@ -172,7 +172,8 @@ class _DeviceGrid:
         import pyopencl as cl
 
         mf = cl.mem_flags
-        bufs = [cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))
+        flags = mf.READ_ONLY | mf.COPY_HOST_PTR
+        bufs = [cl.Buffer(self.ctx, flags, hostbuf=np.ascontiguousarray(a))
                 if isinstance(a, np.ndarray) else a for a in args]
         b_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, max(out.nbytes, 1))
         self.k[name](self.queue, (max(size, 1),), None, *bufs, b_out)

@@ -133,7 +133,7 @@ def count_for_distance(min_distance, area, rho_max=0.8):
     return int(np.floor(area * rho_max ** 2 / (HEXAGONAL_CELL * (0.5 * min_distance) ** 2)))
 
 
-def start_points(n, domain, seed=None):
+def start_points(n, domain, seed=None, device=None):
     """A dart-throwing start set of `n` points on the torus or in a box.
 
     The darts are thrown in parallel rounds
@@ -144,7 +144,8 @@ def start_points(n, domain, seed=None):
     inset by a disk radius (where relaxed points end up: the walls push
     them that far in, so the relaxation saves most of its iterations); the
     box keeps those and drops its surplus at random (so its spacing is at
-    least the torus set's).
+    least the torus set's).  `device`: where the darts' distance tests run
+    (see :func:`~diskpack_cl.parallel_darts.parallel_darts`; the same set).
 
     Examples
     --------
@@ -156,13 +157,13 @@ def start_points(n, domain, seed=None):
 
     rng = _rng(seed)
     if domain.periodic:
-        return parallel_darts(n, seed=rng)
+        return parallel_darts(n, seed=rng, device=device)
     inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
     inner = domain.size - 2.0 * inset
     side = max(inner)
     m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
     while True:
-        pts = parallel_darts(m, seed=rng) * side
+        pts = parallel_darts(m, seed=rng, device=device) * side
         pts = pts[np.all(pts <= inner, axis=1)]
         if len(pts) >= n:
             return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
@@ -352,7 +353,7 @@ def _relaxed3(n, distance, box, seed, eps, rho_max, options):
 def _relaxed(n, domain, eps, seed, inside, distance, options):
     """Start set, relaxation, mask: the :class:`PoissonDiskResult` of one run."""
     t0 = time.perf_counter()
-    start = start_points(n, domain, seed)
+    start = start_points(n, domain, seed, False if options["backend"] == "exact" else options["device"])
     t_start = time.perf_counter() - t0
     res = relax_poisson(start, eps, domain=domain, **options)
     pts = res.points
