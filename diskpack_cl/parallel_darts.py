@@ -188,9 +188,12 @@ class _DeviceGrid:
         y = (row + rng.random(live.size)) * self.c
         dart = np.full((n2, 2), _EMPTY)
         dart[live, 0], dart[live, 1] = x, y
-        free = self._run("dart_free", n2, self.pt, dart, np.int32(g), np.float64(self.d2),
-                         out=np.empty(n2, np.int8))
-        keep = np.flatnonzero(free[live])
+        if empty:   # no point yet: every dart is free
+            keep = np.arange(live.size)
+        else:
+            free = self._run("dart_free", n2, self.pt, dart, np.int32(g), np.float64(self.d2),
+                             out=np.empty(n2, np.int8))
+            keep = np.flatnonzero(free[live])
         prio = np.full(n2, -1.0)
         prio[live[keep]] = rng.random(keep.size)
         kept = self._run("dart_keep", n2, dart, prio, np.int32(g), np.float64(self.d2),
