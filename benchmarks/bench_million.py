@@ -1,15 +1,20 @@
 """A million points at rho >= 0.8 in 2D, beside scipy's Delaunay of the same points, and analyze.
 
-Usage: python benchmarks/bench_million.py [--n 1000000] [--no-analyze]
+Usage: python benchmarks/bench_million.py [--n 1000000] [--repeat 3] [--no-analyze]
 
-Times, in one process: the start set, the relaxation and the whole
-``poisson_disk(n)`` call; then ``scipy.spatial.Delaunay`` of the relaxed
-points (the yardstick the issue set: the set should take under a third of
-it); then the numbers of ``diskpack analyze`` (periodogram by the
-non-uniform FFT, rho, mean rho, psi6).
+Times, in one process, `--repeat` runs of ``poisson_disk(n, seed=r)`` and
+prints each run and the medians: the start set (parallel dart throwing),
+the relaxation (global iterations on the device, then local ones) with the
+engine's stages, and the whole call; then ``scipy.spatial.Delaunay`` of the
+relaxed points (the yardstick the issue set: the set should take under a
+third of it); then the numbers of ``diskpack analyze`` (periodogram by the
+non-uniform FFT, rho, mean rho, psi6) of the last set.  The load average
+is printed with each run: on a shared machine, compare ratios within a run.
 """
 
 import argparse
+import os
+import statistics
 import time
 
 from scipy.spatial import Delaunay
@@ -18,20 +23,35 @@ from diskpack_cl.plots import point_set_numbers
 from diskpack_cl.poisson import poisson_disk
 
 
+def one_run(n, seed):
+    """One timed run: a dict of seconds and counts."""
+    load = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    res = poisson_disk(n, seed=seed)
+    total = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    Delaunay(res.points)
+    row = {"load": load, "total": total, "start": res.start_seconds, "relax": res.seconds,
+           "delaunay": time.perf_counter() - t0, "iterations": res.iterations, "rho": res.rho}
+    row.update(res.timings)
+    return row, res
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=1_000_000)
+    ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--no-analyze", action="store_true")
     args = ap.parse_args()
     poisson_disk(1000, seed=1)   # build and warm the kernel
-    t0 = time.perf_counter()
-    res = poisson_disk(args.n, seed=0)
-    total = time.perf_counter() - t0
-    print(f"poisson_disk({args.n}): {total:.2f} s (start {res.start_seconds:.2f} s, relaxation "
-          f"{res.seconds:.2f} s, {res.iterations} iterations), rho {res.rho:.4f}", flush=True)
-    t0 = time.perf_counter()
-    Delaunay(res.points)
-    print(f"scipy Delaunay of the same points: {time.perf_counter() - t0:.2f} s", flush=True)
+    rows = []
+    for seed in range(args.repeat):
+        row, res = one_run(args.n, seed)
+        rows.append(row)
+        print(" ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()),
+              flush=True)
+    keys = [k for k in rows[0] if all(k in r for r in rows)]
+    print("median: " + " ".join(f"{k} {statistics.median(r[k] for r in rows):.3f}" for k in keys))
     if not args.no_analyze:
         t0 = time.perf_counter()
         numbers = point_set_numbers(res.points)

@@ -208,8 +208,9 @@ _NUFFT_WORK = 2e8
 _NUFFT_SPREAD = 12
 
 
-def _direct_power(pts, kmax):
-    """|sum_j exp(-2 pi i k . x_j)|^2 / n at -kmax <= kx, ky <= kmax, by exact sums."""
+def _direct_power(pts, kmax, weights=None):
+    """|sum_j exp(-2 pi i k . x_j)|^2 / n at -kmax <= kx, ky <= kmax, by exact sums
+    (with `weights`: ``|sum_j w_j exp(..)|^2 / sum_j w_j^2``)."""
     size = 2 * kmax + 1
     # P(-k) = P(k): compute the half plane ky >= 0 and mirror it
     F = np.zeros((kmax + 1, size), dtype=np.complex128)
@@ -217,16 +218,22 @@ def _direct_power(pts, kmax):
         block = pts[start:start + _CHUNK]
         ex = _phase_table(block[:, 0], kmax)  # f = 0 .. kmax
         ex = np.concatenate([ex[:, :0:-1].conj(), ex], axis=1)  # f = -kmax .. kmax
+        if weights is not None:
+            ex *= weights[start:start + _CHUNK, None]
         ey = _phase_table(block[:, 1], kmax)
         F += ey.T @ ex
-    half = (F.real ** 2 + F.imag ** 2) / len(pts)
+    half = (F.real ** 2 + F.imag ** 2) / _norm(pts, weights)
     P = np.empty((size, size))
     P[kmax:] = half
     P[:kmax] = half[:0:-1, ::-1]  # P[-ky, -kx] = P[ky, kx]
     return P
 
 
-def _nufft_power(pts, kmax, spread=None):
+def _norm(pts, weights):
+    return len(pts) if weights is None else float(np.dot(weights, weights))
+
+
+def _nufft_power(pts, kmax, spread=None, weights=None):
     """The power of :func:`_direct_power` by a type-1 non-uniform FFT (Gaussian gridding).
 
     The points are spread with the periodic Gaussian ``exp(-x^2 / (4 tau))``
@@ -244,19 +251,19 @@ def _nufft_power(pts, kmax, spread=None):
     M = fft.next_fast_len(2 * modes, real=True)
     R = M / modes
     tau = math.pi * msp / (modes * modes * R * (R - 0.5))
-    G = _spread(np.mod(pts, 1.0), M, msp, tau)
+    G = _spread(np.mod(pts, 1.0), M, msp, tau, weights)
     k = np.arange(-kmax, kmax + 1)
     corr = math.sqrt(math.pi / tau) * np.exp(k * k * tau) / M
     F = fft.rfft2(G)[k % M, :kmax + 1] * corr[:, None] * corr[None, kmax:]   # kx >= 0
-    half = (F.real ** 2 + F.imag ** 2) / len(pts)
+    half = (F.real ** 2 + F.imag ** 2) / _norm(pts, weights)
     P = np.empty((modes, modes))
     P[:, kmax:] = half
     P[:, :kmax] = half[::-1, kmax:0:-1]   # P[-ky, -kx] = P[ky, kx]
     return P
 
 
-def _spread(pts, M, msp, tau):
-    """Sum over the points of the periodic Gaussian on the M x M grid ``[iy, ix]``.
+def _spread(pts, M, msp, tau, weights=None):
+    """Sum over the points (times `weights`) of the periodic Gaussian on the M x M grid ``[iy, ix]``.
 
     Separable: the grid is ``Wy^T Wx`` with the sparse (n, M) tables of each
     point's 2 msp weights per axis, multiplied by scipy.sparse in row bands.
@@ -270,8 +277,10 @@ def _spread(pts, M, msp, tau):
     for u in (pts[:, 0] * M, pts[:, 1] * M):
         i = np.floor(u).astype(np.int64)[:, None] + off
         d = (i - u[:, None]) * (2.0 * math.pi / M)
-        tables.append(sparse.csr_matrix((np.exp(d * d / (-4.0 * tau)).ravel(), (i % M).ravel(), ptr),
-                                        shape=(n, M)))
+        g = np.exp(d * d / (-4.0 * tau))
+        if weights is not None and not tables:
+            g *= weights[:, None]
+        tables.append(sparse.csr_matrix((g.ravel(), (i % M).ravel(), ptr), shape=(n, M)))
     wx, wyt = tables[0], tables[1].T.tocsr()
     G = np.empty((M, M))
     band = max(1, (1 << 22) // M)

@@ -449,6 +449,21 @@ def read_points(path, *, min_points=2, domain=None, columns=None):
     return validate_points(data, min_points=min_points, domain=domain, source=path)
 
 
+def box_record(path, domain):
+    """``{"box": (W, H)}`` for a box set written to an ``.npz`` (what ``diskpack analyze``
+    reads back to treat it as a box, not a torus); ``{}`` for a torus or another format.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> box_record("a.npz", Domain.rect(2, 1))["box"].tolist(), box_record("a.csv", Domain.rect(2, 1))
+    ([2.0, 1.0], {})
+    """
+    if domain.periodic or not str(path).lower().endswith(".npz"):
+        return {}
+    return {"box": np.asarray(domain.size, dtype=np.float64)}
+
+
 def write_points(path, points, /, **extra):
     """Write an ``(n, 2)`` (or 3D ``(n, 3)``) point array atomically; the format follows the extension.
 

@@ -94,8 +94,15 @@ def _real(x):
     return float("nan") if x is None else x
 
 
-def _point_set_measures(sets, kmax):
-    """(numbers, (freqs, P, centres, power, aniso)) of the realizations `sets`."""
+def _point_set_measures(sets, kmax, box=None):
+    """(numbers, (freqs, P, centres, power, aniso)) of the realizations `sets`
+    (on the unit torus, or in the box ``(W, H)``: :mod:`diskpack_cl.box_analysis`)."""
+    if box is not None:
+        from .box_analysis import box_measures
+
+        numbers, curves = box_measures(sets, box, kmax=kmax)
+        return {k: (_nums(v) if isinstance(v, list) else v if isinstance(v, str) else _num(v))
+                for k, v in numbers.items()}, curves
     freqs, P = analysis.periodogram(sets, kmax=kmax)
     centres, power = analysis.radial_power(P, freqs)
     _, aniso = analysis.anisotropy(P, freqs)
@@ -124,7 +131,7 @@ def _point_set_measures(sets, kmax):
     return numbers, (freqs, P, centres, power, aniso)
 
 
-def point_set_numbers(points_list, *, kmax=None):
+def point_set_numbers(points_list, *, kmax=None, box=None):
     """The numbers of :func:`point_set_report`, without a figure (no matplotlib).
 
     Parameters
@@ -134,6 +141,9 @@ def point_set_numbers(points_list, *, kmax=None):
         (the realizations), all on the unit torus [0,1)^2.
     kmax : int, optional
         Periodogram range (see :func:`diskpack_cl.analysis.periodogram`).
+    box : (float, float), optional
+        The sets lie in the box ``[0, W] x [0, H]``, not on the torus: no
+        wrap, a Hann-windowed periodogram (:mod:`diskpack_cl.box_analysis`).
 
     Returns
     -------
@@ -147,7 +157,7 @@ def point_set_numbers(points_list, *, kmax=None):
     >>> numbers["n"], numbers["realizations"], numbers["kmax"]
     (64, 1, 8)
     """
-    return _point_set_measures(analysis._as_realizations(points_list), kmax)[0]
+    return _point_set_measures(analysis._as_realizations(points_list), kmax, box)[0]
 
 
 def _points_panel(ax_pts, first, K):
@@ -195,7 +205,7 @@ def _spectrum_panels(ax_rad, ax_ani, centres, power, aniso, ref_db, k):
     ax_ani.set_title("anisotropy (dB)", fontsize=9)
 
 
-def point_set_report(points_list, path, *, title=None, kmax=None):
+def point_set_report(points_list, path, *, title=None, kmax=None, box=None):
     """One figure of a point set on the unit torus, and its numbers.
 
     Panels: the first realization's points (small dots, square aspect), the
@@ -217,6 +227,9 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
         First line of the figure title.
     kmax : int, optional
         Periodogram range (see :func:`diskpack_cl.analysis.periodogram`).
+    box : (float, float), optional
+        As in :func:`point_set_numbers`; the points panel shows the box
+        scaled to a square.
 
     Returns
     -------
@@ -238,8 +251,8 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     """
     fmt = figure_format(path)
     sets = analysis._as_realizations(points_list)
-    numbers, (freqs, P, centres, power, aniso) = _point_set_measures(sets, kmax)
-    first = sets[0]
+    numbers, (freqs, P, centres, power, aniso) = _point_set_measures(sets, kmax, box)
+    first = sets[0] if box is None else sets[0] / box
     K = numbers["realizations"]
     ref_db = numbers["anisotropy_reference_db"]
 
@@ -250,7 +263,8 @@ def point_set_report(points_list, path, *, title=None, kmax=None):
     _periodogram_panel(ax_per, P, k, K)
     _spectrum_panels(ax_rad, ax_ani, centres, power, aniso, ref_db, k)
 
-    head = f"{title}\n" if title else ""
+    head = (f"{title}\n" if title else "") + ("" if box is None else
+                                               f"box {box[0]:g} x {box[1]:g}, Hann window: ")
     fig.suptitle(
         f"{head}n = {len(first)}, rho = {_real(numbers['rho']):.3f}, "
         f"mean rho = {_real(numbers['mean_rho']):.3f}, |psi6| = {_real(numbers['psi6_mean']):.3f}",

@@ -140,7 +140,7 @@ def _check_points(points, domain):
 
 def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, device=None,
                   callback=None, patience=100, route="auto", verify=False, profile=False,
-                  domain=None):
+                  domain=None, local=False):
     """Relax a point set on the unit torus (or in a box) by disk packing until rho >= eps.
 
     Parameters
@@ -184,6 +184,10 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         and rho is normalized by the box's area.  There rho may drop in
         an iteration (a wall cuts the disk a cell had around its site);
         the smallest MIC radius still never does after the first.
+    local : bool
+        Once few points are closer than ``2 eps r_max``, move only their
+        neighbourhoods (:mod:`diskpack_cl.relax_local`; torus only): rho never
+        decreases, far cheaper, but the iterates differ from Algorithm 1's.
 
     Returns
     -------
@@ -199,28 +203,36 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     """
     dom = Domain.torus() if domain is None else domain
     X = _check_points(points, dom)
-    if not (0.0 < eps < 1.0):
-        raise ValueError(f"eps must be in (0, 1), got {eps}")
-    if int(max_iter) < 0:
-        raise ValueError(f"max_iter must be >= 0, got {max_iter}")
-    n = len(X)
+    _check_run(eps, max_iter)
     shape = None if grid is None else (int(grid), int(grid))
-    engine = make_engine(dom, n, backend, device=device, grid=shape, route=route, profile=profile,
-                         verify=verify)
-    stats = {"engine": engine.name}
-    if engine.fallback:
-        stats["fallback"] = engine.fallback
+    engine = make_engine(dom, len(X), backend, device=device, grid=shape, route=route,
+                         profile=profile, verify=verify)
+    stats = {"engine": engine.name, **({"fallback": engine.fallback} if engine.fallback else {})}
     t_start = time.perf_counter()
-    X, rho, it, reason = _iterate(engine, dom, X, eps, int(max_iter), patience, callback, verify,
-                                  stats)
+    X, rho, it, reason, nn = _iterate(engine, dom, X, eps, int(max_iter), patience, callback,
+                                      verify, stats, local)
+    went_local = reason == "local"
+    if went_local:   # the local route measures its last rho by the KD-tree itself
+        with engine.timings("local"):
+            X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience,
+                                           callback, stats)
     seconds = time.perf_counter() - t_start
-    _certify_rho(X, rho[-1], dom)
+    if not went_local or reason != "eps":
+        _certify_rho(X, rho[-1], dom)
     return RelaxResult(X, np.array(rho), it, reason, seconds, engine.timings.seconds,
                        engine.backend, engine.device, stats)
 
 
-def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats):
-    """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason)``."""
+def _check_run(eps, max_iter):
+    if not (0.0 < eps < 1.0):
+        raise ValueError(f"eps must be in (0, 1), got {eps}")
+    if int(max_iter) < 0:
+        raise ValueError(f"max_iter must be >= 0, got {max_iter}")
+
+
+def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, local):
+    """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason,
+    nearest-neighbour distances)``; the reason ``"local"`` hands over to local iterations."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     step = _mic(engine, X, stats) if engine.gives_nn else None
     rho = [_rho(X, step, verify, dom)]
@@ -228,6 +240,9 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats):
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
     while rho[-1] < eps and it < max_iter:
+        nn = _local_ready(X, step, eps, dom) if local and dom.periodic else None
+        if nn is not None:
+            return X, rho, it, "local", nn
         it += 1
         step = step or _mic(engine, X, stats)
         X = step.centers
@@ -242,7 +257,31 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats):
         elif it - best_at >= patience:
             reason = "stalled"
             break
-    return X, rho, it, reason
+    return X, rho, it, reason, None
+
+
+def _local_ready(X, step, eps, dom):
+    """Nearest-neighbour distances of X when few enough points are bad to go local, else None."""
+    from .measures import nearest_neighbor_distances
+    from .relax_local import LOCAL_SHARE, bad_points
+
+    nn = step.nn if step is not None and step.nn is not None else nearest_neighbor_distances(X, dom)
+    return nn if len(bad_points(nn, eps, dom.area)) <= LOCAL_SHARE * len(X) else None
+
+
+def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats):
+    """Local iterations after `it` global ones; the last rho measured by a KD-tree."""
+    from .measures import min_distance_at_most
+    from .relax_local import relax_local
+
+    X, more, reason = relax_local(X, nn, eps, dom, max_iter=max_iter - it, patience=patience,
+                                  callback=callback, first=it + 1, stall_gain=STALL_GAIN)
+    stats["local_iterations"] = len(more)
+    rho = rho + more
+    if reason == "eps":   # no pair left below 2 eps r_max: the exact rho is just above
+        r_max = hexagonal_radius(len(X), dom.area)
+        rho[-1] = 0.5 * min_distance_at_most(X, 2 * eps * r_max, dom, grow=True) / r_max
+    return X, rho, it + len(more), reason
 
 
 def _mic(engine, X, stats):
@@ -264,8 +303,13 @@ def _rho(X, step, verify, domain):
 
 
 def _certify_rho(X, rho, domain):
-    """The independent check of rho: scipy's KD-tree (periodic on a torus)."""
-    exact = normalized_radius(X, domain)
+    """The independent check of rho: scipy's KD-tree (periodic on a torus), asked for
+    the pairs within the distance rho claims (all points' neighbours if none is)."""
+    from .measures import min_distance_at_most
+
+    r_max = hexagonal_radius(len(X), domain.area)
+    d = min_distance_at_most(X, 2 * rho * r_max * (1 + 1e-9), domain)
+    exact = 0.5 * d / r_max if np.isfinite(d) else normalized_radius(X, domain)
     if not abs(exact - rho) <= 1e-12:
         raise RuntimeError(f"rho {rho!r} from the engine disagrees with the KD-tree's {exact!r}")
 

@@ -12,7 +12,7 @@ import importlib.util
 import numpy as np
 
 __all__ = ["PLOT_HINT", "have_matplotlib", "analyze", "analyze_stippling", "analyze_color_stippling",
-           "analyze_point_sets"]
+           "analyze_point_sets", "point_file_box"]
 
 PLOT_HINT = 'figures need matplotlib: pip install "diskpack_cl[plot]"'
 
@@ -32,10 +32,13 @@ def have_matplotlib():
 
 
 def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, sigma=3.0,
-            kmax=None, title=None):
+            kmax=None, title=None, box=None):
     """The numbers of one stippling ``.npz`` (with its input `image`) or of point sets.
 
     Draws the report figure to `output` when given and matplotlib is there.
+    Point sets lie on the unit torus, or in a box: `box` ``(W, H)``, or the
+    ``box`` array that ``diskpack poisson --box`` writes into an ``.npz``
+    (see :func:`analyze_point_sets`).
 
     Raises
     ------
@@ -69,7 +72,7 @@ def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, 
                                  allow_large=allow_large, sigma=sigma, title=title)
     if image is not None:
         raise ValueError("--image is for a stippling .npz; these are point sets")
-    return analyze_point_sets(paths, output=output, kmax=kmax, title=title)
+    return analyze_point_sets(paths, output=output, kmax=kmax, title=title, box=box)
 
 
 def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large=False,
@@ -201,8 +204,45 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
     return numbers
 
 
-def analyze_point_sets(paths, *, output=None, kmax=None, title=None):
+def point_file_box(path):
+    """The box ``(W, H)`` recorded in a point ``.npz`` (its ``box`` array), else None.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> p = os.path.join(tempfile.mkdtemp(), "box.npz")
+    >>> np.savez(p, points=np.zeros((2, 2)), box=np.array([2.0, 1.0]))
+    >>> point_file_box(p)
+    (2.0, 1.0)
+    """
+    if not str(path).lower().endswith(".npz"):
+        return None
+    with np.load(path) as z:
+        if "box" not in z.files:
+            return None
+        box = np.asarray(z["box"], dtype=np.float64).ravel()
+    if box.shape != (2,) or not np.all(np.isfinite(box) & (box > 0)):
+        raise ValueError(f"{path}: 'box' must be two positive sizes, got {box.tolist()}")
+    return float(box[0]), float(box[1])
+
+
+def _sets_box(paths, box):
+    """The box of the point files: `box` if given, else the one their .npz record (all
+    alike), else None (the unit torus)."""
+    if box is not None:
+        return float(box[0]), float(box[1])
+    boxes = {point_file_box(p) for p in paths}
+    if len(boxes) > 1:
+        raise ValueError(f"the files record different boxes: {sorted(boxes, key=str)}")
+    return boxes.pop()
+
+
+def analyze_point_sets(paths, *, output=None, kmax=None, title=None, box=None):
     """Spectra and measures of the point files `paths` (realizations of one process).
+
+    On the unit torus, or in the box ``(W, H)`` (`box`, or the files' own
+    ``box`` record): there without wrap and with a Hann-windowed
+    periodogram (:mod:`diskpack_cl.box_analysis`).
 
     Examples
     --------
@@ -214,16 +254,21 @@ def analyze_point_sets(paths, *, output=None, kmax=None, title=None):
     >>> numbers["n"], numbers["realizations"]
     (100, 1)
     """
+    from .domain import Domain
     from .io import read_points
     from .measures import nearest_neighbor_distances
 
+    box = _sets_box(paths, box)
+    dom = Domain.torus() if box is None else Domain.rect(*box)
     sets = []
     for path in paths:
         pts = read_points(path, min_points=2)
-        if np.any(pts < 0) or np.any(pts > 1):
-            raise ValueError(f"{path}: points must lie on the unit torus [0,1)^2 (a stippling "
-                             f"in pixels is analyzed through its .npz with --image)")
-        same = nearest_neighbor_distances(pts) == 0
+        if np.any(pts < 0) or np.any(pts > dom.size):
+            where = ("on the unit torus [0,1)^2 (a box set: give its box, --box WxH)"
+                     if box is None else f"in the box [0, {box[0]:g}] x [0, {box[1]:g}]")
+            raise ValueError(f"{path}: points must lie {where} (a stippling in pixels is "
+                             f"analyzed through its .npz with --image)")
+        same = nearest_neighbor_distances(pts, dom) == 0
         if same.any():
             raise ValueError(f"{path}: {int(same.sum())} of {len(pts)} points coincide with "
                              f"another (first: row {int(np.argmax(same))}); rho, the spectra "
@@ -232,7 +277,7 @@ def analyze_point_sets(paths, *, output=None, kmax=None, title=None):
     if output is not None and have_matplotlib():
         from .plots import point_set_report
 
-        return point_set_report(sets, output, title=title, kmax=kmax)
+        return point_set_report(sets, output, title=title, kmax=kmax, box=box)
     from .plots import point_set_numbers
 
-    return point_set_numbers(sets, kmax=kmax)
+    return point_set_numbers(sets, kmax=kmax, box=box)

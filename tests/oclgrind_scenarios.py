@@ -104,6 +104,44 @@ def cells_full(ctx):
             "cluster_radii": b.radii, "cluster_nn": b.nn, "cluster_flagged": np.array(b.stats["flagged"])}
 
 
+def _cells3(ctx, dom, n):
+    from diskpack_cl import cells3
+
+    pts = np.random.default_rng(6).random((n, 3)) * dom.size
+    solver = cells3.CellMIC3(dom, device=ctx)
+    chunk = cells3.CHUNK
+    cells3.CHUNK = 2 * solver.group   # enqueues of two groups each: the offsets are exercised
+    try:
+        order, start, nb = solver._buckets(pts)
+        mic, codes = solver._run(np.ascontiguousarray(pts[order]), start, nb)
+        r = solver.solve(pts)
+    finally:
+        cells3.CHUNK = chunk
+    return {"mic": mic, "codes": codes, "centers": r.centers, "radii": r.radii,
+            "flagged": np.array(r.stats["flagged"])}
+
+
+def cells3_box(ctx):
+    """cell_mic3 in a box (the six walls as constraints), in several enqueues."""
+    from diskpack_cl.cells3 import Domain3
+
+    return _cells3(ctx, Domain3.box(3.0, 2.0, 1.5), 40)
+
+
+def cells3_torus(ctx):
+    """cell_mic3 on the 3-torus (27 period shifts of the bucket rings)."""
+    from diskpack_cl.cells3 import Domain3
+
+    return _cells3(ctx, Domain3.torus(), 36)
+
+
+def dart_round(ctx):
+    """dart_free, dart_keep and cell_covered: parallel dart throwing on a 64 x 64 grid."""
+    from diskpack_cl.parallel_darts import parallel_darts
+
+    return {"points": parallel_darts(1300, seed=0, device=ctx, max_rounds=3)}
+
+
 def end_to_end(ctx):
     """Relaxation on both engine routes and a short stippling, as the public functions run them."""
     from diskpack_cl import relax_poisson, stipple
@@ -179,8 +217,8 @@ def unowned(ctx):
 
 
 SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
-                                     cells_torus, cells_full, end_to_end, refused, bad_labels,
-                                     unowned)}
+                                     cells_torus, cells_full, cells3_box, cells3_torus,
+                                     dart_round, end_to_end, refused, bad_labels, unowned)}
 
 
 def main(argv):

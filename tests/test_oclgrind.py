@@ -56,6 +56,7 @@ FALSE_POSITIVES = (
 RUNS = [(name, {}) for name in oclgrind_scenarios.SCENARIOS] + [
     ("raster_rect", {"OCLGRIND_MAX_WGSIZE": "16"}),
     ("cells_torus", {"OCLGRIND_MAX_WGSIZE": "8"}),
+    ("cells3_torus", {"OCLGRIND_MAX_WGSIZE": "8"}),
 ]
 
 

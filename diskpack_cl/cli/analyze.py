@@ -51,11 +51,16 @@ def _add_analyze(subparsers):
                         "(default 3)")
     p.add_argument("--kmax", type=_positive_int, default=None,
                    help="for point sets: periodogram frequency range (default: automatic)")
+    p.add_argument("--box", default=None, metavar="WxH",
+                   help="for point sets: they lie in the box [0,W] x [0,H] (no wrap; "
+                        "Hann-windowed periodogram). Default: the box an .npz from 'diskpack "
+                        "poisson --box' records, else the unit torus")
     p.add_argument("--title", default=None, help="figure title")
     p.set_defaults(run=_run_analyze)
 
 
 def _run_analyze(args):
+    from diskpack_cl.poisson import box_sizes
     from diskpack_cl.reports import PLOT_HINT, analyze, have_matplotlib
 
     if args.output is None and not args.json:
@@ -70,9 +75,10 @@ def _run_analyze(args):
         if not have_matplotlib() and not args.json:
             raise ValueError(f"{PLOT_HINT} (the numbers print without it with --json)")
     image = None if args.image is None else _image_path(args.image)
+    box = None if args.box is None else box_sizes(args.box, "WxH")
     numbers = analyze(args.inputs, image=image, output=args.output, invert=args.invert,
                       allow_large=args.allow_large, sigma=args.sigma, kmax=args.kmax,
-                      title=args.title)
+                      title=args.title, box=box)
     if args.json:
         print(json.dumps(numbers, default=json_default), flush=True)
     if plot and not have_matplotlib():

@@ -169,7 +169,7 @@ def _field_image(args, path):
 
 def _run_poisson_set(args):
     """``poisson`` with a box, a minimum distance, a mask or a density (:func:`poisson_disk`)."""
-    from diskpack_cl.io import write_points
+    from diskpack_cl.io import box_record, write_points
     from diskpack_cl.poisson import poisson_disk
 
     if args.init not in ("dart", "random"):
@@ -191,7 +191,7 @@ def _run_poisson_set(args):
                            max_iter=relax["max_iter"], callback=callback, dim=args.dim)
     finally:
         close()
-    write_points(args.output, res.points)
+    write_points(args.output, res.points, **box_record(args.output, res.domain))
     summary = {"n": int(len(res.points)), "box": res.domain.size.tolist(), "dim": args.dim,
                "torus": res.domain.periodic, "rho": res.rho, "min_distance": res.min_distance,
                "reached": res.reached, "stop_reason": res.stop_reason, "iterations": res.iterations,

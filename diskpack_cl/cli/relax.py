@@ -69,7 +69,7 @@ def _progress(args, label):
 
 def _relax_and_write(points, args, *, extra_summary=None):
     """Relax `points`, write ``args.output``, report; return the exit status."""
-    from diskpack_cl.io import write_points
+    from diskpack_cl.io import box_record, write_points
     from diskpack_cl.poisson import as_box
     from diskpack_cl.relax import relax_poisson
 
@@ -82,7 +82,7 @@ def _relax_and_write(points, args, *, extra_summary=None):
         close()
     extra = {}
     if args.output.lower().endswith(".npz"):
-        extra = {"rho": res.rho, "eps": args.eps}
+        extra = {"rho": res.rho, "eps": args.eps, **box_record(args.output, as_box(args.box))}
     write_points(args.output, res.points, **extra)
     stages = {k: float(v) for k, v in res.timings.items()}
     summary = {

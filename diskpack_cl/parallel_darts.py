@@ -1,0 +1,302 @@
+"""Parallel dart throwing on a background grid, vectorized in numpy.
+
+The unit torus is cut into ``g x g`` cells of side ``c <= d / sqrt(2)``
+(``d`` the minimum distance), so a cell holds at most one point, and a
+point can conflict only with the points of the 24 cells around its own.
+A round throws one dart into every live cell at once, each with a random
+priority; a dart is kept when it is at least ``d`` from every point placed
+before and from every higher-priority dart of the round that is itself
+free of the old points.  Two kept darts are then never closer than ``d``
+(the lower-priority one would have seen the other).  A cell stops being
+live when it holds a point, or, from the second round on (every second
+round), when its corners and
+centre all lie within ``d`` of points (darts there would almost surely be
+rejected).
+
+Why not Wei's phase groups (L.-Y. Wei, "Parallel Poisson disk sampling",
+SIGGRAPH 2008), which throw into the cells of one of 9 phases
+``(row % 3, col % 3)`` at a time and need no priorities: the first phase
+of the first round places a jittered lattice of period ``3 c``, and that
+order outlives the later phases and the relaxation (at 100k points, a
+ring peak of 10.8 and axis-aligned spikes of 20-27 dB at the lattice's
+frequencies, against 1.8 for dart throwing).  Random priorities have no
+such lattice: the darts of a round are a full-cell jittered grid, whose
+spectrum vanishes at the grid's frequencies.
+
+The points are stored in the grid itself, with a two-cell border that
+mirrors the opposite side shifted by one period, so a neighbour is a fixed
+offset in a flat array and the torus needs no modulo in the inner loop.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._checks import check_count
+from .measures import hexagonal_radius
+
+__all__ = ["parallel_darts"]
+
+_PAD = 2          # border cells mirroring the far side
+_EMPTY = 1e9      # coordinate of an empty cell: farther than any d
+_SAMPLES = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, 0.5]])
+
+
+class _Grid:
+    """A padded grid of at most one point a cell for the minimum distance `d` on the unit torus."""
+
+    def __init__(self, d):
+        self.d = d
+        self.d2 = d * d
+        self.g = g = max(1, int(np.ceil(np.sqrt(2.0) / d)))
+        self.c = 1.0 / g
+        self.G = G = g + 2 * _PAD
+        self.x = np.full(G * G, _EMPTY)
+        self.y = np.full(G * G, _EMPTY)
+        off = [(dy, dx) for dy in range(-2, 3) for dx in range(-2, 3) if (dy, dx) != (0, 0)]
+        near = [dy * G + dx for dy, dx in off if max(abs(dy), abs(dx)) == 1]
+        far = [dy * G + dx for dy, dx in off if max(abs(dy), abs(dx)) == 2]
+        self.offsets = np.array(near + far)   # the 3x3 block rejects most darts
+
+    def flat(self, cells):
+        """Padded flat index of interior cells ``row * g + col``."""
+        row, col = np.divmod(cells, self.g)
+        return (row + _PAD) * self.G + col + _PAD
+
+    def free(self, flat, x, y, prio=None, mine=None, near_only=False):
+        """Which points (x, y), in the cells `flat`, are at least d from every point of the
+        grid (with `prio`: from every one whose priority is above `mine`; with `near_only`:
+        of the 3 x 3 cells around)."""
+        ok = np.ones(len(flat), dtype=bool)
+        idx = np.arange(len(flat))
+        mine = np.zeros(len(flat)) if mine is None else mine
+        for block in (self.offsets[:8], self.offsets[8:16], self.offsets[16:]):
+            hit = np.zeros(len(idx), dtype=bool)
+            for o in block:
+                k = flat + o
+                dx, dy = self.x[k] - x, self.y[k] - y
+                h = dx * dx + dy * dy < self.d2
+                hit |= h if prio is None else h & (prio[k] > mine)
+            ok[idx[hit]] = False
+            if near_only:
+                break
+            idx, flat, x, y, mine = (a[~hit] for a in (idx, flat, x, y, mine))
+        return ok
+
+    def spread(self, arrays, cells, values):
+        """Write `values` (one tuple of per-cell arrays) into `arrays` at `cells`, and into
+        the border copies of edge cells (coordinates shifted by a period: ``shift=True``)."""
+        g, G = self.g, self.G
+        row, col = np.divmod(cells, g)
+        edge = (row < _PAD) | (row >= g - _PAD) | (col < _PAD) | (col >= g - _PAD)
+        for sy in (-1, 0, 1):
+            for sx in (-1, 0, 1):
+                sel = slice(None) if sx == sy == 0 else edge
+                r, c = row[sel] + _PAD - sy * g, col[sel] + _PAD - sx * g
+                m = (r >= 0) & (r < G) & (c >= 0) & (c < G)
+                at = r[m] * G + c[m]
+                for a, (v, shift) in zip(arrays, values):
+                    a[at] = v[sel][m] - (shift * (sx if a is self.x else sy) if shift else 0)
+
+    def insert(self, cells, x, y):
+        """Put points into their cells (and the border copies)."""
+        self.spread((self.x, self.y), cells, ((x, True), (y, True)))
+
+    def covered(self, cells):
+        """Cells whose corners and centre all lie within d of a point of the 3 x 3 cells around."""
+        row, col = np.divmod(cells, self.g)
+        flat = self.flat(cells)
+        allc = np.ones(len(cells), dtype=bool)
+        for sx, sy in _SAMPLES:   # points of the 3 x 3 cells cover most (test stays sound)
+            allc &= ~self.free(flat, (col + sx) * self.c, (row + sy) * self.c, near_only=True)
+        return allc
+
+    def points(self):
+        inner = np.zeros((self.G, self.G), dtype=bool)
+        inner[_PAD:-_PAD, _PAD:-_PAD] = True
+        keep = inner.ravel() & (self.x < _EMPTY)
+        return np.column_stack([self.x[keep], self.y[keep]])
+
+    def cells_of(self, pts):
+        ij = np.minimum((pts / self.c).astype(np.int64), self.g - 1)
+        return ij[:, 1] * self.g + ij[:, 0]
+
+    def throw(self, live, rng, room, empty):
+        return _round(self, live, rng, room, empty)
+
+
+def _round(grid, live, rng, room, empty):
+    """One round: a dart into every live cell at once, with a random priority each
+    (`empty`: the grid holds no point yet).
+
+    Returns the cells still live and how many points were placed (at most `room`).
+    """
+    row, col = np.divmod(live, grid.g)
+    x = (col + rng.random(live.size)) * grid.c
+    y = (row + rng.random(live.size)) * grid.c
+    flat = grid.flat(live)
+    keep = np.arange(live.size) if empty else np.flatnonzero(grid.free(flat, x, y))
+    darts = _Grid(grid.d)
+    prio = np.full(grid.G * grid.G, -1.0)
+    mine = rng.random(keep.size)
+    darts.spread((darts.x, darts.y, prio), live[keep], ((x[keep], True), (y[keep], True),
+                                                         (mine, False)))
+    keep = keep[darts.free(flat[keep], x[keep], y[keep], prio, mine)][:room]
+    grid.insert(live[keep], x[keep], y[keep])
+    gone = np.zeros(live.size, dtype=bool)
+    gone[keep] = True
+    return live[~gone], keep.size
+
+
+class _DeviceGrid:
+    """The grid of :class:`_Grid` on an OpenCL device (``kernels/dart_round.cl``).
+
+    The host draws the darts and priorities with the same generator calls
+    and keeps the points; the kernels do the distance tests in the same
+    float64 operations, so both give the same points for a seed.
+    """
+
+    def __init__(self, d, ctx):
+        import pyopencl as cl
+
+        from ._kernels import build_program
+
+        self.d, self.d2 = d, d * d
+        self.g = g = max(1, int(np.ceil(np.sqrt(2.0) / d)))
+        self.c = 1.0 / g
+        self.ctx, self.queue = ctx, cl.CommandQueue(ctx)
+        self.k = build_program(ctx, "dart_round")
+        self.pt = np.full((g * g, 2), _EMPTY)
+
+    def _run(self, name, size, *args, out):
+        import pyopencl as cl
+
+        mf = cl.mem_flags
+        flags = mf.READ_ONLY | mf.COPY_HOST_PTR
+        bufs = [cl.Buffer(self.ctx, flags, hostbuf=np.ascontiguousarray(a))
+                if isinstance(a, np.ndarray) else a for a in args]
+        b_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, max(out.nbytes, 1))
+        self.k[name](self.queue, (max(size, 1),), None, *bufs, b_out)
+        cl.enqueue_copy(self.queue, out, b_out)
+        return out.astype(bool)
+
+    def throw(self, live, rng, room, empty):
+        """One round (as :func:`_round`): the cells still live and the points placed."""
+        g, n2 = self.g, self.g * self.g
+        row, col = np.divmod(live, g)
+        x = (col + rng.random(live.size)) * self.c
+        y = (row + rng.random(live.size)) * self.c
+        dart = np.full((n2, 2), _EMPTY)
+        dart[live, 0], dart[live, 1] = x, y
+        if empty:   # no point yet: every dart is free
+            keep = np.arange(live.size)
+        else:
+            free = self._run("dart_free", n2, self.pt, dart, np.int32(g), np.float64(self.d2),
+                             out=np.empty(n2, np.int8))
+            keep = np.flatnonzero(free[live])
+        prio = np.full(n2, -1.0)
+        prio[live[keep]] = rng.random(keep.size)
+        kept = self._run("dart_keep", n2, dart, prio, np.int32(g), np.float64(self.d2),
+                         out=np.empty(n2, np.int8))
+        keep = keep[kept[live[keep]]][:room]
+        self.insert(live[keep], x[keep], y[keep])
+        gone = np.zeros(live.size, dtype=bool)
+        gone[keep] = True
+        return live[~gone], keep.size
+
+    def insert(self, cells, x, y):
+        self.pt[cells, 0], self.pt[cells, 1] = x, y
+
+    def covered(self, cells):
+        return self._run("cell_covered", cells.size, self.pt, cells.astype(np.int32),
+                         np.int32(cells.size), np.int32(self.g), np.float64(self.c),
+                         np.float64(self.d2), out=np.empty(cells.size, np.int8))
+
+    def points(self):
+        return self.pt[self.pt[:, 0] < _EMPTY].copy()
+
+    cells_of = _Grid.cells_of
+
+
+def _throw_rounds(grid, n, rng, max_rounds):
+    """Rounds until the grid holds `n` points (or `max_rounds`); the points."""
+    taken = np.zeros(grid.g * grid.g, dtype=bool)
+    pts = grid.points()
+    taken[grid.cells_of(pts)] = True
+    live, m = np.flatnonzero(~taken), len(pts)
+    for r in range(max_rounds):
+        live, placed = grid.throw(live, rng, n - m, m == 0)
+        m += placed
+        if m >= n or not live.size:
+            break
+        if r % 2 == 1:   # after the second round: most live cells are covered by then
+            live = live[~grid.covered(live)]
+    return grid.points()
+
+
+def _grid_for(d, device):
+    """The device grid where `device` (a context or name; None: the default) has float64
+    and the grid is large enough to gain, else the numpy grid."""
+    if device is not False and np.sqrt(2.0) / d >= 64:
+        from ._device import NoOpenCLError, get_context
+
+        try:
+            ctx = get_context(None if device is True else device)
+        except NoOpenCLError:
+            ctx = None
+        if ctx is not None and "cl_khr_fp64" in ctx.devices[0].extensions:
+            return _DeviceGrid(d, ctx)
+    return _Grid(d)
+
+
+def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16, device=None):
+    """`n` points on the unit torus by parallel dart throwing at a relative radius.
+
+    Rounds of parallel dart throwing at the minimum distance
+    ``d = 2 rel_radius r_max(n)`` run until `n` points are placed; the
+    surplus of the last round is dropped at random (which keeps every
+    distance).  When `max_rounds` rounds place fewer (a radius near the
+    saturation of maximal sampling, about 0.75 here), the radius shrinks by
+    2 % and throwing goes on around the points placed so far.
+
+    Parameters
+    ----------
+    n : int
+        Number of points (at least 1).
+    rel_radius : float, optional
+        Requested normalized radius, in (0, 0.78).
+    seed : int, numpy.random.Generator or None, optional
+    max_rounds : int, optional
+        Rounds at one radius before it shrinks.
+    device : str, pyopencl.Context, bool or None, optional
+        Where the distance tests run: an OpenCL device with float64
+        (``kernels/dart_round.cl``; None: the default one, if any), or
+        numpy (False, or without a device, or for grids under 64 x 64).
+        Both give the same points for a seed.
+
+    Returns
+    -------
+    points : (n, 2) float64 in [0, 1)^2
+        Every periodic distance is at least ``2 rel r_max(n)`` for the
+        final relative radius ``rel``.
+
+    Examples
+    --------
+    >>> p = parallel_darts(1000, seed=0)
+    >>> from diskpack_cl.measures import normalized_radius
+    >>> p.shape, bool(normalized_radius(p) >= 0.7)
+    ((1000, 2), True)
+    """
+    n = check_count(n)
+    if not 0.0 < rel_radius < 0.78:
+        raise ValueError(f"rel_radius must be in (0, 0.78), got {rel_radius}")
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    rel, pts = float(rel_radius), np.empty((0, 2))
+    while True:
+        grid = _grid_for(2.0 * rel * hexagonal_radius(n), device)
+        if len(pts):
+            grid.insert(grid.cells_of(pts), pts[:, 0], pts[:, 1])
+        pts = _throw_rounds(grid, n, rng, max_rounds)
+        if len(pts) >= n:
+            return pts[np.sort(rng.choice(len(pts), n, replace=False))] if len(pts) > n else pts
+        rel *= 0.98

@@ -1,0 +1,211 @@
+"""The tail of a disk-packing relaxation, done locally: only the bad pairs' neighbourhoods move.
+
+After a few iterations of Algorithm 1 almost every pair is already farther
+apart than ``d_eps = 2 eps r_max``; rho is held below eps by a few bad
+pairs (at 100k points after four iterations, about 1 % of the points),
+and the later iterations move a million points to shift a few thousand.
+Here one local iteration moves the points within :data:`MOVE_RADIUS`
+spacings of a bad point to the centres of the maximal inscribed circles
+(MICs) of their Voronoi cells, solved exactly (:func:`exact_mic`) on the
+sites within :data:`HALO` more spacings, and leaves every other point where
+it is.  Two facts make this exact and cheap:
+
+* **A partial move never lowers the minimum distance.**  A moved point's
+  disk (radius R_i, at least half its old nearest-neighbour distance) lies
+  in its old cell, so its distance to a moved point j is at least
+  ``R_i + R_j`` and to a fixed point j at least ``R_i + |x_i - x_j| / 2``;
+  both are at least the old minimum distance.
+* **New bad pairs come from old bad points.**  By the same bounds, a pair
+  of points that were both at least ``d_eps`` from every other point stays
+  at least ``d_eps`` apart, whichever of them move.  So the bad pairs after
+  a step are found among the partners, within ``d_eps``, of the points
+  that were bad before it: no global search.
+
+A moved point's MIC is exact when every site that could cut its disk lies
+in the sub-problem: a site farther than ``|q| + 2 R`` from the centre
+(``q`` the move) cannot, and the sub-problem holds every site within the
+halo of the point; a cell that reaches past it is not moved this time, and
+the halo grows for the next iteration.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .geometry import exact_mic
+from .measures import hexagonal_radius
+
+__all__ = ["HALO", "LOCAL_SHARE", "MOVE_RADIUS", "bad_points", "local_step", "relax_local"]
+
+#: Points within this many spacings (``2 r_max``) of a bad point move.
+MOVE_RADIUS = 1.2
+#: Sites within this many spacings more make a local step's sub-problem.
+HALO = 2.2
+#: :func:`diskpack_cl.relax_poisson` with ``local=True`` goes local when at
+#: most this share of the points is bad (a local step costs about a hundred
+#: times a global one per bad point, counting its neighbourhood).
+LOCAL_SHARE = 0.01
+
+
+def bad_points(nn, eps, area):
+    """Indices of the points whose nearest neighbour is closer than ``2 eps r_max``.
+
+    Examples
+    --------
+    >>> bad_points(np.array([0.1, 0.5, 0.5]), 0.8, 1.0).tolist()   # r_max(3) = 0.31
+    [0]
+    """
+    return np.flatnonzero(nn < 2.0 * eps * hexagonal_radius(len(nn), area))
+
+
+def _diff(a, b, domain):
+    d = a - b
+    if domain.periodic:
+        d -= np.round(d / domain.size) * domain.size
+    return d
+
+
+def _tree(P, domain):
+    from scipy.spatial import cKDTree
+
+    return cKDTree(P, boxsize=domain.size if domain.periodic else None)
+
+
+def _near(X, B, M, domain):
+    """Indices of a superset of the points within `M` of the points `B` (a grid of cells
+    at least `M` wide: the 3 x 3 cells around each of B's), and whether it is all of them."""
+    nx, ny = int(domain.width // M), int(domain.height // M)
+    if min(nx, ny) < 4:
+        return np.arange(len(X)), True
+    cx = np.minimum((X[:, 0] * (nx / domain.width)).astype(np.int64), nx - 1)
+    cy = np.minimum((X[:, 1] * (ny / domain.height)).astype(np.int64), ny - 1)
+    mark = np.zeros((ny + 2, nx + 2), dtype=bool)
+    mark[cy[B] + 1, cx[B] + 1] = True
+    if domain.periodic:
+        mark[0], mark[-1], mark[:, 0], mark[:, -1] = mark[-2], mark[1], mark[:, -2], mark[:, 1]
+    grown = np.zeros((ny, nx), dtype=bool)
+    for dy in range(3):
+        for dx in range(3):
+            grown |= mark[dy:dy + ny, dx:dx + nx]
+    return np.flatnonzero(grown[cy, cx]), False
+
+
+def _bad_pairs(X, B, d_eps, domain):
+    """``(i, j, distance)`` of the pairs closer than `d_eps` that hold a point of `B`."""
+    lists = _tree(X, domain).query_ball_point(X[B], d_eps, return_sorted=False)
+    lens = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))
+    i = np.repeat(B, lens)
+    j = np.fromiter((k for lst in lists for k in lst), dtype=np.int64, count=int(lens.sum()))
+    d = np.hypot(*_diff(X[i], X[j], domain).T)
+    keep = (i != j) & (d < d_eps)
+    return i[keep], j[keep], d[keep]
+
+
+def local_step(X, B, eps, domain, halo=HALO):
+    """One local iteration on the bad points `B`: move their neighbourhoods, in place.
+
+    Parameters
+    ----------
+    X : (n, 2) float64
+        The points (wrapped on a torus); changed in place.
+    B : (m,) int
+        Every point whose nearest neighbour is closer than ``2 eps r_max``.
+    eps : float
+    domain : Domain
+    halo : float
+        Spacings of sites kept around the moving points.
+
+    Returns
+    -------
+    B : (k,) int
+        The bad points after the step.
+    d_min : float
+        The smallest distance of a bad pair (``inf`` when none is left).
+    held : int
+        Moving points whose cell reached past the halo (not moved).
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> X = np.random.default_rng(0).random((400, 2))
+    >>> from diskpack_cl.measures import nearest_neighbor_distances as nnd
+    >>> B = bad_points(nnd(X), 0.8, 1.0)
+    >>> B2, d, held = local_step(X, B, 0.8, Domain.torus())
+    >>> bool(d >= nnd(X).min() - 1e-15), len(B2) < len(B)
+    (True, True)
+    """
+    n = len(X)
+    s = 2.0 * hexagonal_radius(n, domain.area)
+    move = MOVE_RADIUS * s
+    S, everything = _near(X, B, move + halo * s, domain)
+    pos = np.full(n, -1)
+    pos[S] = np.arange(len(S))
+    XS, BS = X[S], pos[B]
+    A = np.unique(np.concatenate(_tree(XS, domain).query_ball_point(XS[BS], move)))
+    mic = exact_mic(XS, domain=domain, cells=A)
+    q = _diff(mic.centers, XS[A], domain)
+    ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
+    XS[A[ok]] = mic.centers[ok]
+    X[S] = XS
+    i, j, d = _bad_pairs(XS, BS, 2.0 * eps * hexagonal_radius(n, domain.area), domain)
+    return S[np.unique(np.concatenate([i, j]))], float(d.min()) if len(d) else np.inf, int((~ok).sum())
+
+
+def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=None, first=1,
+                stall_gain=1e-3):
+    """Local iterations (:func:`local_step`) until no pair is closer than ``2 eps r_max``.
+
+    Parameters
+    ----------
+    X : (n, 2) float64
+        The points (wrapped on a torus); not changed.
+    nn : (n,) float64
+        Each point's exact nearest-neighbour distance in `X`.
+    eps : float
+    domain : Domain
+    max_iter, patience : int
+        Iteration cap; stop as ``"stalled"`` when the smallest distance has
+        not grown by `stall_gain` of rho (or of its gap to eps) in
+        `patience` iterations.
+    callback : callable, optional
+        ``callback(iteration, rho)`` after each iteration, numbered from
+        `first`.
+    first : int
+        Number of the first iteration (for the callback).
+
+    Returns
+    -------
+    X : (n, 2) float64
+    rho : list of float
+        rho after each iteration while bad pairs are left (exact: the
+        smallest distance of a bad pair); eps stands for "no bad pair
+        left", whose exact rho the caller measures.
+    reason : str
+        ``"eps"``, ``"stalled"`` or ``"max_iter"``.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> from diskpack_cl.measures import nearest_neighbor_distances as nnd, normalized_radius
+    >>> X = np.random.default_rng(0).random((300, 2))
+    >>> Y, rho, reason = relax_local(X, nnd(X), 0.7, Domain.torus())
+    >>> reason, bool(normalized_radius(Y) >= 0.7)
+    ('eps', True)
+    """
+    X = np.array(X, dtype=np.float64)
+    r_max = hexagonal_radius(len(X), domain.area)
+    B = bad_points(nn, eps, domain.area)
+    rho, best, best_at, halo = [], float(nn.min()) / (2 * r_max), 0, HALO
+    for it in range(max_iter):
+        if not len(B):
+            return X, rho, "eps"
+        B, d_min, held = local_step(X, B, eps, domain, halo)
+        halo = halo * 1.5 if held else halo
+        rho.append(min(d_min / (2 * r_max), eps))
+        if callback is not None:
+            callback(first + it, rho[-1])
+        if rho[-1] > best + max(1e-12, stall_gain * min(best, eps - best)):
+            best, best_at = rho[-1], it
+        elif it - best_at >= patience:
+            return X, rho, "stalled"
+    return X, rho, "eps" if not len(B) else "max_iter"

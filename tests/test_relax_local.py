@@ -1,0 +1,124 @@
+"""Local tail iterations (diskpack_cl.relax_local): the two facts they rest on, checked by
+brute force; a local step against exact_mic of the whole set; relax_poisson(local=True)."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import reference as ref
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import exact_mic
+from diskpack_cl.measures import hexagonal_radius, min_distance_at_most, nearest_neighbor_distances
+from diskpack_cl.relax import relax_poisson
+from diskpack_cl.relax_local import bad_points, local_step, relax_local
+from diskpack_cl.sampling import dart_throwing
+
+TORUS = Domain.torus()
+
+
+def _pair_distances(X):
+    d = X[:, None, :] - X[None, :, :]
+    d -= np.round(d)
+    D = np.hypot(d[..., 0], d[..., 1])
+    np.fill_diagonal(D, np.inf)
+    return D
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(8, 120), seed=st.integers(0, 2**32 - 1), share=st.floats(0.05, 1.0),
+       t=st.floats(0.3, 1.2))
+def test_a_partial_move_keeps_the_minimum_and_new_bad_pairs_hold_an_old_bad_point(n, seed, share,
+                                                                                  t):
+    rng = np.random.default_rng(seed)
+    X = rng.random((n, 2))
+    D0 = _pair_distances(X)
+    nn0 = D0.min(axis=1)
+    thr = t * 2 * hexagonal_radius(n)
+    moved = np.flatnonzero(rng.random(n) < share)
+    mic = exact_mic(X, cells=moved)
+    Y = X.copy()
+    Y[moved] = mic.centers
+    D1 = _pair_distances(Y)
+    assert D1.min() >= D0.min() * (1 - 1e-12)
+    i, j = np.nonzero(np.triu(D1 < thr))
+    was_bad = nn0 < thr
+    assert np.all(was_bad[i] | was_bad[j])
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), eps=st.floats(0.6, 0.8))
+def test_a_local_step_moves_its_points_to_the_mics_of_the_whole_set(seed, eps):
+    n = 600
+    X = dart_throwing(n, rel_radius=0.5, seed=seed)
+    B = bad_points(nearest_neighbor_distances(X), eps, 1.0)
+    Y = X.copy()
+    B2, d_min, held = local_step(Y, B, eps, TORUS)
+    moved = np.flatnonzero(np.any(Y != X, axis=1))
+    assert len(moved) > held >= 0   # a held cell reached past the halo: it stays
+    want = exact_mic(X, cells=moved).centers
+    d = Y[moved] - want
+    d -= np.round(d)
+    assert np.abs(d).max() <= 1e-12
+    # the bad points it reports are those of a brute-force search, with their distance
+    D = _pair_distances(Y)
+    thr = 2 * eps * hexagonal_radius(n)
+    assert sorted(B2.tolist()) == np.flatnonzero(D.min(axis=1) < thr).tolist()
+    assert d_min == (pytest.approx(D.min(), abs=1e-15) if len(B2) else np.inf)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_relax_local_reaches_eps_and_its_rho_is_the_brute_force_one(seed):
+    n, eps = 400, 0.78
+    X = np.random.default_rng(seed).random((n, 2))
+    seen = []
+    Y, rho, reason = relax_local(X, nearest_neighbor_distances(X), eps, TORUS,
+                                 callback=lambda it, r: seen.append((it, r)))
+    assert reason == "eps" and [it for it, _ in seen] == list(range(1, len(rho) + 1))
+    assert ref.min_distance_ref(Y, TORUS) >= 2 * eps * hexagonal_radius(n)
+    assert np.all(np.diff(rho) >= 0)
+
+
+@pytest.mark.parametrize("n", [300, 3000])
+def test_relax_poisson_local_certified_monotone_and_reproducible(n):
+    X = dart_throwing(n, rel_radius=0.6, seed=n)
+    res = relax_poisson(X, 0.8, backend="exact", local=True)
+    again = relax_poisson(X, 0.8, backend="exact", local=True)
+    np.testing.assert_array_equal(res.points, again.points)
+    assert res.stop_reason == "eps" and res.stats["local_iterations"] > 0
+    assert np.all(np.diff(res.rho) >= -1e-12)
+    exact = (ref.min_distance_ref(res.points, TORUS) if n <= 300
+             else min_distance_at_most(res.points, 1.0, TORUS, grow=True))
+    assert res.rho[-1] == pytest.approx(exact / 2 / hexagonal_radius(n), abs=1e-12)
+    assert res.rho[-1] >= 0.8
+
+
+def test_local_is_ignored_in_a_box():
+    box = Domain.rect(2.0, 1.0)
+    X = np.random.default_rng(5).random((200, 2)) * (2, 1)
+    a = relax_poisson(X, 0.75, backend="exact", domain=box, local=True)
+    b = relax_poisson(X, 0.75, backend="exact", domain=box)
+    np.testing.assert_array_equal(a.points, b.points)
+    assert "local_iterations" not in a.stats
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 60), seed=st.integers(0, 2**32 - 1), periodic=st.booleans(),
+       scale=st.floats(0.3, 3.0))
+def test_min_distance_at_most_is_the_brute_force_minimum(n, seed, periodic, scale):
+    dom = TORUS if periodic else Domain.rect(1.5, 1.0)
+    X = np.random.default_rng(seed).random((n, 2)) * (dom.width, dom.height)
+    best = ref.min_distance_ref(X, dom)
+    got = min_distance_at_most(X, scale * best, dom)
+    if scale >= 1 or scale < 1 - 1e-8:
+        assert got == (pytest.approx(best, rel=1e-14) if scale >= 1 else np.inf)
+    assert min_distance_at_most(X, 0.2 * best, dom, grow=True) == pytest.approx(best, rel=1e-14)
+
+
+def test_poisson_disk_goes_local_on_the_torus_unless_told_not_to():
+    from diskpack_cl.poisson import poisson_disk
+
+    a = poisson_disk(3000, seed=0, backend="exact")
+    b = poisson_disk(3000, seed=0, backend="exact", local=False)
+    assert "local" in a.timings and "local" not in b.timings
+    assert a.rho >= 0.8 and b.rho >= 0.8
