@@ -1239,9 +1239,7 @@ def relax_many(inputs, outputs, relax=None, *, manifest=None, overwrite=False, j
     --------
     >>> import os, tempfile
     >>> import numpy as np
-    >>> from diskpack_cl.io import write_points
-    >>> folder = tempfile.mkdtemp()
-    >>> write_points(os.path.join(folder, "a.npy"), np.random.default_rng(0).random((64, 2)))
+    >>> folder = tempfile.mkdtemp(); np.save(os.path.join(folder, "a.npy"), np.random.default_rng(0).random((64, 2)))
     >>> recs = list(relax_many([os.path.join(folder, "a.npy")], [os.path.join(folder, "{stem}.npz")], eps=0.7))
     >>> [(r["status"], r["summary"]["rho_final"] >= 0.7) for r in recs]
     [('ok', True)]

@@ -140,12 +140,8 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
                     invert=False, pen_px=None, progress=None):
     """Write a colour PNG preview: every pen's dots, inks composited (8-bit sRGB).
 
-    Options as :func:`diskpack_cl.export.write_png`; `invert` is refused.
-
-    Returns
-    -------
-    dict
-        ``width``, ``height`` (output pixels), ``n``.
+    Options and the returned dict as :func:`diskpack_cl.export.write_png`;
+    `invert` is refused.
 
     Examples
     --------

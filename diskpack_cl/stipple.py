@@ -383,13 +383,9 @@ def lloyd_step(state, stage, new_k=True):
 
     Examples
     --------
-    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
-    >>> opt = StippleOptions().plan(60, 48, 32)
-    >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
-    >>> stage = _make_stage(g, opt, engine)
-    >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
-
-    >>> new, entry = lloyd_step(state, stage)
+    >>> g, opt = np.tile(np.linspace(0.0, 1.0, 48), (32, 1)), StippleOptions().plan(60, 48, 32)
+    >>> stage = _make_stage(g, opt, make_engine(Domain.rect(48, 32), 60, "exact", grid=(32, 48)))
+    >>> new, entry = lloyd_step(StippleState(_start_points(g, opt, None), float(opt.k0)), stage)
     >>> new.packs, entry["empty"], bool(new.k > 0)
     (0, 0, True)
     """
