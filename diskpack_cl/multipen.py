@@ -282,7 +282,7 @@ def _run_pens(state, stage, pen, pens, pull, callback, first):
         for it in range(iters):
             t0, mark = time.perf_counter(), stage.engine.timings.mark()
             b = pull * max(0.0, 1.0 - len(history) / (PULL_UNTIL * total))
-            with stage.engine.timings("pens"):   # the pens' own centroids, their engine's stages within
+            with stage.engine.timings("pens"):   # the pens' engine keeps its own stages apart
                 c = _pen_centroids(*pens, state.points, pen) if b > 0 else None
             if kind == "lloyd":
                 state, step = lloyd_step(state, stage, new_k=it == iters - 1)
@@ -451,7 +451,7 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     (('yellow', 'cyan', 'magenta'), 120, True)
     """
     t_start = time.perf_counter()
-    watch = Stopwatch()   # the run's one collector: its stages and both engines'
+    watch = Stopwatch()   # the run's one collector: its stages, the main engine's and "pens"
     with watch("separate"):
         sep, opt, counts = _separate(image, n, colors, counts, joint, pen_pull, options,
                                      dict(black_generation=black_generation,
@@ -469,7 +469,7 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
                           _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)), counts)
     coarse = replace(opt, supersample=max(1, opt.supersample // PEN_COARSEN))
     pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                        grid=coarse.grid_shape(W, H), timings=watch),
+                        grid=coarse.grid_shape(W, H), timings=Stopwatch()),
             [_centroid_density(a, coarse) for a in sep.layers])
     state, more = _run_pens(state, _phases(stage, tail), pen, pens, pen_pull, callback, len(history))
     with watch("certify"):
