@@ -50,14 +50,14 @@ SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
 #: hexagonal order the centroid pulls build; where they are farther apart,
 #: only centroid-pulling mix steps place them well enough, with the
 #: feature-aware blend.  Every band ends with one step that leans on the
-#: centroids (blend 0.5, 1 where dots are sparse): it puts the dots of an
+#: centroids (blend 0.5, 0.75 where dots are sparse): it puts the dots of an
 #: outline back on the outline, which the packing steps round off.
 #: Measured in docs/stipple_quality.md.
 SPACING_BANDS = (
     (2.5, [("mix", 16, 0.7), ("pack", 2), ("mix", 1, 0.5)], {"radius_sigma": 1.5}),
     (3.0, [("mix", 16, 0.7), ("pack", 1), ("mix", 1, 0.5)], {"radius_sigma": 1.5}),
     (6.0, [("mix", 18, 0.5), ("mix", 6, 0.4), ("mix", 1, 0.5)], {"features": "detail"}),
-    (np.inf, [("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 1.0)],
+    (np.inf, [("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 0.75)],
      {"features": "detail", "radius_sigma": 2.0}),
 )
 
@@ -422,7 +422,7 @@ class StipplePlan:
     --------
     >>> opt = StippleOptions().plan(2000, 512, 512)
     >>> opt.radii, opt.floor, opt.supersample, opt.phases, opt.features
-    ('density', 0.01, 1, (('mix', 20, 0.6), ('mix', 6, 0.4), ('mix', 1, 1.0)), 'detail')
+    ('density', 0.01, 1, (('mix', 20, 0.6), ('mix', 6, 0.4), ('mix', 1, 0.75)), 'detail')
     >>> StippleOptions(schedule="paper").plan(2000, 512, 512).radii
     'gray'
     """

@@ -330,7 +330,7 @@ def test_default_schedule_follows_the_dot_spacing():
     sparse = StippleOptions.resolve(5000, 512, 512)      # s = 7.24 px
     assert dense.phases == (("mix", 16, 0.7), ("pack", 2), ("mix", 1, 0.5)) and dense.radius_sigma == 1.5
     assert dense.features == "none"
-    assert sparse.phases == (("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 1.0))
+    assert sparse.phases == (("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 0.75))
     assert sparse.features == "detail"
     assert sparse.radius_sigma == 2.0
     # an explicit option still overrides the band's
