@@ -39,7 +39,8 @@ DATA = Path(os.environ.get("DISKPACK_TEST_DATA", Path(__file__).resolve().parent
 IMAGES = {"sample": "sample", "astronaut": str(DATA / "astronaut.png"),
           "camera": str(DATA / "camera.png"), "coffee": str(DATA / "coffee.png")}
 CASES = {"default": ["-n", "2000"],
-         "pen": ["-n", "6000", "--pen-path", "hilbert", "--width-mm", "150", "--pen-mm", "0.4"]}
+         "pen": ["-n", "6000", "--pen-path", "hilbert", "--width-mm", "150", "--pen-mm", "0.4"],
+         "cmyk": ["-n", "3000", "--colors", "cmyk"]}
 EXTENSIONS = (".npz", ".svg", ".png", ".csv")
 UNTIMED = ("timings", "seconds", "write_seconds", "seconds_per_iteration", "stage_seconds",
            "init_seconds")
