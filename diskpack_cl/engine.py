@@ -17,18 +17,18 @@ engine), ``gives_nn`` (its MICs carry nearest-neighbour distances),
 that every stage of the engine adds its seconds to. :func:`make_engine`
 makes them all.
 
-=========  ==============================================================
-route      how
-=========  ==============================================================
-``cells``  OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
-           re-solved and checked on the host; the default on devices with
-           ``cl_khr_fp64``
-``raster`` OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
-           refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
-           devices without float64
-``exact``  :func:`diskpack_cl.geometry.exact_mic` alone and exact float64
-           grid labels (:func:`diskpack_cl.labels.grid_power_labels`); no OpenCL
-=========  ==============================================================
+==========  ==============================================================
+route       how
+==========  ==============================================================
+``cells``   OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
+            re-solved and checked on the host; the default on devices with
+            ``cl_khr_fp64``
+``raster``  OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
+            refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
+            devices without float64
+``exact``   :func:`diskpack_cl.geometry.exact_mic` alone and exact float64
+            grid labels (:func:`diskpack_cl.labels.grid_power_labels`); no OpenCL
+==========  ==============================================================
 
 All three return the same MICs (to rounding, and exactly the same vertex
 where the MIC is unique): every answer is an LP optimum certified in float64.

@@ -272,12 +272,12 @@ def _pen_pull(timings, pen, pens, pull):
     """The class-aware steps (``before`` of :func:`~diskpack_cl.stipple._run`): after
     every step of the schedule on all dots, each dot moves a share of the way to
     its own pen's centroid (:func:`_pen_centroids` with `pens`, its engine and
-    the pens' densities on that engine's raster, timed as ``pens`` in
+    the pens' densities on that engine's raster, timed as one stage ``pens`` in
     `timings`): `pull` at the first step, falling linearly to 0 at
     :data:`PULL_UNTIL` of the phases, so that the last steps are on all dots alone."""
     def before(state, index, total):
         b = pull * max(0.0, 1.0 - index / (PULL_UNTIL * total))
-        with timings("pens"):   # the pens' own centroids, their engine's stages within
+        with timings("pens"):   # the pens' engine keeps its own stages apart
             c = _pen_centroids(*pens, state.points, pen) if b > 0 else None
         if b > 0:
             return lambda stepped: replace(stepped, points=stepped.points
@@ -438,7 +438,7 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     (('yellow', 'cyan', 'magenta'), 120, True)
     """
     t_start = time.perf_counter()
-    watch = Stopwatch()   # the run's one collector: its stages and both engines'
+    watch = Stopwatch()   # the run's one collector: its stages, the main engine's and "pens"
     with watch("separate"):
         sep, opt, counts = _separate(image, n, colors, counts, joint, pen_pull, options,
                                      dict(black_generation=black_generation,
@@ -456,7 +456,7 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
                           _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)), counts)
     coarse = replace(opt, supersample=max(1, opt.supersample // PEN_COARSEN))
     pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                        grid=coarse.grid_shape(W, H), timings=watch),
+                        grid=coarse.grid_shape(W, H), timings=Stopwatch()),
             [_centroid_density(a, coarse) for a in sep.layers])
     state, more = _run(state, _phases(stage, tail), callback, first=len(history),
                        before=_pen_pull(stage.engine.timings, pen, pens, pen_pull))
