@@ -688,7 +688,7 @@ def relax_item(item, points=None, *, device=None, callback=None, verify=False, p
     if points is None:
         points = read_points(item.input, min_points=2, columns=p.get("columns"))
     domain = as_box(p.get("box"))
-    res = relax_poisson(points, p["eps"], max_iter=p["max_iter"], backend=p["backend"],
+    res = relax_poisson(points, eps=p["eps"], max_iter=p["max_iter"], backend=p["backend"],
                         grid=p["grid"], device=device, callback=callback, verify=verify,
                         profile=profile, domain=domain)
     for out in item.outputs:
