@@ -1,4 +1,5 @@
-"""Outputs of ``diskpack stipple`` on the sample and the test photographs, for a byte comparison.
+"""Outputs of ``diskpack stipple`` on the sample and the test photographs, and of single
+``poisson`` and ``relax`` runs, for a byte comparison.
 
 A structural change must not change a result. Run this once with the tree
 before the change and once with the tree after it, then compare::
@@ -13,6 +14,10 @@ before the change and once with the tree after it, then compare::
 ``make`` writes, per image and case, the ``.npz``, ``.svg``, ``.png`` and
 ``.csv`` outputs and the ``--json`` line without its timings (``timings``,
 ``seconds``, ``write_seconds``: they differ between any two runs).
+The ``poisson`` and ``relax`` cases (:data:`POINT_CASES`) write ``.npz`` and
+``.csv`` sets and the ``--json`` line without ``seconds``,
+``seconds_per_iteration``, ``stage_seconds`` and ``init_seconds``; ``relax``
+reads a start set this script writes with a fixed seed.
 ``compare`` prints each file as identical or different and the count, and
 exits 1 when any differs or is missing. The cases keep the SVG's dot order
 independent of the machine's speed (``--pen-path auto`` is given 2 s, which
@@ -34,9 +39,28 @@ DATA = Path(os.environ.get("DISKPACK_TEST_DATA", Path(__file__).resolve().parent
 IMAGES = {"sample": "sample", "astronaut": str(DATA / "astronaut.png"),
           "camera": str(DATA / "camera.png"), "coffee": str(DATA / "coffee.png")}
 CASES = {"default": ["-n", "2000"],
-         "pen": ["-n", "6000", "--pen-path", "hilbert", "--width-mm", "150", "--pen-mm", "0.4"]}
+         "pen": ["-n", "6000", "--pen-path", "hilbert", "--width-mm", "150", "--pen-mm", "0.4"],
+         "cmyk": ["-n", "3000", "--colors", "cmyk"]}
 EXTENSIONS = (".npz", ".svg", ".png", ".csv")
-UNTIMED = ("timings", "seconds", "write_seconds")
+UNTIMED = ("timings", "seconds", "write_seconds", "seconds_per_iteration", "stage_seconds",
+           "init_seconds")
+#: Single runs of ``poisson`` and ``relax`` (``start.npy``: 300 uniform points, seed 0).
+POINT_CASES = {
+    "poisson_torus": ["poisson", "-n", "1024", "--seed", "5"],
+    "poisson_random": ["poisson", "-n", "400", "--init", "random", "--seed", "6", "--eps", "0.75"],
+    "poisson_file": ["poisson", "--init", "start.npy", "--seed", "1"],
+    "poisson_file_box": ["poisson", "--init", "start.npy", "--box", "1x1", "--seed", "1"],
+    "poisson_box": ["poisson", "-n", "500", "--box", "2x1", "--seed", "3"],
+    "poisson_dim3": ["poisson", "-n", "300", "--dim", "3", "--seed", "2"],
+    "relax": ["relax", "start.npy"],
+    "relax_box": ["relax", "start.npy", "--box", "1x1", "--eps", "0.7"],
+}
+#: Batches of ``poisson`` and ``relax``: their sets (the manifest, with its times, is removed).
+BATCH_CASES = {
+    "poisson_count": ["poisson", "-n", "256", "--count", "2", "--seed", "4",
+                      "-o", "poisson_count_{i}.npz"],
+    "relax_batch": ["relax", "start.npy", "start2.npy", "-o", "relax_batch_{stem}.npz"],
+}
 
 
 def make(folder):
@@ -58,6 +82,33 @@ def make(folder):
             with open(stem + ".json", "w") as fh:
                 json.dump(summary, fh, indent=1, sort_keys=True)
             print(stem, flush=True)
+    make_points(folder)
+
+
+def make_points(folder):
+    """Run every case of :data:`POINT_CASES` in `folder`."""
+    import numpy as np
+
+    np.save(os.path.join(folder, "start.npy"), np.random.default_rng(0).random((300, 2)))
+    np.save(os.path.join(folder, "start2.npy"), np.random.default_rng(1).random((200, 2)))
+    for case, args in BATCH_CASES.items():
+        subprocess.run([sys.executable, "-m", "diskpack_cl.cli", *args, "-q"], check=True,
+                       cwd=folder)
+        os.remove(os.path.join(folder, "manifest.jsonl"))
+    for case, args in POINT_CASES.items():
+        outputs = [arg for ext in (".npz", ".csv") for arg in ("-o", f"{case}{ext}")]
+        runs = [outputs[2 * k:2 * k + 2] for k in range(2)]   # one output per run
+        for k, out in enumerate(runs):
+            cmd = [sys.executable, "-m", "diskpack_cl.cli", *args, *out, "--json", "-q"]
+            line = subprocess.run(cmd, check=True, capture_output=True, text=True,
+                                  cwd=folder).stdout
+            if k == 0:
+                summary = json.loads(line)
+                for key in UNTIMED:
+                    summary.pop(key, None)
+                with open(os.path.join(folder, f"{case}.json"), "w") as fh:
+                    json.dump(summary, fh, indent=1, sort_keys=True)
+        print(os.path.join(folder, case), flush=True)
 
 
 def compare(a, b):
@@ -76,13 +127,19 @@ def compare(a, b):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
-    sub.add_parser("make").add_argument("folder")
+    m = sub.add_parser("make")
+    m.add_argument("folder")
+    m.add_argument("--points-only", action="store_true", help="only the poisson and relax cases")
     c = sub.add_parser("compare")
     c.add_argument("a")
     c.add_argument("b")
     args = p.parse_args(argv)
     if args.command == "make":
-        make(args.folder)
+        if args.points_only:
+            os.makedirs(args.folder, exist_ok=True)
+            make_points(os.path.abspath(args.folder))
+        else:
+            make(args.folder)
         return 0
     return compare(args.a, args.b)
 

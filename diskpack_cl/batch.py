@@ -43,7 +43,8 @@ __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "POCL_THREAD_VARS", "DASK_HINT",
     "Batch", "Item", "Manifest", "expand_inputs", "render_template", "check_outputs",
     "derive_seeds", "default_manifest", "json_default", "default_jobs", "dots_for_image",
-    "write_stipple_outputs", "stipple_item", "run_item", "run_batch",
+    "write_stipple_outputs", "stipple_item", "relax_item", "poisson_start", "run_item",
+    "run_batch",
     "plan_stipple", "plan_poisson", "plan_relax",
     "stipple_many", "poisson_many", "relax_many",
 ]
@@ -642,18 +643,119 @@ def _stipple_item(item, device, progress):
     return summary
 
 
-def _relax_points(points, item, device, progress):
-    """Relax, write every output; the summary of the relaxation."""
-    from diskpack_cl.io import write_points
+def relax_item(item, points=None, *, device=None, callback=None, verify=False, profile=False):
+    """Relax the points of one item and write its outputs: what a single input and every
+    item of a batch run (``relax``, and ``poisson`` after :func:`poisson_start`).
+
+    The relaxation is :func:`diskpack_cl.relax.relax_poisson` with the item's
+    options, on the unit torus or in the item's ``box``. Each ``.npz``
+    output also holds ``rho``, ``eps`` and (in a box) ``box``.
+
+    Parameters
+    ----------
+    item : Item
+        A ``relax`` item (:func:`plan_relax`) or a ``poisson`` item.
+    points : (n, 2) array, optional
+        The start set; None: read from the item's input (its ``columns``).
+    device : str, optional
+        OpenCL device.
+    callback : callable, optional
+        ``callback(iteration, rho)`` after each iteration.
+    verify, profile : bool
+        As for :func:`~diskpack_cl.relax.relax_poisson`.
+
+    Returns
+    -------
+    RelaxResult
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> folder = tempfile.mkdtemp()
+    >>> np.save(os.path.join(folder, "a.npy"), np.random.default_rng(0).random((64, 2)))
+    >>> item, = plan_relax([os.path.join(folder, "a.npy")], [os.path.join(folder, "b.npz")],
+    ...                    eps=0.7, box="1x1")
+    >>> res = relax_item(item)
+    >>> res.stop_reason, sorted(np.load(os.path.join(folder, "b.npz")))
+    ('eps', ['box', 'eps', 'points', 'rho'])
+    """
+    from diskpack_cl.io import box_record, read_points, write_points
+    from diskpack_cl.poisson import as_box
     from diskpack_cl.relax import relax_poisson
 
     p = item.params
-    callback = None if progress is None else (lambda it, rho: progress(it, f"rho={rho:.4f}"))
-    res = relax_poisson(points, p["eps"], max_iter=p["max_iter"], backend=p["backend"],
-                        grid=p["grid"], device=device, callback=callback)
+    if points is None:
+        points = read_points(item.input, min_points=2, columns=p.get("columns"))
+    domain = as_box(p.get("box"))
+    res = relax_poisson(points, eps=p["eps"], max_iter=p["max_iter"], backend=p["backend"],
+                        grid=p["grid"], device=device, callback=callback, verify=verify,
+                        profile=profile, domain=domain)
     for out in item.outputs:
-        extra = {"rho": res.rho, "eps": p["eps"]} if out.lower().endswith(".npz") else {}
+        extra = {}
+        if out.lower().endswith(".npz"):
+            extra = {"rho": res.rho, "eps": p["eps"], **box_record(out, domain)}
         write_points(out, res.points, **extra)
+    return res
+
+
+def poisson_start(item, *, warn=None):
+    """The start set of a ``poisson`` item: dart throwing or uniform random with the
+    item's seed, or the points of a file (a single run's ``init``).
+
+    Parameters
+    ----------
+    item : Item
+        A ``poisson`` item (:func:`plan_poisson`).
+    warn : callable, optional
+        ``warn(text)`` for each warning of the dart throwing, as it comes.
+
+    Returns
+    -------
+    points : (n, 2) array
+    info : dict
+        ``dart_rel_radius`` of a dart-throwing start, else empty.
+
+    Raises
+    ------
+    ValueError
+        Fewer than two points, or a file whose count is not the item's ``n``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> item, = plan_poisson(1, 64, [os.path.join(tempfile.mkdtemp(), "a.npz")], seed=3)
+    >>> points, info = poisson_start(item)
+    >>> points.shape, sorted(info)
+    ((64, 2), ['dart_rel_radius'])
+    """
+    from diskpack_cl.io import read_points
+    from diskpack_cl.sampling import dart_throwing, random_points
+
+    p = item.params
+    info = {}
+    if p["init"] == "dart":
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")
+            warnings.showwarning = lambda message, *_a, **_k: (
+                None if warn is None else warn(str(message)))
+            points, dart = dart_throwing(p["n"], rel_radius=p["dart_radius"], seed=item.seed,
+                                         full_output=True)
+        info["dart_rel_radius"] = dart["rel_radius"]
+    elif p["init"] == "random":
+        points = random_points(p["n"], seed=item.seed)
+    else:
+        points = read_points(p["init"])
+        if p["n"] is not None and p["n"] != len(points):
+            raise ValueError(f"-n {p['n']} does not match the {len(points)} points "
+                             f"of {p['init']}; leave -n out")
+    if len(points) < 2:
+        raise ValueError(f"need at least 2 points, got {len(points)}")
+    return points, info
+
+
+def _relax_summary(res):
+    """A batch record's summary of a relaxation."""
     return {"n": int(len(res.points)), "iterations": int(res.iterations),
             "rho_start": float(res.rho[0]), "rho_final": float(res.rho[-1]),
             "stop_reason": res.stop_reason, "backend": res.backend, "device": res.device,
@@ -661,28 +763,23 @@ def _relax_points(points, item, device, progress):
             "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
 
 
-def _poisson_item(item, device, progress):
-    from diskpack_cl.sampling import dart_throwing, random_points
+def _rho_progress(progress):
+    return None if progress is None else (lambda it, rho: progress(it, f"rho={rho:.4f}"))
 
-    p = item.params
-    info = {}
-    if p["init"] == "dart":
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            points, dart = dart_throwing(p["n"], rel_radius=p["dart_radius"], seed=item.seed,
-                                         full_output=True)
-        info["dart_rel_radius"] = dart["rel_radius"]
-        if caught:
-            info["warnings"] = [str(w.message) for w in caught]
-    else:
-        points = random_points(p["n"], seed=item.seed)
-    return {**_relax_points(points, item, device, progress), **info}
+
+def _poisson_item(item, device, progress):
+    """A batch's poisson item: :func:`poisson_start`, then :func:`relax_item`; its summary."""
+    caught = []
+    points, info = poisson_start(item, warn=caught.append)
+    if caught:
+        info["warnings"] = caught
+    res = relax_item(item, points, device=device, callback=_rho_progress(progress))
+    return {**_relax_summary(res), **info}
 
 
 def _relax_item(item, device, progress):
-    from diskpack_cl.io import read_points
-
-    return _relax_points(read_points(item.input, min_points=2), item, device, progress)
+    """A batch's relax item: :func:`relax_item`; its summary."""
+    return _relax_summary(relax_item(item, device=device, callback=_rho_progress(progress)))
 
 
 _KINDS = {"stipple": _stipple_item, "poisson": _poisson_item, "relax": _relax_item}
@@ -1081,13 +1178,17 @@ def _relax_params(relax, overrides):
 
 
 def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_radius=0.74,
-                 **overrides):
+                 derive=True, box=None, make_folders=True, **overrides):
     """Items for ``count`` Poisson disk sets with seeds derived from ``seed``.
 
     Set ``i`` has seed ``derive_seeds(seed, count)[i]``; ``seed=None`` takes
     a fresh one. ``init`` is ``"dart"`` or ``"random"``. ``relax`` (a
     :class:`~diskpack_cl.relax.RelaxOptions`) with ``overrides`` (its
-    fields: ``eps``, ``max_iter``, ...) relaxes every set.
+    fields: ``eps``, ``max_iter``, ...) relaxes every set. With
+    ``derive=False`` (a single run: ``count`` 1) the set has ``seed``
+    itself, ``init`` may also be a point file (``n`` None: its count), and
+    ``box`` relaxes that file in a box. ``make_folders`` as for
+    :func:`check_outputs`.
 
     Examples
     --------
@@ -1095,9 +1196,14 @@ def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
     >>> items = plan_poisson(3, 64, [os.path.join(tempfile.mkdtemp(), "{i}.npz")], seed=7)
     >>> [it.seed for it in items] == derive_seeds(7, 3)
     True
+    >>> plan_poisson(1, 64, [os.path.join(tempfile.mkdtemp(), "a.npz")], seed=7,
+    ...              derive=False)[0].seed
+    7
     """
-    if init not in ("dart", "random"):
+    if derive and init not in ("dart", "random"):
         raise ValueError(f"init must be 'dart' or 'random' for many sets, got {init!r}")
+    if not derive and count != 1:
+        raise ValueError(f"derive=False makes one set, not {count}")
     if seed is None:
         import numpy as np
 
@@ -1105,16 +1211,22 @@ def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
     params = {"n": n, "init": init, **_relax_params(relax, overrides)}
     if init == "dart":
         params["dart_radius"] = dart_radius
+    if box is not None:
+        params["box"] = box
+    seeds = derive_seeds(seed, count) if derive else [seed]
     items = [Item("poisson", i, None, s, {**params, "base_seed": seed},
                   tuple(render_template(t, n=n, seed=s, i=i) for t in outputs))
-             for i, s in enumerate(derive_seeds(seed, count))]
-    check_outputs(items, _paths_check("poisson"))
+             for i, s in enumerate(seeds)]
+    check_outputs(items, _paths_check("poisson"), make_folders=make_folders)
     return items
 
 
-def plan_relax(inputs, outputs, relax=None, **overrides):
+def plan_relax(inputs, outputs, relax=None, *, box=None, columns=None, make_folders=True,
+               **overrides):
     """Items for relaxing every point file of ``inputs`` (see :func:`plan_poisson` for
-    ``relax`` and ``overrides``).
+    ``relax``, ``overrides`` and ``make_folders``), on the unit torus or in
+    ``box`` (``"WxH"`` or ``(W, H)``), reading ``columns`` (two names or
+    indices, see :func:`diskpack_cl.io.read_points`).
 
     Examples
     --------
@@ -1128,10 +1240,14 @@ def plan_relax(inputs, outputs, relax=None, **overrides):
     [('relax', 'a_relaxed.npz')]
     """
     params = _relax_params(relax, overrides)
+    if box is not None:
+        params["box"] = box
+    if columns is not None:
+        params["columns"] = list(columns)
     items = [Item("relax", i, os.fspath(path), None, params,
                   tuple(render_template(t, input=path, i=i) for t in outputs))
              for i, path in enumerate(inputs)]
-    check_outputs(items, _paths_check("relax"))
+    check_outputs(items, _paths_check("relax"), make_folders=make_folders)
     return items
 
 
@@ -1231,9 +1347,11 @@ def poisson_many(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
                      devices=devices, client=client, collect=collect, progress=progress)
 
 
-def relax_many(inputs, outputs, relax=None, *, manifest=None, overwrite=False, jobs=1,
-               devices=None, client=None, collect=False, progress=None, **overrides):
-    """Relax many point files; yield records as they finish (see :func:`plan_relax`).
+def relax_many(inputs, outputs, relax=None, *, box=None, columns=None, manifest=None,
+               overwrite=False, jobs=1, devices=None, client=None, collect=False, progress=None,
+               **overrides):
+    """Relax many point files; yield records as they finish (see :func:`plan_relax`
+    for ``box`` and ``columns``).
 
     Examples
     --------
@@ -1244,6 +1362,6 @@ def relax_many(inputs, outputs, relax=None, *, manifest=None, overwrite=False, j
     >>> [(r["status"], r["summary"]["rho_final"] >= 0.7) for r in recs]
     [('ok', True)]
     """
-    items = plan_relax(inputs, outputs, relax, **overrides)
+    items = plan_relax(inputs, outputs, relax, box=box, columns=columns, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)

@@ -47,7 +47,7 @@ from .domain import Domain
 from .radii import certified_k, field_at
 from .schedule import StippleOptions
 from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
-                      dot_radii, lloyd_step, pack_step, result_summary)
+                      dot_radii, result_summary)
 from .engine import make_engine
 
 __all__ = ["ColorStippleResult", "assign_pens", "dots_per_pen", "pen_counts", "stipple_colors"]
@@ -268,36 +268,23 @@ def _pen_centroids(engine, dens, x, pen):
     return c
 
 
-def _run_pens(state, stage, pen, pens, pull, callback, first):
-    """The class-aware phases: every step of the schedule on all dots, then each dot
-    moved a share of the way to its own pen's centroid (:func:`_pen_centroids` with
-    `pens`, its engine and the pens' densities on that engine's raster):
-    `pull` at the first step, falling linearly to 0 at :data:`PULL_UNTIL` of the
-    phases, so that the last steps are on all dots alone."""
-    history = []
-    total = sum(ph[1] for ph in stage.options.phases)
-    for phase in stage.options.phases:
-        kind, iters = phase[0], phase[1]
-        blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
-        for it in range(iters):
-            t0, mark = time.perf_counter(), stage.engine.timings.mark()
-            b = pull * max(0.0, 1.0 - len(history) / (PULL_UNTIL * total))
-            with stage.engine.timings("pens"):   # the pens' engine keeps its own stages apart
-                c = _pen_centroids(*pens, state.points, pen) if b > 0 else None
-            if kind == "lloyd":
-                state, step = lloyd_step(state, stage, new_k=it == iters - 1)
-            else:
-                state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
-            if b > 0:
-                state = replace(state, points=state.points + b * (c - state.points))
-            entry = {"kind": kind, "iteration": first + len(history), **step, "k": float(state.k)}
-            entry.update({f"{name}_s": secs
-                          for name, secs in stage.engine.timings.since(mark).items()})
-            entry["seconds"] = time.perf_counter() - t0
-            history.append(entry)
-            if callback is not None:
-                callback(entry)
-    return state, history
+def _pen_pull(timings, pen, pens, pull):
+    """The class-aware steps (``before`` of :func:`~diskpack_cl.stipple._run`): after
+    every step of the schedule on all dots, each dot moves a share of the way to
+    its own pen's centroid (:func:`_pen_centroids` with `pens`, its engine and
+    the pens' densities on that engine's raster, timed as one stage ``pens`` in
+    `timings`): `pull` at the first step, falling linearly to 0 at
+    :data:`PULL_UNTIL` of the phases, so that the last steps are on all dots alone."""
+    def before(state, index, total):
+        b = pull * max(0.0, 1.0 - index / (PULL_UNTIL * total))
+        with timings("pens"):   # the pens' engine keeps its own stages apart
+            c = _pen_centroids(*pens, state.points, pen) if b > 0 else None
+        if b > 0:
+            return lambda stepped: replace(stepped, points=stepped.points
+                                           + b * (c - stepped.points))
+        return None
+
+    return before
 
 
 def _split(phases, first):
@@ -471,7 +458,8 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
                         grid=coarse.grid_shape(W, H), timings=Stopwatch()),
             [_centroid_density(a, coarse) for a in sep.layers])
-    state, more = _run_pens(state, _phases(stage, tail), pen, pens, pen_pull, callback, len(history))
+    state, more = _run(state, _phases(stage, tail), callback, first=len(history),
+                       before=_pen_pull(stage.engine.timings, pen, pens, pen_pull))
     with watch("certify"):
         r = dot_radii(state, stage, state.points)
         k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))

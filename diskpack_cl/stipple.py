@@ -404,24 +404,33 @@ def lloyd_step(state, stage, new_k=True):
     return StippleState(newx, k, state.packs, state.ink), entry
 
 
-def _run(state, stage, callback):
+def _run(state, stage, callback, *, first=0, before=None):
     """Every phase of the schedule; returns (final state, history).
 
     Each history entry holds the seconds of the engine stages that ran in
-    its step (``<stage>_s``), read off the engine's one collector."""
+    its step (``<stage>_s``), read off the engine's one collector; its
+    ``iteration`` counts from `first`. ``before(state, index, total)``, if
+    given, runs before each step (within its time) and returns None or a
+    function that the stepped state goes through (the colour stippling's
+    pull to each pen's centroid)."""
     history = []
     watch = stage.engine.timings
+    total = sum(ph[1] for ph in stage.options.phases)
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
         for it in range(iters):
             t0, mark = time.perf_counter(), watch.mark()
+            after = None if before is None else before(state, len(history), total)
             if kind == "lloyd":
                 # only the phase's last step sets k, for the packing after it
                 state, step = lloyd_step(state, stage, new_k=it == iters - 1)
             else:
                 state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
-            entry = {"kind": kind, "iteration": len(history), **step, "k": float(state.k)}
+            if after is not None:
+                state = after(state)
+            entry = {"kind": kind, "iteration": first + len(history), **step,
+                     "k": float(state.k)}
             entry.update({f"{name}_s": secs for name, secs in watch.since(mark).items()})
             entry["seconds"] = time.perf_counter() - t0
             history.append(entry)

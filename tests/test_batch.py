@@ -231,14 +231,15 @@ def test_sigterm_part_way_then_resume(tmp_path, jobs):
 
 
 def test_one_set_recreated_alone(tmp_path, capsys):
+    """A single run is a one-item plan with its seed itself (not derived), run by the
+    batch's code (poisson_start, relax_item): the same seed writes the same bytes."""
     recs = list(poisson_many(3, 200, [str(tmp_path / "{i}.npz")], seed=11, backend="exact",
                              jobs=1))
     rec = next(r for r in recs if r["i"] == 2)
     rc, _, _ = _cli(["poisson", "-n", 200, "--seed", rec["seed"], "--backend", "exact",
                      "-o", tmp_path / "alone.npz", "-q"], capsys)
     assert rc == 0
-    np.testing.assert_array_equal(np.load(tmp_path / "alone.npz")["points"],
-                                  np.load(tmp_path / "2.npz")["points"])
+    assert (tmp_path / "alone.npz").read_bytes() == (tmp_path / "2.npz").read_bytes()
 
 
 def test_rerun_without_seed_takes_the_recorded_one(tmp_path):
@@ -430,3 +431,72 @@ def test_the_batch_rule_is_in_help(command, capsys):
     group = text[text.index(" ".join(BATCH_RULE.split())):]
     shown = [k for k in BATCH_OPTIONS if f"--{k}" in group]
     assert set(shown) == set(BATCH_OPTIONS) - ({"count"} if command != "poisson" else set())
+
+
+def _start_sets(folder):
+    """Two uniform start sets (.npy) in ``folder``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for k, n in enumerate((120, 90)):
+        p = folder / f"s{k}.npy"
+        np.save(p, np.random.default_rng(k).random((n, 2)))
+        paths.append(p)
+    return paths
+
+
+def test_one_relax_input_and_the_same_file_in_a_batch_write_the_same_bytes(tmp_path, capsys):
+    """relax: a single input and a batch item run the same code (batch.relax_item), in a
+    --box too, which a batch once refused (the two had separate paths)."""
+    paths = _start_sets(tmp_path / "in")
+    opts = ["--box", "2x1", "--eps", "0.7", "--backend", "exact", "-q"]
+    rc, _, _ = _cli(["relax", paths[0], "-o", tmp_path / "one.npz", *opts], capsys)
+    assert rc == 0
+    rc, _, err = _cli(["relax", *paths, "-o", tmp_path / "many" / "{stem}.npz", *opts], capsys)
+    assert rc == 0, err
+    one = (tmp_path / "one.npz").read_bytes()
+    assert (tmp_path / "many" / "s0.npz").read_bytes() == one
+    assert np.load(tmp_path / "many" / "s1.npz")["box"].tolist() == [2.0, 1.0]
+    line, = _manifest_lines(tmp_path / "many" / "manifest.jsonl")[:1]
+    assert line["params"]["box"] == "2x1"
+
+
+def test_relax_columns_reach_the_batch_items(tmp_path, capsys):
+    """--columns reads the same columns in a batch as for one input (once refused there)."""
+    src = tmp_path / "xyz.csv"
+    xyz = np.random.default_rng(2).random((80, 3))
+    np.savetxt(src, xyz, delimiter=",", header="x,y,z", comments="")
+    opts = ["--columns", "z,x", "--eps", "0.6", "--backend", "exact", "-q"]
+    rc, _, _ = _cli(["relax", src, "-o", tmp_path / "one.npz", *opts], capsys)
+    assert rc == 0
+    rc, _, err = _cli(["relax", src, "-o", tmp_path / "b" / "{stem}.npz", *opts], capsys)
+    assert rc == 0, err
+    assert (tmp_path / "b" / "xyz.npz").read_bytes() == (tmp_path / "one.npz").read_bytes()
+
+
+def test_a_relax_plan_without_box_keeps_the_old_identity(tmp_path):
+    """box and columns enter an item's params only when given: a manifest written before
+    them still marks its items done."""
+    src, = _start_sets(tmp_path / "in")[:1]
+    item, = batch.plan_relax([str(src)], [str(tmp_path / "o.npz")])
+    assert sorted(item.params) == ["backend", "eps", "grid", "max_iter"]
+
+
+def test_one_poisson_run_prints_the_dart_warning_as_it_comes(tmp_path, capsys, monkeypatch):
+    """The dart throwing's warnings: printed by a single run, recorded by a batch item."""
+    import warnings
+
+    from diskpack_cl import sampling
+    from diskpack_cl.sampling import DartThrowingWarning
+
+    real = sampling.dart_throwing
+
+    def saturated(*a, **k):
+        warnings.warn("saturated", DartThrowingWarning)
+        return real(*a, **k)
+
+    monkeypatch.setattr(sampling, "dart_throwing", saturated)
+    rc, _, err = _cli(["poisson", "-n", 64, "--seed", 1, "--backend", "exact",
+                       "-o", tmp_path / "a.npz"], capsys)
+    assert rc == 0 and "diskpack: warning: saturated" in err
+    rec, = poisson_many(1, 64, [str(tmp_path / "b" / "{i}.npz")], seed=1, backend="exact")
+    assert rec["summary"]["warnings"] == ["saturated"]

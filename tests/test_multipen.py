@@ -329,3 +329,18 @@ def test_dask_colour_batch_matches_one_process(tmp_path):
     for stem in ("a", "b"):
         a, b = (read_stipple(tmp_path / d / f"{stem}.npz") for d in ("local", "dask"))
         assert np.array_equal(a.points, b.points) and np.array_equal(a.pen, b.pen)
+
+
+def test_the_pen_steps_are_the_one_pen_loop():
+    """The class-aware steps run in the one schedule loop (stipple._run with a hook):
+    without a pull they move the dots as the joint steps do, and the history
+    counts on across the two parts."""
+    img = _image(32, 40)
+    sched = [("mix", 6, 0.5), ("pack", 2)]
+    joint = stipple_colors(img, 120, "cmy", schedule=sched, joint=1.0, seed=2, backend="exact")
+    split = stipple_colors(img, 120, "cmy", schedule=sched, joint=0.5, pen_pull=0.0, seed=2,
+                           backend="exact")
+    assert np.array_equal(split.points, joint.points)
+    assert [e["iteration"] for e in split.history] == list(range(8))
+    assert [e["kind"] for e in split.history] == ["mix"] * 6 + ["pack"] * 2
+    assert all("pens_s" in e for e in split.history[4:])

@@ -11,7 +11,7 @@ from diskpack_cl.batch import json_default
 from ._batches import _batch_mode, _batch_run, _report_batch
 from ._common import (PROG, _bar, _batch_options, _checked, _image_path, _nonnegative_int,
                       _output_options, _point_count, _positive_float, _positive_int, _unit_open)
-from .relax import _progress, _relax, _relax_and_write, _relax_options, _single_only, _unreached
+from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 
 
 def _add_poisson(subparsers):
@@ -112,10 +112,7 @@ def _report(args, line, summary):
 
 
 def _run_poisson(args):
-    import warnings
-
-    from diskpack_cl.io import check_points_path, read_points
-    from diskpack_cl.sampling import DartThrowingWarning, dart_throwing, random_points
+    from diskpack_cl.io import check_points_path
 
     if _batch_mode(args, [], [args.output]):
         return _run_poisson_batch(args)
@@ -125,34 +122,27 @@ def _run_poisson(args):
     if args.min_distance is not None or args.mask or args.density or args.dim == 3 or (
             args.box is not None and args.init in ("dart", "random")):
         return _run_poisson_set(args)
-    t0 = time.perf_counter()
-    if args.seed is None:
-        import numpy as np
+    return _run_poisson_one(args)
 
-        # a fresh seed, reported in the summary so the run can be repeated
-        args.seed = int(np.random.SeedSequence().entropy % 2**31)
-    info = {"init": args.init, "seed": args.seed}
-    if args.init == "dart":
-        n = 1024 if args.n is None else args.n
-        with warnings.catch_warnings():
-            warnings.simplefilter("always", DartThrowingWarning)
-            # printed as they come: a saturated radius is said at once
-            warnings.showwarning = lambda message, *_a, **_k: None if args.quiet else print(
-                f"{PROG}: warning: {message}", file=sys.stderr, flush=True)
-            points, dart = dart_throwing(n, rel_radius=args.dart_radius, seed=args.seed,
-                                         full_output=True)
-        info["dart_rel_radius"] = dart["rel_radius"]
-    elif args.init == "random":
-        points = random_points(1024 if args.n is None else args.n, seed=args.seed)
-    else:
-        points = read_points(args.init)
-        if args.n is not None and args.n != len(points):
-            raise ValueError(f"-n {args.n} does not match the {len(points)} points "
-                             f"of {args.init}; leave -n out")
-    if len(points) < 2:
-        raise ValueError(f"need at least 2 points, got {len(points)}")
-    info["init_seconds"] = time.perf_counter() - t0
-    return _relax_and_write(points, args, extra_summary=info)
+
+def _run_poisson_one(args):
+    """A start set relaxed on the torus (or a file's in a --box): a one-item plan without a
+    manifest, run here (:func:`~diskpack_cl.batch.poisson_start`, then ``relax_item``)."""
+    from diskpack_cl.batch import plan_poisson, poisson_start
+
+    drawn = args.init in ("dart", "random")
+    (item,) = plan_poisson(1, 1024 if args.n is None and drawn else args.n, [args.output],
+                           _relax(args), seed=args.seed, init=args.init,
+                           dart_radius=args.dart_radius, derive=False,
+                           box=None if drawn else args.box, make_folders=False)
+    t0 = time.perf_counter()
+    # printed as they come: a saturated radius is said at once
+    points, start = poisson_start(item, warn=None if args.quiet else lambda text: print(
+        f"{PROG}: warning: {text}", file=sys.stderr, flush=True))
+    # the seed (a fresh one without --seed) in the summary, so that the run can be repeated
+    info = {"init": args.init, "seed": item.seed, **start,
+            "init_seconds": time.perf_counter() - t0}
+    return _relax_and_write(item, args, points, extra_summary=info)
 
 
 def _field_image(args, path):
@@ -205,6 +195,13 @@ def _run_poisson_set(args):
                 else f"--eps {args.eps:g}")
         return _unreached(args, f"the set did not reach {goal} (stop: {res.stop_reason})")
     return 0
+
+
+def _single_only(args, *names):
+    """Refuse options that batches do not take."""
+    given = [f"--{n}" for n in names if getattr(args, n, None) is not None]
+    if given:
+        raise ValueError(f"{', '.join(given)} make(s) one set: not with --count or a batch")
 
 
 def _run_poisson_batch(args):

@@ -39,13 +39,6 @@ def _unreached(args, what):
     return UNREACHED
 
 
-def _single_only(args, *names):
-    """Refuse options that batches do not take."""
-    given = [f"--{n}" for n in names if getattr(args, n, None) is not None]
-    if given:
-        raise ValueError(f"{', '.join(given)} make(s) one set: not with --count or a batch")
-
-
 def _relax(args):
     """The :class:`~diskpack_cl.relax.RelaxOptions` of the arguments."""
     from diskpack_cl.options import from_namespace
@@ -67,23 +60,17 @@ def _progress(args, label):
     return callback, bar.close
 
 
-def _relax_and_write(points, args, *, extra_summary=None):
-    """Relax `points`, write ``args.output``, report; return the exit status."""
-    from diskpack_cl.io import box_record, write_points
-    from diskpack_cl.poisson import as_box
-    from diskpack_cl.relax import relax_poisson
+def _relax_and_write(item, args, points=None, *, extra_summary=None):
+    """Relax and write a one-item plan (:func:`diskpack_cl.batch.relax_item`), report;
+    return the exit status."""
+    from diskpack_cl.batch import relax_item
 
     callback, close = _progress(args, "relax")
     try:
-        res = relax_poisson(points, **_relax(args).kwargs(), device=args.device,
-                            callback=callback, verify=args.verify, profile=args.profile,
-                            domain=as_box(args.box))
+        res = relax_item(item, points, device=args.device, callback=callback,
+                         verify=args.verify, profile=args.profile)
     finally:
         close()
-    extra = {}
-    if args.output.lower().endswith(".npz"):
-        extra = {"rho": res.rho, "eps": args.eps, **box_record(args.output, as_box(args.box))}
-    write_points(args.output, res.points, **extra)
     stages = {k: float(v) for k, v in res.timings.items()}
     summary = {
         "n": int(len(res.points)),
@@ -147,18 +134,13 @@ def _columns(text):
 
 
 def _run_relax(args):
-    from diskpack_cl.io import check_points_path, read_points
+    """One input: a one-item plan without a manifest, run here; else a batch."""
+    from diskpack_cl.batch import plan_relax, relax_many
 
+    where = dict(box=args.box, columns=args.columns)
     if _batch_mode(args, args.inputs, [args.output]):
-        return _run_relax_batch(args)
-    check_points_path(args.output, for_writing=True)
-    points = read_points(args.inputs[0], min_points=2, columns=args.columns)
-    return _relax_and_write(points, args, extra_summary={"input": str(args.inputs[0])})
-
-
-def _run_relax_batch(args):
-    from diskpack_cl.batch import relax_many
-
-    _single_only(args, "box", "columns")
-    batch = relax_many(args.inputs, [args.output], _relax(args), **_batch_run(args))
-    return _report_batch(args, batch)
+        return _report_batch(args, relax_many(args.inputs, [args.output], _relax(args), **where,
+                                              **_batch_run(args)))
+    (item,) = plan_relax(args.inputs[:1], [args.output], _relax(args), **where,
+                         make_folders=False)
+    return _relax_and_write(item, args, extra_summary={"input": str(args.inputs[0])})
