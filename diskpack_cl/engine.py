@@ -3,9 +3,11 @@
 Relaxation and stippling ask their engine the same questions, through one
 protocol:
 
-- ``engine.mic(points, weights=None, *, exact=True)``: the certified MIC of
-  every power cell, a :class:`~diskpack_cl.geometry.MIC` (``exact=False``:
-  the raster estimate alone, where the engine has one);
+- ``engine.mic(points, weights=None, *, exact=True, certify=True)``: the
+  certified MIC of every power cell, a :class:`~diskpack_cl.geometry.MIC`
+  (``exact=False``: the raster estimate alone, where the engine has one;
+  ``certify=False``: the ``cells`` route takes the device's proven MICs
+  without the host's re-solve, for a caller that certifies what it returns);
 - ``engine.centroids(points, weights, density)``: ``(centroids, mass)``,
   the density-weighted centroids and masses of the power cells on the
   engine's grid (engines made with a ``grid``).
@@ -114,10 +116,11 @@ class _Engine:
             self.fallback = fallback   # why ``auto`` chose this engine
         self.timings = Stopwatch() if timings is None else timings
 
-    def mic(self, points, weights=None, *, exact=True):
+    def mic(self, points, weights=None, *, exact=True, certify=True):
         """MICs of the power cells (a :class:`~diskpack_cl.geometry.MIC`); with
-        ``verify``, checked against :func:`exact_mic` (RuntimeError on a mismatch)."""
-        m = self._mic(points, weights, exact)
+        ``verify``, checked against :func:`exact_mic` (RuntimeError on a mismatch).
+        ``certify=False`` spares the ``cells`` route its host re-solve (verify overrides)."""
+        m = self._mic(points, weights, exact, certify or self.verify)
         if self.verify and exact:
             check_against_exact(points, weights, self.domain, m.radii, m.empty)
         return m
@@ -158,8 +161,8 @@ class ExactEngine(_Engine):
         super().__init__(domain, verify=verify, fallback=fallback, timings=timings)
         self.grid = None if grid is None else tuple(grid)
 
-    def _mic(self, points, weights, exact):
-        # there is no estimate to stop at: `exact` changes nothing here
+    def _mic(self, points, weights, exact, certify):
+        # there is no estimate to stop at, and exact_mic certifies: neither flag changes anything
         check_sites(points, weights, self.domain)
         with self.timings("exact"):
             m = exact_mic(points, weights, self.domain)
@@ -249,9 +252,9 @@ class OpenCLEngine(_Engine):
         self._labelled = (np.array(points), np.array(weights), est)
         return est
 
-    def _mic(self, points, weights, exact):
+    def _mic(self, points, weights, exact, certify):
         if exact and self.cells is not None:
-            r = self.cells.solve(points, weights)
+            r = self.cells.solve(points, weights, certify=certify)
             return _answer(r, "cells", r.nn)
         est = self._label(points, weights, True)
         if not exact:

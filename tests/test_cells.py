@@ -68,12 +68,14 @@ def cell_sets(draw):
 
 
 @SETTINGS
-@given(cell_sets())
-def test_mic_matches_linprog_on_every_cell(solvers, case):
+@given(cell_sets(), st.booleans())
+def test_mic_matches_linprog_on_every_cell(solvers, case, certify):
+    """With and without the host's re-solve (``certify=False``: the device's proven
+    answers, which must be the same MICs)."""
     dom, pts, w = case
     if len(pts) < 2:
         return
-    res = solvers(dom).solve(pts, w)
+    res = solvers(dom).solve(pts, w, certify=certify)
     scale = max(dom.width, dom.height)
     for i in range(len(pts)):
         r = ref.chebyshev_ref(pts, w, dom, i)
@@ -86,8 +88,9 @@ def test_mic_matches_linprog_on_every_cell(solvers, case):
             assert _wrapped_diff(res.centers[i], r.center, dom) <= 1e-6 * scale
 
 
+@pytest.mark.parametrize("certify", [True, False])
 @pytest.mark.parametrize("start", ["dart", "random", "relaxed"])
-def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start):
+def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start, certify):
     dom = Domain.torus()
     n = 5000
     if start == "dart":
@@ -97,7 +100,7 @@ def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start):
     if start == "relaxed":
         for _ in range(5):
             pts = exact_mic(pts).centers
-    res = solvers(dom).solve(pts)
+    res = solvers(dom).solve(pts, certify=certify)
     _same_as_exact(dom, pts, None, res)
     from scipy.spatial import cKDTree
 

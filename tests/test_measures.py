@@ -54,6 +54,44 @@ def test_coincident_pairs():
     assert coincident_pairs([[0.0, 0.2], [1.0, 0.2]]).tolist() == [[0, 1]]
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(-8, 8), st.integers(-8, 8)), min_size=2, max_size=40),
+       st.sampled_from([(1.0, 1.0), (2.0, 1.0)]), st.booleans())
+def test_coincident_pairs_against_brute_force(cells, size, periodic):
+    """The sort that answers "no duplicates" before the tree: the pairs of points at
+    distance 0 (minimum image on a torus), on a lattice of eighths where many coincide,
+    with coordinates out of the torus by whole periods, the seam and -0.0 among them."""
+    dom = Domain(*size, periodic=True) if periodic else Domain.rect(*size)
+    X = np.array(cells, dtype=np.float64) / 8.0 * (1.0 if periodic else 0.125)
+    X[X == 0] = -0.0   # -0.0 and 0.0 are one point
+    d = X[:, None, :] - X[None, :, :]
+    if periodic:
+        d -= np.round(d / np.array(size)) * np.array(size)
+    i, j = np.nonzero(np.triu(np.all(d == 0, axis=2), k=1))
+    assert coincident_pairs(X, dom).tolist() == np.column_stack([i, j]).tolist()
+
+
+_SPECIAL = [0.0, -0.0, -1e-300, -1e-17, 1.0, 2.0, 1.0 - 1e-17, -1.0, 3.5, np.nan, np.inf, -np.inf]
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.tuples(*[st.one_of(st.floats(-5, 5), st.sampled_from(_SPECIAL))] * 2),
+                min_size=1, max_size=30),
+       st.sampled_from([(1.0, 1.0), (2.0, 0.5), (0.3, 7.0)]))
+def test_wrap_is_np_mod_bit_for_bit(rows, size):
+    """Domain.wrap mods only the coordinates outside [0, size): the same bits as
+    ``np.mod`` on every coordinate (-0.0, the seam, NaN and infinities among them),
+    in a new array."""
+    X = np.array(rows, dtype=np.float64)
+    dom = Domain(*size, periodic=True)
+    with np.errstate(invalid="ignore"):   # np.mod of an infinity warns, in both
+        want = np.mod(X, dom.size)
+        got = dom.wrap(X)
+    want[want >= dom.size] = 0.0
+    assert got.view(np.uint64).tolist() == want.view(np.uint64).tolist()
+    assert not np.may_share_memory(got, X)
+
+
 def test_nearest_neighbor_distances_plane_and_torus():
     pts = [[0.05, 0.5], [0.95, 0.5], [0.5, 0.5]]
     assert nearest_neighbor_distances(pts).tolist() == pytest.approx([0.1, 0.1, 0.45])

@@ -93,6 +93,22 @@ def test_relax_poisson_local_certified_monotone_and_reproducible(n):
     assert res.rho[-1] >= 0.8
 
 
+def test_local_route_on_the_device_skips_the_host_resolve(ctx):
+    """On the device, the local route's global iterates take the kernel's proven MICs
+    without the host's re-solve of every cell (``refine``); the set it returns is still
+    certified (rho against a KD-tree), monotone and reproducible."""
+    X = dart_throwing(3000, rel_radius=0.6, seed=7)
+    res = relax_poisson(X, 0.8, backend="opencl", device=ctx, local=True)
+    again = relax_poisson(X, 0.8, backend="opencl", device=ctx, local=True)
+    np.testing.assert_array_equal(res.points, again.points)
+    assert "refine" not in res.timings and res.stats["local_iterations"] > 0
+    assert "refine" in relax_poisson(X, 0.8, backend="opencl", device=ctx, max_iter=1).timings
+    assert np.all(np.diff(res.rho) >= -1e-12)
+    exact = min_distance_at_most(res.points, 1.0, TORUS, grow=True)
+    assert res.rho[-1] == pytest.approx(exact / 2 / hexagonal_radius(3000), abs=1e-12)
+    assert res.rho[-1] >= 0.8
+
+
 def test_local_is_ignored_in_a_box():
     box = Domain.rect(2.0, 1.0)
     X = np.random.default_rng(5).random((200, 2)) * (2, 1)
