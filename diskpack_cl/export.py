@@ -812,11 +812,10 @@ def write_csv(path, result):
 
     Examples
     --------
-    >>> import os, tempfile
-    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
-    >>> path = os.path.join(tempfile.mkdtemp(), "dots.csv")
-    >>> _ = write_csv(path, res)
-    >>> Path(path).read_text().splitlines()[1:]
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "dots.csv"
+    >>> _ = write_csv(path, _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2))
+    >>> path.read_text().splitlines()[1:]
     ['x,y,r', '1,1,0.5', '3,1,0.5']
     """
     p, r, W, H = _arrays(result)

@@ -247,9 +247,8 @@ def analyze_point_sets(paths, *, output=None, kmax=None, title=None, box=None):
     Examples
     --------
     >>> import os, tempfile
-    >>> from diskpack_cl.io import write_points
     >>> path = os.path.join(tempfile.mkdtemp(), "points.npy")
-    >>> write_points(path, np.random.default_rng(0).random((100, 2)))
+    >>> np.save(path, np.random.default_rng(0).random((100, 2)))
     >>> numbers = analyze_point_sets([path], kmax=8)
     >>> numbers["n"], numbers["realizations"]
     (100, 1)

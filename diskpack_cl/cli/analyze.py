@@ -27,10 +27,9 @@ def _add_analyze(subparsers):
                     "each layer), or without --image against the dots' own density; and the "
                     "certificate over all dots. Figures need matplotlib: "
                     "pip install \"diskpack_cl[plot]\".",
-        epilog="examples:\n"
-               "  diskpack analyze a.npz b.npz c.npz -o report.png --json\n"
-               "  diskpack analyze stipple.npz --image sample -o stipple_report.png\n"
-               "  diskpack analyze colour.npz --image photo.png --json",
+        epilog="\n  ".join(["examples:", "diskpack analyze a.npz b.npz c.npz -o report.png --json",
+                            "diskpack analyze stipple.npz --image sample -o stipple_report.png",
+                            "diskpack analyze colour.npz --image photo.png --json"]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="POINTS",
                    help="point files (realizations of one process), or one stippling .npz "
