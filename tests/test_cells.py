@@ -77,13 +77,16 @@ def test_mic_matches_linprog_on_every_cell(solvers, case, certify):
         return
     res = solvers(dom).solve(pts, w, certify=certify)
     scale = max(dom.width, dom.height)
+    # the host's re-solve is exact to rounding; the device's own float64 vertex
+    # solve loses digits where sites nearly coincide (2e-9 for two sites 4.5e-4 apart)
+    tol = (1e-9 if certify else 1e-8) * scale
     for i in range(len(pts)):
         r = ref.chebyshev_ref(pts, w, dom, i)
         assert res.empty[i] == (r.radius < 0)
         # (an empty cell's negative LP value on a torus depends on how many
         # periodic images enter: only its sign means anything there)
         if r.radius >= 0 or not dom.periodic:
-            assert abs(res.radii[i] - r.radius) <= 1e-9 * scale, (i, res.radii[i], r.radius)
+            assert abs(res.radii[i] - r.radius) <= tol, (i, res.radii[i], r.radius)
         if r.unique and r.radius > 0:
             assert _wrapped_diff(res.centers[i], r.center, dom) <= 1e-6 * scale
 
