@@ -281,7 +281,11 @@ def test_jobs_two_gives_the_files_of_jobs_one(ctx, tmp_path):
     assert len(_files(tmp_path / "j1")) == 6
     assert _differences(tmp_path / "j1", tmp_path / "j2") == []
     workers = {r["worker"] for r in two}
-    assert len(workers) == 2 and os.getpid() not in {int(w.split(":")[1]) for w in workers}
+    # every item ran in a worker process; how the pool spreads three quick items over
+    # its two workers is the scheduler's (one worker can take all of them while the
+    # other is still starting), so the pool's size is read from what it gave each
+    # worker: half the cores for PoCL
+    assert 1 <= len(workers) <= 2 and os.getpid() not in {int(w.split(":")[1]) for w in workers}
     cores = batch.default_jobs()
     for r in two:  # PoCL capped per worker, one device each
         assert r["worker_env"]["POCL_MAX_PTHREAD_COUNT"] == str(max(1, cores // 2))
