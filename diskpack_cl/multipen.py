@@ -279,10 +279,8 @@ def _pen_pull(timings, pen, pens, pull):
         b = pull * max(0.0, 1.0 - index / (PULL_UNTIL * total))
         with timings("pens"):   # the pens' engine keeps its own stages apart
             c = _pen_centroids(*pens, state.points, pen) if b > 0 else None
-        if b > 0:
-            return lambda stepped: replace(stepped, points=stepped.points
-                                           + b * (c - stepped.points))
-        return None
+        return None if c is None else (
+            lambda stepped: replace(stepped, points=stepped.points + b * (c - stepped.points)))
 
     return before
 
