@@ -19,7 +19,6 @@ import argparse
 import json
 import time
 
-import numpy as np
 
 from diskpack_cl import error_diffusion, load_gray, sample_image_path
 from diskpack_cl.export import plot_time
