@@ -51,14 +51,17 @@ SCHEDULES["detail"] = [("mix", 18, 0.5), ("mix", 7, 0.4)]
 #: only centroid-pulling mix steps place them well enough, with the
 #: feature-aware blend.  Every band ends with one step that leans on the
 #: centroids (blend 0.5, 0.75 where dots are sparse): it puts the dots of an
-#: outline back on the outline, which the packing steps round off.
+#: outline back on the outline, which the packing steps round off. Where dots
+#: are sparse, features thinner than their spacing (blades of grass) keep
+#: their dots only with the centroids of the unblurred darkness and a
+#: stronger pull off the white side (``support`` 16).
 #: Measured in docs/stipple_quality.md.
 SPACING_BANDS = (
     (2.5, [("mix", 16, 0.7), ("pack", 2), ("mix", 1, 0.5)], {"radius_sigma": 1.5}),
     (3.0, [("mix", 16, 0.7), ("pack", 1), ("mix", 1, 0.5)], {"radius_sigma": 1.5}),
     (6.0, [("mix", 18, 0.5), ("mix", 6, 0.4), ("mix", 1, 0.5)], {"features": "detail"}),
     (np.inf, [("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 0.75)],
-     {"features": "detail", "radius_sigma": 2.0}),
+     {"features": "detail", "radius_sigma": 2.0, "support": 16.0, "density_sigma": 0.0}),
 )
 
 #: Every schedule name :func:`make_schedule` takes.

@@ -57,11 +57,13 @@ The default schedule follows the dot spacing ``s = sqrt(W H / n)`` px
 blend 0.7, one or two disk-packing steps with radii blurred by 1.5 px, and a
 last step at blend 0.5; from 3 to 6 px 18 + 6 mix steps, feature-aware, and
 a last one at 0.5; from 6 px on 20 + 6 mix steps, feature-aware, radii
-blurred by 2 px, and a last step three quarters of the way to the centroids. All use
-density radii (floor 0.01), centroid density blurred by 0.5 px, ``k`` from
-the 15% quantile of ``R_i / r_i``, ``support=8`` (a dot whose largest empty
-disk leaves its cell's ink, or loses an eighth of its tone, goes to the
-centroid: white paper stays white, outlines stay sharp) and ``capacity=0.1`` (equal ink per dot). The former
+blurred by 2 px, the centroids of the unblurred darkness, ``support=16``
+and a last step three quarters of the way to the centroids. All use
+density radii (floor 0.01), ``k`` from the 15% quantile of ``R_i / r_i``
+and ``capacity=0.1`` (equal ink per dot); below 6 px, centroid density
+blurred by 0.5 px and ``support=8`` (a dot whose largest empty disk leaves
+its cell's ink, or loses an eighth of its tone, goes to the centroid: white
+paper stays white, outlines stay sharp). The former
 defaults remain as ``"classic"`` and ``"detail"``. Options that come with a
 named schedule are in :data:`SCHEDULE_OPTIONS`; explicit keyword arguments
 override them. Measured in ``docs/stipple_quality.md``.

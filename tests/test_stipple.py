@@ -333,6 +333,9 @@ def test_default_schedule_follows_the_dot_spacing():
     assert sparse.phases == (("mix", 20, 0.6), ("mix", 6, 0.4), ("mix", 1, 0.75))
     assert sparse.features == "detail"
     assert sparse.radius_sigma == 2.0
+    # sparse dots follow the unblurred darkness and leave the white side sooner
+    assert (sparse.density_sigma, sparse.support) == (0.0, 16.0)
+    assert (dense.density_sigma, dense.support) == (0.5, 8.0)
     # an explicit option still overrides the band's
     assert StippleOptions.resolve(50000, 512, 512, radius_sigma=3.0).radius_sigma == 3.0
     assert make_schedule(method="lloyd", lloyd=0) == []
