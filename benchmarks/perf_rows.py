@@ -56,7 +56,8 @@ def append(path, row):
     if path is None:
         return
     with open(path, "a") as fh:
-        fh.write(json.dumps({**context(), **row}) + "\n")
+        # numpy scalars and arrays become numbers and lists
+        fh.write(json.dumps({**context(), **row}, default=lambda v: v.tolist()) + "\n")
 
 
 def read(path):
