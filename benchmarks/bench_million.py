@@ -40,6 +40,10 @@ def one_run(n, seed):
     return row, res
 
 
+#: The keys of a run's row that are not the engine's stages.
+RESULT_KEYS = ("total", "start", "relax", "delaunay", "iterations", "rho")
+
+
 def summary(rows):
     """``(header, rows)`` of the docs' table: per n, medians over the runs (the ratio: median of each run's)."""
     runs = [dict(r, ratio=r["total"] / r["delaunay"]) for r in rows if r["kind"] == "run"]
@@ -66,7 +70,9 @@ def main():
     for seed in range(args.repeat):
         row, res = one_run(args.n, seed)
         rows.append(row)
-        append(args.json, {"kind": "run", "n": args.n, "seed": seed, **row})
+        # the load is the context's; the stages are prefixed, one of them is named "device"
+        append(args.json, {"kind": "run", "n": args.n, "seed": seed,
+                           **{k if k in RESULT_KEYS else f"stage_{k}": v for k, v in row.items() if k != "load"}})
         print(" ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()),
               flush=True)
     keys = [k for k in rows[0] if all(k in r for r in rows)]

@@ -37,7 +37,7 @@ from diskpack_cl.sampling import dart_throwing
 from perf_rows import append, count, medians, num
 
 #: The stages of the ``cells`` engine the table shows, and their column names.
-CELL_STAGES = {"buckets": "buckets", "device": "device", "refine": "host check"}
+CELL_STAGES = {"stage_buckets": "buckets", "stage_device": "device", "stage_refine": "host check"}
 
 
 def plain_scipy_step(X, block=4000):
@@ -146,8 +146,8 @@ def main():
             d -= np.round(d)
             dx = float(np.abs(d).max())
             for it, (sec, st) in enumerate(zip(seconds, stages)):
-                append(args.json, {"n": n, "engine": name, "iteration": it, "seconds": sec, **st,
-                                   "max_dx": dx, "rho": float(rho)})
+                append(args.json, {"n": n, "engine": name, "iteration": it, "seconds": sec,
+                                   **{f"stage_{k}": v for k, v in st.items()}, "max_dx": dx, "rho": float(rho)})
             med = {k: float(np.median([s.get(k, 0.0) for s in stages])) for k in stages[0]}
             st = " ".join(f"{k}={v:.4f}" for k, v in med.items())
             sec = np.median(seconds)

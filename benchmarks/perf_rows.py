@@ -52,12 +52,19 @@ def context():
 
 
 def append(path, row):
-    """Append ``row`` and its :func:`context` as one JSON line to ``path`` (nothing when ``path`` is None)."""
+    """Append ``row`` and its :func:`context` as one JSON line to ``path`` (nothing when ``path`` is None).
+
+    A key of ``row`` that the context also has is an error: it would hide the context (a stage named
+    ``device``, say); prefix stage names with ``stage_``.
+    """
     if path is None:
         return
+    ctx = context()
+    if set(row) & set(ctx):
+        raise ValueError(f"row keys {sorted(set(row) & set(ctx))} would hide the context")
     with open(path, "a") as fh:
         # numpy scalars and arrays become numbers and lists
-        fh.write(json.dumps({**context(), **row}, default=lambda v: v.tolist()) + "\n")
+        fh.write(json.dumps({**ctx, **row}, default=lambda v: v.tolist()) + "\n")
 
 
 def read(path):
