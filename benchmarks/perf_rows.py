@@ -104,10 +104,10 @@ def count(n):
 
 def provenance(rows):
     """A sentence on where ``rows`` come from: dates, commits, load averages and devices."""
-    dates = sorted(r["date"] for r in rows)
+    first, last = (d[:16].split("T") for d in (min(r["date"] for r in rows), max(r["date"] for r in rows)))
+    when = f"on {first[0]}, {first[1]} to {last[1]}" if first[0] == last[0] else \
+        f"from {' '.join(first)} to {' '.join(last)}"
     loads = [r["load"] for r in rows]
-    commits = sorted({r["commit"] for r in rows})
-    devices = sorted({r["device"] for r in rows})
-    return (f"{len(rows)} stored rows, measured {dates[0][:16].replace('T', ' ')} to "
-            f"{dates[-1][:16].replace('T', ' ')} UTC at commit {', '.join(commits)} on "
-            f"{', '.join(devices)} ({rows[0]['cores']} cores), load average {min(loads):.1f} to {max(loads):.1f}.")
+    return (f"{len(rows)} stored rows, measured {when} UTC at commit {', '.join(sorted({r['commit'] for r in rows}))}"
+            f" on {', '.join(sorted({r['device'] for r in rows}))} ({rows[0]['cores']} cores), load average "
+            f"{min(loads):.1f} to {max(loads):.1f}.")
