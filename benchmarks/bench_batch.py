@@ -160,9 +160,9 @@ SHOWN = {"jobs 1": "--jobs 1 (in the process, PoCL on both cores)",
 
 
 def summary(rows):
-    """``(header, rows)`` of the docs' throughput table: medians per run of stippling and of ``poisson --count``."""
-    stip = {r["run"]: r for r in medians([r for r in rows if r["part"] == "stipple"], ("run",),
-                                         ["seconds", "images_per_minute", "overhead_per_item_s", "item_seconds_sum", "items"])}
+    """``(header, rows)`` of the docs' throughput table: medians per run of stippling and ``poisson --count``."""
+    values = ["seconds", "images_per_minute", "overhead_per_item_s", "item_seconds_sum", "items"]
+    stip = {r["run"]: r for r in medians([r for r in rows if r["part"] == "stipple"], ("run",), values)}
     sets = {r["run"]: r for r in medians([r for r in rows if r["part"] == "poisson"], ("run",),
                                          ["sets_per_second"])}
     identical = all(r["identical_files"] for r in rows if r["part"] == "stipple")

@@ -37,11 +37,12 @@ def device_name():
 
 @functools.cache
 def commit():
-    """The checkout's short commit, with ``-dirty`` when tracked files other than the stored rows differ from it."""
+    """The checkout's short commit, ``-dirty`` when tracked files other than the stored rows differ from it."""
     def git(*args):
         return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True).stdout.strip()
 
-    return (git("rev-parse", "--short", "HEAD") or "unknown") + ("-dirty" if git("status", "--porcelain", "-uno", "--", ".", ":!docs/perf") else "")
+    dirty = git("status", "--porcelain", "-uno", "--", ".", ":!docs/perf")
+    return (git("rev-parse", "--short", "HEAD") or "unknown") + ("-dirty" if dirty else "")
 
 
 def context():
@@ -108,6 +109,7 @@ def provenance(rows):
     when = f"on {first[0]}, {first[1]} to {last[1]}" if first[0] == last[0] else \
         f"from {' '.join(first)} to {' '.join(last)}"
     loads = [r["load"] for r in rows]
-    return (f"{len(rows)} stored rows, measured {when} UTC at commit {', '.join(sorted({r['commit'] for r in rows}))}"
+    commits = ", ".join(sorted({r["commit"] for r in rows}))
+    return (f"{len(rows)} stored rows, measured {when} UTC at commit {commits}"
             f" on {', '.join(sorted({r['device'] for r in rows}))} ({rows[0]['cores']} cores), load average "
             f"{min(loads):.1f} to {max(loads):.1f}.")

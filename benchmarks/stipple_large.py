@@ -23,17 +23,23 @@ from diskpack_cl.schedule import SCHEDULE_OPTIONS
 from diskpack_cl.stipple import stipple
 from perf_rows import append, count, medians, num
 
+#: Names the table gives the stages (``load`` is loading the image, not the load average).
+STAGE_NAMES = {"load": "loading the image", "device": "MIC kernel", "refine": "MIC host check",
+               "raster_labels": "labels"}
+
 
 def summary(rows):
     """``(header, rows)`` of the docs' table: medians per image, n and schedule, with the run's stages."""
     # "total" is the seconds column again
     stages = list(dict.fromkeys(k for r in rows for k in r if k.startswith("stage_") and k != "stage_total"))
-    runs = medians(rows, ("size", "n", "schedule"), ["seconds", "iterations", "s_per_iter", "peak_rss_gib", *stages])
+    values = ["seconds", "iterations", "s_per_iter", "peak_rss_gib", *stages]
+    runs = medians(rows, ("size", "n", "schedule"), values)
     header = ["image", "n", "schedule", "steps", "seconds to the certified result", "median s/iter",
               "peak resident memory", "stages (s)"]
     return header, [[f"{r['size']} x {r['size']}", count(r["n"]), r["schedule"], num(r["iterations"]),
                      num(r["seconds"]), num(r["s_per_iter"]), num(r["peak_rss_gib"], " GiB"),
-                     ", ".join(f"{k[6:]} {num(r[k])}" for k in stages if (r[k] or 0) >= 0.05)] for r in runs]
+                     ", ".join(f"{STAGE_NAMES.get(k[6:], k[6:])} {num(r[k])}"
+                               for k in stages if (r[k] or 0) >= 0.05)] for r in runs]
 
 
 def main():

@@ -122,7 +122,8 @@ def test_summary_takes_the_median_of_the_repeats():
     bench = _ext()._benchmark("bench_relax")
     rows = [{"n": 1000, "engine": engine, "iteration": i, "seconds": scale * s, "stage_buckets": 0.1 * s,
              "stage_device": 0.2 * s, "stage_refine": 0.3 * s, "max_dx": 1e-16}
-            for engine, scale in (("cells", 1.0), ("exact", 10.0), ("raster", 20.0)) for i, s in enumerate((9, 1, 2))]
+            for engine, scale in (("cells", 1.0), ("exact", 10.0), ("raster", 20.0))
+            for i, s in enumerate((9, 1, 2))]
     header, table = bench.summary(rows)
     (row,) = table
     cells = dict(zip(header, row))
