@@ -110,9 +110,9 @@ def run_plain(points, iters):
 def summary(rows):
     """``(header, rows)`` of the docs' table: per n, each engine's median seconds per iteration and ratios."""
     med = {(r["n"], r["engine"]): r for r in medians(rows, ("n", "engine"), ["seconds", *CELL_STAGES])}
-    header = ["n", "`cells` (opencl default)", "`exact` (scipy)", "`raster` route", "`plain` scipy",
+    header = ["n", "cells (opencl default)", "exact (scipy)", "raster route", "plain scipy",
               "cells / exact", "cells / plain", "cells stages: " + " / ".join(CELL_STAGES.values()),
-              "max centre difference from `exact`"]
+              "max centre difference from exact"]
     out = []
     for n in dict.fromkeys(r["n"] for r in rows):
         s = {e: med[n, e]["seconds"] if (n, e) in med else None for e in ("cells", "exact", "raster", "plain")}

@@ -103,13 +103,18 @@ def count(n):
     return "" if n is None else f"{int(n):,}".replace(",", " ")
 
 
+def _span(low, high, fmt=str):
+    """``low to high``, or one value when they are the same."""
+    return fmt(low) if fmt(low) == fmt(high) else f"{fmt(low)} to {fmt(high)}"
+
+
 def provenance(rows):
     """A sentence on where ``rows`` come from: dates, commits, load averages and devices."""
     first, last = (d[:16].split("T") for d in (min(r["date"] for r in rows), max(r["date"] for r in rows)))
-    when = f"on {first[0]}, {first[1]} to {last[1]}" if first[0] == last[0] else \
+    when = f"on {first[0]}, {_span(first[1], last[1])}" if first[0] == last[0] else \
         f"from {' '.join(first)} to {' '.join(last)}"
     loads = [r["load"] for r in rows]
     commits = ", ".join(sorted({r["commit"] for r in rows}))
-    return (f"{len(rows)} stored rows, measured {when} UTC at commit {commits}"
-            f" on {', '.join(sorted({r['device'] for r in rows}))} ({rows[0]['cores']} cores), load average "
-            f"{min(loads):.1f} to {max(loads):.1f}.")
+    return (f"{count(len(rows))} stored row{'s' if len(rows) > 1 else ''}, measured {when} UTC at commit "
+            f"{commits} on {', '.join(sorted({r['device'] for r in rows}))} ({rows[0]['cores']} cores), "
+            f"load average {_span(min(loads), max(loads), lambda x: f'{x:.1f}')}.")
