@@ -251,8 +251,11 @@ class BenchmarkTableDirective(Directive):
         name = self.arguments[0]
         out = [table_node(*TABLES[name]())]
         if name in PERF_TABLES:
-            # a changed rows file rebuilds the page
-            self.state.document.settings.env.note_dependency(str(ROOT / "docs" / "perf" / PERF_TABLES[name][1]))
+            # changed rows or summary code rebuild the page
+            bench, rows_file = PERF_TABLES[name][:2]
+            for path in (ROOT / "docs" / "perf" / rows_file, ROOT / "benchmarks" / f"{bench}.py",
+                         ROOT / "benchmarks" / "perf_rows.py"):
+                self.state.document.settings.env.note_dependency(str(path))
             note = _benchmark("perf_rows").provenance(perf_rows(name))
             out.append(nodes.paragraph("", "", nodes.emphasis(text=note)))
         return out
