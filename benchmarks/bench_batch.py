@@ -14,7 +14,11 @@ time not spent inside items (start-up, dispatch, the idle tail):
 spawning its workers, the cluster is started before it is timed.
 
     python benchmarks/bench_batch.py [-n 20000] [--count 1000] [--memory-n 20000 200000]
-        [--skip stipple poisson memory] [--json out.json]
+        [--skip stipple poisson memory] [--json rows.jsonl]
+
+``--json`` appends a row per run (``part``: ``stipple``, ``poisson`` or
+``memory``) with the context of :mod:`perf_rows`; :func:`summary` and
+:func:`summary_memory` make the docs' tables of them.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from pathlib import Path
 from PIL import Image
 
 from diskpack_cl.batch import POCL_THREAD_VARS, default_jobs, poisson_many, stipple_many
+from perf_rows import append, count, medians, num
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 
@@ -78,6 +83,7 @@ def cluster():
 
 
 def bench_stipple(work, n, client):
+    """Rows of the three stipple runs (each with ``identical_files``), after a printed comparison."""
     photos = photographs(work)
     out, rows = {}, {}
     for label, run, workers in (("jobs 1", dict(jobs=1), 1), ("jobs 2", dict(jobs=2), 2),
@@ -87,7 +93,8 @@ def bench_stipple(work, n, client):
         seconds, recs = timed(stipple_many(photos, [str(folder / "{stem}.svg"),
                                                     str(folder / "{stem}.npz")], n=n, **run))
         item_seconds = sum(r["seconds"] for r in recs)
-        rows[label] = {"seconds": seconds, "images_per_minute": 60 * len(photos) / seconds,
+        rows[label] = {"part": "stipple", "run": label, "n": n, "items": len(photos), "workers": workers,
+                       "seconds": seconds, "images_per_minute": 60 * len(photos) / seconds,
                        "item_seconds_sum": item_seconds,
                        # worker time not spent in items: start-up, dispatch, idle tail
                        "overhead_per_item_s": (seconds * workers - item_seconds) / len(photos),
@@ -97,37 +104,35 @@ def bench_stipple(work, n, client):
               f"{rows[label]['images_per_minute']:6.2f} images/min  "
               f"(sum of item times {item_seconds:.1f} s, overhead per item "
               f"{rows[label]['overhead_per_item_s']:.2f} s)", flush=True)
-    rows["identical_files"] = same_files(out["jobs 1"], out["jobs 2"]) and \
-        same_files(out["jobs 1"], out["LocalCluster 2x1"])
+    identical = same_files(out["jobs 1"], out["jobs 2"]) and same_files(out["jobs 1"], out["LocalCluster 2x1"])
     local, dask = rows["jobs 2"]["seconds"], rows["LocalCluster 2x1"]["seconds"]
-    rows["dask_minus_jobs2_per_item_s"] = (dask - local) / len(photos)
-    rows["dask_minus_jobs2_fraction"] = (dask - local) / local
     per_item = rows["jobs 2"]["item_seconds_sum"] / len(photos)
-    rows["dask_overhead_fraction_of_item"] = rows["LocalCluster 2x1"]["overhead_per_item_s"] / per_item
-    print(f"identical files: {rows['identical_files']}; wall time Dask - jobs 2: "
-          f"{rows['dask_minus_jobs2_per_item_s']:+.2f} s per item "
-          f"({100 * rows['dask_minus_jobs2_fraction']:+.1f} %); Dask overhead "
-          f"{100 * rows['dask_overhead_fraction_of_item']:.1f} % of an item's time", flush=True)
-    return rows
+    print(f"identical files: {identical}; wall time Dask - jobs 2: {(dask - local) / len(photos):+.2f} s "
+          f"per item ({100 * (dask - local) / local:+.1f} %); Dask overhead "
+          f"{100 * rows['LocalCluster 2x1']['overhead_per_item_s'] / per_item:.1f} % of an item's time",
+          flush=True)
+    return [dict(r, identical_files=identical) for r in rows.values()]
 
 
 def bench_poisson(work, count, n, client):
-    rows = {}
+    """Rows of the three ``poisson --count`` runs."""
+    rows = []
     for label, run in (("jobs 1", dict(jobs=1)), ("jobs 2", dict(jobs=2)),
                        ("LocalCluster 2x1", dict(client=client))):
         folder = Path(work) / f"sets_{label.replace(' ', '_')}"
         folder.mkdir()
         seconds, _ = timed(poisson_many(count, n, [str(folder / "{i:04d}.npz")], seed=7,
                                         **run))
-        rows[label] = {"seconds": seconds, "sets_per_second": count / seconds}
+        rows.append({"part": "poisson", "run": label, "count": count, "points": n, "seconds": seconds,
+                     "sets_per_second": count / seconds})
         print(f"poisson --count {count} -n {n} {label:17s} {seconds:7.1f} s  "
               f"{count / seconds:7.1f} sets/s", flush=True)
     return rows
 
 
 def bench_memory(work, sizes):
-    """Peak resident memory of one worker process stippling the sample at each n."""
-    rows = {}
+    """Rows of the peak resident memory of one worker process stippling the sample at each n."""
+    rows = []
     for n in sizes:
         folder = Path(work) / f"mem_{n}"
         folder.mkdir()
@@ -142,10 +147,39 @@ def bench_memory(work, sizes):
                 "'peak_rss_mib')}))")
         rec = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                         check=True).stdout.splitlines()[-1])
-        rows[n] = {**rec, "image": f"{side}x{side}"}
+        rows.append({"part": "memory", "n": n, **rec, "image": f"{side} x {side}"})
         print(f"memory n={n} ({side}x{side}): peak {rec['peak_rss_mib']} MiB in "
               f"{rec['seconds']:.1f} s ({rec['status']})", flush=True)
     return rows
+
+
+#: How the tables name the runs.
+SHOWN = {"jobs 1": "--jobs 1 (in the process, PoCL on both cores)",
+         "jobs 2": "--jobs 2 (two spawned workers, one PoCL thread each)",
+         "LocalCluster 2x1": "Dask LocalCluster, 2 process workers x 1 thread"}
+
+
+def summary(rows):
+    """``(header, rows)`` of the docs' throughput table: medians per run of stippling and ``poisson --count``."""
+    values = ["seconds", "images_per_minute", "overhead_per_item_s", "item_seconds_sum", "items"]
+    stip = {r["run"]: r for r in medians([r for r in rows if r["part"] == "stipple"], ("run",), values)}
+    sets = {r["run"]: r for r in medians([r for r in rows if r["part"] == "poisson"], ("run",),
+                                         ["sets_per_second"])}
+    identical = all(r["identical_files"] for r in rows if r["part"] == "stipple")
+    header = ["run", "wall time", "images per minute", "overhead per item", "overhead / item time",
+              "poisson sets per second", "files identical across runs"]
+    return header, [[SHOWN[run], num(r["seconds"], " s"), num(r["images_per_minute"]),
+                     num(r["overhead_per_item_s"], " s"),
+                     num(100 * r["overhead_per_item_s"] * r["items"] / r["item_seconds_sum"], " %"),
+                     num(sets.get(run, {}).get("sets_per_second")), "yes" if identical else "no"]
+                    for run, r in stip.items()]
+
+
+def summary_memory(rows):
+    """``(header, rows)`` of the docs' table of one worker's peak resident memory per n."""
+    runs = medians([r for r in rows if r["part"] == "memory"], ("n", "image"), ["peak_rss_mib", "seconds"])
+    return ["n", "image", "peak resident memory", "seconds"], \
+        [[count(r["n"]), r["image"], num(r["peak_rss_mib"], " MiB"), num(r["seconds"], " s")] for r in runs]
 
 
 def main(argv=None):
@@ -158,27 +192,27 @@ def main(argv=None):
     ap.add_argument("--skip", nargs="*", default=[], choices=("stipple", "poisson", "memory"))
     ap.add_argument("--json")
     a = ap.parse_args(argv)
-    load = os.getloadavg()[0]
-    print(f"cores {default_jobs()}, load average {load:.2f} at the start", flush=True)
-    result = {"cores": default_jobs(), "load_average_start": load}
+    print(f"cores {default_jobs()}, load average {os.getloadavg()[0]:.2f} at the start", flush=True)
+
+    def record(rows):   # each part's rows as soon as it ends, with the load of that time
+        for row in rows:
+            append(a.json, row)
+
     with tempfile.TemporaryDirectory(prefix="bench-batch-") as work:
         lc = client = None
         if not {"stipple", "poisson"} <= set(a.skip):
             lc, client = cluster()
         try:
             if "stipple" not in a.skip:
-                result["stipple"] = bench_stipple(work, a.n, client)
+                record(bench_stipple(work, a.n, client))
             if "poisson" not in a.skip:
-                result["poisson"] = bench_poisson(work, a.count, a.points, client)
+                record(bench_poisson(work, a.count, a.points, client))
         finally:
             if client is not None:
                 client.close()
                 lc.close()
         if "memory" not in a.skip:
-            result["memory"] = bench_memory(work, a.memory_n)
-    result["load_average_end"] = os.getloadavg()[0]
-    if a.json:
-        Path(a.json).write_text(json.dumps(result, indent=1))
+            record(bench_memory(work, a.memory_n))
     return 0
 
 

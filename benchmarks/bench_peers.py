@@ -21,17 +21,20 @@ torus.  Each peer's radius is set from its packing density so that it
 returns about n points (in 2D scipy and poisson_disc reach rho ~0.72,
 bridson ~0.66 with its default k = 5; in 3D about 0.755).  diskpack relaxes
 to its default eps 0.8 in both; its time includes building the kernel in
-the fresh worker (about 1 s on PoCL).  A peer that passes ``--timeout`` is listed
-as such.
+the fresh worker (about 1 s on PoCL).  A peer that passes ``--timeout`` is
+stopped and listed as such.  ``--json`` appends a row per run (a stopped one
+with ``stopped_after``) with the context of :mod:`perf_rows`; :func:`summary`
+makes the docs' tables of them.
 """
 
 import argparse
-import json
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor, TimeoutError
 
 import numpy as np
+
+from perf_rows import append, count, medians, num
 
 #: rho each peer reaches (measured), to ask it for about n points, by dimension.
 PEER_RHO = {2: {"scipy": 0.72, "poisson_disc": 0.72, "bridson": 0.66},
@@ -93,6 +96,27 @@ def measures(pts, dim, torus):
     return out
 
 
+#: How the tables name the samplers.
+SHOWN = {"diskpack": "diskpack", "scipy": "scipy PoissonDisk", "poisson_disc": "`poisson_disc`",
+         "bridson": "`bridson`"}
+
+
+def summary(rows, dim=2):
+    """``(header, rows)`` of the docs' table for ``dim``: medians per size, domain and sampler."""
+    values = ["n", "seconds", "rho", "stopped_after"] + (["low", "peak"] if dim == 2 else [])
+    header = ["n", "domain", "sampler", "n produced", "seconds", "rho"] + (["low", "peak"] if dim == 2 else [])
+    out = []
+    for r in medians([r for r in rows if r["dim"] == dim], ("asked", "domain", "sampler"), values):
+        if r["seconds"] is None:
+            seconds = f"> {r['stopped_after']:g} (stopped)"
+        else:
+            seconds = num(r["seconds"])
+        tail = [num(r["low"]), num(r["peak"])] if dim == 2 else []
+        out.append([count(r["asked"]), r["domain"], SHOWN[r["sampler"]], count(r["n"]), seconds,
+                    "" if r["rho"] is None else f"{r['rho']:.3f}", *tail])
+    return header, out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", default="1000,10000,100000")
@@ -117,15 +141,15 @@ def main():
                         for p in pool._processes.values():   # a peer past the timeout is stopped
                             p.terminate()
                         print(f"| {args.dim} | {n} | box | {name} | - | > {args.timeout:g} | - |")
+                        append(args.json, {"dim": args.dim, "asked": n, "domain": "box", "sampler": name,
+                                           "stopped_after": args.timeout})
                         continue
                 row = {"dim": args.dim, "asked": n, "domain": "torus" if torus else "box",
                        "sampler": name, "seconds": sec, **measures(pts, args.dim, torus)}
                 extra = f" {row['low']:.3f} | {row['peak']:.2f} |" if args.dim == 2 else ""
                 print(f"| {args.dim} | {n} | {row['domain']} | {name} | {row['n']} | {sec:.3g} | "
                       f"{row['rho']:.3f} |{extra}", flush=True)
-                if args.json:
-                    with open(args.json, "a") as fh:
-                        fh.write(json.dumps(row) + "\n")
+                append(args.json, row)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Seconds per relaxation iteration (Algorithm 1): every engine, and a plain scipy code.
 
 Usage: python benchmarks/bench_relax.py [--sizes 1024,20000,100000,1000000] [--iters 5]
-                                        [--plain-up-to 20000] [--profile]
+                                        [--plain-up-to 20000] [--profile] [--json rows.jsonl]
 
 Each size starts from a dart-throwing set (rho ~ 0.74) and runs `iters`
 iterations of Algorithm 1 with each engine in the same process, so that
@@ -19,6 +19,9 @@ seconds per iteration and its stages:
   to ``--plain-up-to`` points.
 
 Every engine's iterate is checked against ``exact``'s (max centre difference).
+With ``--json`` every iteration is appended as a row (n, engine, seconds,
+stages, that max difference, and the context of :mod:`perf_rows`);
+:func:`summary` makes the docs' table of them.
 """
 
 import argparse
@@ -31,6 +34,10 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.engine import make_engine
 from diskpack_cl.measures import normalized_radius
 from diskpack_cl.sampling import dart_throwing
+from perf_rows import append, count, medians, num
+
+#: The stages of the ``cells`` engine the table shows, and their column names.
+CELL_STAGES = {"stage_buckets": "buckets", "stage_device": "device", "stage_refine": "host check"}
 
 
 def plain_scipy_step(X, block=4000):
@@ -78,27 +85,42 @@ def run_engine(points, name, iters, profile):
                       route="auto" if name == "exact" else name,
                       profile=profile)
     eng.mic(points)    # build and warm outside the timing
-    X, rows, stages = points.copy(), [], []
+    X, seconds, stages = points.copy(), [], []
     for _ in range(iters):
         t0, mark = time.perf_counter(), eng.timings.mark()
         step = eng.mic(X)
         X = step.centers
         rho = 0.5 * step.nn.min() / np.sqrt(1 / (2 * np.sqrt(3) * len(X))) if step.nn is not None \
             else normalized_radius(X)
-        rows.append(time.perf_counter() - t0)
+        seconds.append(time.perf_counter() - t0)
         stages.append(eng.timings.since(mark))
-    med = {k: float(np.median([s.get(k, 0.0) for s in stages])) for k in stages[0]}
-    return float(np.median(rows)), med, X, rho
+    return seconds, stages, X, rho
 
 
 def run_plain(points, iters):
-    X, rows = points.copy(), []
+    X, seconds = points.copy(), []
     for _ in range(iters):
         t0 = time.perf_counter()
         X = plain_scipy_step(X)
         normalized_radius(X)
-        rows.append(time.perf_counter() - t0)
-    return float(np.median(rows)), {}, X, normalized_radius(X)
+        seconds.append(time.perf_counter() - t0)
+    return seconds, [{}] * iters, X, normalized_radius(X)
+
+
+def summary(rows):
+    """``(header, rows)`` of the docs' table: per n, each engine's median seconds per iteration and ratios."""
+    med = {(r["n"], r["engine"]): r for r in medians(rows, ("n", "engine"), ["seconds", *CELL_STAGES])}
+    header = ["n", "cells (opencl default)", "exact (scipy)", "raster route", "plain scipy",
+              "cells / exact", "cells / plain", "cells stages: " + " / ".join(CELL_STAGES.values()),
+              "max centre difference from exact"]
+    out = []
+    for n in dict.fromkeys(r["n"] for r in rows):
+        s = {e: med[n, e]["seconds"] if (n, e) in med else None for e in ("cells", "exact", "raster", "plain")}
+        ratio = {e: num(s["cells"] / s[e]) if s[e] else "" for e in ("exact", "plain")}
+        stages = " / ".join(num(med[n, "cells"][k]) for k in CELL_STAGES)
+        dx = max(r["max_dx"] for r in rows if r["n"] == n)
+        out.append([count(n), *(num(s[e]) for e in s), ratio["exact"], ratio["plain"], stages, f"{dx:.1e}"])
+    return header, out
 
 
 def main():
@@ -107,6 +129,7 @@ def main():
     ap.add_argument("--iters", type=int, default=5)
     ap.add_argument("--plain-up-to", type=int, default=20000)
     ap.add_argument("--profile", action="store_true", help="OpenCL event times (stage 'kernel')")
+    ap.add_argument("--json", default=None, help="append one JSON line per iteration to this file")
     args = ap.parse_args()
     print(f"{'n':>8} {'engine':>7} {'s/iter':>9} {'x exact':>8} {'max |dx|':>9}  stages (median s)")
     for n in (int(s) for s in args.sizes.split(",")):
@@ -117,14 +140,21 @@ def main():
         if n <= args.plain_up_to:
             res["plain"] = run_plain(pts, args.iters)
         ref_x = res["exact"][2]
-        for name, (sec, stages, X, rho) in res.items():
+        sec_exact = np.median(res["exact"][0])
+        for name, (seconds, stages, X, rho) in res.items():
             d = X - ref_x
             d -= np.round(d)
-            st = " ".join(f"{k}={v:.4f}" for k, v in stages.items())
-            print(f"{n:>8} {name:>7} {sec:9.4f} {sec / res['exact'][0]:8.3f} {np.abs(d).max():9.1e}  {st}",
-                  flush=True)
+            dx = float(np.abs(d).max())
+            for it, (sec, st) in enumerate(zip(seconds, stages)):
+                append(args.json, {"n": n, "engine": name, "iteration": it, "seconds": sec,
+                                   **{f"stage_{k}": v for k, v in st.items()}, "max_dx": dx, "rho": float(rho)})
+            med = {k: float(np.median([s.get(k, 0.0) for s in stages])) for k in stages[0]}
+            st = " ".join(f"{k}={v:.4f}" for k, v in med.items())
+            sec = np.median(seconds)
+            print(f"{n:>8} {name:>7} {sec:9.4f} {sec / sec_exact:8.3f} {dx:9.1e}  {st}", flush=True)
         if "plain" in res:
-            print(f"{n:>8} cells / plain scipy = {res['cells'][0] / res['plain'][0]:.3f}", flush=True)
+            print(f"{n:>8} cells / plain scipy = {np.median(res['cells'][0]) / np.median(res['plain'][0]):.3f}",
+                  flush=True)
 
 
 if __name__ == "__main__":

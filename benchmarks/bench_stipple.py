@@ -11,15 +11,16 @@ default's options), ``mix-before`` (the same without ``support`` and
 ``capacity``, the default's step before issue 17) and ``lloyd``.
 
     python benchmarks/bench_stipple.py [--n 5000 20000 50000] [--sizes 512 2048]
-        [--iters 5] [--device pocl] [--json out.json] [--profile]
+        [--iters 5] [--device pocl] [--json rows.jsonl] [--profile]
 
 ``--profile`` adds the device seconds of the kernels per iteration (OpenCL
 events): all of them (``kernel``) and, in the JSON, per kernel.
 
 With ``--end-to-end N``: whole runs at N dots on the sample instead, the
-default schedule, the default as before issue 17 and the paper's Fig. 8
-schedule (180 disk-packing and 30 Lloyd iterations: three rounds of 60 +
-10), seconds from the image to the certified result.
+default schedule, the default as before issue 17, the former default
+(``classic``) and the paper's Fig. 8 schedule (180 disk-packing and 30
+Lloyd iterations: three rounds of 60 + 10), seconds from the image to the
+certified result.
 
 With ``--color``: whole CMYK stipplings (:func:`diskpack_cl.stipple_colors`)
 against mono ones of the same n on the same joint density (the coverage of
@@ -31,12 +32,16 @@ medians of the seconds and of those ratios, and the colour run's own stages
 (separation, pen assignment, the pens' centroids):
 
     python benchmarks/bench_stipple.py --color --n 20000 50000 --sizes 512 --reps 5
+
+In every mode ``--json`` appends a row per measurement (``kind``:
+``iterations``, ``end-to-end`` or ``color``) with the context of
+:mod:`perf_rows`; :func:`summary` and :func:`summary_end_to_end` make the
+docs' tables of the first two.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 
@@ -46,6 +51,7 @@ from diskpack_cl.image import load_gray, sample_image_path
 from diskpack_cl.dithering import error_diffusion
 from diskpack_cl.schedule import SCHEDULE_OPTIONS
 from diskpack_cl.stipple import stipple
+from perf_rows import append, count, medians, num
 
 
 def image(size):
@@ -74,6 +80,30 @@ def med_sum(history, keys):
     return float(np.median(v)) if v else float("nan")
 
 
+def summary(rows):
+    """``(header, rows)`` of the docs' table: median seconds per iteration and stage per image, n, method."""
+    values = ["s_per_iter", "mic_s", "centroids_s", "labels_s"]
+    med = {(r["size"], r["n"], r["method"]): r
+           for r in medians([r for r in rows if r["kind"] == "iterations"], ("size", "n", "method"), values)}
+    header = ["image", "n", "disk packing s/iter (MIC)", "default mix s/iter (MIC / centroids)",
+              "weighted Lloyd s/iter (labels / centroids)"]
+    out = []
+    for size, n in dict.fromkeys(key[:2] for key in med):
+        pack, mix, lloyd = (med[size, n, m] for m in ("diskpack", "mix", "lloyd"))
+        out.append([f"{size} x {size}", count(n), f"{num(pack['s_per_iter'])} ({num(pack['mic_s'])})",
+                    f"{num(mix['s_per_iter'])} ({num(mix['mic_s'])} / {num(mix['centroids_s'])})",
+                    f"{num(lloyd['s_per_iter'])} ({num(lloyd['labels_s'])} / {num(lloyd['centroids_s'])})"])
+    return header, out
+
+
+def summary_end_to_end(rows):
+    """``(header, rows)`` of the docs' table of whole stipplings: median seconds per schedule and n."""
+    runs = medians([r for r in rows if r["kind"] == "end-to-end"], ("schedule", "n"), ["iterations", "seconds"])
+    header = ["schedule", "n", "steps", "seconds to the certified result", "s/iter"]
+    return header, [[r["schedule"], count(r["n"]), count(r["iterations"]), num(r["seconds"]),
+                     num(r["seconds"] / r["iterations"])] for r in runs]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, nargs="+", default=[5000, 20000, 50000])
@@ -88,10 +118,9 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=5, help="--color: rounds")
     a = ap.parse_args(argv)
     if a.end_to_end:
-        return end_to_end(a.end_to_end, a.device)
+        return end_to_end(a.end_to_end, a.device, a.json)
     if a.color:
         return color_against_mono(a)
-    rows = []
     hdr = f"{'size':>5s} {'n':>7s} {'method':8s} {'start':>7s} {'s/iter':>7s} {'labels':>7s} {'mic':>7s} {'centr':>7s}"
     hdr += f" {'kernel':>7s}" if a.profile else ""
     print(hdr)
@@ -121,13 +150,10 @@ def main(argv=None):
                        "supersample": res.params["supersample"]}
                 kernels = sorted({k for h in hist for k in h if k.startswith("kernel")})
                 row.update({k: med(hist, k) for k in kernels})
-                rows.append(row)
+                append(a.json, {"kind": "iterations", "iters": a.iters, **row})
                 print(f"{size:5d} {n:7d} {method:8s} {t_start:7.3f} {row['s_per_iter']:7.3f} "
                       f"{row['labels_s']:7.3f} {row['mic_s']:7.3f} {row['centroids_s']:7.3f}"
                       + (f" {row['kernel_s']:7.3f}" if a.profile else ""), flush=True)
-    if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
     return 0
 
 
@@ -146,7 +172,6 @@ def color_against_mono(a):
     from diskpack_cl.color import separate
     from diskpack_cl.multipen import stipple_colors
 
-    rows = []
     print(f"{'image':10s} {'size':>5s} {'n':>7s} {'mono s':>7s} {'cmyk s':>7s} {'ratio':>6s} "
           f"{'min':>5s} {'max':>5s}  cmyk stages (s)")
     for name, size, n in ((i, s, n) for i in a.images for s in a.sizes for n in a.n):
@@ -166,26 +191,26 @@ def color_against_mono(a):
                     stages.append(res.timings)
         ratio = np.array(cmyk) / np.array(mono)
         st = {k: float(np.median([s.get(k, 0.0) for s in stages])) for k in stages[0]}
-        rows.append({"image": name, "size": size, "n": n, "reps": a.reps, "mono_s": mono, "cmyk_s": cmyk,
-                     "ratio_median": float(np.median(ratio)), "cmyk_stages_median": st})
+        append(a.json, {"kind": "color", "image": name, "size": size, "n": n, "reps": a.reps, "mono_s": mono,
+                        "cmyk_s": cmyk, "ratio_median": float(np.median(ratio)), "cmyk_stages_median": st})
         print(f"{name:10s} {size:5d} {n:7d} {np.median(mono):7.2f} {np.median(cmyk):7.2f} "
               f"{np.median(ratio):6.2f} {ratio.min():5.2f} {ratio.max():5.2f}  "
               + " ".join(f"{k} {v:.2f}" for k, v in st.items() if k != "total"), flush=True)
-    if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
     return 0
 
 
-def end_to_end(n, device):
-    """Whole stipplings of the sample: the default schedule, as before issue 17, and the paper's Fig. 8 one."""
+def end_to_end(n, device, json_path):
+    """Whole stipplings of the sample: the default schedule, as before issue 17, classic and the paper's Fig. 8."""
     runs = (("default", {}), ("default before issue 17 (no support, no capacity)",
                               dict(support=0.0, capacity=0.0)),
+            ("classic (the former default)", dict(schedule="classic")),
             ("paper Fig. 8 (3 x (60 pack + 10 Lloyd))", dict(schedule=[("pack", 60), ("lloyd", 10)] * 3)))
     for name, kw in runs:
         t = time.perf_counter()
         res = stipple(sample_image_path(), n, seed=0, device=device, **kw)
         total = time.perf_counter() - t
+        append(json_path, {"kind": "end-to-end", "schedule": name, "n": n, "iterations": len(res.history),
+                           "seconds": total, "valid": bool(res.certificate.valid)})
         print(f"n={n} {name}: {len(res.history)} iterations, {total:.1f} s to the certified result "
               f"({total / len(res.history):.3f} s/iter), certificate valid: {res.certificate.valid}",
               flush=True)

@@ -90,3 +90,55 @@ def test_guide_commands_parse():
             parser.parse_args(argv)
         except SystemExit as exc:  # pragma: no cover - shown on failure
             pytest.fail(f"{page}: diskpack {' '.join(argv)} does not parse (status {exc.code})")
+
+
+#: A column each performance table must have (the one that names what it measures).
+PERF_COLUMNS = {"relax": "cells (opencl default)", "peers-2d": "low", "peers-3d": "rho", "paper": "the paper",
+                "million": "total / Delaunay", "stipple": "default mix s/iter (MIC / centroids)",
+                "stipple-end-to-end": "seconds to the certified result", "stipple-large": "peak resident memory",
+                "batch": "images per minute", "batch-memory": "peak resident memory"}
+
+
+@pytest.mark.parametrize("name", sorted(PERF_COLUMNS))
+def test_performance_tables_build_from_their_rows(name):
+    ext = _ext()
+    header, rows = ext.TABLES[name]()
+    assert PERF_COLUMNS[name] in header
+    assert rows and all(len(r) == len(header) for r in rows)
+    assert all(any(str(c).strip() for c in r[1:]) for r in rows), "a row without numbers"
+    stored = ext.perf_rows(name)
+    assert all({"date", "commit", "load", "device"} <= set(r) for r in stored)
+    assert "load average" in ext._benchmark("perf_rows").provenance(stored)
+
+
+def test_performance_tables_are_all_registered():
+    assert set(PERF_COLUMNS) == set(_ext().PERF_TABLES)
+    assert {p.name for p in (ROOT / "docs" / "perf").glob("*.jsonl")} == \
+        {f for _, f, _, _ in _ext().PERF_TABLES.values()}
+
+
+def test_summary_takes_the_median_of_the_repeats():
+    # first row, mean and median differ for every measured value
+    bench = _ext()._benchmark("bench_relax")
+    rows = [{"n": 1000, "engine": engine, "iteration": i, "seconds": scale * s, "stage_buckets": 0.1 * s,
+             "stage_device": 0.2 * s, "stage_refine": 0.3 * s, "max_dx": 1e-16}
+            for engine, scale in (("cells", 1.0), ("exact", 10.0), ("raster", 20.0))
+            for i, s in enumerate((9, 1, 2))]
+    header, table = bench.summary(rows)
+    (row,) = table
+    cells = dict(zip(header, row))
+    assert cells["n"] == "1 000"
+    assert cells["cells (opencl default)"] == "2" and cells["exact (scipy)"] == "20"
+    assert cells["raster route"] == "40" and cells["plain scipy"] == ""
+    assert cells["cells / exact"] == "0.1"
+    assert cells["cells stages: buckets / device / host check"] == "0.2 / 0.4 / 0.6"
+
+
+def test_peers_summary_shows_a_stopped_peer():
+    bench = _ext()._benchmark("bench_peers")
+    rows = [{"dim": 2, "asked": 1000, "domain": "box", "sampler": "bridson", "n": n, "seconds": s, "rho": 0.66,
+             "low": 0.1, "peak": 1.5} for n, s in ((1017, 3.0), (1010, 0.1), (1020, 0.2))]
+    rows.append({"dim": 2, "asked": 10**6, "domain": "box", "sampler": "scipy", "stopped_after": 60.0})
+    header, table = bench.summary(rows, dim=2)
+    assert [r[3:5] for r in table] == [["1 017", "0.2"], ["", "> 60 (stopped)"]]
+    assert bench.summary(rows, dim=3)[1] == []

@@ -8,7 +8,9 @@
     flags, argument, default, help.
 ``diskpack-table NAME``
     A results table computed at build time from a benchmark's ``.jsonl`` file
-    in ``docs/`` by the benchmark's own summary code (see :data:`TABLES`).
+    in ``docs/`` by the benchmark's own summary code (see :data:`TABLES`); the
+    performance tables (:data:`PERF_TABLES`, rows in ``docs/perf/``) are
+    followed by the date, commit, load and device their rows carry.
 
 The tables are docutils nodes made here (plain text in every cell), so they
 read the same from reStructuredText and from MyST Markdown, and no help text
@@ -20,10 +22,12 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import functools
 import importlib
 import importlib.util
 import io
 import json
+import sys
 from pathlib import Path
 
 from docutils import nodes
@@ -151,6 +155,8 @@ class CliDirective(Directive):
 
 def _benchmark(name):
     """Import ``benchmarks/NAME.py`` (not a package) as a module."""
+    if str(ROOT / "benchmarks") not in sys.path:   # where the benchmarks find perf_rows, as when run
+        sys.path.insert(0, str(ROOT / "benchmarks"))
     spec = importlib.util.spec_from_file_location(f"_bench_{name}", ROOT / "benchmarks" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -205,9 +211,35 @@ def _color_summary():
     return header, rows
 
 
+#: The performance tables: name -> (benchmark, its rows in ``docs/perf/``, its summary function, arguments).
+PERF_TABLES = {
+    "relax": ("bench_relax", "relax.jsonl", "summary", {}),
+    "peers-2d": ("bench_peers", "peers.jsonl", "summary", {"dim": 2}),
+    "peers-3d": ("bench_peers", "peers_3d.jsonl", "summary", {"dim": 3}),
+    "paper": ("bench_paper", "paper.jsonl", "summary", {}),
+    "million": ("bench_million", "million.jsonl", "summary", {}),
+    "stipple": ("bench_stipple", "stipple.jsonl", "summary", {}),
+    "stipple-end-to-end": ("bench_stipple", "stipple.jsonl", "summary_end_to_end", {}),
+    "stipple-large": ("stipple_large", "stipple_large.jsonl", "summary", {}),
+    "batch": ("bench_batch", "batch.jsonl", "summary", {}),
+    "batch-memory": ("bench_batch", "batch.jsonl", "summary_memory", {}),
+}
+
+
+def perf_rows(name):
+    """The stored rows of the performance table ``name``."""
+    return _benchmark("perf_rows").read(ROOT / "docs" / "perf" / PERF_TABLES[name][1])
+
+
+def perf_table(name):
+    """``(header, rows)`` of the performance table ``name``, by its benchmark's summary of the stored rows."""
+    bench, _, function, kwargs = PERF_TABLES[name]
+    return getattr(_benchmark(bench), function)(perf_rows(name), **kwargs)
+
+
 #: The tables ``diskpack-table`` builds: name -> () -> (header, rows).
 TABLES = {"stipple-tally": _stipple_tally, "color-quality": _color_table,
-          "color-summary": _color_summary}
+          "color-summary": _color_summary, **{name: functools.partial(perf_table, name) for name in PERF_TABLES}}
 
 
 class BenchmarkTableDirective(Directive):
@@ -216,8 +248,17 @@ class BenchmarkTableDirective(Directive):
     required_arguments = 1
 
     def run(self):
-        header, rows = TABLES[self.arguments[0]]()
-        return [table_node(header, rows)]
+        name = self.arguments[0]
+        out = [table_node(*TABLES[name]())]
+        if name in PERF_TABLES:
+            # changed rows or summary code rebuild the page
+            bench, rows_file = PERF_TABLES[name][:2]
+            for path in (ROOT / "docs" / "perf" / rows_file, ROOT / "benchmarks" / f"{bench}.py",
+                         ROOT / "benchmarks" / "perf_rows.py"):
+                self.state.document.settings.env.note_dependency(str(path))
+            note = _benchmark("perf_rows").provenance(perf_rows(name))
+            out.append(nodes.paragraph("", "", nodes.emphasis(text=note)))
+        return out
 
 
 def setup(app):
