@@ -183,7 +183,8 @@ def tone_dot_count(darkness, scale, dot_mm):
 
 
 def _fmt(v):
-    return np.char.mod("%.4f", v)
+    # numpy 1.x returns an empty input in its own dtype, which np.char.add refuses
+    return np.char.mod("%.4f", v).astype(str)
 
 
 #: Paper sizes (portrait, mm) of ``page=``; ``"WxH"`` or ``"WxHmm"`` gives any other.
