@@ -4,12 +4,13 @@ The dots are the error-diffusion start of the stippling of the sample
 photograph (:func:`diskpack_cl.error_diffusion`, dots spread like its
 darkness), on a 190 mm wide drawing, the pen starting at the origin as in
 the SVG. Orders: Hilbert curve, greedy nearest neighbour, each improved by
-:func:`diskpack_cl.pen_path.two_opt` within a time budget, and the default
+:func:`diskpack_cl.pen_path.two_opt` for the default's rounds
+(:func:`diskpack_cl.pen_path.two_opt_rounds`, or ``--rounds``), and the default
 (``method="auto"``). Each row: travel in mm, its ratio to Hilbert, seconds,
 and the plot time (:func:`diskpack_cl.export.plot_time`, every dot one pen
 touch). ``--markdown`` prints the table rows of docs/guide/plotters.md.
 
-    python benchmarks/pen_path.py [-n 2000 20000 100000] [--budget 2] [--json out.json]
+    python benchmarks/pen_path.py [-n 2000 20000 100000] [--rounds R] [--json out.json]
         [--markdown]
 """
 
@@ -22,7 +23,8 @@ import time
 
 from diskpack_cl import error_diffusion, load_gray, sample_image_path
 from diskpack_cl.export import plot_time
-from diskpack_cl.pen_path import _greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt
+from diskpack_cl.pen_path import (_greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt,
+                                  two_opt_rounds)
 
 WIDTH_MM = 190.0
 
@@ -33,7 +35,7 @@ def dots(n, seed=0):
     return error_diffusion(gray, n, seed=seed) * (WIDTH_MM / gray.shape[1])
 
 
-def measure(p, budget):
+def measure(p, rounds=None):
     """Rows (order name, travel mm, seconds) for one point set."""
     rows = []
     t = time.perf_counter()
@@ -44,10 +46,10 @@ def measure(p, budget):
     rows.append(("greedy", gre, time.perf_counter() - t))
     for name, base, took in list(rows):
         t = time.perf_counter()
-        better = two_opt(p, base, budget_s=budget)
+        better = two_opt(p, base, rounds=two_opt_rounds(len(p)) if rounds is None else rounds)
         rows.append((f"{name}+2opt", better, took + time.perf_counter() - t))
     t = time.perf_counter()
-    auto, _, _ = pen_path_order(p, budget_s=budget)
+    auto, _, _ = pen_path_order(p, rounds=rounds)
     rows.append(("auto (default)", auto, time.perf_counter() - t))
     return [(name, path_travel(p, order), s) for name, order, s in rows]
 
@@ -55,14 +57,14 @@ def measure(p, budget):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-n", type=int, nargs="+", default=[2000, 20000, 100000])
-    ap.add_argument("--budget", type=float, default=2.0, help="2-opt time budget, s")
+    ap.add_argument("--rounds", type=int, default=None, help="2-opt rounds (default: the default's)")
     ap.add_argument("--json", default=None, help="also write the rows here")
     ap.add_argument("--markdown", action="store_true", help="print the table rows of docs/guide/plotters.md")
     args = ap.parse_args(argv)
     out, table = [], []
     for n in args.n:
         p = dots(n)
-        rows = measure(p, args.budget)
+        rows = measure(p, args.rounds)
         ref = rows[0][1]
         print(f"n = {n}: unordered {path_travel(p):.0f} mm")
         cells = {}

@@ -19,7 +19,7 @@ import numpy as np
 from .color import linear_to_srgb, srgb_to_linear
 from .export import (PLOT_SPEED_MM_S, _coverage, _inside_page, _svg_dots, _svg_head, _svg_meta,
                      _svg_size, plot_time, svg_layout)
-from .pen_path import pen_path_order
+from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
 
 __all__ = ["layer_order", "write_color_svg", "write_color_png"]
@@ -113,8 +113,8 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     layers, before, after, draw = [], 0.0, 0.0, 0.0
     for i, p in enumerate(order):
         idx = np.flatnonzero(result.pen == p)
-        # the pen-path budget of one mono layer, shared by the pens
-        path_order, b, a = pen_path_order(pm[idx], method=pen_path, budget_s=2.0 / len(order))
+        # the 2-opt work of one mono drawing of all the dots, shared by the pens
+        path_order, b, a = pen_path_order(pm[idx], method=pen_path, rounds=two_opt_rounds(len(pm)))
         idx = idx[path_order]
         c = hex_color(result.colors[p])
         if i:

@@ -3,18 +3,18 @@
 Orders: a Hilbert curve (vectorized sort), greedy nearest neighbour
 (cKDTree), and either improved by 2-opt and Or-opt moves towards each dot's
 nearest neighbours (all evaluated with numpy each round, the best ones that
-change disjoint edges applied) within a time budget.
+change disjoint edges applied) for a number of rounds that depends on the
+number of dots only, so that the order is the same on every machine.
 ``benchmarks/pen_path.py`` measures them on stippled dots; see
 :func:`pen_path_order` for what the default does and why.
 """
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-__all__ = ["GREEDY_MAX", "PEN_PATHS", "path_travel", "pen_path_order", "two_opt"]
+__all__ = ["GREEDY_MAX", "PEN_PATHS", "TWO_OPT_WORK", "path_travel", "pen_path_order", "two_opt",
+           "two_opt_rounds"]
 
 #: The ``method`` names of :func:`pen_path_order`.
 PEN_PATHS = ("auto", "hilbert", "greedy", "none")
@@ -171,21 +171,40 @@ def _apply_moves(moves, arrays, pos, tol):
     return done
 
 
-def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, budget_s=2.0):
+#: Work of the 2-opt of :func:`pen_path_order`'s ``"auto"``, in dots times
+#: rounds: a round costs 2 to 4 us a dot on two CPU cores, so about 2 to 4 s
+#: in all. Counted in rounds, not seconds, so the order never depends on the
+#: machine's speed or load.
+TWO_OPT_WORK = 1_000_000
+
+
+def two_opt_rounds(n):
+    """Rounds of :func:`two_opt` that ``"auto"`` runs on `n` dots: ``ceil(TWO_OPT_WORK / n)``.
+
+    Examples
+    --------
+    >>> two_opt_rounds(2000), two_opt_rounds(20000), two_opt_rounds(3_000_000)
+    (500, 50, 1)
+    """
+    return max(1, -(-TWO_OPT_WORK // max(int(n), 1)))
+
+
+def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
     """Shorten an open pen path by 2-opt and Or-opt moves towards near neighbours.
 
     Each round evaluates, for every dot and each of its ``neighbors``
     nearest dots (a k-d tree, once), the reversal that joins them (2-opt)
     and the moves of the dot next to it (Or-opt), all with numpy, applies
     the best ones that change disjoint edges, and stops when none gains or
-    after ``budget_s`` seconds (checked between rounds): with a budget that
-    stops it, the order depends on the machine's speed. The start is fixed.
+    after `rounds` rounds (None: no limit). The start is fixed.
 
     Examples
     --------
     >>> p = np.array([[1.0, 0.0], [3.0, 0.0], [2.0, 0.0], [4.0, 0.0]])
     >>> two_opt(p, np.arange(4)).tolist()
     [0, 2, 1, 3]
+    >>> two_opt(p, np.arange(4), rounds=0).tolist()
+    [0, 1, 2, 3]
     """
     from scipy.spatial import cKDTree
 
@@ -199,8 +218,9 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, budget_s=2.0):
     place = np.arange(len(q))  # place[position now] = place in the starting q
     pos = np.arange(len(q))  # its inverse
     tol = 1e-9 * float(np.ptp(q, axis=0).max())
-    deadline = time.perf_counter() + budget_s
-    while time.perf_counter() < deadline:
+    done = 0
+    while rounds is None or done < rounds:
+        done += 1
         edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
         i = np.repeat(np.arange(len(q)), k)
         j = pos[near[place]].ravel()
@@ -215,7 +235,7 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, budget_s=2.0):
 GREEDY_MAX = 200_000
 
 
-def pen_path_order(points, *, method="auto", start=(0.0, 0.0), budget_s=2.0):
+def pen_path_order(points, *, method="auto", start=(0.0, 0.0), rounds=None):
     """Order the dots along a short pen path.
 
     Parameters
@@ -226,15 +246,15 @@ def pen_path_order(points, *, method="auto", start=(0.0, 0.0), budget_s=2.0):
         per dot); ``"greedy"``: nearest unvisited dot next (cKDTree, a
         Python loop, about 40 us per dot); ``"auto"`` (default): the shorter
         of the two (Hilbert only above :data:`GREEDY_MAX` dots), then
-        :func:`two_opt` for at most ``budget_s`` seconds: on stipplings of
-        2 000 and 20 000 dots 7 % shorter than Hilbert and 13 % than greedy
-        (``benchmarks/pen_path.py``; the table is in the docs' plotter guide);
+        :func:`two_opt` (``benchmarks/pen_path.py`` measures them; the table
+        is in the docs' plotter guide);
         ``"none"``: as given. Every method keeps the given order when it is
         not longer.
     start : (2,) array_like
         Where the pen starts (the SVG origin by default).
-    budget_s : float
-        Time budget of the 2-opt of ``"auto"``.
+    rounds : int, optional
+        Rounds of the 2-opt of ``"auto"`` (default :func:`two_opt_rounds`
+        of the number of dots: the same order on every machine).
 
     Returns
     -------
@@ -264,6 +284,6 @@ def pen_path_order(points, *, method="auto", start=(0.0, 0.0), budget_s=2.0):
     best = int(np.argmin(travel))
     order, after = orders[best], travel[best]
     if method == "auto" and n >= 2:
-        order = two_opt(p, order, start=start, budget_s=budget_s)
+        order = two_opt(p, order, start=start, rounds=two_opt_rounds(n) if rounds is None else rounds)
         after = path_travel(p, order, start=start)
     return order, travel[0], after

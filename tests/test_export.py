@@ -279,7 +279,24 @@ def test_two_opt_keeps_a_permutation_never_longer_and_a_zero_budget():
     better = two_opt(p, start)
     np.testing.assert_array_equal(np.sort(better), np.arange(500))
     assert path_travel(p, better) < 0.5 * path_travel(p, start)
-    np.testing.assert_array_equal(two_opt(p, start, budget_s=0.0), start)
+    np.testing.assert_array_equal(two_opt(p, start, rounds=0), start)
+
+
+def test_pen_path_does_not_depend_on_the_clock(monkeypatch):
+    """The order is counted in rounds: a slow machine (a clock that races) gets the same SVG order."""
+    import time
+
+    from diskpack_cl.pen_path import two_opt, two_opt_rounds
+
+    p = np.random.default_rng(7).random((3000, 2))
+    calm = pen_path_order(p)[0]
+    clock = iter(range(0, 10**9, 100))
+    monkeypatch.setattr(time, "perf_counter", lambda: float(next(clock)))
+    np.testing.assert_array_equal(pen_path_order(p)[0], calm)
+    # the rounds are those of the work; one round alone is not enough on this set
+    base = pen_path_order(p, rounds=0)[0]
+    np.testing.assert_array_equal(two_opt(p, base, rounds=two_opt_rounds(len(p))), calm)
+    assert path_travel(p, two_opt(p, base, rounds=1)) > path_travel(p, calm)
 
 
 def test_png_preview_progress_and_default_size(tmp_path, result):
