@@ -188,12 +188,14 @@ class _DeviceGrid:
         return cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))
 
     def _test(self, name, m, *args):
-        """Kernel `name` over `m` cells (its other arguments `args`): its 0/1 answers as bools."""
+        """Kernel `name` over `m` cells, its other arguments `args` (host arrays are
+        uploaded): its 0/1 answers as bools."""
         import pyopencl as cl
 
         out = np.zeros(m, dtype=bool)
         if m:
             b_out = cl.Buffer(self.ctx, cl.mem_flags.WRITE_ONLY, m)
+            args = [self._up(a) if isinstance(a, np.ndarray) else a for a in args]
             self._launch(name, m, *args, b_out)
             cl.enqueue_copy(self.queue, out.view(np.int8), b_out)
         return out
@@ -209,31 +211,37 @@ class _DeviceGrid:
         group = self.group[name]
         self.k[name](self.queue, (padded(m, group),), (group,), *args)
 
+    def free(self, cells, xy):
+        """Which darts `xy`, one in each of the distinct empty `cells` (int32), are at least
+        d from every point."""
+        m = np.int32(len(cells))
+        return self._test("dart_free", m, self.b_pt, cells, xy, m, np.int32(self.g),
+                          np.float64(self.d2))
+
+    def kept(self, cells, xy, prio):
+        """Which free darts `xy`, one in each of the distinct `cells` (int32), with
+        priorities `prio` in [0, 1), have no dart of higher priority within d."""
+        k = np.int32(len(cells))
+        if not k:
+            return np.zeros(0, dtype=bool)
+        b_cells = self._up(cells)
+        self._put("put_pair", self.b_dart, b_cells, xy)
+        self._put("put_one", self.b_prio, b_cells, prio)
+        kept = self._test("dart_keep", k, self.b_dart, self.b_prio, b_cells, k,
+                          np.int32(self.g), np.float64(self.d2))
+        # clear these priorities, so that the next round's darts see none of them
+        self._put("put_one", self.b_prio, b_cells, np.full(k, -1.0))
+        return kept
+
     def throw(self, live, rng, room, empty):
         """One round (as :func:`_round`): the cells still live and the points placed."""
-        if not live.size:
-            return live, 0
-        g, m = np.int32(self.g), np.int32(live.size)
         row, col = np.divmod(live, self.g)
         x = (col + rng.random(live.size)) * self.c
         y = (row + rng.random(live.size)) * self.c
         xy, cells = np.column_stack((x, y)), live.astype(np.int32)
-        if empty:   # no point yet: every dart is free
-            keep = np.arange(live.size)
-        else:
-            keep = np.flatnonzero(self._test("dart_free", m, self.b_pt, self._up(cells),
-                                             self._up(xy), m, g, np.float64(self.d2)))
-        mine = rng.random(keep.size)
-        if not keep.size:
-            return live, 0
-        b_free, k = self._up(cells[keep]), np.int32(keep.size)
-        self._put("put_pair", self.b_dart, b_free, xy[keep])
-        self._put("put_one", self.b_prio, b_free, mine)
-        kept = self._test("dart_keep", k, self.b_dart, self.b_prio, b_free, k, g,
-                          np.float64(self.d2))
-        # clear this round's priorities, so that the next round's darts see none of them
-        self._put("put_one", self.b_prio, b_free, np.full(keep.size, -1.0))
-        keep = keep[kept][:room]
+        # no point yet: every dart is free
+        keep = np.arange(live.size) if empty else np.flatnonzero(self.free(cells, xy))
+        keep = keep[self.kept(cells[keep], xy[keep], rng.random(keep.size))][:room]
         self.insert(live[keep], x[keep], y[keep])
         gone = np.zeros(live.size, dtype=bool)
         gone[keep] = True
@@ -249,9 +257,7 @@ class _DeviceGrid:
     def covered(self, cells):
         """Cells whose corners and centre all lie within d of a point of the 3 x 3 cells around."""
         m = np.int32(cells.size)
-        if not m:
-            return np.zeros(0, dtype=bool)
-        return self._test("cell_covered", m, self.b_pt, self._up(cells.astype(np.int32)), m,
+        return self._test("cell_covered", m, self.b_pt, cells.astype(np.int32), m,
                           np.int32(self.g), np.float64(self.c), np.float64(self.d2))
 
     def points(self):
