@@ -49,12 +49,10 @@ __constant int NEAR[24][2] = {
     {-2, -2}, {-2, -1}, {-2, 0}, {-2, 1}, {-2, 2}, {-1, -2}, {-1, 2}, {0, -2},
     {0, 2}, {1, -2}, {1, 2}, {2, -2}, {2, -1}, {2, 0}, {2, 1}, {2, 2}};
 
-/* Is a point of the first `count` cells of NEAR around (r, c) (8: the ring of 3 x 3,
- * 24: that of 5 x 5) closer than sqrt(d2) to q? */
-static int near_point(__global const double2 *pt, int r, int c, int g, double2 q, double d2,
-                      int count)
+/* Is a point of the 24 cells around (r, c) closer than sqrt(d2) to q? */
+static int near_point(__global const double2 *pt, int r, int c, int g, double2 q, double d2)
 {
-    for (int k = 0; k < count; ++k) {
+    for (int k = 0; k < 24; ++k) {
         const double2 p = at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g);
         const double dx = p.x - q.x, dy = p.y - q.y;
         if (dx * dx + dy * dy < d2) return 1;
@@ -74,7 +72,7 @@ __kernel void dart_free(
     const int i = get_global_id(0);
     if (i >= m) return;
     const int k = cells[i];
-    free_out[i] = !near_point(pt, k / g, k % g, g, dart[i], d2, 24);
+    free_out[i] = !near_point(pt, k / g, k % g, g, dart[i], d2);
 }
 
 __kernel void dart_keep(
@@ -116,10 +114,19 @@ __kernel void cell_covered(
     const int i = get_global_id(0);
     if (i >= m) return;
     const int r = cells[i] / g, col = cells[i] % g;
+    /* the 8 points around, loaded once for the 5 samples */
+    double2 p[8];
+    for (int k = 0; k < 8; ++k) p[k] = at_cell(pt, r + NEAR[k][0], col + NEAR[k][1], g);
     const double sx[5] = {0.0, 1.0, 0.0, 1.0, 0.5}, sy[5] = {0.0, 0.0, 1.0, 1.0, 0.5};
     int all = 1;
-    for (int k = 0; k < 5 && all; ++k)
-        all = near_point(pt, r, col, g, (double2)((col + sx[k]) * c, (r + sy[k]) * c), d2, 8);
+    for (int s = 0; s < 5 && all; ++s) {
+        const double2 q = (double2)((col + sx[s]) * c, (r + sy[s]) * c);
+        all = 0;
+        for (int k = 0; k < 8 && !all; ++k) {
+            const double dx = p[k].x - q.x, dy = p[k].y - q.y;
+            all = dx * dx + dy * dy < d2;
+        }
+    }
     covered[i] = all;
 }
 
