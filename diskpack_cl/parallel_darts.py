@@ -236,13 +236,16 @@ class _DeviceGrid:
     def throw(self, live, rng, room, empty):
         """One round (as :func:`_round`): the cells still live and the points placed."""
         row, col = np.divmod(live, self.g)
-        x = (col + rng.random(live.size)) * self.c
-        y = (row + rng.random(live.size)) * self.c
-        xy, cells = np.column_stack((x, y)), live.astype(np.int32)
+        # (col + u) c and (row + v) c as in _round, written in place (no temporaries)
+        xy = np.empty((live.size, 2))
+        np.add(col, rng.random(live.size), out=xy[:, 0])
+        np.add(row, rng.random(live.size), out=xy[:, 1])
+        xy *= self.c
         # no point yet: every dart is free
-        keep = np.arange(live.size) if empty else np.flatnonzero(self.free(cells, xy))
-        keep = keep[self.kept(cells[keep], xy[keep], rng.random(keep.size))][:room]
-        self.insert(live[keep], x[keep], y[keep])
+        keep = np.arange(live.size) if empty else np.flatnonzero(self.free(live, xy))
+        keep = keep[self.kept(live[keep], np.take(xy, keep, axis=0), rng.random(keep.size))]
+        keep = keep[:room]
+        self.insert(live[keep], *np.take(xy, keep, axis=0).T)
         gone = np.zeros(live.size, dtype=bool)
         gone[keep] = True
         return live[~gone], keep.size
@@ -257,7 +260,7 @@ class _DeviceGrid:
     def covered(self, cells):
         """Cells whose corners and centre all lie within d of a point of the 3 x 3 cells around."""
         m = np.int32(cells.size)
-        return self._test("cell_covered", m, self.b_pt, cells.astype(np.int32), m,
+        return self._test("cell_covered", m, self.b_pt, cells.astype(np.int32, copy=False), m,
                           np.int32(self.g), np.float64(self.c), np.float64(self.d2))
 
     def points(self):
@@ -271,7 +274,8 @@ def _throw_rounds(grid, n, rng, max_rounds):
     taken = np.zeros(grid.g * grid.g, dtype=bool)
     pts = grid.points()
     taken[grid.cells_of(pts)] = True
-    live, m = np.flatnonzero(~taken), len(pts)
+    # int32 cells: what the kernels take, and integer division at half the cost
+    live, m = np.flatnonzero(~taken).astype(np.int32), len(pts)
     for r in range(max_rounds):
         live, placed = grid.throw(live, rng, n - m, m == 0)
         m += placed
