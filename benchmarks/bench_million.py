@@ -5,10 +5,12 @@ Usage: python benchmarks/bench_million.py [--n 1000000] [--repeat 3] [--no-analy
 Times, in one process, `--repeat` runs of ``poisson_disk(n, seed=r)`` and
 prints each run and the medians: the start set (parallel dart throwing),
 the relaxation (global iterations on the device, then local ones) with the
-engine's stages, and the whole call; then ``scipy.spatial.Delaunay`` of the
-relaxed points (the yardstick the issue set: the set should take under a
-third of it); then the numbers of ``diskpack analyze`` (periodogram by the
-non-uniform FFT, rho, mean rho, psi6) of the last set.  The load average
+engine's stages, and the whole call (wall, and ``cpu``: the CPU time of
+all the process's threads, PoCL's included, which the load moves least);
+then ``scipy.spatial.Delaunay`` of the relaxed points (the yardstick the
+issue set: the set should take under a third of it); then the numbers of
+``diskpack analyze`` (periodogram by the non-uniform FFT, rho, mean rho,
+psi6) of the last set.  The load average
 is printed with each run: on a shared machine, compare ratios within a run.
 ``--json`` appends a row per run and one for analyze, with the context of
 :mod:`perf_rows`; :func:`summary` makes the docs' table of them.
@@ -29,13 +31,13 @@ from perf_rows import append, count, medians, num
 def one_run(n, seed):
     """One timed run: a dict of seconds and counts."""
     load = os.getloadavg()[0]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     res = poisson_disk(n, seed=seed)
-    total = time.perf_counter() - t0
+    total, cpu = time.perf_counter() - t0, time.process_time() - c0
     t0 = time.perf_counter()
     Delaunay(res.points)
-    row = {"load": load, "total": total, "start": res.start_seconds, "relax": res.seconds,
-           "delaunay": time.perf_counter() - t0, "iterations": res.iterations, "rho": res.rho}
+    row = {"load": load, "total": total, "cpu": cpu, "start": res.start_seconds,
+           "relax": res.seconds, "delaunay": time.perf_counter() - t0, "iterations": res.iterations, "rho": res.rho}
     row.update(res.timings)
     return row, res
 

@@ -152,13 +152,18 @@ class _DeviceGrid:
     """The grid of :class:`_Grid` on an OpenCL device (``kernels/dart_round.cl``).
 
     The host draws the darts and priorities with the same generator calls
-    and keeps the points; the kernels do the distance tests in the same
-    float64 operations, so both give the same points for a seed.
+    and keeps a copy of the points; the kernels do the distance tests in the
+    same float64 operations, so both give the same points for a seed.  The
+    grids of points, darts and priorities stay on the device from round to
+    round and every kernel takes a list of cells: after two rounds a quarter
+    of the cells are live, and dense passes over the whole grid (3.5M cells
+    at 1M points) were what a round cost.
     """
 
     def __init__(self, d, ctx):
         import pyopencl as cl
 
+        from ._device import group_size
         from ._kernels import build_program
 
         self.d, self.d2 = d, d * d
@@ -166,51 +171,97 @@ class _DeviceGrid:
         self.c = 1.0 / g
         self.ctx, self.queue = ctx, cl.CommandQueue(ctx)
         self.k = build_program(ctx, "dart_round")
+        # explicit groups: left to itself, PoCL takes a divisor of the global size (1 for a prime)
+        self.group = {name: group_size(k, ctx.devices[0], 64) for name, k in self.k.items()}
         self.pt = np.full((g * g, 2), _EMPTY)
+        mf = cl.mem_flags
+        self.b_pt = cl.Buffer(ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=self.pt)
+        # a dart cell is read only where this round wrote a priority: no fill needed
+        self.b_dart = cl.Buffer(ctx, mf.READ_WRITE, self.pt.nbytes)
+        self.b_prio = cl.Buffer(ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=np.full(g * g, -1.0))
 
-    def _run(self, name, size, *args, out):
+    def _up(self, a):
+        """A read-only device copy of the non-empty host array `a`."""
         import pyopencl as cl
 
         mf = cl.mem_flags
-        flags = mf.READ_ONLY | mf.COPY_HOST_PTR
-        bufs = [cl.Buffer(self.ctx, flags, hostbuf=np.ascontiguousarray(a))
-                if isinstance(a, np.ndarray) else a for a in args]
-        b_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, max(out.nbytes, 1))
-        self.k[name](self.queue, (max(size, 1),), None, *bufs, b_out)
-        cl.enqueue_copy(self.queue, out, b_out)
-        return out.astype(bool)
+        return cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))
+
+    def _test(self, name, m, *args):
+        """Kernel `name` over `m` cells, its other arguments `args` (host arrays are
+        uploaded): its 0/1 answers as bools."""
+        import pyopencl as cl
+
+        out = np.zeros(m, dtype=bool)
+        if m:
+            b_out = cl.Buffer(self.ctx, cl.mem_flags.WRITE_ONLY, m)
+            args = [self._up(a) if isinstance(a, np.ndarray) else a for a in args]
+            self._launch(name, m, *args, b_out)
+            cl.enqueue_copy(self.queue, out.view(np.int8), b_out)
+        return out
+
+    def _put(self, name, grid, b_cells, values):
+        """Write `values` into device grid `grid` at the cells of `b_cells` (kernel `name`)."""
+        self._launch(name, len(values), grid, b_cells, self._up(values), np.int32(len(values)))
+
+    def _launch(self, name, m, *args):
+        """Kernel `name` over `m` work items (the kernels skip the padding past `m`)."""
+        from ._device import padded
+
+        group = self.group[name]
+        self.k[name](self.queue, (padded(m, group),), (group,), *args)
+
+    def free(self, cells, xy):
+        """Which darts `xy`, one in each of the distinct empty `cells` (int32), are at least
+        d from every point."""
+        m = np.int32(len(cells))
+        return self._test("dart_free", m, self.b_pt, cells, xy, m, np.int32(self.g),
+                          np.float64(self.d2))
+
+    def kept(self, cells, xy, prio):
+        """Which free darts `xy`, one in each of the distinct `cells` (int32), with
+        priorities `prio` in [0, 1), have no dart of higher priority within d."""
+        k = np.int32(len(cells))
+        if not k:
+            return np.zeros(0, dtype=bool)
+        b_cells = self._up(cells)
+        self._put("put_pair", self.b_dart, b_cells, xy)
+        self._put("put_one", self.b_prio, b_cells, prio)
+        kept = self._test("dart_keep", k, self.b_dart, self.b_prio, b_cells, k,
+                          np.int32(self.g), np.float64(self.d2))
+        # clear these priorities, so that the next round's darts see none of them
+        self._put("put_one", self.b_prio, b_cells, np.full(k, -1.0))
+        return kept
 
     def throw(self, live, rng, room, empty):
         """One round (as :func:`_round`): the cells still live and the points placed."""
-        g, n2 = self.g, self.g * self.g
-        row, col = np.divmod(live, g)
-        x = (col + rng.random(live.size)) * self.c
-        y = (row + rng.random(live.size)) * self.c
-        dart = np.full((n2, 2), _EMPTY)
-        dart[live, 0], dart[live, 1] = x, y
-        if empty:   # no point yet: every dart is free
-            keep = np.arange(live.size)
-        else:
-            free = self._run("dart_free", n2, self.pt, dart, np.int32(g), np.float64(self.d2),
-                             out=np.empty(n2, np.int8))
-            keep = np.flatnonzero(free[live])
-        prio = np.full(n2, -1.0)
-        prio[live[keep]] = rng.random(keep.size)
-        kept = self._run("dart_keep", n2, dart, prio, np.int32(g), np.float64(self.d2),
-                         out=np.empty(n2, np.int8))
-        keep = keep[kept[live[keep]]][:room]
-        self.insert(live[keep], x[keep], y[keep])
+        row, col = np.divmod(live, self.g)
+        # (col + u) c and (row + v) c as in _round, written in place (no temporaries)
+        xy = np.empty((live.size, 2))
+        np.add(col, rng.random(live.size), out=xy[:, 0])
+        np.add(row, rng.random(live.size), out=xy[:, 1])
+        xy *= self.c
+        # no point yet: every dart is free
+        keep = np.arange(live.size) if empty else np.flatnonzero(self.free(live, xy))
+        keep = keep[self.kept(live[keep], np.take(xy, keep, axis=0), rng.random(keep.size))]
+        keep = keep[:room]
+        self.insert(live[keep], *np.take(xy, keep, axis=0).T)
         gone = np.zeros(live.size, dtype=bool)
         gone[keep] = True
         return live[~gone], keep.size
 
     def insert(self, cells, x, y):
+        """Put points into their cells, on the host and on the device."""
         self.pt[cells, 0], self.pt[cells, 1] = x, y
+        if len(cells):
+            self._put("put_pair", self.b_pt, self._up(cells.astype(np.int32)),
+                      np.column_stack((x, y)))
 
     def covered(self, cells):
-        return self._run("cell_covered", cells.size, self.pt, cells.astype(np.int32),
-                         np.int32(cells.size), np.int32(self.g), np.float64(self.c),
-                         np.float64(self.d2), out=np.empty(cells.size, np.int8))
+        """Cells whose corners and centre all lie within d of a point of the 3 x 3 cells around."""
+        m = np.int32(cells.size)
+        return self._test("cell_covered", m, self.b_pt, cells.astype(np.int32, copy=False), m,
+                          np.int32(self.g), np.float64(self.c), np.float64(self.d2))
 
     def points(self):
         return self.pt[self.pt[:, 0] < _EMPTY].copy()
@@ -223,7 +274,8 @@ def _throw_rounds(grid, n, rng, max_rounds):
     taken = np.zeros(grid.g * grid.g, dtype=bool)
     pts = grid.points()
     taken[grid.cells_of(pts)] = True
-    live, m = np.flatnonzero(~taken), len(pts)
+    # int32 cells: what the kernels take, and integer division at half the cost
+    live, m = np.flatnonzero(~taken).astype(np.int32), len(pts)
     for r in range(max_rounds):
         live, placed = grid.throw(live, rng, n - m, m == 0)
         m += placed

@@ -37,6 +37,12 @@ __all__ = ["PoissonDisk", "PoissonDiskResult", "as_box", "count_for_distance", "
 #: Grid cells per side on which a callable mask or density is sampled.
 FIELD_SAMPLES = 512
 
+#: Relative radius of the dart-throwing start.  From 0.72 rather than 0.70,
+#: 1M points go local after 3 global iterations instead of 4 (5 seeds), for
+#: about 0.2 s more of throwing (8 rounds instead of 4); at 0.74 the throwing
+#: needs 19 rounds and a shrink, and saves no further iteration.
+START_RADIUS = 0.72
+
 
 @dataclass
 class PoissonDiskResult:
@@ -144,8 +150,8 @@ def start_points(n, domain, seed=None, device=None):
 
     The darts are thrown in parallel rounds
     (:func:`diskpack_cl.parallel_darts.parallel_darts`, relative radius
-    0.7): at a million points a few seconds, where sequential dart throwing
-    to 0.74 took 17 s.  In a box ``W x H`` the darts are thrown on a square torus of side
+    :data:`START_RADIUS`): at a million points about 2 s, where sequential
+    dart throwing to 0.74 took 17 s.  In a box ``W x H`` the darts are thrown on a square torus of side
     ``max(W, H)`` with enough points that at least `n` fall in the box
     inset by a disk radius (where relaxed points end up: the walls push
     them that far in, so the relaxation saves most of its iterations); the
@@ -163,13 +169,13 @@ def start_points(n, domain, seed=None, device=None):
 
     rng = _rng(seed)
     if domain.periodic:
-        return parallel_darts(n, seed=rng, device=device)
+        return parallel_darts(n, rel_radius=START_RADIUS, seed=rng, device=device)
     inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
     inner = domain.size - 2.0 * inset
     side = max(inner)
     m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
     while True:
-        pts = parallel_darts(m, seed=rng, device=device) * side
+        pts = parallel_darts(m, rel_radius=START_RADIUS, seed=rng, device=device) * side
         pts = pts[np.all(pts <= inner, axis=1)]
         if len(pts) >= n:
             return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset

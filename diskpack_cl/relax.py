@@ -218,7 +218,7 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     if went_local:   # the local route measures its last rho by the KD-tree itself
         with engine.timings("local"):
             X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience,
-                                           callback, stats)
+                                           callback, stats, _local_solver(engine, dom))
     seconds = time.perf_counter() - t_start
     if not went_local or reason != "eps":
         _certify_rho(X, rho[-1], dom)
@@ -276,13 +276,24 @@ def _local_ready(X, step, eps, dom):
     return nn if len(bad_points(nn, eps, dom.area)) <= LOCAL_SHARE * len(X) else None
 
 
-def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats):
-    """Local iterations after `it` global ones; the last rho measured by a KD-tree."""
+def _local_solver(engine, dom):
+    """The per-cell kernel for the local steps' cells (its own, so that its seconds stay
+    out of the global iterations' stages) where the engine has one, else None (exact_mic)."""
+    from .cells import CellMIC
+
+    cells = getattr(engine, "cells", None)
+    return None if cells is None else CellMIC(dom, device=cells.ctx)
+
+
+def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, solver=None):
+    """Local iterations after `it` global ones (their cells solved by `solver`, a
+    :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured by a KD-tree."""
     from .measures import min_distance_at_most
     from .relax_local import relax_local
 
     X, more, reason = relax_local(X, nn, eps, dom, max_iter=max_iter - it, patience=patience,
-                                  callback=callback, first=it + 1, stall_gain=STALL_GAIN)
+                                  callback=callback, first=it + 1, stall_gain=STALL_GAIN,
+                                  solver=solver)
     stats["local_iterations"] = len(more)
     rho = rho + more
     if reason == "eps":   # no pair left below 2 eps r_max: the exact rho is just above

@@ -101,7 +101,7 @@ def _bad_pairs(X, B, d_eps, domain):
     return i[keep], j[keep], d[keep]
 
 
-def local_step(X, B, eps, domain, halo=HALO):
+def local_step(X, B, eps, domain, halo=HALO, solver=None):
     """One local iteration on the bad points `B`: move their neighbourhoods, in place.
 
     Parameters
@@ -114,6 +114,10 @@ def local_step(X, B, eps, domain, halo=HALO):
     domain : Domain
     halo : float
         Spacings of sites kept around the moving points.
+    solver : CellMIC, optional
+        Solves the moving cells on the device (:meth:`CellMIC.solve
+        <diskpack_cl.cells.CellMIC.solve>` with `cells`, certified as by
+        :func:`exact_mic`); None: :func:`exact_mic` on the host.
 
     Returns
     -------
@@ -142,7 +146,7 @@ def local_step(X, B, eps, domain, halo=HALO):
     pos[S] = np.arange(len(S))
     XS, BS = X[S], pos[B]
     A = np.unique(np.concatenate(_tree(XS, domain).query_ball_point(XS[BS], move)))
-    mic = exact_mic(XS, domain=domain, cells=A)
+    mic = exact_mic(XS, domain=domain, cells=A) if solver is None else solver.solve(XS, cells=A)
     q = _diff(mic.centers, XS[A], domain)
     ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
     XS[A[ok]] = mic.centers[ok]
@@ -152,7 +156,7 @@ def local_step(X, B, eps, domain, halo=HALO):
 
 
 def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=None, first=1,
-                stall_gain=1e-3):
+                stall_gain=1e-3, solver=None):
     """Local iterations (:func:`local_step`) until no pair is closer than ``2 eps r_max``.
 
     Parameters
@@ -172,6 +176,8 @@ def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=Non
         `first`.
     first : int
         Number of the first iteration (for the callback).
+    solver : CellMIC, optional
+        Where the moving cells are solved (see :func:`local_step`).
 
     Returns
     -------
@@ -199,7 +205,7 @@ def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=Non
     for it in range(max_iter):
         if not len(B):
             return X, rho, "eps"
-        B, d_min, held = local_step(X, B, eps, domain, halo)
+        B, d_min, held = local_step(X, B, eps, domain, halo, solver)
         halo = halo * 1.5 if held else halo
         rho.append(min(d_min / (2 * r_max), eps))
         if callback is not None:

@@ -87,6 +87,15 @@ def cells_torus(ctx):
     return _cells(ctx, Domain.torus(), 40, 0.0)
 
 
+def cells_list(ctx):
+    """cell_mic on a list of cells (unsorted, repeated) of a weighted torus set."""
+    from diskpack_cl import cells
+
+    pts, w = _sites(Domain.torus(), 40, 3, 0.5)
+    r = cells.CellMIC(Domain.torus(), device=ctx).solve(pts, w, cells=[7, 3, 39, 3, 0])
+    return {"centers": r.centers, "radii": r.radii, "nn": r.nn}
+
+
 def cells_full(ctx):
     """cell_mic where a cell has 40 tight sides (full constraint list, full
     near-tight slots) and a site alone beside a cluster (wide rings, scans
@@ -136,7 +145,8 @@ def cells3_torus(ctx):
 
 
 def dart_round(ctx):
-    """dart_free, dart_keep and cell_covered: parallel dart throwing on a 64 x 64 grid."""
+    """dart_free, dart_keep, cell_covered, put_pair and put_one: parallel dart throwing on a
+    68 x 68 grid (edge cells wrap)."""
     from diskpack_cl.parallel_darts import parallel_darts
 
     return {"points": parallel_darts(1300, seed=0, device=ctx, max_rounds=3)}
@@ -217,7 +227,7 @@ def unowned(ctx):
 
 
 SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
-                                     cells_torus, cells_full, cells3_box, cells3_torus,
+                                     cells_torus, cells_list, cells_full, cells3_box, cells3_torus,
                                      dart_round, end_to_end, refused, bad_labels, unowned)}
 
 

@@ -67,3 +67,91 @@ def test_the_device_kernels_give_the_numpy_points(ctx, n, rel, seed):
     a = parallel_darts(n, rel_radius=rel, seed=seed, device=ctx)
     b = parallel_darts(n, rel_radius=rel, seed=seed, device=False)
     np.testing.assert_array_equal(a, b)
+
+
+def _torus_d2(a, b):
+    """Squared distances between the rows of `a` and of `b` on the unit torus (all pairs)."""
+    diff = a[:, None, :] - b[None, :, :]
+    diff -= np.round(diff)
+    return (diff ** 2).sum(axis=-1)
+
+
+def _grid_case(ctx, g, seed, coarse, fill):
+    """A device grid of g x g cells with points in a share `fill` of them, and darts in
+    a random share of the others (`coarse`: on a cell's near corner or just short of the
+    others: aligned, and the only way to reach the corner cells of the 5 x 5 ring)."""
+    from diskpack_cl.parallel_darts import _DeviceGrid
+
+    rng = np.random.default_rng(seed)
+    # the largest d for g cells a side: pairs two cells apart both ways can be within d
+    grid = _DeviceGrid(np.sqrt(2.0) / (g - 1) * (1 - 1e-9), ctx)
+    assert grid.g == g
+    order = rng.permutation(g * g)
+    full, rest = np.split(order, [int(fill * g * g)])
+    empty = np.sort(rest[rng.random(rest.size) < rng.random()])
+
+    def inside(cells):
+        u = (rng.choice([0.0, 1 - 2.0**-20], (cells.size, 2)) if coarse
+             else rng.random((cells.size, 2)))
+        return (np.column_stack((cells % g, cells // g)) + u) / g
+
+    pts = inside(full)
+    grid.insert(full, pts[:, 0], pts[:, 1])
+    return grid, pts, full, empty.astype(np.int32), inside(empty)
+
+
+@settings(max_examples=20, deadline=None)
+@given(g=st.integers(5, 14), seed=st.integers(0, 2**32 - 1), coarse=st.booleans(),
+       fill=st.floats(0.0, 0.6))
+def test_the_list_kernels_answer_as_every_pair_does(ctx, g, seed, coarse, fill):
+    """dart_free, dart_keep and cell_covered on lists of cells (edge cells wrap, empty
+    lists, no points, darts on cell corners) against all pairs on the torus, by brute force:
+    sparse points, so that the far cells of the 5 x 5 ring decide too."""
+    grid, pts, full, cells, darts = _grid_case(ctx, g, seed, coarse, fill)
+    d2 = grid.d2
+    free = grid.free(cells, darts)
+    np.testing.assert_array_equal(free, (_torus_d2(darts, pts) >= d2).all(axis=1))
+
+    prio = np.random.default_rng(seed).random(cells.size)
+    near = _torus_d2(darts, darts) < d2
+    beaten = (near & (prio[None, :] > prio[:, None])).any(axis=1)
+    for _ in range(2):   # the second time: the first call's priorities were cleared
+        np.testing.assert_array_equal(grid.kept(cells, darts, prio), ~beaten)
+
+    # covered: the 4 corners and the centre each within d of a point of the 8 cells around
+    row, col = np.divmod(cells, g)
+    prow, pcol = np.divmod(full, g)
+    ring = (np.isin((row[:, None] - prow[None, :]) % g, (0, 1, g - 1))
+            & np.isin((col[:, None] - pcol[None, :]) % g, (0, 1, g - 1))
+            & ~((row[:, None] == prow[None, :]) & (col[:, None] == pcol[None, :])))
+    want = np.ones(cells.size, dtype=bool)
+    for sx, sy in ((0, 0), (1, 0), (0, 1), (1, 1), (0.5, 0.5)):
+        sample = np.column_stack((col + sx, row + sy)) * grid.c
+        want &= ((_torus_d2(sample, pts) < d2) & ring).any(axis=1)
+    np.testing.assert_array_equal(grid.covered(cells), want)
+
+
+@settings(max_examples=20, deadline=None)
+@given(g=st.integers(5, 8), cell=st.integers(0, 63), u=st.tuples(*[st.floats(0, 0.999)] * 2))
+def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
+    """One point, and a dart in each of the 24 cells around its own (wrapping at the edges)
+    at the spot of that cell nearest the point: the corner cells of the ring decide only
+    here.  Free darts, and darts beaten by a top-priority dart in the point's place,
+    against brute force."""
+    from diskpack_cl.parallel_darts import _DeviceGrid
+
+    grid = _DeviceGrid(np.sqrt(2.0) / (g - 1) * (1 - 1e-9), ctx)
+    r, c = divmod(cell % (g * g), g)
+    p = (np.array([c, r]) + u) * grid.c
+    off = np.array([(oy, ox) for oy in range(-2, 3) for ox in range(-2, 3) if oy or ox])
+    lo = np.column_stack((c + off[:, 1], r + off[:, 0])) * grid.c   # unwrapped cells' corners
+    darts = np.mod(np.clip(p, lo, lo + (1 - 2.0**-20) * grid.c), 1.0)
+    cells = (((r + off[:, 0]) % g) * g + (c + off[:, 1]) % g).astype(np.int32)
+    near = _torus_d2(darts, p[None, :])[:, 0] < grid.d2
+    assert near.any()
+    grid.insert(np.array([r * g + c]), p[:1], p[1:])
+    np.testing.assert_array_equal(grid.free(cells, darts), ~near)
+    top = _DeviceGrid(grid.d, ctx)   # the point as a dart of the highest priority
+    kept = top.kept(np.append(cells, r * g + c).astype(np.int32), np.vstack((darts, p)),
+                    np.append(np.full(len(cells), 0.5), 0.9))
+    np.testing.assert_array_equal(kept, np.append(~near, True))

@@ -67,6 +67,24 @@ def test_a_local_step_moves_its_points_to_the_mics_of_the_whole_set(seed, eps):
     assert d_min == (pytest.approx(D.min(), abs=1e-15) if len(B2) else np.inf)
 
 
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), eps=st.floats(0.6, 0.8))
+def test_a_local_step_on_the_device_moves_as_on_the_host(ctx, seed, eps):
+    """The step's cells solved by the per-cell kernel on a list (CellMIC.solve with
+    cells) land where exact_mic puts them, and leave the same bad points."""
+    from diskpack_cl.cells import CellMIC
+
+    X = dart_throwing(600, rel_radius=0.5, seed=seed)
+    B = bad_points(nearest_neighbor_distances(X), eps, 1.0)
+    Y, Z = X.copy(), X.copy()
+    B_host, d_host, held_host = local_step(Y, B, eps, TORUS)
+    B_dev, d_dev, held_dev = local_step(Z, B, eps, TORUS, solver=CellMIC(TORUS, device=ctx))
+    d = Z - Y
+    d -= np.round(d)
+    assert np.abs(d).max() <= 1e-12 and held_dev == held_host
+    assert B_dev.tolist() == B_host.tolist() and d_dev == pytest.approx(d_host, abs=1e-12)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_relax_local_reaches_eps_and_its_rho_is_the_brute_force_one(seed):
     n, eps = 400, 0.78

@@ -1,4 +1,5 @@
-/* Maximal inscribed circle of every power cell, one work item per site, float64.
+/* Maximal inscribed circle of every power cell, or of a list of them, one work item
+ * per cell, float64.
  *
  * The MIC of cell i is the Chebyshev centre of its power cell: the linear
  * program  max R  s.t.  n_k . q + R <= beta_k  over the half-planes that
@@ -26,9 +27,10 @@
  *      has a huge cutter radius at first, which the first sites found there
  *      shrink, so scanning that whole ball at once would cost thousands of
  *      buckets;
- *   4. writes, in sorted order (sequential writes), the centre, the radius, the three basic (active) constraints,
- *      the other near-tight ones, the nearest-neighbour distance of the site
- *      and a flag word, non-zero where it could not prove its answer.
+ *   4. writes, in the order of the list of cells (sorted positions, ascending
+ *      for sequential writes), the centre, the radius, the three basic (active)
+ *      constraints, the other near-tight ones, the nearest-neighbour distance
+ *      of the site and a flag word, non-zero where it could not prove its answer.
  *
  * Constraint codes: 9 * j + 3 * (sx + 1) + (sy + 1) for sorted site j shifted by
  * (sx, sy) periods (|sx|, |sy| <= 1); -1..-4 for the left, right, top and
@@ -261,21 +263,23 @@ __kernel void cell_mic(
     __global const double *bwmax,    /* largest weight in each bucket */
     __global const double *bwloc,    /* largest weight in the window of +-win buckets around each */
     const int win,
-    const int n,                     /* number of sites */
+    __global const int *cells,       /* m sorted positions: the cells to solve */
+    const int m,                     /* number of cells to solve */
     const int nbx, const int nby,    /* bucket grid */
     const double bw, const double bh,/* bucket size */
     const double W, const double H,  /* domain size */
     const double wmax,               /* largest weight */
     const double tol,                /* feasibility tolerance (length units) */
     const double near_tol,               /* slack below which a constraint is near-tight */
-    const int offset,                /* first sorted site of this enqueue */
-    __global double4 *mic,           /* out, by sorted position: MIC centre x, y, radius
+    const int offset,                /* first list position of this enqueue */
+    __global double4 *mic,           /* out, by list position: MIC centre x, y, radius
                                         (negative: empty power cell), nearest-neighbour distance */
-    __global int *codes)             /* out: NCODES a site: three basic constraint codes,
+    __global int *codes)             /* out: NCODES a cell: three basic constraint codes,
                                         the flag word, MAXNEAR near-tight codes (-9 = none) */
 {
-    const int s = offset + get_global_id(0);
-    if (s >= n) return;
+    const int i = offset + get_global_id(0);
+    if (i >= m) return;
+    const int s = cells[i];
     const double2 xi = site[s];
     const double wi = weight[s];
     const int hx = clamp((int)(xi.x / bw), 0, nbx - 1), hy = clamp((int)(xi.y / bh), 0, nby - 1);
@@ -411,7 +415,7 @@ __kernel void cell_mic(
     if (!(nn2 <= Gnn * Gnn)) flag |= F_NN;
 
     /* 4. outputs */
-    __global int *out = codes + (size_t)s * (4 + MAXNEAR);
+    __global int *out = codes + (size_t)i * (4 + MAXNEAR);
     int nnear = 0;
     for (int k = 3; k < L.m; ++k) {
         if (k == b[0] || k == b[1] || k == b[2]) continue;
@@ -424,5 +428,5 @@ __kernel void cell_mic(
     if (nnear > MAXNEAR) flag |= F_NEAR_FULL;
     for (int k = nnear; k < MAXNEAR; ++k) out[4 + k] = -9;
     out[0] = L.code[b[0]]; out[1] = L.code[b[1]]; out[2] = L.code[b[2]]; out[3] = flag;
-    mic[s] = (double4)(xi.x + z[0], xi.y + z[1], z[2], sqrt(nn2));
+    mic[i] = (double4)(xi.x + z[0], xi.y + z[1], z[2], sqrt(nn2));
 }

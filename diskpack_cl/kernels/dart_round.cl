@@ -1,10 +1,13 @@
 /* Parallel dart throwing on the unit torus (diskpack_cl/parallel_darts.py), one work
- * item per grid cell or live cell.
+ * item per live cell (or per cell of a list).
  *
  * The torus is a g x g grid of cells of side c <= d / sqrt(2): a cell holds at most
  * one point, and a point can be closer than d only to the points of the 24 cells
- * around its own.  Points and darts are stored one per cell (x >= EMPTY: none); a
- * neighbour past an edge is the cell on the far side, shifted by one period.
+ * around its own.  Points and darts are stored one per cell in grids that stay on
+ * the device between rounds (an empty cell holds a point far off, at 1e9, which no
+ * distance test can find near); a neighbour past an edge is the
+ * cell on the far side, shifted by one period.  The kernels take lists of cells, so
+ * that a round costs its live cells and not the whole grid.
  *
  * The host draws the darts and their priorities (numpy, so that a seed gives the
  * same set with or without a device) and does the bookkeeping; these kernels do the
@@ -12,75 +15,89 @@
  *   dart_free    a dart is free when no point lies within d;
  *   dart_keep    a free dart is kept when no free dart of higher priority lies within d;
  *   cell_covered a live cell is covered when its corners and centre all lie within d
- *                of a point of the 8 cells around it.
+ *                of a point of the 8 cells around it;
+ *   put_pair, put_one  write values into grid cells (points, darts, priorities).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 
-#define EMPTY 1e8
-
-/* The entry of cell (r, c) of the unbounded cell lattice: wrapped onto the grid and
- * shifted by the periods it was wrapped over. */
-static double2 at_cell(__global const double2 *a, int r, int c, int g)
+/* Cell (r, c) of the unbounded cell lattice, one period at most off the grid, wrapped
+ * onto it: its row-major index, and in `shift` the periods it was wrapped over.
+ * Conditional adds, not `%`: an integer division per neighbour was most of a round. */
+static int wrap_cell(int r, int c, int g, double2 *shift)
 {
-    double sx = 0.0, sy = 0.0;
-    if (r < 0) { r += g; sy = -1.0; } else if (r >= g) { r -= g; sy = 1.0; }
-    if (c < 0) { c += g; sx = -1.0; } else if (c >= g) { c -= g; sx = 1.0; }
-    const double2 p = a[r * g + c];
-    return (double2)(p.x + sx, p.y + sy);
+    *shift = (double2)(0.0, 0.0);
+    if (r < 0) { r += g; shift->y = -1.0; } else if (r >= g) { r -= g; shift->y = 1.0; }
+    if (c < 0) { c += g; shift->x = -1.0; } else if (c >= g) { c -= g; shift->x = 1.0; }
+    return r * g + c;
 }
 
-/* Is a point of the cells within `reach` rings of (r, c) (not (r, c) itself) closer
- * than sqrt(d2) to q? */
-static int near_point(__global const double2 *pt, int r, int c, int g, double2 q, double d2,
-                      int reach)
+/* The entry of cell (r, c) of the unbounded cell lattice: wrapped onto the grid and
+ * shifted by the periods it was wrapped over (by 0.0 on the grid: x + 0.0 is x, as no
+ * coordinate is -0.0, so the numpy path's unshifted values come out bit for bit). */
+static double2 at_cell(__global const double2 *a, int r, int c, int g)
 {
-    for (int oy = -reach; oy <= reach; ++oy) {
-        for (int ox = -reach; ox <= reach; ++ox) {
-            if (oy == 0 && ox == 0) continue;
-            const double2 p = at_cell(pt, r + oy, c + ox, g);
-            const double dx = p.x - q.x, dy = p.y - q.y;
-            if (dx * dx + dy * dy < d2) return 1;
-        }
+    double2 shift;
+    const int at = wrap_cell(r, c, g, &shift);
+    return a[at] + shift;
+}
+
+/* The 24 cells around a cell, the 8 nearest first: most rejected darts meet their
+ * conflict there, and a test stops at its first conflict. */
+__constant int NEAR[24][2] = {
+    {-1, -1}, {-1, 0}, {-1, 1}, {0, -1}, {0, 1}, {1, -1}, {1, 0}, {1, 1},
+    {-2, -2}, {-2, -1}, {-2, 0}, {-2, 1}, {-2, 2}, {-1, -2}, {-1, 2}, {0, -2},
+    {0, 2}, {1, -2}, {1, 2}, {2, -2}, {2, -1}, {2, 0}, {2, 1}, {2, 2}};
+
+/* Is a point of the 24 cells around (r, c) closer than sqrt(d2) to q? */
+static int near_point(__global const double2 *pt, int r, int c, int g, double2 q, double d2)
+{
+    for (int k = 0; k < 24; ++k) {
+        const double2 p = at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g);
+        const double dx = p.x - q.x, dy = p.y - q.y;
+        if (dx * dx + dy * dy < d2) return 1;
     }
     return 0;
 }
 
 __kernel void dart_free(
-    __global const double2 *pt,     /* g*g: the point of each cell (x >= EMPTY: none) */
-    __global const double2 *dart,   /* g*g: this round's dart of each cell (x >= EMPTY: none) */
+    __global const double2 *pt,     /* g*g: the point of each cell (1e9: none) */
+    __global const int *cells,      /* m live cells, row * g + col, no cell twice */
+    __global const double2 *dart,   /* m: the dart of each live cell */
+    const int m,                    /* number of live cells */
     const int g,                    /* grid side */
     const double d2,                /* squared minimum distance */
-    __global char *free_out)        /* out, g*g: 1 where the dart is free of the points */
+    __global char *free_out)        /* out, m: 1 where the dart is free of the points */
 {
     const int i = get_global_id(0);
-    if (i >= g * g) return;
-    const double2 q = dart[i];
-    free_out[i] = q.x < EMPTY && !near_point(pt, i / g, i % g, g, q, d2, 2);
+    if (i >= m) return;
+    const int k = cells[i];
+    free_out[i] = !near_point(pt, k / g, k % g, g, dart[i], d2);
 }
 
 __kernel void dart_keep(
-    __global const double2 *dart,   /* g*g: this round's darts */
+    __global const double2 *dart,   /* g*g: this round's free darts (read only where prio >= 0) */
     __global const double *prio,    /* g*g: priority of each free dart (-1: none) */
+    __global const int *cells,      /* m cells holding a free dart */
+    const int m,                    /* number of those cells */
     const int g,                    /* grid side */
     const double d2,                /* squared minimum distance */
-    __global char *keep)            /* out, g*g: 1 where the dart is kept */
+    __global char *keep)            /* out, m: 1 where the dart is kept */
 {
     const int i = get_global_id(0);
-    if (i >= g * g) return;
-    const double mine = prio[i];
-    int ok = mine >= 0.0;
-    const double2 q = dart[i];
-    const int r = i / g, c = i % g;
-    for (int oy = -2; oy <= 2 && ok; ++oy) {
-        for (int ox = -2; ox <= 2; ++ox) {
-            if (oy == 0 && ox == 0) continue;
-            const int rr = (r + oy + g) % g, cc = (c + ox + g) % g;
-            if (!(prio[rr * g + cc] > mine)) continue;
-            const double2 p = at_cell(dart, r + oy, c + ox, g);
-            const double dx = p.x - q.x, dy = p.y - q.y;
-            if (dx * dx + dy * dy < d2) { ok = 0; break; }
-        }
+    if (i >= m) return;
+    const int k = cells[i];
+    const double mine = prio[k];
+    const double2 q = dart[k];
+    const int r = k / g, c = k % g;
+    int ok = 1;
+    for (int j = 0; j < 24 && ok; ++j) {
+        double2 shift;
+        const int at = wrap_cell(r + NEAR[j][0], c + NEAR[j][1], g, &shift);
+        if (!(prio[at] > mine)) continue;
+        const double2 p = dart[at] + shift;
+        const double dx = p.x - q.x, dy = p.y - q.y;
+        ok = !(dx * dx + dy * dy < d2);
     }
     keep[i] = ok;
 }
@@ -97,9 +114,38 @@ __kernel void cell_covered(
     const int i = get_global_id(0);
     if (i >= m) return;
     const int r = cells[i] / g, col = cells[i] % g;
+    /* the 8 points around, loaded once for the 5 samples */
+    double2 p[8];
+    for (int k = 0; k < 8; ++k) p[k] = at_cell(pt, r + NEAR[k][0], col + NEAR[k][1], g);
     const double sx[5] = {0.0, 1.0, 0.0, 1.0, 0.5}, sy[5] = {0.0, 0.0, 1.0, 1.0, 0.5};
     int all = 1;
-    for (int k = 0; k < 5 && all; ++k)
-        all = near_point(pt, r, col, g, (double2)((col + sx[k]) * c, (r + sy[k]) * c), d2, 1);
+    for (int s = 0; s < 5 && all; ++s) {
+        const double2 q = (double2)((col + sx[s]) * c, (r + sy[s]) * c);
+        all = 0;
+        for (int k = 0; k < 8 && !all; ++k) {
+            const double dx = p[k].x - q.x, dy = p[k].y - q.y;
+            all = dx * dx + dy * dy < d2;
+        }
+    }
     covered[i] = all;
+}
+
+__kernel void put_pair(
+    __global double2 *grid,         /* g*g: points or darts, written at `cells` */
+    __global const int *cells,      /* m cells, no cell twice */
+    __global const double2 *value,  /* m: what each cell gets */
+    const int m)                    /* number of cells */
+{
+    const int i = get_global_id(0);
+    if (i < m) grid[cells[i]] = value[i];
+}
+
+__kernel void put_one(
+    __global double *grid,          /* g*g: priorities, written at `cells` */
+    __global const int *cells,      /* m cells, no cell twice */
+    __global const double *value,   /* m: what each cell gets */
+    const int m)                    /* number of cells */
+{
+    const int i = get_global_id(0);
+    if (i < m) grid[cells[i]] = value[i];
 }
