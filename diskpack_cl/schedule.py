@@ -288,7 +288,8 @@ class StippleOptions:
     support: float = option(
         None, "keep dots on the ink: a dot whose largest empty disk leaves its cell's ink "
         "moves towards the cell's centroid instead, by S times how far it left, at most all "
-        "the way (default: the schedule's, 8 for default, 0 for the others; 0 lets edge dots "
+        "the way (default: the schedule's, for default 8, or 16 where dots are 6 px or more "
+        "apart; 0 for the others; 0 lets edge dots "
         "drift onto white paper and blurs edges)", lo=0, hi=16, group=_STIPPLING, metavar="S")
     paper_tone: float = option(
         0.0, "darkness T added under the whole image, so that white paper gets sparse dots "
