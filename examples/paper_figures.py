@@ -402,16 +402,20 @@ def _stipple_numbers(points, darkness, result=None):
     return m
 
 
-def fig5(out, quick):
-    name, n = "coffee", 2000 if quick else 5000
+def _stipple_input(name, n):
+    """A test photograph's gray image, darkness, error-diffusion start and equal-ink radius."""
     gray = load_gray(DATA / f"{name}.png")
     dark = 1.0 - gray
-    start = error_diffusion(gray, n, seed=0)
+    return gray, dark, error_diffusion(gray, n, seed=0), analysis.tone_radius(n, dark)
+
+
+def fig5(out, quick):
+    name, n = "coffee", 2000 if quick else 5000
+    gray, dark, start, r = _stipple_input(name, n)
     stages = [("disk packing only (40 it.)", [("pack", 40)]),
               ("+ 10 Lloyd it.", [("pack", 40), ("lloyd", 10)]),
               ("default schedule (final)", "default")]
     results = [(label, stipple(gray, n, schedule=sch, seed=0)) for label, sch in stages]
-    r = analysis.tone_radius(n, dark)
     fig = _figure(15.0, 3.7)
     axes = fig.subplots(1, 5)
     _show(axes[0], gray, f"(a) input ({name})")
@@ -429,11 +433,8 @@ def fig5(out, quick):
 
 def fig8(out, quick):
     name, n = "astronaut", 4000 if quick else 15000
-    gray = load_gray(DATA / f"{name}.png")
-    dark = 1.0 - gray
-    start = error_diffusion(gray, n, seed=0)
+    gray, dark, start, r = _stipple_input(name, n)
     res = stipple(gray, n, seed=0)
-    r = analysis.tone_radius(n, dark)
     fig = _figure(15.0, 5.4)
     axes = fig.subplots(1, 3)
     m0 = _stipple_numbers(start, dark)
