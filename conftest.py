@@ -43,6 +43,7 @@ OPENCL_DOCTESTS = {
     "diskpack_cl.cells.has_fp64",
     "diskpack_cl.engine.OpenCLEngine",
     "diskpack_cl.cells.CellMIC",
+    "diskpack_cl.cells.CellMIC.solve",
     "diskpack_cl.cells3.CellMIC3",
 }
 

@@ -5,8 +5,9 @@ Pen-path ordering
 A pen plotter lifts the pen and travels between dots; the order of the dots
 sets that travel, and with it most of the plot time besides the pen lifts.
 :func:`diskpack_cl.pen_path.pen_path_order` offers a Hilbert curve, greedy
-nearest neighbour, and ``"auto"``: the shorter of both, then 2-opt within a
-time budget. The SVG writer uses ``"auto"`` unless told otherwise.
+nearest neighbour, and ``"auto"``: the shorter of both, then rounds of 2-opt
+(as many as the number of dots allows, the same on every machine). The SVG
+writer uses ``"auto"`` unless told otherwise.
 """
 
 import matplotlib.pyplot as plt
@@ -19,7 +20,7 @@ points = stipple(gray, 800, seed=0).points
 
 fig, axes = plt.subplots(1, 4, figsize=(12, 3.4))
 for ax, method in zip(axes, ("none", "hilbert", "greedy", "auto")):
-    order, _, travel = pen_path_order(points, method=method, budget_s=0.5)
+    order, _, travel = pen_path_order(points, method=method)
     p = points[order]
     ax.plot(p[:, 0], p[:, 1], lw=0.4, color="tab:blue")
     ax.plot(p[:, 0], p[:, 1], ".", ms=1.5, color="k")
