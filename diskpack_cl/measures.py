@@ -138,10 +138,13 @@ def min_distance(points, domain=Domain.torus()):
 def min_distance_at_most(points, bound, domain=Domain.torus(), *, grow=False):
     """Smallest pairwise distance if it is at most `bound` (1e-9 relative; else ``inf``), exact.
 
-    One KD-tree query for the pairs within ``bound (1 + 1e-9)``: at a million
-    points, a few times faster than every point's nearest neighbour when few
-    pairs are that close.  With ``grow=True`` the bound grows by 5 % until a
-    pair is found (one tree), so the smallest distance is always returned.
+    The pairs within ``bound (1 + 1e-9)`` are found by a grid of cells of
+    side at least that (:func:`_grid_min_distance`): at a million points a
+    few times faster than a KD-tree.  With ``grow=True`` the smallest
+    distance is always returned: the grid's cells are at least the mean
+    spacing wide, so its neighbour cells hold the closest pair of any set
+    that is not clustered; one that is goes to the KD-tree, whose bound
+    grows by 5 % until a pair is found.
 
     Examples
     --------
@@ -151,18 +154,132 @@ def min_distance_at_most(points, bound, domain=Domain.torus(), *, grow=False):
     >>> round(min_distance_at_most(p, 0.05, grow=True), 12)
     0.1
     """
-    X, tree = kdtree(points, domain)
+    X = np.asarray(points, np.float64)
     if len(X) < 2:
         raise ValueError("need at least 2 points")
+    reach = bound * (1 + 1e-9)
+    found = _grid_min_distance(X, reach, domain)
+    if found is not None:
+        dmin, side = found
+        if dmin <= reach or (grow and dmin < side):
+            return dmin
+        if not grow:
+            return float("inf")
+    return _kdtree_min_distance_at_most(X, bound, domain, grow)
+
+
+def _kdtree_min_distance_at_most(points, bound, domain, grow):
+    """:func:`min_distance_at_most` by one KD-tree query (the grid's fallback)."""
+    X, tree = kdtree(points, domain)
     while not len(pairs := tree.query_pairs(bound * (1 + 1e-9), output_type="ndarray")):
         if not grow:
             return float("inf")
         bound *= 1.05
-    d = X[pairs[:, 0]] - X[pairs[:, 1]]
+    dmin = float(_pair_distances(X, pairs[:, 0], pairs[:, 1], domain).min())
+    return dmin if grow or dmin <= bound * (1 + 1e-9) else float("inf")
+
+
+def _pair_distances(X, i, j, domain):
+    """Distances of the pairs ``(i[k], j[k])`` of X (minimum image on a torus)."""
+    d = X[i] - X[j]
     if domain.periodic:
         d -= np.round(d / domain.size) * domain.size
-    dmin = float(np.sqrt((d * d).sum(axis=1)).min())
-    return dmin if grow or dmin <= bound * (1 + 1e-9) else float("inf")
+    return np.sqrt((d * d).sum(axis=1))
+
+
+#: A grid's cells are this much wider than the distance asked for, so that
+#: rounding in ``floor(x / side)`` cannot put a pair within it two cells apart.
+_GRID_MARGIN = 1 + 1e-6
+
+#: Candidate pairs per point beyond which a (clustered) set goes to the KD-tree,
+#: which bounds the grid's memory (a relaxed or uniform set has about 4).
+_GRID_PAIRS_PER_POINT = 16
+
+#: Half of the 3 x 3 neighbourhood: each pair of adjacent cells is compared once.
+_HALF_NEIGHBOURS = ((1, 0), (-1, 1), (0, 1), (1, 1))
+
+
+def _grid_min_distance(X, reach, domain):
+    """``(dmin, side)``: the smallest distance of the pairs in the same or adjacent
+    cells of a grid of cells of side ``side >= reach``, or None where the grid
+    does not serve (fewer than 3 cells across a torus, non-finite points, a
+    clustered set).
+
+    Every pair closer than ``side`` lies in adjacent cells (``side`` is the
+    cells' width less the margin), so ``dmin`` is the exact smallest distance
+    when it is below ``side`` (``inf`` if no pair is adjacent).  Distances are computed as the KD-tree path computes them.
+    """
+    if not np.all(np.isfinite(X)):
+        return None
+    if domain.periodic:
+        X = domain.wrap(X)
+        lo, extent = np.zeros(2), domain.size
+    else:
+        lo = X.min(axis=0)
+        extent = X.max(axis=0) - lo
+    # at most 4n cells, and 4n along a line of points (a box's extent can be 0)
+    spacing = max(0.5 * np.sqrt(np.prod(extent) / len(X)), 0.25 * extent.max() / len(X))
+    side = max(reach, spacing) * _GRID_MARGIN
+    shape = np.maximum(np.floor(extent / side), 1).astype(np.int64)
+    if domain.periodic and shape.min() < 3:
+        return None
+    per_length = np.divide(shape, extent, out=np.zeros(2), where=extent > 0)
+    cell = np.minimum((X - lo) * per_length, shape - 1).astype(np.int64)
+    order, ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape, domain.periodic)
+    if sum(int(c.sum()) for _, c in ranges) > _GRID_PAIRS_PER_POINT * len(X):
+        return None
+    xy = [np.ascontiguousarray(X[order, k]) for k in (0, 1)]
+    d2 = min((_min_square_distance(xy, first, count, domain) for first, count in ranges),
+             default=np.inf)
+    # along an axis of one cell (a box's) every point shares it: no limit there
+    width = np.where(shape > 1, extent / shape, np.inf).min()
+    return float(np.sqrt(d2)), float(width) / _GRID_MARGIN
+
+
+def _candidate_ranges(flat, shape, periodic):
+    """``(order, ranges)``: the points' order by cell, and per neighbour offset
+    ``(first, count)`` of each sorted point's partners (contiguous in that
+    order): the later points of its own cell, then all points of each of
+    half its neighbour cells."""
+    order = np.argsort(flat, kind="stable")
+    own = flat[order]
+    count = np.bincount(own, minlength=int(shape.prod()))
+    start = np.cumsum(count) - count
+    i = np.arange(len(own))
+    ranges = [(i + 1, start[own] + count[own] - i - 1)]
+    count, start = count.reshape(tuple(shape)), start.reshape(tuple(shape))
+    for offset in _HALF_NEIGHBOURS:
+        n_count = _shifted(count, offset, periodic).ravel()
+        ranges.append((_shifted(start, offset, periodic).ravel()[own], n_count[own]))
+    return order, ranges
+
+
+def _shifted(grid, offset, periodic):
+    """``grid[c + offset]`` at each cell c: wrapped on a torus, 0 past a box's edge."""
+    if periodic:
+        return np.roll(grid, (-offset[0], -offset[1]), axis=(0, 1))
+    out = np.zeros_like(grid)
+    src = tuple(slice(max(o, 0), grid.shape[k] + min(o, 0)) for k, o in enumerate(offset))
+    dst = tuple(slice(max(-o, 0), grid.shape[k] + min(-o, 0)) for k, o in enumerate(offset))
+    out[dst] = grid[src]
+    return out
+
+
+def _min_square_distance(xy, first, count, domain):
+    """Smallest squared distance between each point i and the points
+    ``first[i] .. first[i] + count[i] - 1`` (``inf`` if none), as
+    :func:`_pair_distances` computes it (sqrt is monotone: the same minimum)."""
+    i = np.repeat(np.arange(len(first)), count)
+    if not len(i):
+        return np.inf
+    j = np.repeat(first - np.cumsum(count) + count, count) + np.arange(len(i))
+    d2 = np.zeros(len(i))
+    for k, (coord, size) in enumerate(zip(xy, domain.size)):
+        d = coord[i] - coord[j]
+        if domain.periodic:
+            d -= np.round(d / size) * size
+        d2 += d * d
+    return float(d2.min())
 
 
 def normalized_radius(points, domain=Domain.torus()):

@@ -173,7 +173,8 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     verify : bool
         Check every iteration against an independent computation: the MIC
         radii against :func:`diskpack_cl.geometry.exact_mic` (to 1e-9) and
-        rho against a scipy KD-tree; raises RuntimeError on a mismatch.
+        rho against an exact host measure (a cell grid or a KD-tree); raises
+        RuntimeError on a mismatch.
     profile : bool
         Profile the OpenCL kernels (``timings["kernel"]`` and
         ``timings["kernel_<name>"]``).
@@ -190,7 +191,7 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         decreases, far cheaper, but the iterates differ from Algorithm 1's.
         The global iterations before then take the device's proven MICs
         without the host's re-solve of every cell (unless `verify`): the
-        rho returned is measured by a KD-tree in any case.
+        rho returned is measured exactly on the host in any case.
 
     Returns
     -------
@@ -215,7 +216,7 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     X, rho, it, reason, nn = _iterate(engine, dom, X, eps, int(max_iter), patience, callback,
                                       verify, stats, local)
     went_local = reason == "local"
-    if went_local:   # the local route measures its last rho by the KD-tree itself
+    if went_local:   # the local route measures its last rho on the host itself
         with engine.timings("local"):
             X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience,
                                            callback, stats, _local_solver(engine, dom))
@@ -238,7 +239,7 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
     nearest-neighbour distances)``; the reason ``"local"`` hands over to local iterations."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     local = local and dom.periodic
-    # the local route measures the rho it returns by a KD-tree: its global iterates need
+    # the local route measures the rho it returns on the host: its global iterates need
     # the device's proven MICs, not the host's re-solve of every cell (verify still has it)
     certify = not local
     step = _mic(engine, X, stats, certify) if engine.gives_nn else None
@@ -287,7 +288,7 @@ def _local_solver(engine, dom):
 
 def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, solver=None):
     """Local iterations after `it` global ones (their cells solved by `solver`, a
-    :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured by a KD-tree."""
+    :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured on the host."""
     from .measures import min_distance_at_most
     from .relax_local import relax_local
 
@@ -323,15 +324,15 @@ def _rho(X, step, verify, domain):
 
 
 def _certify_rho(X, rho, domain):
-    """The independent check of rho: scipy's KD-tree (periodic on a torus), asked for
-    the pairs within the distance rho claims (all points' neighbours if none is)."""
+    """The independent check of rho: the host's pairs within the distance rho claims
+    (:func:`~diskpack_cl.measures.min_distance_at_most`; all points' neighbours if none is)."""
     from .measures import min_distance_at_most
 
     r_max = hexagonal_radius(len(X), domain.area)
     d = min_distance_at_most(X, 2 * rho * r_max * (1 + 1e-9), domain)
     exact = 0.5 * d / r_max if np.isfinite(d) else normalized_radius(X, domain)
     if not abs(exact - rho) <= 1e-12:
-        raise RuntimeError(f"rho {rho!r} from the engine disagrees with the KD-tree's {exact!r}")
+        raise RuntimeError(f"rho {rho!r} from the engine disagrees with the host's {exact!r}")
 
 
 @dataclass

@@ -145,8 +145,8 @@ def cells3_torus(ctx):
 
 
 def dart_round(ctx):
-    """dart_free, dart_keep, cell_covered, put_pair and put_one: parallel dart throwing on a
-    68 x 68 grid (edge cells wrap)."""
+    """dart_place, dart_free, dart_keep, cell_covered, put_pair and put_one: parallel dart
+    throwing on a 68 x 68 grid (edge cells wrap)."""
     from diskpack_cl.parallel_darts import parallel_darts
 
     return {"points": parallel_darts(1300, seed=0, device=ctx, max_rounds=3)}

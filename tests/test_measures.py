@@ -7,8 +7,10 @@ from hypothesis import strategies as st
 
 import reference as ref
 from diskpack_cl.domain import Domain
+from diskpack_cl import measures
 from diskpack_cl.measures import (coincident_pairs, hexagonal_radius, min_distance,
-                                  nearest_neighbor_distances, normalized_radius)
+                                  min_distance_at_most, nearest_neighbor_distances,
+                                  normalized_radius)
 
 
 def test_hexagonal_radius():
@@ -125,3 +127,86 @@ def test_domain_images_rectangle_and_rect_check():
     assert pos.tolist() == [[0.5, 0.5]] and site.tolist() == [0]
     with pytest.raises(ValueError, match="domain size must be positive, got 0 x 1"):
         Domain.rect(0, 1)
+
+
+GRID_DOMAINS = [Domain.torus(), Domain(2.0, 0.5, True), Domain.rect(3.0, 2.0)]
+
+
+@st.composite
+def awkward_sets(draw):
+    """``(points, domain)``: uniform, lattice, cell-border, seam, coincident or clustered sets."""
+    dom = draw(st.sampled_from(GRID_DOMAINS))
+    n = draw(st.integers(2, 60))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    kind = draw(st.sampled_from(["uniform", "lattice", "border", "seam", "coincident", "cluster"]))
+    if kind == "lattice":        # exact grid lines: points on many cells' borders at once
+        m = draw(st.integers(2, 12))
+        pts = rng.integers(0, m, (n, 2)) / m * dom.size
+    elif kind == "border":       # coordinates a few ulps either side of k / m
+        m = draw(st.integers(3, 40))
+        pts = rng.integers(0, m, (n, 2)) / m * dom.size
+        pts = pts + rng.integers(-3, 4, (n, 2)) * np.spacing(dom.size)
+    elif kind == "seam":         # 0, -0.0, just below the size, the size itself
+        choices = np.array([0.0, -0.0, 1e-300, 0.5, 1 - 2**-53, 1.0, 2**-53])
+        pts = rng.choice(choices, (n, 2)) * dom.size
+    elif kind == "cluster":
+        pts = rng.random(2) * dom.size + rng.normal(0, 10.0 ** -rng.integers(2, 12), (n, 2))
+    else:
+        pts = rng.random((n, 2)) * dom.size
+    if kind == "coincident":
+        pts[rng.integers(0, n, n // 3)] = pts[rng.integers(0, n, n // 3)]
+    if not dom.periodic:
+        pts = np.clip(pts, 0, dom.size)
+    return pts, dom
+
+
+def _all_pairs_min(points, domain):
+    """Brute force, with the very float64 operations of the grid and the KD-tree."""
+    X = domain.wrap(points) if domain.periodic else np.asarray(points, np.float64)
+    i, j = np.triu_indices(len(X), 1)
+    return float(measures._pair_distances(X, i, j, domain).min())
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=awkward_sets(), scale=st.sampled_from([1e-6, 0.3, 0.999, 1.0, 1.7, 40.0]),
+       grow=st.booleans())
+def test_min_distance_at_most_is_the_kdtree_and_brute_force_answer(case, scale, grow):
+    pts, dom = case
+    best = _all_pairs_min(pts, dom)
+    bound = max(scale * best, 1e-9 * dom.width)
+    got = min_distance_at_most(pts, bound, dom, grow=grow)
+    assert got == measures._kdtree_min_distance_at_most(pts, bound, dom, grow)
+    if grow:
+        assert got == best
+    else:
+        assert got == (best if best <= bound * (1 + 1e-9) else np.inf)
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=awkward_sets(), reach=st.floats(1e-6, 0.4))
+def test_grid_finds_every_pair_closer_than_its_side(case, reach):
+    pts, dom = case
+    found = measures._grid_min_distance(np.asarray(pts, np.float64), reach, dom)
+    if found is not None:    # None: too few cells on the torus or too many pairs
+        dmin, side = found
+        best = _all_pairs_min(pts, dom)
+        assert side >= reach
+        assert dmin == best if best < side else dmin >= best
+
+
+@pytest.mark.parametrize("dom", GRID_DOMAINS)
+def test_grid_serves_a_large_uniform_set(dom):
+    pts = np.random.default_rng(5).random((20000, 2)) * dom.size
+    best = measures._kdtree_min_distance_at_most(pts, 1e-3, dom, True)
+    assert measures._grid_min_distance(pts, best, dom) is not None
+    assert min_distance_at_most(pts, best, dom) == best
+    assert min_distance_at_most(pts, 0.99 * best, dom) == np.inf
+
+
+def test_min_distance_at_most_tiny_sets():
+    with pytest.raises(ValueError, match="need at least 2 points"):
+        min_distance_at_most([[0.5, 0.5]], 0.1)
+    assert min_distance_at_most([[0.5, 0.5], [0.5, 0.5]], 0.1) == 0.0
+    assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1) == 0.0     # the seam: one point
+    assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1, Domain.rect(1, 1)) == np.inf
+    assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1, Domain.rect(1, 1), grow=True) == 1.0

@@ -155,3 +155,26 @@ def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
     kept = top.kept(np.append(cells, r * g + c).astype(np.int32), np.vstack((darts, p)),
                     np.append(np.full(len(cells), 0.5), 0.9))
     np.testing.assert_array_equal(kept, np.append(~near, True))
+
+
+@settings(max_examples=20, deadline=None)
+@given(g=st.integers(5, 300), seed=st.integers(0, 2**32 - 1), edges=st.booleans())
+def test_dart_place_computes_the_hosts_coordinates_bit_for_bit(ctx, g, seed, edges):
+    """dart_place puts ``((col + u) c, (row + v) c)`` into the dart grid as numpy rounds it
+    (uniforms 0 and just under 1 too), and dart_free reads the darts it placed."""
+    import pyopencl as cl
+
+    from diskpack_cl.parallel_darts import _DeviceGrid
+
+    rng = np.random.default_rng(seed)
+    grid = _DeviceGrid(np.sqrt(2.0) / g * (1 + 1e-12), ctx)
+    cells = np.sort(rng.choice(grid.g * grid.g, rng.integers(1, 2 * grid.g), replace=False))
+    uv = (rng.choice([0.0, 1 - 2.0**-53, 0.5], (2, cells.size)) if edges
+          else rng.random((2, cells.size)))
+    grid.place(cells.astype(np.int32), *uv)
+    got = np.empty((grid.g * grid.g, 2))
+    cl.enqueue_copy(grid.queue, got, grid.b_dart)
+    row, col = np.divmod(cells, grid.g)
+    want = np.column_stack(((col + uv[0]) * grid.c, (row + uv[1]) * grid.c))
+    np.testing.assert_array_equal(got[cells], want)
+    np.testing.assert_array_equal(grid.free(cells.astype(np.int32)), np.ones(cells.size, bool))

@@ -9,9 +9,11 @@
  * cell on the far side, shifted by one period.  The kernels take lists of cells, so
  * that a round costs its live cells and not the whole grid.
  *
- * The host draws the darts and their priorities (numpy, so that a seed gives the
- * same set with or without a device) and does the bookkeeping; these kernels do the
- * distance tests, in the same float64 operations as the numpy path (no contraction):
+ * The host draws the darts' uniforms and their priorities (numpy, so that a seed gives
+ * the same set with or without a device) and does the bookkeeping; these kernels place
+ * the darts and do the distance tests, in the same float64 operations as the numpy path
+ * (no contraction):
+ *   dart_place   a live cell's dart from the host's two uniforms, into the dart grid;
  *   dart_free    a dart is free when no point lies within d;
  *   dart_keep    a free dart is kept when no free dart of higher priority lies within d;
  *   cell_covered a live cell is covered when its corners and centre all lie within d
@@ -60,10 +62,27 @@ static int near_point(__global const double2 *pt, int r, int c, int g, double2 q
     return 0;
 }
 
+__kernel void dart_place(
+    __global double2 *dart,         /* g*g: written at `cells` */
+    __global const int *cells,      /* m live cells, row * g + col, no cell twice */
+    __global const double *u,       /* m: uniforms in [0, 1) along x */
+    __global const double *v,       /* m: uniforms in [0, 1) along y */
+    const int m,                    /* number of live cells */
+    const int g,                    /* grid side */
+    const double c)                 /* cell side, 1 / g */
+{
+    const int i = get_global_id(0);
+    if (i >= m) return;
+    const int k = cells[i];
+    /* ((col + u) c, (row + v) c): numpy's add of the int column and the uniform,
+     * then its scaling, rounded as there */
+    dart[k] = (double2)(((double)(k % g) + u[i]) * c, ((double)(k / g) + v[i]) * c);
+}
+
 __kernel void dart_free(
     __global const double2 *pt,     /* g*g: the point of each cell (1e9: none) */
     __global const int *cells,      /* m live cells, row * g + col, no cell twice */
-    __global const double2 *dart,   /* m: the dart of each live cell */
+    __global const double2 *dart,   /* g*g: the dart of each live cell, at the cell */
     const int m,                    /* number of live cells */
     const int g,                    /* grid side */
     const double d2,                /* squared minimum distance */
@@ -72,7 +91,7 @@ __kernel void dart_free(
     const int i = get_global_id(0);
     if (i >= m) return;
     const int k = cells[i];
-    free_out[i] = !near_point(pt, k / g, k % g, g, dart[i], d2);
+    free_out[i] = !near_point(pt, k / g, k % g, g, dart[k], d2);
 }
 
 __kernel void dart_keep(
