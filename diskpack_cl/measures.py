@@ -11,7 +11,8 @@ import numpy as np
 
 from .domain import Domain
 
-__all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "hexagonal_radius", "nearest_neighbors",
+__all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "ball_candidates", "hexagonal_radius",
+           "nearest_neighbors",
            "nearest_neighbor_distances",
            "min_distance", "min_distance_at_most", "normalized_radius", "coincident_pairs", "kdtree"]
 
@@ -202,13 +203,32 @@ _HALF_NEIGHBOURS = ((1, 0), (-1, 1), (0, 1), (1, 1))
 def _grid_min_distance(X, reach, domain):
     """``(dmin, side)``: the smallest distance of the pairs in the same or adjacent
     cells of a grid of cells of side ``side >= reach``, or None where the grid
-    does not serve (fewer than 3 cells across a torus, non-finite points, a
-    clustered set).
+    does not serve (see :func:`_grid_cells`, and a clustered set).
 
     Every pair closer than ``side`` lies in adjacent cells (``side`` is the
     cells' width less the margin), so ``dmin`` is the exact smallest distance
     when it is below ``side`` (``inf`` if no pair is adjacent).  Distances are computed as the KD-tree path computes them.
     """
+    grid = _grid_cells(X, reach, domain)
+    if grid is None:
+        return None
+    X, cell, shape, extent = grid
+    order, ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape, domain.periodic)
+    if sum(int(c.sum()) for _, c in ranges) > _GRID_PAIRS_PER_POINT * len(X):
+        return None
+    xy = [np.ascontiguousarray(X[order, k]) for k in (0, 1)]
+    d2 = min((_min_square_distance(xy, first, count, domain) for first, count in ranges),
+             default=np.inf)
+    # along an axis of one cell (a box's) every point shares it: no limit there
+    width = np.where(shape > 1, extent / shape, np.inf).min()
+    return float(np.sqrt(d2)), float(width) / _GRID_MARGIN
+
+
+def _grid_cells(X, reach, domain):
+    """``(X, cell, shape, extent)``: the points (wrapped on a torus), each one's
+    ``(column, row)`` in a grid of ``shape`` cells of side at least ``reach``
+    over ``extent``, or None where a grid does not serve (non-finite points,
+    fewer than 3 cells across a torus, where neighbour cells would repeat)."""
     if not np.all(np.isfinite(X)):
         return None
     if domain.periodic:
@@ -224,16 +244,59 @@ def _grid_min_distance(X, reach, domain):
     if domain.periodic and shape.min() < 3:
         return None
     per_length = np.divide(shape, extent, out=np.zeros(2), where=extent > 0)
-    cell = np.minimum((X - lo) * per_length, shape - 1).astype(np.int64)
-    order, ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape, domain.periodic)
-    if sum(int(c.sum()) for _, c in ranges) > _GRID_PAIRS_PER_POINT * len(X):
+    return X, np.minimum((X - lo) * per_length, shape - 1).astype(np.int64), shape, extent
+
+
+def ball_candidates(points, centres, reach, domain=Domain.torus()):
+    """``(i, j)``: a superset of the pairs of a point ``i`` of `centres` and a
+    point ``j`` of `points` (``i`` itself included) within `reach`, or None
+    where a grid does not serve.
+
+    The pairs are those in the same or adjacent cells of a grid of cells of
+    side at least `reach`; only the points of the cells around a centre are
+    sorted, so a few centres among many points cost little more than one
+    pass over the points.  The caller measures the distances (as
+    :func:`_pair_distances` does) and keeps the pairs it wants; where this
+    returns None (see :func:`_grid_cells`), a KD-tree's ball query serves.
+
+    Examples
+    --------
+    >>> p = np.array([[0.05, 0.5], [0.95, 0.5], [0.5, 0.5], [0.5, 0.1]])
+    >>> i, j = ball_candidates(p, np.array([0]), 0.2)
+    >>> sorted(j[_pair_distances(p, i, j, Domain.torus()) <= 0.2].tolist())
+    [0, 1]
+    """
+    grid = _grid_cells(np.asarray(points, np.float64), reach, domain)
+    if grid is None:
         return None
-    xy = [np.ascontiguousarray(X[order, k]) for k in (0, 1)]
-    d2 = min((_min_square_distance(xy, first, count, domain) for first, count in ranges),
-             default=np.inf)
-    # along an axis of one cell (a box's) every point shares it: no limit there
-    width = np.where(shape > 1, extent / shape, np.inf).min()
-    return float(np.sqrt(d2)), float(width) / _GRID_MARGIN
+    _, cell, shape, _ = grid
+    flat = cell[:, 0] * shape[1] + cell[:, 1]
+    near = _neighbour_cells(cell[centres], shape, domain.periodic).ravel()
+    inside = near >= 0
+    mark = np.zeros(int(shape.prod()), dtype=bool)
+    mark[near[inside]] = True
+    order = np.flatnonzero(mark[flat])
+    order = order[np.argsort(flat[order], kind="stable")]
+    count = np.bincount(flat[order], minlength=len(mark))
+    start = np.cumsum(count) - count
+    count = np.where(inside, count[near], 0)
+    i = np.repeat(np.repeat(centres, len(_NEIGHBOURS)), count)
+    j = np.repeat(start[near] - np.cumsum(count) + count, count) + np.arange(len(i))
+    return i, order[j]
+
+
+#: The 3 x 3 neighbourhood of a cell, itself included.
+_NEIGHBOURS = np.array([(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)])
+
+
+def _neighbour_cells(cell, shape, periodic):
+    """``(m, 9)`` flat indices of the 3 x 3 cells around each of `cell`: wrapped
+    on a torus, -1 past a box's edge."""
+    around = cell[:, None, :] + _NEIGHBOURS
+    if periodic:
+        around %= shape
+    flat = around[..., 0] * shape[1] + around[..., 1]
+    return np.where(((around >= 0) & (around < shape)).all(axis=2), flat, -1)
 
 
 def _candidate_ranges(flat, shape, periodic):

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .geometry import exact_mic
-from .measures import hexagonal_radius
+from .measures import ball_candidates, hexagonal_radius
 
 __all__ = ["HALO", "LOCAL_SHARE", "MOVE_RADIUS", "bad_points", "local_step", "relax_local"]
 
@@ -65,10 +65,22 @@ def _diff(a, b, domain):
     return d
 
 
-def _tree(P, domain):
-    from scipy.spatial import cKDTree
+def _pairs_near(X, C, r, domain):
+    """``(i, j, q)``: a superset of the pairs of a point ``i`` of `C` and a point
+    ``j`` of `X` within `r` (``i`` itself included), and ``q = X[i] - X[j]``
+    (minimum image), from a grid of cells (:func:`ball_candidates`); a
+    KD-tree where the grid does not serve."""
+    found = ball_candidates(X, C, r, domain)
+    if found is None:
+        from scipy.spatial import cKDTree
 
-    return cKDTree(P, boxsize=domain.size if domain.periodic else None)
+        tree = cKDTree(X, boxsize=domain.size if domain.periodic else None)
+        lists = tree.query_ball_point(X[C], r, return_sorted=False)
+        lens = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))
+        found = np.repeat(C, lens), np.fromiter((k for lst in lists for k in lst),
+                                                dtype=np.int64, count=int(lens.sum()))
+    i, j = found
+    return i, j, _diff(X[i], X[j], domain)
 
 
 def _near(X, B, M, domain):
@@ -92,13 +104,17 @@ def _near(X, B, M, domain):
 
 def _bad_pairs(X, B, d_eps, domain):
     """``(i, j, distance)`` of the pairs closer than `d_eps` that hold a point of `B`."""
-    lists = _tree(X, domain).query_ball_point(X[B], d_eps, return_sorted=False)
-    lens = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))
-    i = np.repeat(B, lens)
-    j = np.fromiter((k for lst in lists for k in lst), dtype=np.int64, count=int(lens.sum()))
-    d = np.hypot(*_diff(X[i], X[j], domain).T)
+    i, j, q = _pairs_near(X, B, d_eps, domain)
+    d = np.hypot(*q.T)
     keep = (i != j) & (d < d_eps)
     return i[keep], j[keep], d[keep]
+
+
+def _within(X, C, r, domain):
+    """Sorted indices of the points within `r` of a point of `C`, the squared
+    distance as a periodic KD-tree computes it (so the same points as its ball query)."""
+    _, j, q = _pairs_near(X, C, r, domain)
+    return np.unique(j[(q * q).sum(axis=1) <= r * r])
 
 
 def local_step(X, B, eps, domain, halo=HALO, solver=None):
@@ -145,7 +161,7 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None):
     pos = np.full(n, -1)
     pos[S] = np.arange(len(S))
     XS, BS = X[S], pos[B]
-    A = np.unique(np.concatenate(_tree(XS, domain).query_ball_point(XS[BS], move)))
+    A = _within(XS, BS, move, domain)
     mic = exact_mic(XS, domain=domain, cells=A) if solver is None else solver.solve(XS, cells=A)
     q = _diff(mic.centers, XS[A], domain)
     ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
