@@ -194,6 +194,31 @@ def test_grid_finds_every_pair_closer_than_its_side(case, reach):
         assert dmin == best if best < side else dmin >= best
 
 
+@settings(max_examples=300, deadline=None)
+@given(case=awkward_sets(), reach=st.floats(1e-6, 0.4), seed=st.integers(0, 2**32 - 1))
+def test_ball_candidates_hold_every_pair_within_reach_once(case, reach, seed):
+    pts, dom = case
+    centres = np.flatnonzero(np.random.default_rng(seed).random(len(pts)) < 0.3)
+    found = measures.ball_candidates(pts, centres, reach, dom)
+    if found is not None:    # None: too few cells on the torus
+        X = dom.wrap(pts) if dom.periodic else np.asarray(pts, np.float64)
+        i, j = (a.ravel() for a in np.meshgrid(centres, np.arange(len(X))))
+        near = measures._pair_distances(X, i, j, dom) <= reach
+        got = list(zip(*(a.tolist() for a in found)))
+        assert len(got) == len(set(got))
+        assert set(zip(i[near].tolist(), j[near].tolist())) <= set(got)
+
+
+def test_ball_candidates_of_a_large_set_and_no_centre():
+    dom = Domain.torus()
+    pts = np.random.default_rng(3).random((20000, 2))
+    i, j = measures.ball_candidates(pts, np.array([7, 70]), 0.01, dom)
+    assert set(i.tolist()) == {7, 70} and len(i) < 100
+    i, j = measures.ball_candidates(pts, np.array([], dtype=np.int64), 0.01, dom)
+    assert len(i) == len(j) == 0
+    assert measures.ball_candidates(pts, np.array([7]), 0.34, dom) is None
+
+
 @pytest.mark.parametrize("dom", GRID_DOMAINS)
 def test_grid_serves_a_large_uniform_set(dom):
     pts = np.random.default_rng(5).random((20000, 2)) * dom.size

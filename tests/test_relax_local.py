@@ -11,7 +11,7 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.measures import hexagonal_radius, min_distance_at_most, nearest_neighbor_distances
 from diskpack_cl.relax import relax_poisson
-from diskpack_cl.relax_local import bad_points, local_step, relax_local
+from diskpack_cl.relax_local import _bad_pairs, _within, bad_points, local_step, relax_local
 from diskpack_cl.sampling import dart_throwing
 
 TORUS = Domain.torus()
@@ -44,6 +44,37 @@ def test_a_partial_move_keeps_the_minimum_and_new_bad_pairs_hold_an_old_bad_poin
     i, j = np.nonzero(np.triu(D1 < thr))
     was_bad = nn0 < thr
     assert np.all(was_bad[i] | was_bad[j])
+
+
+def _awkward(kind, n, rng):
+    """Uniform points, a lattice (pairs exactly at its multiples) or coincident points."""
+    if kind == "lattice":
+        return rng.integers(0, 16, (n, 2)) / 16
+    X = rng.random((n, 2))
+    if kind == "coincident":
+        X[rng.integers(0, n, n // 3)] = X[rng.integers(0, n, n // 3)]
+    return X
+
+
+@settings(max_examples=100, deadline=None)
+@given(n=st.integers(2, 400), seed=st.integers(0, 2**32 - 1), share=st.floats(0.0, 1.0),
+       r=st.sampled_from([0.01, 1 / 16, 0.1, 2 / 16, 0.3]),
+       kind=st.sampled_from(["uniform", "lattice", "coincident"]))
+def test_the_grid_finds_the_kdtrees_neighbourhoods_and_the_brute_force_bad_pairs(n, seed, share,
+                                                                                  r, kind):
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(seed)
+    X = _awkward(kind, n, rng)
+    C = np.flatnonzero(rng.random(n) < share)
+    lists = cKDTree(X, boxsize=1.0).query_ball_point(X[C], r) if len(C) else []
+    want = np.unique(np.concatenate([np.array(lst, dtype=np.int64) for lst in lists] or [[]]))
+    np.testing.assert_array_equal(_within(X, C, r, TORUS), want.astype(np.int64))
+    D = _pair_distances(X)
+    i, j = np.nonzero(D[C] < r)
+    got = _bad_pairs(X, C, r, TORUS)
+    assert sorted(zip(got[0].tolist(), got[1].tolist(), got[2].tolist())) == \
+        sorted(zip(C[i].tolist(), j.tolist(), D[C[i], j].tolist()))
 
 
 @settings(max_examples=15, deadline=None)
