@@ -275,16 +275,14 @@ class CellMIC:
         # everything below runs in bucket order: neighbours sit close in memory
         with self.timings("buckets"):
             order, start, bwmax, grid = self._buckets(X, w)
-            Xs, ws = X[order], w[order]
+            # np.take: numpy's row gather X[order] is several times slower (40 against 5 ms at 1M)
+            Xs, ws = np.take(X, order, axis=0), w[order]
             pos, rows = _positions(order, None if cells is None else _checked_cells(cells, len(X)))
         with self.timings("device"):
             out = self._run(Xs, ws, start, bwmax, grid, pos)
         res = self._finish(Xs, ws, out, certify, pos)
         for name in ("centers", "radii", "empty", "nn"):
-            a = getattr(res, name)
-            back = np.empty_like(a)
-            back[rows] = a
-            setattr(res, name, back)
+            setattr(res, name, _scatter(getattr(res, name), rows))
         return res
 
     def _run(self, Xs, ws, start, bwmax, grid, pos):
@@ -341,7 +339,7 @@ class CellMIC:
         `certify`, the device's answers), exact_mic for the rest."""
         flags = out["codes"][:, 3]
         proven = (flags & ~_NN) == 0
-        Xc = X[pos]
+        Xc = np.take(X, pos, axis=0)
         if certify:
             q, R, accepted = self._refine(X, w, out, pos)
         else:
@@ -367,6 +365,18 @@ class CellMIC:
         stats.update({name: int(np.count_nonzero(raised & bit)) for name, bit in FLAGS.items()})
         stats.update(self.transfers)
         return MIC(centers, R, empty, stats, nn)
+
+
+def _scatter(a, rows):
+    """``b`` with ``b[rows] = a``: an (n, 2) float64 `a` moves as complex numbers, one
+    16-byte element a row (numpy's row scatter, like its row gather, is several times
+    slower: 30 against 7 ms at a million rows)."""
+    b = np.empty(a.shape, a.dtype)   # C order, whatever `a`'s, for the view
+    if a.ndim == 2:
+        b.view(np.complex128).ravel()[rows] = np.ascontiguousarray(a).view(np.complex128).ravel()
+    else:
+        b[rows] = a
+    return b
 
 
 def _positions(order, cells):

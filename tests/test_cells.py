@@ -6,7 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
-from diskpack_cl.cells import FLAGS, NO_CODE, CellMIC, refine_active
+from diskpack_cl.cells import FLAGS, NO_CODE, CellMIC, _scatter, refine_active
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.sampling import dart_throwing
@@ -357,3 +357,17 @@ def test_host_check_certifies_centres_not_only_radii(solvers, kind):
     scale = max(dom.width, dom.height)
     assert _power_cell_slack(pts, w, res.centers, res.radii, dom).min() >= -1e-9 * scale
     assert res.stats["rejected"] == 0 and res.stats["fallback"] == 0
+
+
+@pytest.mark.parametrize("kind", ["rows", "fortran rows", "negative zeros", "radii", "flags"])
+def test_scatter_puts_every_row_where_numpys_row_scatter_does(kind):
+    rng = np.random.default_rng(3)
+    a = {"rows": rng.random((257, 2)), "fortran rows": np.asfortranarray(rng.normal(size=(257, 2))),
+         "negative zeros": np.where(rng.random((257, 2)) < 0.5, -0.0, np.nan),
+         "radii": rng.random(257), "flags": rng.random(257) < 0.5}[kind]
+    rows = rng.permutation(len(a))
+    want = np.empty_like(a)
+    want[rows] = a
+    got = _scatter(a, rows)
+    assert got.dtype == a.dtype and got.shape == a.shape
+    assert np.ascontiguousarray(got).tobytes() == np.ascontiguousarray(want).tobytes()
