@@ -213,15 +213,21 @@ class _DeviceGrid:
         group = self.group[name]
         self.k[name](self.queue, (padded(m, group),), (group,), *args)
 
+    def _darts_at(self, cells, xy):
+        """The device buffer of `cells`, with the darts `xy` written there first (None: those
+        :meth:`place` put in the dart grid)."""
+        b_cells = self._up(cells)
+        if xy is not None:
+            self._put("put_pair", self.b_dart, b_cells, xy)
+        return b_cells
+
     def free(self, cells, xy=None):
         """Which darts, one in each of the distinct empty `cells` (int32), are at least
         d from every point: `xy`, or (None) those :meth:`place` put in the dart grid."""
         m = np.int32(len(cells))
         if not m:
             return np.zeros(0, dtype=bool)
-        b_cells = self._up(cells)
-        if xy is not None:
-            self._put("put_pair", self.b_dart, b_cells, xy)
+        b_cells = self._darts_at(cells, xy)
         return self._test("dart_free", m, self.b_pt, b_cells, self.b_dart, m, np.int32(self.g),
                           np.float64(self.d2))
 
@@ -239,9 +245,7 @@ class _DeviceGrid:
         k = np.int32(len(cells))
         if not k:
             return np.zeros(0, dtype=bool)
-        b_cells = self._up(cells)
-        if xy is not None:
-            self._put("put_pair", self.b_dart, b_cells, xy)
+        b_cells = self._darts_at(cells, xy)
         self._put("put_one", self.b_prio, b_cells, prio)
         kept = self._test("dart_keep", k, self.b_dart, self.b_prio, b_cells, k,
                           np.int32(self.g), np.float64(self.d2))
