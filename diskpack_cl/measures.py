@@ -281,8 +281,7 @@ def ball_candidates(points, centres, reach, domain=Domain.torus()):
     start = np.cumsum(count) - count
     count = np.where(inside, count[near], 0)
     i = np.repeat(np.repeat(centres, len(_NEIGHBOURS)), count)
-    j = np.repeat(start[near] - np.cumsum(count) + count, count) + np.arange(len(i))
-    return i, order[j]
+    return i, order[_range_indices(start[near], count)]
 
 
 #: The 3 x 3 neighbourhood of a cell, itself included.
@@ -328,6 +327,11 @@ def _shifted(grid, offset, periodic):
     return out
 
 
+def _range_indices(first, count):
+    """``first[k], ..., first[k] + count[k] - 1`` for every k, one after the other."""
+    return np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+
+
 def _min_square_distance(xy, first, count, domain):
     """Smallest squared distance between each point i and the points
     ``first[i] .. first[i] + count[i] - 1`` (``inf`` if none), as
@@ -335,7 +339,7 @@ def _min_square_distance(xy, first, count, domain):
     i = np.repeat(np.arange(len(first)), count)
     if not len(i):
         return np.inf
-    j = np.repeat(first - np.cumsum(count) + count, count) + np.arange(len(i))
+    j = _range_indices(first, count)
     d2 = np.zeros(len(i))
     for k, (coord, size) in enumerate(zip(xy, domain.size)):
         d = coord[i] - coord[j]
