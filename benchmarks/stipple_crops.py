@@ -36,22 +36,23 @@ def drawing(points, darkness, box, scale):
     return Image.fromarray((255 * (1 - np.clip(ink, 0, 1))).astype(np.uint8))
 
 
-def panel(image, n, configs, box, scale=4, seed=0):
-    """One row: the photograph's crop, then the drawing of each configuration, labelled."""
+def panel(image, n, configs, box, scale=4, seed=0, names=None):
+    """One row: the photograph's crop, then the drawing of each configuration, labelled
+    with its name (default: the configuration) and its measures."""
     gray = sq.load(image)
     dark = 1.0 - gray
     x0, y0, w, h = box
     crop = Image.fromarray((255 * gray[y0:y0 + h, x0:x0 + w]).astype(np.uint8))
     tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{image} (input)")]
-    for spec in configs:
+    for spec, shown in zip(configs, names or configs):
         name, extra = sq.parse_config(spec)
         kw = sq.stipple_kwargs(name, extra, (gray.shape[1], gray.shape[0], n))
         res = sq.stipple(gray, n, seed=seed, **kw)
         t, e = tone_ssim(res.points, dark), edge_fidelity(res.points, dark)
         s = stray_dots(res.points, dark).per_10k
-        label = f"{spec}  n={n}  tone {t:.3f}" + (f"  edge {e:.3f}" if e == e else "") + f"  stray {s:.0f}"
+        label = f"{shown}\nn={n}  tone {t:.3f}" + (f"  edge {e:.3f}" if e == e else "") + f"  stray {s:.0f}"
         tiles.append((drawing(res.points, dark, box, scale), label))
-    pad, label = 6, 16
+    pad, label = 6, 28
     W = sum(t.size[0] for t, _ in tiles) + pad * (len(tiles) + 1)
     H = h * scale + label + 2 * pad
     out = Image.new("L", (W, H), 255)
@@ -73,9 +74,12 @@ def main(argv=None):
     ap.add_argument("--configs", nargs="+", default=["default", "lloyd"])
     ap.add_argument("--scale", type=int, default=4, help="output pixels per image pixel")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--names", nargs="+", help="labels of the configurations, in their order")
     ap.add_argument("-o", "--output", required=True)
     a = ap.parse_args(argv)
-    panel(a.image, a.n, a.configs, tuple(a.box), a.scale, a.seed).save(a.output, optimize=True)
+    if a.names is not None and len(a.names) != len(a.configs):
+        ap.error(f"--names gives {len(a.names)} labels for {len(a.configs)} configurations")
+    panel(a.image, a.n, a.configs, tuple(a.box), a.scale, a.seed, a.names).save(a.output, optimize=True)
     print(a.output)
     return 0
 

@@ -608,7 +608,9 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     gray, image, run = _item_image(item.input, params)
     H, W = image.shape[:2]
     n, tone_n = _item_dots(params, write, gray, W, H, note)
-    check_stipple_memory(W, H, n, supersample=options.supersample,
+    # the ink without the paper tone: no more than the stippling's, so no smaller a raster
+    ink = None if gray is None else float((gray if options.invert else 1.0 - gray).sum())
+    check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
                          png_scale=preview_scale(W, H, write.png_scale), device=device,
                          outputs=item.outputs)
     each = None

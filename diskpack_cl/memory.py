@@ -77,11 +77,12 @@ def _raster_limits(free, device):
 
 
 def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, device=None,
-                         outputs=(), free=None):
+                         outputs=(), free=None, ink=None):
     """Refuse, before the work, a raster or a PNG preview that memory cannot hold.
 
-    The raster (``supersample``, default automatic) is checked against the
-    machine's available memory (`free`, default :func:`available_memory`)
+    The raster (``supersample``, default automatic: see
+    :func:`~diskpack_cl.schedule.auto_supersample`, which reads the image's
+    `ink` where it is given) is checked against the machine's available memory (`free`, default :func:`available_memory`)
     and the OpenCL device's largest buffer and global memory; a PNG among
     `outputs` (``png_scale``) against the machine's memory.
 
@@ -103,7 +104,7 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
     from .schedule import auto_supersample
 
     free = available_memory() if free is None else free
-    s = supersample or auto_supersample(n, width, height)
+    s = supersample or auto_supersample(n, width, height, ink)
     cells = (s * width) * (s * height)
     for per_cell, have, what in _raster_limits(free, device):
         if cells * per_cell > have:

@@ -64,6 +64,12 @@ SPACING_BANDS = (
      {"features": "detail", "radius_sigma": 2.0, "support": 16.0, "density_sigma": 0.0}),
 )
 
+#: Largest blur of the centroid density, as a fraction of the dot spacing
+#: on full black, ``sqrt(ink / n)``.  Where a drawing's thin lines carry
+#: more than one dot per pixel, a blur wider than that spreads each line's
+#: centroids, and so its dots, onto the paper beside it.
+BLACK_SPACING_BLUR = 0.5
+
 #: Every schedule name :func:`make_schedule` takes.
 SCHEDULE_NAMES = ("default", *sorted(SCHEDULES))
 
@@ -179,16 +185,37 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
     return [tuple(p) for p in phases if p[1] > 0]
 
 
-def auto_supersample(n, width, height):
-    """Grid cells per pixel side: about 16 grid cells per average power cell, at most 8.
+#: Grid cells per dot that the automatic supersampling aims at: about
+#: :data:`CELLS_PER_DOT` per power cell over the whole image, and at least
+#: :data:`CELLS_PER_BLACK_DOT` (the fewest :meth:`StippleOptions.plan`
+#: accepts on average) per power cell on full black, where the dots are
+#: densest.  A mostly white drawing puts all its dots on its few inked
+#: pixels, whose power cells would otherwise span two grid cells: their
+#: centroids and labels would be the raster's, not the cells'.
+CELLS_PER_DOT, CELLS_PER_BLACK_DOT = 16.0, 4.0
+
+
+def auto_supersample(n, width, height, ink=None):
+    """Grid cells per pixel side for `n` dots on a `width` x `height` image, at most 8.
+
+    About :data:`CELLS_PER_DOT` grid cells per average power cell, and, with
+    the image's `ink` (its total darkness, in pixels of full black), at
+    least :data:`CELLS_PER_BLACK_DOT` per power cell on full black.
 
     Examples
     --------
     >>> auto_supersample(20000, 512, 512)
     2
+
+    Thin black lines over 7 % of the image hold all the dots:
+
+    >>> auto_supersample(50000, 384, 384, ink=0.074 * 384 * 384)
+    5
     """
-    # more where the image is dark is left to the user (supersample=)
-    return int(min(8, max(1, np.ceil(np.sqrt(16.0 * n / (width * height))))))
+    cells = CELLS_PER_DOT * n / (width * height)
+    if ink is not None and ink > 0:
+        cells = max(cells, CELLS_PER_BLACK_DOT * n / ink)
+    return int(min(8, max(1, np.ceil(np.sqrt(cells)))))
 
 
 def _schedule_defaults(schedule, beta, lloyd, rounds, method, spacing):
@@ -318,8 +345,8 @@ class StippleOptions:
         "stippling (Secord 2002), the baseline, from the same start",
         choices=("diskpack", "lloyd"), group=_STIPPLING)
     supersample: int = option(
-        None, "raster cells per image pixel side (default: automatic, about 16 cells per dot, "
-        "at most 8)", integer=True, lo=1, group=_STIPPLING, metavar="S")
+        None, "raster cells per image pixel side (default: automatic, about 16 cells per dot "
+        "and at least 4 per dot on black, at most 8)", integer=True, lo=1, group=_STIPPLING, metavar="S")
     refine_every: int = option(
         1, "refine the raster MIC estimate exactly every R disk-packing iterations (default "
         "1 = always; 0 = never); the output is always certified", integer=True, lo=0,
@@ -384,8 +411,14 @@ class StippleOptions:
         """The :class:`StipplePlan` of ``options`` (default: all defaults) with ``overrides``."""
         return (options or cls()).replace(**overrides).plan(n, width, height)
 
-    def plan(self, n, width, height):
+    def plan(self, n, width, height, ink=None):
         """The options resolved for `n` dots on a `width` x `height` image.
+
+        With the image's `ink` (its total darkness, in pixels of full black)
+        the automatic choices also follow where the dots will be: the
+        supersampling (:func:`auto_supersample`) and the schedule's blur of
+        the centroid density, at most :data:`BLACK_SPACING_BLUR` of the dot
+        spacing on full black.
 
         Raises
         ------
@@ -393,7 +426,7 @@ class StippleOptions:
             n too large for the grid, or a bad schedule.
         """
         n = check_count(n)
-        s = auto_supersample(n, width, height) if self.supersample is None else self.supersample
+        s = auto_supersample(n, width, height, ink) if self.supersample is None else self.supersample
         if 4 * n > (s * width) * (s * height):
             raise ValueError(
                 f"n = {n} is too large for a {width}x{height} image at supersample {s}: at most "
@@ -404,6 +437,8 @@ class StippleOptions:
                                method=self.method, spacing=spacing)
         d = _schedule_defaults(schedule, self.beta, self.lloyd, self.rounds, self.method,
                                spacing)
+        if ink is not None and ink > 0:
+            d["density_sigma"] = min(d["density_sigma"], BLACK_SPACING_BLUR * np.sqrt(ink / n))
         d.setdefault("features", "none")
         d.setdefault("capacity", 0.0)
         d.setdefault("support", 0.0)

@@ -469,10 +469,10 @@ def _centroid_density(darkness, opt):
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
 
-def _toned(gray, opt):
+def _toned(gray, paper_tone):
     """The gray image under the paper tone and its darkness (refused when white)."""
-    if opt.paper_tone > 0:
-        gray = gray * (1.0 - opt.paper_tone)
+    if paper_tone > 0:
+        gray = gray * (1.0 - paper_tone)
     darkness = 1.0 - gray
     if not darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
@@ -574,8 +574,8 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
         options = (options or StippleOptions()).replace(**overrides)
         gray = to_gray(image, invert=options.invert)
         H, W = gray.shape
-        opt = options.plan(n, W, H)
-        gray, darkness = _toned(gray, opt)
+        gray, darkness = _toned(gray, options.paper_tone)
+        opt = options.plan(n, W, H, ink=float(darkness.sum()))
     with watch("start"):
         x = _start_points(gray, opt, start)
     engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,

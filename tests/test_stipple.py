@@ -2,12 +2,14 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from diskpack_cl.dithering import _fs_wavefront, error_diffusion
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.radii import base_radii, detail_fields, field_at, largest_valid_k, radius_field
-from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, make_schedule
+from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, auto_supersample, make_schedule
 from diskpack_cl.stipple import INK_RANGE, StippleStage, StippleState, lloyd_step, pack_step, stipple
 from diskpack_cl.engine import ExactEngine
 
@@ -380,6 +382,35 @@ def test_options_checked_before_any_work(kwargs, match):
     # stipple() checks them before the start set and the engine exist
     with pytest.raises(ValueError, match=match):
         stipple(gradient(32, 32), 30, backend="no such backend", **kwargs)
+
+
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(1, 10**6), width=st.integers(8, 4096), height=st.integers(8, 4096),
+       ink_share=st.one_of(st.none(), st.floats(1e-4, 1.0)))
+def test_auto_supersample_gives_enough_grid_cells_per_dot(n, width, height, ink_share):
+    ink = None if ink_share is None else ink_share * width * height
+    s = auto_supersample(n, width, height, ink)
+
+    def share(t):  # of the grid cells needed: 16 per average dot, 4 per dot on full black
+        return min(t * t * width * height / (16 * n), np.inf if ink is None else t * t * ink / (4 * n))
+    # the smallest s with enough, never more than 8 (to rounding)
+    assert 1 <= s <= 8
+    assert s == 8 or share(s) >= 1 - 1e-9
+    assert s == 1 or share(s - 1) < 1 + 1e-9
+
+
+def test_plan_blurs_the_centroid_density_less_than_the_spacing_on_black():
+    plan = StippleOptions().plan
+    assert plan(50000, 384, 384).density_sigma == 0.5
+    # thin lines: 50000 dots on 10 000 px of full black, 0.45 px apart there
+    thin = plan(50000, 384, 384, ink=10000.0)
+    assert thin.density_sigma == pytest.approx(0.5 * (10000 / 50000) ** 0.5)
+    assert thin.supersample == 5 > plan(50000, 384, 384).supersample
+    # a photograph's dots are farther apart than 1 px: nothing changes
+    assert plan(50000, 512, 512, ink=0.5 * 512 * 512) == plan(50000, 512, 512)
+    # the user's blur and raster are the user's
+    mine = StippleOptions(density_sigma=0.5, supersample=3).plan(50000, 384, 384, ink=10000.0)
+    assert (mine.density_sigma, mine.supersample) == (0.5, 3)
 
 
 def test_options_are_frozen():

@@ -90,3 +90,32 @@ def test_support_gain_sharpens_edges_between_two_grays():
         edge = {s: edge_fidelity(stipple(g, 600, seed=seed, support=s).points, 1.0 - g)
                 for s in (1.0, 8.0)}
         assert edge[8.0] > edge[1.0] + 0.005
+
+
+def rings(size=96):
+    """Four thin anti-aliased rings (1-2 px) on white paper: a tenth of the page is inked."""
+    yy, xx = np.mgrid[0:size, 0:size] + 0.5
+    r = np.hypot(xx - size / 2, yy - size / 2)
+    dark = np.zeros((size, size))
+    for radius, width in ((10, 1.0), (20, 1.5), (30, 1.0), (40, 2.0)):
+        dark = np.maximum(dark, np.clip(width / 2 + 0.5 - np.abs(r - radius), 0.0, 1.0))
+    return 1.0 - dark
+
+
+def test_dense_thin_lines_keep_their_dots_on_the_ink():
+    # 3000 dots on 940 inked pixels, three per pixel of full black: the raster
+    # and the centroid blur follow the ink, not the page (auto_supersample,
+    # BLACK_SPACING_BLUR); with the page's (supersample 3, blur 0.5 px) the
+    # lines' dots spill onto the paper and the rings blur
+    g = rings()
+    dark = 1.0 - g
+    res = stipple(g, 3000, seed=1)
+    assert res.certificate.valid and res.params["supersample"] == 4
+    lloyd = stipple(g, 3000, seed=1, method="lloyd")
+    page = stipple(g, 3000, seed=1, supersample=3, density_sigma=0.5)
+    stray = {k: stray_dots(r.points, dark).per_10k for k, r in
+             (("default", res), ("lloyd", lloyd), ("page", page))}
+    edge = {k: edge_fidelity(r.points, dark) for k, r in
+            (("default", res), ("lloyd", lloyd), ("page", page))}
+    assert stray["default"] <= stray["lloyd"] + 5 < stray["page"]
+    assert edge["default"] >= max(edge["lloyd"] - 0.01, edge["page"] + 0.005)
