@@ -240,21 +240,6 @@ static int site_code(int j, int qx, int qy, int *flag)
     return 9 * j + 3 * (clamp(qx, -1, 1) + 1) + (clamp(qy, -1, 1) + 1);
 }
 
-/* Bucket (cx, cy) of the unbounded bucket lattice: on a torus, wrap it onto
- * the grid and give its period shift (qx, qy); on a rectangle, 0 when it
- * lies outside the grid.  (common.h's locate_bucket, with integer shifts.) */
-static int wrap_bucket(int *cx, int *cy, int *qx, int *qy, int nbx, int nby)
-{
-#if PERIODIC
-    *qx = floordiv(*cx, nbx); *qy = floordiv(*cy, nby);
-    *cx -= *qx * nbx; *cy -= *qy * nby;
-    return 1;
-#else
-    *qx = 0; *qy = 0;
-    return *cx >= 0 && *cy >= 0 && *cx < nbx && *cy < nby;
-#endif
-}
-
 /* Does the basis still hold one of the artificial half-planes? */
 static int is_artificial(const clist *L, const int *b)
 {
