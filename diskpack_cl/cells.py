@@ -201,8 +201,9 @@ class CellMIC:
         start = np.zeros(nbx * nby + 1, np.int32)
         np.cumsum(counts, out=start[1:])
         bwmax = np.zeros(nbx * nby)
-        nonempty = counts > 0
-        bwmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+        if w.any():   # a Voronoi diagram's weights and maxima are all 0 (15 ms at 1M saved)
+            nonempty = counts > 0
+            bwmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
         return order, start, bwmax, (nbx, nby, bw, bh)
 
     def _local_wmax(self, bwmax, grid, wmax):
