@@ -380,11 +380,12 @@ def coincident_pairs(points, domain=Domain.torus(), tol=0.0):
 
 
 def _any_identical(points, domain):
-    """Whether two points coincide (wrapped into the torus on one), by one sort.
+    """Whether two points coincide (wrapped into the torus on one), by one sort or two.
 
     The usual answer is no, and one sort of the points as complex numbers
     says so several times faster than a KD-tree (at a million points, about
-    0.1 s against 0.6 s); a set that has duplicates then pays the tree too.
+    0.1 s against 0.6 s), a sort of their x alone faster still (0.02 s) where
+    no two x are equal; a set that has duplicates then pays the tree too.
     Equal keys are contiguous after the sort (``-0.0 == 0.0`` too), so equal
     neighbours find every duplicate.  Non-2D input answers True (the tree decides).
     """
@@ -393,5 +394,10 @@ def _any_identical(points, domain):
         return True
     if domain.periodic:   # wrap() maps into [0, W) x [0, H): coincident means equal there
         X = domain.wrap(X)
+    # coincident points share their x: a sort of the x alone (float64, about 7 times
+    # faster than the complex sort) clears every set whose x all differ
+    x = np.sort(X[:, 0])
+    if not np.any(x[1:] == x[:-1]):
+        return False
     z = np.sort(np.ascontiguousarray(X).view(np.complex128).ravel())
     return bool(np.any(z[1:] == z[:-1]))

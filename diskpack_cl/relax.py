@@ -243,19 +243,20 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
     # the device's proven MICs, not the host's re-solve of every cell (verify still has it)
     certify = not local
     step = _mic(engine, X, stats, certify) if engine.gives_nn else None
-    rho = [_rho(X, step, verify, dom)]
+    nn = None if step is None else step.nn
+    rho = [_rho(X, nn, verify, dom)]
     best_at = 0
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
     while rho[-1] < eps and it < max_iter:
-        nn = _local_ready(X, step, eps, dom) if local else None
-        if nn is not None:
+        nn, ready, soon = _local_state(X, nn, eps, dom) if local else (nn, False, False)
+        if ready:
             return X, rho, it, "local", nn
         it += 1
         step = step or _mic(engine, X, stats, certify)
         X = step.centers
-        step = _mic(engine, X, stats, certify) if engine.gives_nn else None
-        rho.append(_rho(X, step, verify, dom))
+        step, nn = _after_move(engine, X, stats, certify, soon)
+        rho.append(_rho(X, nn, verify, dom))
         if callback is not None:
             callback(it, rho[-1])
         if rho[-1] > rho[best_at] + max(1e-12, STALL_GAIN * min(rho[best_at], eps - rho[best_at])):
@@ -268,13 +269,28 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
     return X, rho, it, reason, None
 
 
-def _local_ready(X, step, eps, dom):
-    """Nearest-neighbour distances of X when few enough points are bad to go local, else None."""
+def _local_state(X, nn, eps, dom):
+    """``(nn, ready, soon)``: the nearest-neighbour distances of X (a KD-tree's where `nn`
+    is None), whether few enough points are bad to go local now, and whether few enough
+    are that the next iterate probably will (:data:`~diskpack_cl.relax_local.LOCAL_SOON`)."""
     from .measures import nearest_neighbor_distances
-    from .relax_local import LOCAL_SHARE, bad_points
+    from .relax_local import LOCAL_SHARE, LOCAL_SOON, bad_points
 
-    nn = step.nn if step is not None and step.nn is not None else nearest_neighbor_distances(X, dom)
-    return nn if len(bad_points(nn, eps, dom.area)) <= LOCAL_SHARE * len(X) else None
+    nn = nearest_neighbor_distances(X, dom) if nn is None else nn
+    share = len(bad_points(nn, eps, dom.area)) / len(X)
+    return nn, share <= LOCAL_SHARE, share <= LOCAL_SOON
+
+
+def _after_move(engine, X, stats, certify, soon):
+    """``(step, nn)`` of the moved set X: its MICs and their nearest-neighbour distances
+    from an engine that gives them; where X will `soon` go local and the engine has the
+    per-cell kernel, its nearest-neighbour distances alone (a tenth of the MICs' cost;
+    no step: the MICs are solved if it does not go local after all); else neither."""
+    cells = getattr(engine, "cells", None)
+    if soon and cells is not None:
+        return None, cells.nearest(X)
+    step = _mic(engine, X, stats, certify) if engine.gives_nn else None
+    return step, None if step is None else step.nn
 
 
 def _local_solver(engine, dom):
@@ -313,11 +329,11 @@ def _mic(engine, X, stats, certify=True):
     return step
 
 
-def _rho(X, step, verify, domain):
-    """rho of X: from the engine's nearest-neighbour distances, or a KD-tree."""
-    if step is None or step.nn is None:
+def _rho(X, nn, verify, domain):
+    """rho of X: from the engine's nearest-neighbour distances `nn`, or a KD-tree."""
+    if nn is None:
         return normalized_radius(X, domain)
-    rho = 0.5 * float(step.nn.min()) / hexagonal_radius(len(X), domain.area)
+    rho = 0.5 * float(nn.min()) / hexagonal_radius(len(X), domain.area)
     if verify:
         _certify_rho(X, rho, domain)
     return rho

@@ -96,6 +96,17 @@ def cells_list(ctx):
     return {"centers": r.centers, "radii": r.radii, "nn": r.nn}
 
 
+def nearest(ctx):
+    """nearest (the nearest-neighbour distances alone) on the torus and on a rectangle."""
+    from diskpack_cl import cells
+
+    out = {}
+    for name, dom in (("torus", Domain.torus()), ("rect", Domain.rect(30.0, 20.0))):
+        pts, _ = _sites(dom, 40, 5)
+        out[name] = cells.CellMIC(dom, device=ctx).nearest(pts)
+    return out
+
+
 def cells_full(ctx):
     """cell_mic where a cell has 40 tight sides (full constraint list, full
     near-tight slots) and a site alone beside a cluster (wide rings, scans
@@ -227,8 +238,9 @@ def unowned(ctx):
 
 
 SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
-                                     cells_torus, cells_list, cells_full, cells3_box, cells3_torus,
-                                     dart_round, end_to_end, refused, bad_labels, unowned)}
+                                     cells_torus, cells_list, nearest, cells_full, cells3_box,
+                                     cells3_torus, dart_round, end_to_end, refused, bad_labels,
+                                     unowned)}
 
 
 def main(argv):

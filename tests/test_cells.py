@@ -137,16 +137,39 @@ def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start, certify):
     assert np.abs(res.nn - d[:, 1]).max() <= 1e-15
 
 
+def _brute_nearest(pts, dom):
+    """Distance from each site to its nearest other one, over all periodic images."""
+    P, gid = ref.images(pts, dom)
+    d = np.hypot(*(pts[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
+    d[(np.arange(len(pts))[:, None] == gid[None, :]) & (d == 0)] = np.inf   # the site itself
+    return d.min(axis=1)
+
+
 @pytest.mark.parametrize("periodic", [True, False])
 def test_nearest_neighbour_distance_by_brute_force(solvers, periodic):
     dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
     pts = np.random.default_rng(10).random((300, 2)) * (dom.width, dom.height)
     res = solvers(dom).solve(pts)
-    P, gid = ref.images(pts, dom)
-    d = np.hypot(*(pts[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
-    d[(np.arange(len(pts))[:, None] == gid[None, :]) & (d == 0)] = np.inf   # the site itself
-    assert np.abs(res.nn - d.min(axis=1)).max() <= 1e-15
+    assert np.abs(res.nn - _brute_nearest(pts, dom)).max() <= 1e-15
     assert float(res.nn.min()) == pytest.approx(ref.min_distance_ref(pts, dom), abs=1e-15)
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("kind", ["uniform", "cluster"])
+def test_nearest_alone_by_brute_force(solvers, periodic, kind):
+    """CellMIC.nearest: the kernel's distances, and the KD-tree's for the sites with no
+    other within a bucket side (a tight cluster leaves the sites outside it alone)."""
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    rng = np.random.default_rng(11)
+    pts = rng.random((300, 2))
+    if kind == "cluster":
+        pts[:270] = 0.4 + 0.01 * pts[:270]
+    pts *= (dom.width, dom.height)
+    solver = solvers(dom)
+    want = _brute_nearest(pts, dom)
+    _, _, bw, bh = solver._grid(len(pts))
+    assert kind == "uniform" or np.any(want > min(bw, bh))   # the KD-tree's route is taken
+    assert np.abs(solver.nearest(pts) - want).max() <= 1e-15
 
 
 def test_power_cells_of_a_stippling_like_set(solvers):

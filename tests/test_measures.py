@@ -54,6 +54,9 @@ def test_coincident_pairs():
     assert coincident_pairs(np.random.default_rng(0).random((50, 2))).shape == (0, 2)
     # seam: 0.0 and 1.0 are the same point on the torus
     assert coincident_pairs([[0.0, 0.2], [1.0, 0.2]]).tolist() == [[0, 1]]
+    # a shared x is not a shared point; x all distinct is none (the quick sort's answer)
+    assert coincident_pairs([[0.5, 0.2], [0.5, 0.3], [0.1, 0.3]]).shape == (0, 2)
+    assert coincident_pairs([[0.5, 0.3], [0.1, 0.2], [0.5, 0.3]]).tolist() == [[0, 2]]
 
 
 @settings(max_examples=60, deadline=None)

@@ -158,6 +158,23 @@ def test_local_route_on_the_device_skips_the_host_resolve(ctx):
     assert res.rho[-1] >= 0.8
 
 
+@pytest.mark.parametrize("soon", [0.0, 1.0])
+def test_nearest_alone_before_going_local_changes_no_iterate(ctx, monkeypatch, soon):
+    """The iterates whose MICs the device skips (nearest neighbours alone, where the set
+    will probably go local) are those of the route that solves every MIC: with the
+    nearest neighbours first at every iterate (``LOCAL_SOON`` 1) or at none (0), the
+    same rho after each iteration and the same points."""
+    import diskpack_cl.relax_local as rl
+
+    X = dart_throwing(3000, rel_radius=0.6, seed=8)
+    want = relax_poisson(X, 0.8, backend="opencl", device=ctx, local=True)
+    monkeypatch.setattr(rl, "LOCAL_SOON", soon)
+    res = relax_poisson(X, 0.8, backend="opencl", device=ctx, local=True)
+    np.testing.assert_array_equal(res.points, want.points)
+    np.testing.assert_allclose(res.rho, want.rho, rtol=0, atol=1e-15)
+    assert res.stats["local_iterations"] == want.stats["local_iterations"] > 0
+
+
 def test_local_is_ignored_in_a_box():
     box = Domain.rect(2.0, 1.0)
     X = np.random.default_rng(5).random((200, 2)) * (2, 1)

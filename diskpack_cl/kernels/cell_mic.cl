@@ -12,9 +12,11 @@
  *      holds at least KMIN of them (or RMAX rings), into a private list, and
  *      more rings while the cell is unbounded by them;
  *   2. solves the LP on the list by the dual simplex method, starting from
- *      three artificial half-planes that bound a large triangle (dual
- *      feasible by construction) and pivoting in the most violated
- *      constraint each step;
+ *      the nearest half-planes of three sectors of directions where they
+ *      bound a triangle (dual feasible; the optimum's basis, or a pivot or
+ *      two from it, in most cells), else from three artificial half-planes
+ *      that bound a large triangle (dual feasible by construction), and
+ *      pivoting in the most violated constraint each step;
  *   3. proves the answer for *all* sites: a site can only violate the
  *      solution if it lies within the cutter radius of the centre (derived
  *      from the power distance; per-bucket weight maxima prune the scan).
@@ -124,6 +126,50 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
     return F_PIVOTS;
 }
 
+/* The nearer (smaller beta) of the list's constraints j and k; -1 stands for none. */
+static int nearer(const clist *L, int j, int k)
+{
+    return j < 0 || (k >= 0 && L->be[k] < L->be[j]) ? k : j;
+}
+
+/* Make b the basis of the nearest half-planes of three 120-degree sectors of
+ * normal directions, made of the sextants `first` + 0..5 (mod 6) of `near`
+ * pairwise, when the three bound a triangle: their normals span the plane
+ * positively, the dual multipliers (third row of the basis inverse) are > 0.
+ * Returns whether it did. */
+static int sector_basis(const clist *L, const int *near, int first, int *b)
+{
+    int c[3];
+    double ax[3], ay[3], inv[9];
+    for (int k = 0; k < 3; ++k) {
+        c[k] = nearer(L, near[(first + 2 * k) % 6], near[(first + 2 * k + 1) % 6]);
+        if (c[k] < 0) return 0;
+        ax[k] = L->nx[c[k]]; ay[k] = L->ny[c[k]];
+    }
+    if (!inv3(ax, ay, inv) || !(inv[6] > 0.0 && inv[7] > 0.0 && inv[8] > 0.0)) return 0;
+    for (int k = 0; k < 3; ++k) b[k] = c[k];
+    return 1;
+}
+
+/* A dual feasible start basis for the dual simplex from the list's constraints
+ * `first`.. : the nearest half-plane in each of three 120-degree sectors of
+ * normal directions ([0, 120), [120, 240), [240, 360) degrees, or, where those
+ * three do not bound a triangle, the sectors turned by 60 degrees); else `b` is
+ * left as it is (the artificial triangle).  A relaxed cell's optimal basis is
+ * mostly its nearest neighbours': from there the simplex needs about a third of
+ * the pivots it needs from the artificial triangle, which it must pivot out first. */
+static void start_basis(const clist *L, int first, int *b)
+{
+    int near[6] = {-1, -1, -1, -1, -1, -1};   /* nearest in each 60-degree sextant */
+    for (int k = first; k < L->m; ++k) {
+        const double x = L->nx[k];
+        const int s = L->ny[k] >= 0.0 ? (x > 0.5 ? 0 : x > -0.5 ? 1 : 2)
+                                      : (x < -0.5 ? 3 : x < 0.5 ? 4 : 5);
+        near[s] = nearer(L, near[s], k);
+    }
+    if (!sector_basis(L, near, 0, b)) sector_basis(L, near, 1, b);
+}
+
 static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
                      int code)
 {
@@ -192,21 +238,6 @@ static int site_code(int j, int qx, int qy, int *flag)
 {
     if (qx < -1 || qx > 1 || qy < -1 || qy > 1) *flag |= F_SHIFT;
     return 9 * j + 3 * (clamp(qx, -1, 1) + 1) + (clamp(qy, -1, 1) + 1);
-}
-
-/* Bucket (cx, cy) of the unbounded bucket lattice: on a torus, wrap it onto
- * the grid and give its period shift (qx, qy); on a rectangle, 0 when it
- * lies outside the grid.  (common.h's locate_bucket, with integer shifts.) */
-static int wrap_bucket(int *cx, int *cy, int *qx, int *qy, int nbx, int nby)
-{
-#if PERIODIC
-    *qx = floordiv(*cx, nbx); *qy = floordiv(*cy, nby);
-    *cx -= *qx * nbx; *cy -= *qy * nby;
-    return 1;
-#else
-    *qx = 0; *qy = 0;
-    return *cx >= 0 && *cy >= 0 && *cx < nbx && *cy < nby;
-#endif
 }
 
 /* Does the basis still hold one of the artificial half-planes? */
@@ -313,6 +344,7 @@ __kernel void cell_mic(
         if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
     }
     int b[3] = {0, 1, 2};
+    start_basis(&L, 3, b);
     double z[3];
     flag |= dual_simplex(&L, b, z, tol);
     /* 2. more rings while the cell is unbounded by the list, or its disk

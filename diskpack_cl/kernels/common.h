@@ -51,4 +51,20 @@ inline int locate_bucket(int *cx, int *cy, float *sx, float *sy,
 #endif
 }
 
+/* Bucket (cx, cy) of the unbounded bucket lattice: on a torus, wrap it onto
+ * the grid and give its period shift (qx, qy); on a rectangle, 0 when it
+ * lies outside the grid.  (locate_bucket with integer shifts, for the float64
+ * kernels.) */
+inline int wrap_bucket(int *cx, int *cy, int *qx, int *qy, int nbx, int nby)
+{
+#if PERIODIC
+    *qx = floordiv(*cx, nbx); *qy = floordiv(*cy, nby);
+    *cx -= *qx * nbx; *cy -= *qy * nby;
+    return 1;
+#else
+    *qx = 0; *qy = 0;
+    return *cx >= 0 && *cy >= 0 && *cx < nbx && *cy < nby;
+#endif
+}
+
 #endif

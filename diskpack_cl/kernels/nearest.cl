@@ -1,0 +1,46 @@
+/* Distance from every site to its nearest other site, one work item per site, float64.
+ *
+ * The sites come sorted by bucket (the grid of cell_mic.cl).  A work item
+ * scans the 3 x 3 buckets around its own; every site nearer than one bucket
+ * side lies in them, so a nearest distance up to that side is exact, and a
+ * larger one (a site alone in its neighbourhood) is written as -1 for the
+ * host to measure.  The distances are computed as cell_mic.cl computes them
+ * (offset to the shifted site, sqrt of the smallest squared length): this
+ * kernel gives the nearest-neighbour distances of the sets whose MICs are
+ * not needed (the iterate where a relaxation goes local) at a small part of
+ * that kernel's cost.
+ *
+ * Build-time switch: PERIODIC (see common.h).
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#include "common.h"
+
+__kernel void nearest(
+    __global const double2 *site,    /* sites sorted by bucket */
+    __global const int *bstart,      /* bucket b holds sorted sites bstart[b] .. bstart[b+1]-1 */
+    const int n,                     /* number of sites */
+    const int nbx, const int nby,    /* bucket grid */
+    const double bw, const double bh,/* bucket size */
+    const double W, const double H,  /* domain size */
+    __global double *nn)             /* out, by sorted position: distance, or -1 (not proven) */
+{
+    const int s = get_global_id(0);
+    if (s >= n) return;
+    const double2 xi = site[s];
+    const int hx = clamp((int)(xi.x / bw), 0, nbx - 1), hy = clamp((int)(xi.y / bh), 0, nby - 1);
+    double nn2 = INFINITY;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            int cx = hx + dx, cy = hy + dy, qx, qy;
+            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+            const int b = cy * nbx + cx;
+            for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
+                if (t == s) continue;   /* its own periodic images are no other site */
+                const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
+                nn2 = fmin(nn2, ax * ax + ay * ay);
+            }
+        }
+    }
+    const double side = fmin(bw, bh);
+    nn[s] = nn2 <= side * side ? sqrt(nn2) : -1.0;
+}
