@@ -647,13 +647,18 @@ def _query_pairs(tree, centers, radius, k=16):
     """All (row, tree index) pairs with the tree point within radius[row] of centers[row].
 
     A k-nearest query per centre; rows whose k-th neighbour is still inside
-    the radius are asked again with 4k, so nothing inside is missed.
+    the radius are asked again with 4k, so nothing inside is missed.  The
+    search stops at the largest radius asked (scipy takes one bound for all
+    rows): where most rows have fewer than k points inside, that prunes
+    most of the tree (certifying 50 000 disks: 0.7 s to 0.23 s).
     """
     rows_out, idx_out = [], []
     rows = np.arange(len(centers))
     while len(rows):
         k = min(k, tree.n)
-        d, idx = tree.query(centers[rows], k=k)
+        # scipy keeps only neighbours strictly below the bound
+        bound = np.nextafter(float(radius[rows].max()) * (1 + 1e-12), np.inf)
+        d, idx = tree.query(centers[rows], k=k, distance_upper_bound=bound)
         d, idx = d.reshape(len(rows), k), idx.reshape(len(rows), k)
         within = (d <= radius[rows, None] * (1 + 1e-12)) & (idx < tree.n)
         full = within[:, -1] if k < tree.n else np.zeros(len(rows), bool)

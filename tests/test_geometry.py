@@ -332,3 +332,23 @@ def test_certificate_searches_the_whole_band_of_an_octave():
     assert not cert.valid and not cert.disjoint
     assert cert.min_gap == pytest.approx(3.5 - 3.8)
     assert certify_disks(C, [1.7, 1.7, 1.0], Domain.rect(20.0, 20.0)).valid
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(1, 120), m=st.integers(1, 60), seed=st.integers(0, 2**16),
+       spread=st.sampled_from([0.0, 0.01, 0.3, 3.0]), k=st.sampled_from([1, 2, 16]))
+def test_query_pairs_finds_every_point_inside_each_radius(n, m, seed, spread, k):
+    # radii from none to the whole set (the 4k re-asks), equal or spread over
+    # orders of magnitude (the search stops at the largest), clustered points
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.geometry import _query_pairs
+
+    rng = np.random.default_rng(seed)
+    pts = np.round(rng.random((n, 2)) * 4, 1)          # lattice: ties and duplicates
+    centers = np.round(rng.random((m, 2)) * 4, 1)
+    radius = 0.3 * np.exp(spread * rng.standard_normal(m))
+    rows, idx = _query_pairs(cKDTree(pts), centers, radius, k=k)
+    d = np.hypot(*(centers[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+    want = set(zip(*np.nonzero(d <= radius[:, None] * (1 + 1e-12))))
+    assert len(rows) == len(want) and set(zip(rows.tolist(), idx.tolist())) == want
