@@ -82,9 +82,10 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
 
     The raster (``supersample``, default automatic: see
     :func:`~diskpack_cl.schedule.auto_supersample`, which reads the image's
-    `ink` where it is given) is checked against the machine's available memory (`free`, default :func:`available_memory`)
-    and the OpenCL device's largest buffer and global memory; a PNG among
-    `outputs` (``png_scale``) against the machine's memory.
+    `ink` where it is given) is checked against the machine's available
+    memory (`free`, default :func:`available_memory`) and the OpenCL
+    device's largest buffer and global memory; a PNG among `outputs`
+    (``png_scale``) against the machine's memory.
 
     Raises
     ------
