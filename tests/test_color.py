@@ -134,9 +134,11 @@ def test_color_measures_of_a_perfect_grey():
 @settings(max_examples=30)
 @given(st.integers(0, 2**32 - 1), st.integers(1, 5))
 def test_unmixing_is_as_near_as_nnls(seed, P):
-    """The face enumeration finds the nearest mix: no farther than scipy's NNLS
-    with the paper as a further pen and a heavily weighted row sum(a) = 1."""
-    from scipy.optimize import nnls
+    """The face enumeration finds the nearest mix: no farther than scipy's bounded
+    least squares (BVLS, a non-negative one: scipy 1.12-1.13's ``nnls`` stops
+    without converging on some of these) with the paper as a further pen and
+    a heavily weighted row sum(a) = 1."""
+    from scipy.optimize import lsq_linear
 
     rng = np.random.default_rng(seed)
     pens, targets = rng.random((P, 3)), rng.random((20, 3))
@@ -144,7 +146,7 @@ def test_unmixing_is_as_near_as_nnls(seed, P):
     assert np.all(a >= 0) and np.all(a.sum(axis=1) <= 1 + 1e-9)
     A = np.vstack([np.column_stack([np.ones(3), pens.T]), np.full(P + 1, 1e4)])
     for t, got in zip(targets, a):
-        ref = nnls(A, np.append(t, 1e4))[0]
+        ref = lsq_linear(A, np.append(t, 1e4), bounds=(0, np.inf), method="bvls").x
         d_ref = np.linalg.norm(A[:3] @ ref - t)
         d_got = np.linalg.norm((1 - got.sum()) + pens.T @ got - t)
         assert d_got <= d_ref + 1e-6
