@@ -142,10 +142,8 @@ class CellMIC:
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
         self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
-        self._nn_kernel = build_program(self.ctx, "nearest", {"PERIODIC": int(domain.periodic)})["nearest"]
         dev = self.ctx.devices[0]
         self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
-        self._nn_group = group_size(self._nn_kernel, dev, 64)
         # whole groups per enqueue: the last group of one must not reach into the next
         self.chunk = CHUNK - CHUNK % self.group
         self._bufs = {}
@@ -308,6 +306,9 @@ class CellMIC:
         import pyopencl as cl
 
         X, w = check_sites(points, None, self.domain, minimum=2)
+        # built on the first call: the stippling's cells never need it
+        kernel = build_program(self.ctx, "nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
+        group = group_size(kernel, self.ctx.devices[0], 64)
         with self.timings("buckets"):
             order, start, _, (nbx, nby, bw, bh) = self._buckets(X, w)
             Xs = np.take(X, order, axis=0)
@@ -315,10 +316,10 @@ class CellMIC:
             n, dom = len(Xs), self.domain
             nn = np.empty(n)
             b_nn = self._buffer("out_nn", nn.nbytes)
-            self._nn_kernel(self.queue, (padded(n, self._nn_group),), (self._nn_group,),
-                            self._upload("site", Xs), self._upload("start", start), np.int32(n),
-                            np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
-                            np.float64(dom.width), np.float64(dom.height), b_nn)
+            kernel(self.queue, (padded(n, group),), (group,),
+                   self._upload("site", Xs), self._upload("start", start), np.int32(n),
+                   np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
+                   np.float64(dom.width), np.float64(dom.height), b_nn)
             cl.enqueue_copy(self.queue, nn, b_nn)
         far = np.flatnonzero(nn < 0)
         if len(far):
