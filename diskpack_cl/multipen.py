@@ -384,7 +384,9 @@ def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
         raise ValueError("nothing to stipple: the image is white")
     if options.get("capacity") is None:   # measured: equal ink per dot costs tone per pen
         options = dict(options, capacity=COLOR_CAPACITY)
-    opt = StippleOptions.resolve(n, sep.layers.shape[2], sep.layers.shape[1], **options)
+    # the joint darkness is what the first phases stipple: its ink sizes the raster
+    opt = StippleOptions.resolve(n, sep.layers.shape[2], sep.layers.shape[1],
+                                 ink=float(sep.darkness.sum()), **options)
     return sep, opt, dots_per_pen(sep.names, sep.layers, opt.n, counts)
 
 

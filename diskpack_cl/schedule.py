@@ -407,9 +407,10 @@ class StippleOptions:
         return dataclasses.replace(self, **overrides)
 
     @classmethod
-    def resolve(cls, n, width, height, options=None, **overrides):
-        """The :class:`StipplePlan` of ``options`` (default: all defaults) with ``overrides``."""
-        return (options or cls()).replace(**overrides).plan(n, width, height)
+    def resolve(cls, n, width, height, options=None, *, ink=None, **overrides):
+        """The :class:`StipplePlan` of ``options`` (default: all defaults) with ``overrides``
+        (`ink` as for :meth:`plan`)."""
+        return (options or cls()).replace(**overrides).plan(n, width, height, ink=ink)
 
     def plan(self, n, width, height, ink=None):
         """The options resolved for `n` dots on a `width` x `height` image.

@@ -344,3 +344,24 @@ def test_the_pen_steps_are_the_one_pen_loop():
     assert [e["iteration"] for e in split.history] == list(range(8))
     assert [e["kind"] for e in split.history] == ["mix"] * 6 + ["pack"] * 2
     assert all("pens_s" in e for e in split.history[4:])
+
+
+def test_colour_line_art_keeps_its_dots_on_the_ink(ctx):
+    """The colour plan, like the one-pen plan, sizes its raster and centroid
+    blur by the joint ink (3000 dots on 940 inked pixels): with the page's
+    (supersample 3, blur 0.5 px) the lines' dots spill onto the paper.
+    (OpenCL: the exact engine takes a minute for these two runs.)"""
+    from diskpack_cl.analysis import edge_fidelity, stray_dots
+    from test_stipple_support import rings
+
+    g = rings()
+    rgb = np.ones(g.shape + (3,))
+    left = np.arange(g.shape[1])[None, :] < g.shape[1] // 2
+    rgb[(g < 0.5) & left] = (1.0, 0.0, 0.0)
+    rgb[(g < 0.5) & ~left] = (0.0, 0.0, 1.0)
+    res = stipple_colors(rgb, 3000, "cmy", seed=1)
+    page = stipple_colors(rgb, 3000, "cmy", seed=1, supersample=3, density_sigma=0.5)
+    assert res.certificate.valid and res.params["supersample"] == 4
+    stray = [stray_dots(r.points, 1.0 - g).per_10k for r in (res, page)]
+    edge = [edge_fidelity(r.points, 1.0 - g) for r in (res, page)]
+    assert stray[0] < 0.1 * stray[1] and edge[0] > edge[1] + 0.01
