@@ -268,10 +268,10 @@ class OpenCLEngine(_Engine):
         """``(centroids, mass)`` of the power cells (labels reused from :meth:`mic`)."""
         last = self._labelled
         if last is None or not (np.array_equal(last[0], points) and np.array_equal(last[1], weights)):
-            last = (None, None, self._label(points, weights, False))
+            # no labels to reuse: the raster labels and sums in one pass where it can
+            return self.raster.centroids(points, weights, density)
         with self.timings("centroids"):
-            c, mass = last[2].centroids(density)
-        return np.asarray(c), np.asarray(mass)
+            return last[2].centroids(density)
 
 
 def _auto_grid(n, domain):

@@ -232,11 +232,13 @@ class PowerRaster:
         self.layout = layout
         # centroids reduced on the device where it has 64-bit integer atomics
         dev = self.ctx.devices[0]
-        self._k_sums = None
+        self._k_sums = self._k_fused = None
         if "cl_khr_int64_base_atomics" in dev.extensions:
             fp64 = int("cl_khr_fp64" in dev.extensions)
-            self._k_sums = build_program(self.ctx, "cell_sums",
-                                         {"PERIODIC": periodic, "USE_FP64": fp64})["cell_sums"]
+            sums = build_program(self.ctx, "cell_sums", {"PERIODIC": periodic, "USE_FP64": fp64})
+            self._k_sums = sums["cell_sums"]
+            # labels and sums in one pass where labels come in tiles
+            self._k_fused = sums["power_sums_tile"] if layout == "tile" else None
             self._real = np.float64 if fp64 else np.float32
         self._density = None
         k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
@@ -273,7 +275,10 @@ class PowerRaster:
         shape, self.shape = self.shape, (1, 1)
         try:
             with self.timings.discarded():
-                self.compute(np.full((1, 2), 0.5 * self.domain.width))
+                site = np.full((1, 2), 0.5 * self.domain.width)
+                self.compute(site)
+                if self._k_fused is not None:
+                    self.centroids(site, density=np.ones((1, 1)))
         finally:
             self.shape = shape
 
@@ -334,6 +339,11 @@ class PowerRaster:
         return order, start, wmax, (nbx, nby, bw, bh)
 
     # -- work --------------------------------------------------------------
+    def _tile_band(self, tx):
+        """Rows of tiles per enqueue of the CPU layout's kernels (`tx` tiles a row):
+        about `max_groups` * 64 grid cells."""
+        return max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
+
     def _label_tiles(self, b_site, b_w, b_id, b_start, b_wmax, grid, wmax, b_label, b_status):
         """Labels only with the CPU layout (power_labels_tile, TW x TH grid cells a
         work item), in bands of tile rows waited for one at a time."""
@@ -341,7 +351,7 @@ class PowerRaster:
         ny, nx = self.shape
         dom = self.domain
         tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
-        band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
+        band = self._tile_band(tx)
         for y0 in range(0, ty, band):
             self._wait(self._k_tile(
                 self.queue, (tx, min(band, ty - y0)), (1, 1), b_site, b_w, b_id, b_start, b_wmax,
@@ -382,27 +392,13 @@ class PowerRaster:
             grid cell without an owner (:data:`STATUS`).
         """
         t0 = time.perf_counter()
-        pts, w = check_sites(points, weights, self.domain)
+        pts, bufs, grid, wmax = self._upload_sites(points, weights)
         n = len(pts)
-        # Float32 kernels: only relative power distances matter, and the
-        # largest weight shifts all of them equally, so subtract it.
-        w32 = (w - w.max()).astype(np.float32)
-        order, start, wmax_b, (nbx, nby, bw, bh) = self._buckets(pts, w32)
-        sites = np.ascontiguousarray(pts[order], np.float32)
-        ids = order.astype(np.int32)
-        wsorted = np.ascontiguousarray(w32[order])
-        b_site = self._site_buffer("site", sites)
-        b_w = self._site_buffer("weight", wsorted)
-        b_id = self._site_buffer("id", ids)
-        b_start = self._site_buffer("start", start)
-        b_wmax = self._site_buffer("wmax", wmax_b)
         ny, nx = self.shape
         dom = self.domain
-        npix = nx * ny
-        maps = self._map_buffers(npix)
+        maps = self._map_buffers(nx * ny)
         self._generation += 1
-        self._label(distance, (b_site, b_w, b_id, b_start, b_wmax), (nbx, nby, bw, bh),
-                    float(wmax_b.max()), maps)
+        self._label(distance, bufs, grid, wmax, maps)
         t1 = time.perf_counter()
         self.timings.add("raster_labels", t1 - t0)
         if not (distance and neighbors):
@@ -425,6 +421,62 @@ class PowerRaster:
         self.timings.add("mic_estimate", t2 - t1)
         return RasterResult(centers, radii, self.shape, (hx, hy), self, maps,
                                   self._generation, pts)
+
+    def _upload_sites(self, points, weights):
+        """Check the sites, sort them into buckets and upload them: ``(points,
+        buffers, bucket grid, largest weight)`` for the labelling kernels."""
+        pts, w = check_sites(points, weights, self.domain)
+        # Float32 kernels: only relative power distances matter, and the
+        # largest weight shifts all of them equally, so subtract it.
+        w32 = (w - w.max()).astype(np.float32)
+        order, start, wmax_b, grid = self._buckets(pts, w32)
+        host = {"site": np.ascontiguousarray(pts[order], np.float32), "weight": np.ascontiguousarray(w32[order]),
+                "id": order.astype(np.int32), "start": start, "wmax": wmax_b}
+        bufs = tuple(self._site_buffer(name, a) for name, a in host.items())
+        return pts, bufs, grid, float(wmax_b.max())
+
+    def centroids(self, points, weights=None, density=None):
+        """Density-weighted centroids and masses of the power cells of `points`.
+
+        As ``compute(points, weights, distance=False).centroids(density)``;
+        on a CPU device with 64-bit atomics (the ``tile`` layout) in one
+        pass that labels the grid cells and sums them without a label map
+        (``power_sums_tile`` in ``diskpack_cl/kernels/cell_sums.cl``).
+
+        Returns
+        -------
+        centroids, mass : (n, 2) and (n,) float64
+            NaN centroids where a cell holds no mass.
+
+        Examples
+        --------
+        >>> pr = PowerRaster(Domain.rect(64, 32), (32, 64))
+        >>> c, mass = pr.centroids([[16.0, 16.0], [48.0, 16.0]])
+        >>> c.round(6).tolist(), mass.tolist()
+        ([[16.0, 16.0], [48.0, 16.0]], [1024.0, 1024.0])
+        """
+        if self._k_fused is None or density is None:
+            est = self.compute(points, weights, distance=False)
+            with self.timings("centroids"):
+                return est.centroids(density)
+        t0 = time.perf_counter()
+        pts, bufs, (nbx, nby, bw, bh), wmax = self._upload_sites(points, weights)
+        ny, nx = self.shape
+        dom = self.domain
+        b_density, b_pts, acc, b_acc = self._sums_buffers(pts, density)
+        b_status = self._site_buffer("status", np.zeros(1, np.int32))
+        tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
+        for y0 in range(0, ty, self._tile_band(tx)):
+            self._wait(self._k_fused(
+                self.queue, (tx, min(self._tile_band(tx), ty - y0)), (1, 1), *bufs,
+                np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
+                np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
+                np.int32(nx), np.int32(ny), b_density, b_pts, np.int32(len(pts)), b_status, b_acc,
+                global_offset=(0, y0)), "power_sums_tile")
+        self._check_status(b_status)
+        self.timings.add("raster_labels", time.perf_counter() - t0)
+        with self.timings("centroids"):
+            return self._sums_to_centroids(acc, b_acc, pts)
 
     def _map_buffers(self, npix):
         """The label, distance and neighbour maps (buffer, dtype).
@@ -479,6 +531,12 @@ class PowerRaster:
                 np.int32(ny), np.int32(bool(distance)), maps["label"][0], maps["dist"][0],
                 maps["nbr"][0], b_status, global_offset=(0, y0))
             self._wait(ev, "power_labels")
+        self._check_status(b_status)
+
+    def _check_status(self, b_status):
+        """Refuse a labelling whose kernel set a status bit (:data:`STATUS`)."""
+        import pyopencl as cl
+
         status = np.zeros(1, np.int32)
         cl.enqueue_copy(self.queue, status, b_status)
         if status[0]:
@@ -491,21 +549,9 @@ class PowerRaster:
         map never leaves the device; the density is uploaded once per array.
         The sums are fixed point (2^-24), so masses and centroids agree with a
         float64 host reduction to about 1e-7 relative."""
-        import pyopencl as cl
-
         ny, nx = self.shape
-        if self._density is None or self._density[0] is not density:
-            d = np.ascontiguousarray(density, self._real)
-            if d.shape != self.shape:
-                raise ValueError(f"density must have the raster shape {self.shape}")
-            self._density = (density, self._site_buffer("density", d))
-        dom = self.domain
-        hx, hy = dom.width / nx, dom.height / ny
         n = len(sites)
-        grid_pts = np.ascontiguousarray(sites / (hx, hy), self._real)
-        b_pts = self._site_buffer("grid_sites", grid_pts)
-        acc = np.zeros((n, 3), np.int64)
-        b_acc = self._site_buffer("sums", acc)
+        b_density, b_pts, acc, b_acc = self._sums_buffers(sites, density)
         seg = -(-nx // CELL_SUMS_SEG)
         g = self._groups["cell_sums"]
         # whole groups of rows per band, so that only the last band's padding
@@ -513,8 +559,31 @@ class PowerRaster:
         band = padded(max(1, (self.max_groups * TILE * TILE) // (seg * CELL_SUMS_SEG)), g)
         for y0 in range(0, ny, band):
             self._wait(self._k_sums(self.queue, (seg, padded(min(band, ny - y0), g)), (1, g),
-                                    label_buf, self._density[1], b_pts, np.int32(n),
+                                    label_buf, b_density, b_pts, np.int32(n),
                                     np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
+        return self._sums_to_centroids(acc, b_acc, sites)
+
+    def _sums_buffers(self, sites, density):
+        """Buffers of the device sums: the density (uploaded once per array), the
+        sites in grid-cell units, and the zeroed sums (host array and buffer)."""
+        ny, nx = self.shape
+        if self._density is None or self._density[0] is not density:
+            d = np.ascontiguousarray(density, self._real)
+            if d.shape != self.shape:
+                raise ValueError(f"density must have the raster shape {self.shape}")
+            self._density = (density, self._site_buffer("density", d))
+        cell = (self.domain.width / nx, self.domain.height / ny)
+        b_pts = self._site_buffer("grid_sites", np.ascontiguousarray(sites / cell, self._real))
+        acc = np.zeros((len(sites), 3), np.int64)
+        return self._density[1], b_pts, acc, self._site_buffer("sums", acc)
+
+    def _sums_to_centroids(self, acc, b_acc, sites):
+        """``(centroids, mass)`` from the device's fixed-point sums."""
+        import pyopencl as cl
+
+        ny, nx = self.shape
+        dom = self.domain
+        hx, hy = dom.width / nx, dom.height / ny
         cl.enqueue_copy(self.queue, acc, b_acc)
         sums = acc / CELL_SUMS_FIX
         mass = sums[:, 0]

@@ -29,7 +29,7 @@ def _sites(dom, n, seed, heavy=0.0):
 
 def _raster(ctx, dom, shape, n, heavy):
     """power_labels (both passes), power_labels_tile, cell_max, cell_argmax,
-    cell_sums, on a raster with partial tiles."""
+    cell_sums and power_sums_tile, on a raster with partial tiles."""
     from diskpack_cl.raster import PowerRaster
 
     pts, w = _sites(dom, n, 1, heavy)
@@ -39,9 +39,11 @@ def _raster(ctx, dom, shape, n, heavy):
         est = pr.compute(pts, w, neighbors=True)
         out.update({f"{layout}_label": est.labels.copy(), f"{layout}_dist": est.dist.copy(),
                     f"{layout}_nbr": est.neighbor.copy(), f"{layout}_radii": est.radii})
-        c, mass = est.centroids(np.random.default_rng(2).random(shape))
+        dens = np.random.default_rng(2).random(shape)
+        c, mass = est.centroids(dens)
         out.update({f"{layout}_centroids": c, f"{layout}_mass": mass})
         out[f"{layout}_labels_only"] = pr.compute(pts, w, distance=False).labels.copy()
+    out["fused_centroids"], out["fused_mass"] = pr.centroids(pts, w, dens)   # the tile layout's
     return out
 
 
@@ -63,7 +65,9 @@ def raster_streamed(ctx):
     dom = Domain.rect(10.0, 10.0)
     pts, w = _sites(dom, 600, 5, 0.3)
     est = PowerRaster(dom, (5, 6), device=ctx, layout="item").compute(pts, w)
-    return {"label": est.labels.copy(), "dist": est.dist.copy(), "radii": est.radii}
+    c, mass = PowerRaster(dom, (5, 6), device=ctx, layout="tile").centroids(pts, w, np.ones((5, 6)))
+    return {"label": est.labels.copy(), "dist": est.dist.copy(), "radii": est.radii,
+            "fused_centroids": c, "fused_mass": mass}
 
 
 def _cells(ctx, dom, n, heavy):
@@ -225,11 +229,15 @@ def unowned(ctx):
     check = raster.check_sites
     for name, dom in (("rect", Domain.rect(8.0, 8.0)), ("torus", Domain.torus())):
         pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
-        for layout, distance in (("item", True), ("tile", False)):
-            pr = raster.PowerRaster(dom, (9, 10), device=ctx, layout=layout)
+        for layout, distance in (("item", True), ("tile", False), ("fused", False)):
+            pr = raster.PowerRaster(dom, (9, 10), device=ctx, layout=layout.replace("fused", "tile"))
             raster.check_sites = lambda p, w, d: (np.asarray(p, float), np.asarray(w, float))
+            w = np.array([0.1, np.nan, 0.2, 0.1, 0.3])
             try:
-                pr.compute(pts, np.array([0.1, np.nan, 0.2, 0.1, 0.3]), distance=distance)
+                if layout == "fused":
+                    pr.centroids(pts, w, np.ones((9, 10)))
+                else:
+                    pr.compute(pts, w, distance=distance)
             except RuntimeError as exc:
                 out[f"{name}_{layout}"] = np.array(str(exc))
             finally:

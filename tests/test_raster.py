@@ -213,8 +213,10 @@ def test_single_site_torus(ctx):
 
 
 @SETTINGS
-@given(case=cases(n_max=16), use_density=st.booleans())
-def test_centroids_match_reference(ctx, case, use_density):
+@given(case=cases(n_max=16), use_density=st.booleans(), fused=st.booleans())
+def test_centroids_match_reference(ctx, case, use_density, fused):
+    """From a labelled result, or (`fused`) from PowerRaster.centroids, which on
+    a CPU device labels and sums in one pass (power_sums_tile)."""
     dom, shape, pts, w = case
     s = _scale(dom)
     pr, est, lab, _ = _raster(ctx, dom, shape, pts, w)
@@ -223,7 +225,7 @@ def test_centroids_match_reference(ctx, case, use_density):
     assert np.all(gap[differ] <= TIE * s * s)     # a grid cell changes owner only on a float32 tie
     rng = np.random.default_rng(1)
     dens = rng.random(shape) if use_density else None
-    c, m = est.centroids(dens)
+    c, m = pr.centroids(pts, w, dens) if fused else est.centroids(dens)
     cr, mr = ref.lloyd_centroids_ref(pts, w, dom, shape, dens)
     assert np.isclose(m.sum(), mr.sum())
     # cells that no tie touched are exactly the reference's
@@ -347,9 +349,11 @@ def test_bad_layout(ctx):
         PowerRaster(Domain.torus(), (8, 8), device=ctx, layout="gpu")
 
 
+@pytest.mark.parametrize("fused", [False, True])
 @pytest.mark.parametrize("periodic", [True, False])
-def test_device_centroids_match_bincount(ctx, periodic):
-    """The on-device reduction (cell_sums.cl) against numpy.bincount on the same labels."""
+def test_device_centroids_match_bincount(ctx, periodic, fused):
+    """The on-device reductions (cell_sums.cl: cell_sums, and power_sums_tile,
+    which labels too) against numpy.bincount on the same labels."""
     from diskpack_cl.labels import cell_centroids
     from diskpack_cl.raster import PowerRaster
 
@@ -363,7 +367,9 @@ def test_device_centroids_match_bincount(ctx, periodic):
     if pr._k_sums is None:
         pytest.skip("device without 64-bit integer atomics: centroids on the host")
     est = pr.compute(pts, w, distance=False)
-    c, m = est.centroids(dens)
+    if fused and pr._k_fused is None:
+        pytest.skip("no fused labels and sums: not the CPU (tile) layout")
+    c, m = pr.centroids(pts, w, dens) if fused else est.centroids(dens)
     c2, m2 = cell_centroids(est.labels, pts, dens, dom)
     d = c - c2
     if periodic:
@@ -371,7 +377,7 @@ def test_device_centroids_match_bincount(ctx, periodic):
     h = dom.width / shape[1]
     assert np.abs(m - m2).max() <= 1e-6 * max(m2.max(), 1)
     live = m2 > 0
-    # fixed point (2^-24 a run): the centroid error scales like 1 / mass
+    # fixed point (2^-24 a run, or a tile's part of a cell): the error scales like 1 / mass
     err = np.abs(d[live]).max(axis=1) / h
     assert np.all(err * m2[live] <= 1e-5)
     assert np.all(err[m2[live] > 1] <= 1e-5)
@@ -451,19 +457,24 @@ def test_sites_without_an_owner_for_every_cell_are_refused(ctx, periodic, pts, w
 
 
 @pytest.mark.parametrize("periodic", [False, True])
-@pytest.mark.parametrize("layout, distance", [("item", True), ("tile", False), ("item", False)])
+@pytest.mark.parametrize("layout, distance", [("item", True), ("tile", False), ("item", False),
+                                              ("fused", False)])
 def test_kernels_flag_unowned_cells_that_reach_them(ctx, monkeypatch, periodic, layout, distance):
     """With the host check bypassed, NaN weights reach the labelling kernel:
     its ring searches end at their limits and it reports the unowned cells,
-    instead of indexing buffers with them or searching forever."""
+    instead of indexing buffers with them or searching forever (``fused``:
+    the labels-and-sums kernel of PowerRaster.centroids)."""
     from diskpack_cl import raster as raster_mod
 
     dom = Domain.torus() if periodic else Domain.rect(8.0, 8.0)
-    pr = raster_mod.PowerRaster(dom, (19, 21), device=ctx, layout=layout)
+    pr = raster_mod.PowerRaster(dom, (19, 21), device=ctx, layout=layout.replace("fused", "tile"))
     pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
     monkeypatch.setattr(raster_mod, "check_sites", lambda p, w, d: (np.asarray(p), np.asarray(w)))
     with pytest.raises(RuntimeError, match=r"refused its result \(.*no_owner"):
-        pr.compute(pts, np.array(_NAN_W), distance=distance)
+        if layout == "fused":
+            pr.centroids(pts, np.array(_NAN_W), np.ones((19, 21)))
+        else:
+            pr.compute(pts, np.array(_NAN_W), distance=distance)
 
 
 def test_reductions_skip_labels_that_name_no_site(ctx):

@@ -131,7 +131,8 @@ def test_profiled_stippling_reports_kernel_time_and_the_same_result(ctx):
         assert ("kernel_cell_mic_s" in per) == (h["kind"] != "lloyd")
     assert prof.timings["kernel"] == pytest.approx(sum(h["kernel_s"] for h in prof.history))
     names = {k for k in prof.timings if k.startswith("kernel_")}
-    assert "kernel_cell_mic" in names and len(names) >= 3   # MICs, labels, centroid sums
+    # MICs, and labels with centroid sums: one kernel on a CPU (power_sums_tile), else two
+    assert "kernel_cell_mic" in names and len(names) >= 2
     for name in names:
         assert prof.timings[name] == pytest.approx(sum(h.get(f"{name}_s", 0.0) for h in prof.history))
 

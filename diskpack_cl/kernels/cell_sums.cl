@@ -11,10 +11,18 @@
  * contiguous piece.  A grid cell whose label names no site (only possible
  * for sites the host refuses) adds nothing and reads no site.
  *
- * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1).
+ * power_sums_tile labels and sums in one pass, in the CPU layout of
+ * power_labels_tile: each work item sums its tile's grid cells per owner in
+ * local memory and adds each owner's sums once, so no label map is written
+ * or read, and a tile costs a few atomics instead of three per run of each
+ * row.  Its totals are cell_sums' of power_labels_tile's labels, but for
+ * where the fixed point rounds (per tile and owner, not per run).
+ *
+ * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1), CAP
+ * (power_gather.h).
  */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-#include "common.h"
+#include "power_gather.h"
 
 #if USE_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -84,4 +92,73 @@ __kernel void cell_sums(
         my += d * dy;
     }
     add_run(acc, cur, nsite, m, mx, my);
+}
+
+/* Add a run of owner l's sums to its slot in the tile's table of `k` owners
+ * (a new slot for a new owner); returns the owners now in the table. */
+inline int add_to_slot(__local int *own, __local real *sum, int k, int l, real m, real mx, real my)
+{
+    int t = 0;
+    while (t < k && own[t] != l) ++t;
+    if (t == k) {
+        own[k++] = l;
+        sum[3 * t] = sum[3 * t + 1] = sum[3 * t + 2] = 0;
+    }
+    sum[3 * t] += m;
+    sum[3 * t + 1] += mx;
+    sum[3 * t + 2] += my;
+    return k;
+}
+
+/* Labels (as power_labels_tile) and density sums (as cell_sums) of one tile:
+ * runs of equal owners are summed in registers, as in cell_sums, then per
+ * owner in local memory, and each owner's totals get one atomic add each. */
+__kernel __attribute__((reqd_work_group_size(1, 1, 1)))
+void power_sums_tile(
+    LABEL_ARGS,
+    __global const real *density,    /* density of each grid cell */
+    __global const real *gsite,      /* site positions in grid-cell units, x then y, by caller's index */
+    const int nsite,                 /* sites */
+    __global int *status,            /* in/out: ST_* bits (common.h), init 0 */
+    __global long *acc)              /* in/out: per site mass, x moment, y moment (init 0) */
+{
+    __local float2 cpos[CAP];
+    __local float cw[CAP];
+    __local int cid[CAP];
+    __local int own[TW * TH];        /* the tile's owners so far */
+    __local real sum[3 * TW * TH];   /* and their sums */
+    const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
+    if (gx0 >= nx || gy0 >= ny) return;
+    int8 best_id[TH];
+    tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
+    int k = 0, cur = -1;             /* owners in the table; the run's owner (-1: none yet) */
+    real m = 0, mx = 0, my = 0, sx = 0, sy = 0;
+    for (int r = 0; r < TH && gy0 + r < ny; ++r) {
+        int ids[TW];
+        vstore8(best_id[r], 0, ids);
+        const size_t base = (size_t)(gy0 + r) * nx;
+        const real py = gy0 + r + (real)0.5;
+        for (int c = 0; c < TW && gx0 + c < nx; ++c) {
+            const int l = ids[c];
+            if (l != cur) {
+                if (owned(cur, nsite)) k = add_to_slot(own, sum, k, cur, m, mx, my);
+                cur = l;
+                m = mx = my = 0;
+                sx = owned(l, nsite) ? gsite[2 * l] : 0;
+                sy = owned(l, nsite) ? gsite[2 * l + 1] : 0;
+            }
+            const real d = density[base + gx0 + c];
+            real dx = (gx0 + c + (real)0.5) - sx, dy = py - sy;
+#if PERIODIC
+            dx -= nx * rint(dx / nx);
+            dy -= ny * rint(dy / ny);
+#endif
+            m += d;
+            mx += d * dx;
+            my += d * dy;
+        }
+    }
+    if (owned(cur, nsite)) k = add_to_slot(own, sum, k, cur, m, mx, my);
+    for (int t = 0; t < k; ++t)
+        add_run(acc, own[t], nsite, sum[3 * t], sum[3 * t + 1], sum[3 * t + 2]);
 }

@@ -1,0 +1,263 @@
+/* Candidate gathering of the labelling kernels (power_diagram.cl) and of the
+ * fused labels-and-sums kernel (cell_sums.cl): the bucket ring walks, the
+ * tile bound U, and the CPU layout's owner scan of a TW x TH tile.  See
+ * power_diagram.cl for the bounds.
+ *
+ * Build-time switches: PERIODIC (common.h); CAP, the local candidate list
+ * (default 256; longer lists are streamed in chunks).
+ */
+#ifndef DISKPACK_POWER_GATHER_H
+#define DISKPACK_POWER_GATHER_H
+
+#include "common.h"
+
+#ifndef CAP
+#define CAP 256
+#endif
+
+#define GATHER_OWNER 0
+#define GATHER_DIST 1
+
+#define GATHER_DIST 1
+
+/* Distance between boxes [ax0,ax1]x[ay0,ay1] and [bx0,bx1]x[by0,by1]. */
+inline float boxbox(float ax0, float ay0, float ax1, float ay1,
+                    float bx0, float by0, float bx1, float by1)
+{
+    const float dx = fmax(fmax(bx0 - ax1, ax0 - bx1), 0.0f);
+    const float dy = fmax(fmax(by0 - ay1, ay0 - by1), 0.0f);
+    return sqrt(dx * dx + dy * dy);
+}
+
+/* Rings a gather walks at most.  A rectangle's rings leave the grid after
+ * max(nbx, nby) + 1.  On a torus the bound U (tile_bound) reaches from the
+ * tile's far corner to a runner-up found up to half the grid away, and the
+ * gather's rings start at the tile's bucket block (`span` buckets wide), so
+ * a legitimate search may walk a few more rings than the grid has; twice
+ * that leaves room for the weights' spread. */
+inline int gather_limit(int nbx, int nby, int span)
+{
+#if PERIODIC
+    return 2 * (max(nbx, nby) + span) + 4;
+#else
+    return max(nbx, nby) + 1;
+#endif
+}
+
+/* Walk the buckets in rings around the tile's bucket block and copy the
+ * sites that pass the test of `mode` into the local list, skipping the first
+ * `skip` that pass.  Returns how many pass in total (may exceed CAP); sets
+ * ST_RING_LIMIT in `status` when the rings reach gather_limit.
+ *   GATHER_OWNER: boxdist^2 - w <= bound
+ *   GATHER_DIST:  boxdist <= bound + sqrt(bound2 + w)   (bound2 >= -w)
+ */
+inline int gather(int mode, float bound, float bound2, int skip,
+                  float x0, float y0, float x1, float y1,
+                  __global const float2 *site, __global const float *weight,
+                  __global const int *site_id, __global const int *bucket_start,
+                  __global const float *bucket_wmax,
+                  int nbx, int nby, float bw, float bh, float W, float H, float wmax,
+                  __local float2 *cpos, __local float *cw, __local int *cid,
+                  __global int *status)
+{
+    const int bx0 = clamp((int)floor(x0 / bw), -(1 << 20), 1 << 20);
+    const int by0 = clamp((int)floor(y0 / bh), -(1 << 20), 1 << 20);
+    const int bx1 = (int)floor(x1 / bw), by1 = (int)floor(y1 / bh);
+    const int rmax = gather_limit(nbx, nby, max(bx1 - bx0, by1 - by0));
+    int total = 0;
+    int r = 0;
+    for (; r <= rmax; ++r) {
+        if (r > 0) {
+            /* distance from the tile to buckets of ring >= r */
+            float gl = x0 - (bx0 - r + 1) * bw, gr = (bx1 + r) * bw - x1;
+            float gb = y0 - (by0 - r + 1) * bh, gt = (by1 + r) * bh - y1;
+#if !PERIODIC
+            /* a side past the grid's edge has no buckets left: no bound */
+            if (bx0 - r < 0) gl = INFINITY;
+            if (bx1 + r >= nbx) gr = INFINITY;
+            if (by0 - r < 0) gb = INFINITY;
+            if (by1 + r >= nby) gt = INFINITY;
+#endif
+            const float gap = fmin(fmin(gl, gr), fmin(gb, gt));
+            if (gap > 0.0f) {
+                if (mode == GATHER_OWNER && gap * gap - wmax > bound) break;
+                if (mode == GATHER_DIST && gap > bound + sqrt(fmax(bound2 + wmax, 0.0f))) break;
+            }
+#if !PERIODIC
+            if (bx0 - r < 0 && by0 - r < 0 && bx1 + r >= nbx && by1 + r >= nby) break;
+#endif
+        }
+        /* the ring's rows; in a rectangle only those inside the grid, and
+           in its top and bottom rows only the columns inside the grid, so
+           that a ring costs what its existing buckets cost (elongated
+           images have rings far longer than the grid is wide) */
+        int cy_lo = by0 - r, cy_hi = by1 + r;
+#if !PERIODIC
+        cy_lo = max(cy_lo, 0);
+        cy_hi = min(cy_hi, nby - 1);
+#endif
+        for (int cy0 = cy_lo; cy0 <= cy_hi; ++cy0) {
+            const int edge_row = (r == 0 || cy0 == by0 - r || cy0 == by1 + r);
+            const int step = edge_row ? 1 : (bx1 - bx0 + 2 * r);
+            int cx_lo = bx0 - r, cx_hi = bx1 + r;
+#if !PERIODIC
+            if (edge_row) { cx_lo = max(cx_lo, 0); cx_hi = min(cx_hi, nbx - 1); }
+#endif
+            for (int cx0 = cx_lo; cx0 <= cx_hi; cx0 += (step > 0 ? step : 1)) {
+                int cx = cx0, cy = cy0;
+                float sx, sy;
+                if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
+                const int b = cy * nbx + cx;
+                const float ex0 = cx * bw + sx, ey0 = cy * bh + sy;
+                const float d = boxbox(x0, y0, x1, y1, ex0, ey0, ex0 + bw, ey0 + bh);
+                const float wb = bucket_wmax[b];
+                if (mode == GATHER_OWNER && d * d - wb > bound) continue;
+                if (mode == GATHER_DIST && d > bound + sqrt(fmax(bound2 + wb, 0.0f))) continue;
+                for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
+                    const float2 s = site[k];
+                    const float xs = s.x + sx, ys = s.y + sy;
+                    const float ds = box_dist(xs, ys, x0, y0, x1, y1);
+                    const float wk = weight[k];
+                    const int pass = (mode == GATHER_OWNER) ? (ds * ds - wk <= bound)
+                                                            : (ds <= bound + sqrt(fmax(bound2 + wk, 0.0f)));
+                    if (!pass) continue;
+                    const int slot = total - skip;
+                    if (slot >= 0 && slot < CAP) {
+                        cpos[slot] = (float2)(xs, ys);
+                        cw[slot] = wk;
+                        cid[slot] = site_id[k];
+                    }
+                    ++total;
+                }
+            }
+        }
+    }
+    if (r > rmax) atomic_or(status, ST_RING_LIMIT);
+    return total;
+}
+
+/* Bound U: the second best "worst corner" power distance over the tile
+ * [x0,x1] x [y0,y1] among the sites of the nearest bucket rings.  Two sites
+ * have pow <= U everywhere in the tile, so every grid cell finds its owner
+ * and a runner-up among the sites with  boxdist^2 - w <= U.  By ring
+ * max(nbx, nby) + 1 every bucket was seen (on a torus, with its images one
+ * period away); U is infinite only when no two candidates exist (no sites,
+ * NaN weights), and then the grid cells find no owner (ST_NO_OWNER). */
+inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
+                        __global const float2 *site, __global const float *weight,
+                        __global const int *bucket_start,
+                        int nbx, int nby, float bw, float bh, float W, float H)
+{
+    const int bx = clamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
+    const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
+    float U1 = INFINITY, U2 = INFINITY;
+    const int rmax = max(nbx, nby) + 1;
+    for (int r = 0; (U2 == INFINITY || r <= 1) && r <= rmax; ++r) {
+        /* ring r only (its perimeter), clipped to the grid in a rectangle */
+        int dy_lo = -r, dy_hi = r;
+#if !PERIODIC
+        dy_lo = max(dy_lo, -by);
+        dy_hi = min(dy_hi, nby - 1 - by);
+#endif
+        for (int dy = dy_lo; dy <= dy_hi; ++dy) {
+            const int edge = (dy == -r || dy == r);
+            int dx_lo = -r, dx_hi = r;
+#if !PERIODIC
+            if (edge) { dx_lo = max(dx_lo, -bx); dx_hi = min(dx_hi, nbx - 1 - bx); }
+#endif
+            for (int dx = dx_lo; dx <= dx_hi; dx += (edge ? 1 : 2 * r)) {
+                int cx = bx + dx, cy = by + dy;
+                float sx, sy;
+                if (!locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H)) continue;
+                const int b = cy * nbx + cx;
+                for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
+                    const float xs = site[k].x + sx, ys = site[k].y + sy;
+                    const float fx = fmax(fabs(x0 - xs), fabs(x1 - xs));
+                    const float fy = fmax(fabs(y0 - ys), fabs(y1 - ys));
+                    const float u = fx * fx + fy * fy - weight[k];
+                    if (u < U1) { U2 = U1; U1 = u; } else if (u < U2) { U2 = u; }
+                }
+            }
+        }
+    }
+    return U2 + pad + 1e-5f * fabs(U2);
+}
+
+/* The first arguments of both labelling kernels (power_labels and
+ * power_labels_tile): the sorted sites, their bucket grid and the raster. */
+#define LABEL_ARGS \
+    __global const float2 *site,        /* sites sorted by bucket */ \
+    __global const float *weight,       /* their weights (squared radii) */ \
+    __global const int *site_id,        /* sorted position -> caller's index */ \
+    __global const int *bucket_start,   /* nbx*nby + 1 offsets into site[] */ \
+    __global const float *bucket_wmax,  /* largest weight in each bucket */ \
+    const int nbx, const int nby,       /* bucket grid size */ \
+    const float bw, const float bh,     /* bucket size */ \
+    const float W, const float H,       /* domain size */ \
+    const float wmax,                   /* largest weight overall */ \
+    const int nx, const int ny          /* raster size */
+
+/* The arguments of LABEL_ARGS, passed on. */
+#define LABEL_PASS site, weight, site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax, nx, ny
+
+/* The CPU layout: one work item per TW x TH tile of grid cells, no
+ * barriers, and the candidate scan written with explicit float8 vectors (a
+ * row of the tile at a time), which PoCL turns into packed SIMD
+ * instructions where it would not vectorize the scalar scan of
+ * power_labels.  The candidates and the arithmetic are those of
+ * power_labels' pass 1, so both give the same labels.  (GPUs want the
+ * opposite layout: one work item per grid cell, power_labels.) */
+/* (8 lanes: AVX2 registers; 16-wide vectors would change the call ABI of
+ * the builtins on CPUs without AVX-512) */
+#define TW 8
+#define TH 16
+
+/* Owners of the tile whose first grid cell is (gx0, gy0): best_id[r] holds
+ * row r's, caller's indices (lanes past the raster repeat its last column).
+ * A grid cell of the raster left without one sets ST_NO_OWNER. */
+inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
+                        __local float2 *cpos, __local float *cw, __local int *cid,
+                        __global int *status, int8 *best_id)
+{
+    const float hx = W / nx, hy = H / ny;
+    const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
+    const float x1 = (min(gx0 + TW, nx) - 0.5f) * hx, y1 = (min(gy0 + TH, ny) - 0.5f) * hy;
+    const float pad = 1e-4f * (hx * hx + hy * hy);
+    const float U = tile_bound(x0, y0, x1, y1, pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
+
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
+    /* columns past the raster shadow its last column */
+    const float8 px = (convert_float8(min(gx0 + lane, (int8)(nx - 1))) + 0.5f) * hx;
+    float py[TH];
+    float8 best[TH];
+    for (int r = 0; r < TH; ++r) {
+        py[r] = (min(gy0 + r, ny - 1) + 0.5f) * hy;
+        best[r] = (float8)(INFINITY);
+        best_id[r] = (int8)(INT_MAX);
+    }
+    for (int chunk = 0; ; ++chunk) {
+        const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
+                                 site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
+                                 cpos, cw, cid, status);
+        const int m = min(total - chunk * CAP, CAP);
+        for (int c = 0; c < m; ++c) {
+            const float2 s = cpos[c];
+            const float wc = cw[c];
+            const int8 id = (int8)(cid[c]);
+            const float8 dx = px - s.x;
+            const float8 dx2 = dx * dx;
+            for (int r = 0; r < TH; ++r) {
+                const float dy = py[r] - s.y;
+                const float8 pw = (dx2 + dy * dy) - wc;
+                const int8 take = (pw < best[r]) | ((pw == best[r]) & (id < best_id[r]));
+                best[r] = take ? pw : best[r];
+                best_id[r] = take ? id : best_id[r];
+            }
+        }
+        if (total <= (chunk + 1) * CAP) break;
+    }
+    for (int r = 0; r < TH && gy0 + r < ny; ++r)
+        if (any(best_id[r] == (int8)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
+}
+
+#endif
