@@ -449,7 +449,7 @@ class PowerRaster:
         # largest weight shifts all of them equally, so subtract it.
         w32 = (w - w.max()).astype(np.float32)
         order, start, wmax_b, grid = self._buckets(pts, w32)
-        host = {"site": np.ascontiguousarray(pts[order], np.float32), "weight": np.ascontiguousarray(w32[order]),
+        host = {"site": np.take(pts, order, axis=0).astype(np.float32), "weight": w32[order],
                 "id": order.astype(np.int32), "start": start, "wmax": wmax_b}
         bufs = tuple(self._site_buffer(name, a) for name, a in host.items())
         return pts, bufs, grid, float(wmax_b.max())
