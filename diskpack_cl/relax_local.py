@@ -43,15 +43,16 @@ MOVE_RADIUS = 1.2
 HALO = 2.2
 #: :func:`diskpack_cl.relax_poisson` with ``local=True`` goes local when at
 #: most this share of the points is bad (a local step costs about a hundred
-#: times a global one per bad point, counting its neighbourhood).  After its
-#: two over-relaxed global moves (:data:`diskpack_cl.relax.OVER_RELAX`) 67 %,
-#: 22 %, then 2.1-2.5 % of the points are bad (200k and 1M points): it goes local there.
+#: times a global one per bad point, counting its neighbourhood).  Before and
+#: after its two over-relaxed global moves (:data:`diskpack_cl.relax.OVER_RELAX`)
+#: 67 %, 31 %, then 1.5-1.6 % of the points are bad (200k and 1M points, seeds
+#: 0-5): it goes local there.
 LOCAL_SHARE = 0.04
 #: From at most this share of bad points the next iterate probably goes
 #: local: :func:`diskpack_cl.relax_poisson` measures its nearest neighbours
 #: alone first (:meth:`diskpack_cl.cells.CellMIC.nearest`, about a tenth of
 #: the MICs' cost), and solves its MICs only if it does not.
-LOCAL_SOON = 0.3
+LOCAL_SOON = 0.45
 
 
 def bad_points(nn, eps, area):

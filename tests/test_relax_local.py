@@ -215,7 +215,7 @@ def test_only_the_local_routes_first_moves_are_over_relaxed():
     d_min = ref.min_distance_ref(X, TORUS)
     local = relax_poisson(X, 0.8, backend="exact", local=True, max_iter=1).points
     plain = relax_poisson(X, 0.8, backend="exact", max_iter=1).points
-    dz = local - _over_relaxed_ref(X, mic, d_min, OVER_RELAX)
+    dz = local - _over_relaxed_ref(X, mic, d_min, OVER_RELAX[0])
     np.testing.assert_allclose(dz - np.round(dz), 0.0, rtol=0, atol=1e-14)
     np.testing.assert_array_equal(plain, mic.centers)
     assert not np.array_equal(local, plain)
