@@ -21,7 +21,7 @@ from .options import check_fields, option
 from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
 __all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
-           "RadiusResult", "STALL_GAIN"]
+           "RadiusResult", "STALL_GAIN", "OVER_RELAX"]
 
 #: Iteration cap of :func:`relax_poisson` when none is given.
 MAX_ITER = 1000
