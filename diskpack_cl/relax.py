@@ -21,7 +21,7 @@ from .options import check_fields, option
 from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
 
 __all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
-           "RadiusResult", "STALL_GAIN"]
+           "RadiusResult", "STALL_GAIN", "OVER_RELAX"]
 
 #: Iteration cap of :func:`relax_poisson` when none is given.
 MAX_ITER = 1000
@@ -54,6 +54,15 @@ class RelaxOptions:
         """The keyword arguments of :func:`relax_poisson`."""
         return {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
                 "backend": self.backend, "grid": self.grid}
+
+#: The local route's first global moves take each point these many times the way to
+#: its MIC centre, one factor a move (successive over-relaxation), as far as keeps rho
+#: from falling (:func:`_moved`); the later moves are Algorithm 1's (over-relaxing
+#: every move of a long run need not converge).  Two such moves order the set as three
+#: plain ones do (1M points: ring peak, low-frequency power and abs(psi6) the same
+#: within the seeds' spread), and leave 1.5-1.6 % of the points bad: the set goes
+#: local after them, one MIC call sooner.
+OVER_RELAX = (1.8, 1.2)
 
 #: Progress that counts: within ``patience`` iterations rho must grow by this
 #: share of itself or of its gap to eps (the smaller), or the run stops as
@@ -191,7 +200,9 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         decreases, far cheaper, but the iterates differ from Algorithm 1's.
         The global iterations before then take the device's proven MICs
         without the host's re-solve of every cell (unless `verify`): the
-        rho returned is measured exactly on the host in any case.
+        rho returned is measured exactly on the host in any case.  Their
+        first moves are over-relaxed (:data:`OVER_RELAX`), so the set goes
+        local an iteration sooner with the same spectrum.
 
     Returns
     -------
@@ -254,7 +265,8 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
             return X, rho, it, "local", nn
         it += 1
         step = step or _mic(engine, X, stats, certify)
-        X = step.centers
+        omega = OVER_RELAX[it - 1] if local and it <= len(OVER_RELAX) else 1.0
+        X = _moved(X, step, rho[-1], dom, omega)
         step, nn = _after_move(engine, X, stats, certify, soon)
         rho.append(_rho(X, nn, verify, dom))
         if callback is not None:
@@ -267,6 +279,27 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
             reason = "stalled"
             break
     return X, rho, it, reason, None
+
+
+def _moved(X, mic, rho, domain, omega):
+    """The points X moved `omega` times the way to their MIC centres (`mic`, a
+    :class:`~diskpack_cl.geometry.MIC`; 1: the centres themselves), each no farther past
+    its centre than its MIC radius less half the minimum distance of X (`rho` its
+    normalized radius): the MIC disks do not overlap, so no two moved points come
+    closer than that minimum, and rho does not fall (as in Algorithm 1)."""
+    if omega == 1.0:
+        return mic.centers
+    d_min = 2.0 * rho * hexagonal_radius(len(X), domain.area)
+    past = np.subtract(mic.centers, X)
+    if domain.periodic:   # the shortest offsets
+        past -= np.round(past / domain.size) * domain.size
+    z = past.view(np.complex128).ravel()   # one (x, y) row a number: |z| without column copies
+    z *= omega - 1.0
+    length = np.abs(z)
+    room = np.maximum(mic.radii - 0.5 * d_min, 0.0)
+    z *= np.divide(room, length, out=np.ones_like(length), where=length > room)
+    past += mic.centers
+    return domain.wrap(past)
 
 
 def _local_state(X, nn, eps, dom):

@@ -43,16 +43,16 @@ MOVE_RADIUS = 1.2
 HALO = 2.2
 #: :func:`diskpack_cl.relax_poisson` with ``local=True`` goes local when at
 #: most this share of the points is bad (a local step costs about a hundred
-#: times a global one per bad point, counting its neighbourhood).  The share
-#: falls about 3.7 times a global iteration (67 %, 14 %, 3.6 %, then 0.97-1.03 %
-#: at 100k and 1M points, seeds 0-2): at 1.5 % all go local after the third,
-#: where at 1 % some took a fourth (100k seed 0; a million-point call is 0.6 s longer).
-LOCAL_SHARE = 0.015
+#: times a global one per bad point, counting its neighbourhood).  Before and
+#: after its two over-relaxed global moves (:data:`diskpack_cl.relax.OVER_RELAX`)
+#: 67 %, 31 %, then 1.5-1.6 % of the points are bad (200k and 1M points, seeds
+#: 0-5): it goes local there.
+LOCAL_SHARE = 0.04
 #: From at most this share of bad points the next iterate probably goes
 #: local: :func:`diskpack_cl.relax_poisson` measures its nearest neighbours
 #: alone first (:meth:`diskpack_cl.cells.CellMIC.nearest`, about a tenth of
 #: the MICs' cost), and solves its MICs only if it does not.
-LOCAL_SOON = 4 * LOCAL_SHARE
+LOCAL_SOON = 0.45
 
 
 def bad_points(nn, eps, area):

@@ -10,7 +10,7 @@ import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.measures import hexagonal_radius, min_distance_at_most, nearest_neighbor_distances
-from diskpack_cl.relax import relax_poisson
+from diskpack_cl.relax import OVER_RELAX, _moved, relax_poisson
 from diskpack_cl.relax_local import _bad_pairs, _within, bad_points, local_step, relax_local
 from diskpack_cl.sampling import dart_throwing
 
@@ -173,6 +173,52 @@ def test_nearest_alone_before_going_local_changes_no_iterate(ctx, monkeypatch, s
     np.testing.assert_array_equal(res.points, want.points)
     np.testing.assert_allclose(res.rho, want.rho, rtol=0, atol=1e-15)
     assert res.stats["local_iterations"] == want.stats["local_iterations"] > 0
+
+
+def _over_relaxed_ref(X, mic, d_min, omega):
+    """The over-relaxed move point by point: the image of each MIC centre nearest its
+    site (of the 9), `omega` times the way there, no farther past the centre than the
+    radius less half `d_min`."""
+    Y = np.empty_like(X)
+    for i, (x, c, R) in enumerate(zip(X, mic.centers, mic.radii)):
+        c = min((c + (sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1)),
+                key=lambda p: np.hypot(*(p - x)))
+        past = (omega - 1.0) * (c - x)
+        room = max(R - d_min / 2, 0.0)
+        if np.hypot(*past) > room:
+            past *= room / np.hypot(*past)
+        Y[i] = np.mod(c + past, 1.0)
+    return Y
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(3, 60), seed=st.integers(0, 2**32 - 1), omega=st.floats(1.0, 3.0))
+def test_an_over_relaxed_move_keeps_the_minimum_distance(n, seed, omega):
+    """The local route's over-relaxed global moves (relax._moved) against a point-by-point
+    reference, and never closer than the set's minimum distance (brute force; random
+    sets, whose cells are far from their MICs, need the cap)."""
+    X = np.random.default_rng(seed).random((n, 2))
+    mic = exact_mic(X, domain=TORUS)
+    d_min = ref.min_distance_ref(X, TORUS)
+    Y = _moved(X, mic, d_min / 2 / hexagonal_radius(n), TORUS, omega)
+    Z = _over_relaxed_ref(X, mic, d_min, omega)
+    dz = Y - Z
+    np.testing.assert_allclose(dz - np.round(dz), 0.0, rtol=0, atol=1e-14)
+    assert ref.min_distance_ref(Y, TORUS) >= d_min * (1 - 1e-12)
+
+
+def test_only_the_local_routes_first_moves_are_over_relaxed():
+    """relax_poisson's first global move: over-relaxed on the local route, the MIC centres
+    (Algorithm 1) otherwise."""
+    X = dart_throwing(500, rel_radius=0.6, seed=3)
+    mic = exact_mic(X, domain=TORUS)
+    d_min = ref.min_distance_ref(X, TORUS)
+    local = relax_poisson(X, 0.8, backend="exact", local=True, max_iter=1).points
+    plain = relax_poisson(X, 0.8, backend="exact", max_iter=1).points
+    dz = local - _over_relaxed_ref(X, mic, d_min, OVER_RELAX[0])
+    np.testing.assert_allclose(dz - np.round(dz), 0.0, rtol=0, atol=1e-14)
+    np.testing.assert_array_equal(plain, mic.centers)
+    assert not np.array_equal(local, plain)
 
 
 def test_local_is_ignored_in_a_box():
