@@ -151,8 +151,8 @@ def start_points(n, domain, seed=None, device=None):
 
     The darts are thrown in parallel rounds
     (:func:`diskpack_cl.parallel_darts.parallel_darts`, relative radius
-    :data:`START_RADIUS`): at a million points about 2 s, where sequential
-    dart throwing to 0.74 took 17 s.  In a box ``W x H`` the darts are thrown on a square torus of side
+    :data:`START_RADIUS`; ``docs/poisson.md`` describes the rounds and what
+    they cost).  In a box ``W x H`` the darts are thrown on a square torus of side
     ``max(W, H)`` with enough points that at least `n` fall in the box
     inset by a disk radius (where relaxed points end up: the walls push
     them that far in, so the relaxation saves most of its iterations); the
