@@ -871,7 +871,14 @@ def _error_text(item, exc):
 def _ignore_interrupts_and_exit_on_term():
     """Worker signals: Ctrl-C is the coordinator's; SIGTERM ends cleanly (no .part files)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    signal.signal(signal.SIGTERM, _exit_on_first_term)
+
+
+def _exit_on_first_term(*_):
+    """SystemExit(143), once: a second SIGTERM (the pool terminates its other workers
+    when one exits) must not interrupt the removal of the partial files."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    sys.exit(143)
 
 
 def _init_worker(slots, devices, threads):

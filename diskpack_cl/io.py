@@ -77,11 +77,14 @@ def atomic_write(path, mode="wb"):
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
         raise FileNotFoundError(f"output directory does not exist: {directory}")
+    tmp = None
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
-    except OSError as exc:
-        raise _named(exc, path) from exc
-    try:
+        # signals held while the file is created and named: one in between would leave it
+        with _signals_held():
+            try:
+                fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
+            except OSError as exc:
+                raise _named(exc, path) from exc
         # mkstemp creates 0600 files; give the result the mode a plain open() would
         # (or keep the mode of the file being replaced)
         try:
@@ -100,6 +103,8 @@ def atomic_write(path, mode="wb"):
         else:  # renamed with the others at the end of atomic_writes()
             pending.append((tmp, path))
     except BaseException as exc:
+        if tmp is None:   # mkstemp failed (its error names `path`) or was interrupted
+            raise
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         if isinstance(exc, OSError) and exc.errno and exc.filename in (None, tmp):
@@ -135,16 +140,17 @@ def atomic_writes():
     token = _PENDING.set(pending)
     try:
         yield
+        # the renames inside the try: a signal just before them still removes the temporaries
+        with _signals_held():
+            for tmp, path in pending:
+                os.replace(tmp, path)
     except BaseException:
-        for tmp, _ in pending:
+        for tmp, _ in pending:   # (a signal held over the renames finds them renamed)
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(tmp)
         raise
     finally:
         _PENDING.reset(token)
-    with _signals_held():
-        for tmp, path in pending:
-            os.replace(tmp, path)
 
 
 @contextlib.contextmanager

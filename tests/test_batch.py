@@ -504,3 +504,23 @@ def test_one_poisson_run_prints_the_dart_warning_as_it_comes(tmp_path, capsys, m
     assert rc == 0 and "diskpack: warning: saturated" in err
     rec, = poisson_many(1, 64, [str(tmp_path / "b" / "{i}.npz")], seed=1, backend="exact")
     assert rec["summary"]["warnings"] == ["saturated"]
+
+
+def test_a_worker_ignores_a_second_sigterm_while_it_cleans_up():
+    """The first SIGTERM ends a worker with SystemExit(143), which removes its
+    partial files on the way out; the pool may terminate the worker again
+    meanwhile (it does when another worker exits), and that second SIGTERM must
+    not interrupt the removal (a .part file was left behind)."""
+    from diskpack_cl import batch
+
+    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        batch._ignore_interrupts_and_exit_on_term()
+        handler = signal.getsignal(signal.SIGTERM)
+        with pytest.raises(SystemExit) as exc:
+            handler(signal.SIGTERM, None)
+        assert exc.value.code == 143
+        assert signal.getsignal(signal.SIGTERM) == signal.SIG_IGN
+    finally:
+        for s, h in saved.items():
+            signal.signal(s, h)
