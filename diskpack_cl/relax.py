@@ -259,15 +259,19 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
     best_at = 0
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
+    guess = True   # nearest neighbours alone where the next iterate will probably go local
     while rho[-1] < eps and it < max_iter:
         nn, ready, soon = _local_state(X, nn, eps, dom) if local else (nn, False, False)
         if ready:
             return X, rho, it, "local", nn
+        # an iterate without its MICs that did not go local: the guess failed, so no more
+        # (at a high eps the share of bad points hovers above the local one for long)
+        guess = guess and (it == 0 or step is not None)
         it += 1
         step = step or _mic(engine, X, stats, certify)
         omega = OVER_RELAX[it - 1] if local and it <= len(OVER_RELAX) else 1.0
         X = _moved(X, step, rho[-1], dom, omega)
-        step, nn = _after_move(engine, X, stats, certify, soon)
+        step, nn = _after_move(engine, X, stats, certify, soon and guess)
         rho.append(_rho(X, nn, verify, dom))
         if callback is not None:
             callback(it, rho[-1])

@@ -250,3 +250,23 @@ def test_poisson_disk_goes_local_on_the_torus_unless_told_not_to():
     b = poisson_disk(3000, seed=0, backend="exact", local=False)
     assert "local" in a.timings and "local" not in b.timings
     assert a.rho >= 0.8 and b.rho >= 0.8
+
+
+@pytest.mark.parametrize("eps", [0.8, 0.84])
+def test_a_failed_guess_of_going_local_is_not_repeated(ctx, monkeypatch, eps):
+    """Where an iterate got its nearest neighbours alone (the set would probably go
+    local) and did not go local, the next iterates solve their MICs directly: with the
+    guess made at every iterate (``LOCAL_SOON`` 1), one nearest-neighbour call, not one
+    every other iterate (5 and 13 of them before), and the same points."""
+    import diskpack_cl.relax_local as rl
+    from diskpack_cl.cells import CellMIC
+
+    X = dart_throwing(3000, rel_radius=0.6, seed=8)
+    want = relax_poisson(X, eps, backend="opencl", device=ctx, local=True)
+    calls = []
+    nearest = CellMIC.nearest
+    monkeypatch.setattr(CellMIC, "nearest", lambda self, pts: calls.append(len(pts)) or nearest(self, pts))
+    monkeypatch.setattr(rl, "LOCAL_SOON", 1.0)
+    res = relax_poisson(X, eps, backend="opencl", device=ctx, local=True)
+    np.testing.assert_array_equal(res.points, want.points)
+    assert len(calls) == 1 and len(res.rho) > 6
