@@ -358,26 +358,21 @@ class PowerRaster:
         return order, start, wmax, (nbx, nby, bw, bh)
 
     # -- work --------------------------------------------------------------
-    def _tile_band(self, tx):
-        """Rows of tiles per enqueue of the CPU layout's kernels (`tx` tiles a row):
-        about `max_groups` * 64 grid cells."""
-        return max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
-
-    def _label_tiles(self, b_site, b_w, b_id, b_start, b_wmax, grid, wmax, b_label, b_status):
-        """Labels only with the CPU layout (power_labels_tile, TW x TH grid cells a
-        work item), in bands of tile rows waited for one at a time."""
+    def _run_tiles(self, kernel, name, bufs, grid, wmax, *args):
+        """A kernel of the CPU layout (``LABEL_ARGS`` then `args`; TW x TH grid cells
+        a work item) over the raster, in bands of tile rows of about `max_groups` * 64
+        grid cells, waited for one at a time."""
         nbx, nby, bw, bh = grid
         ny, nx = self.shape
         dom = self.domain
         tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
-        band = self._tile_band(tx)
+        band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
         for y0 in range(0, ty, band):
-            self._wait(self._k_tile(
-                self.queue, (tx, min(band, ty - y0)), (1, 1), b_site, b_w, b_id, b_start, b_wmax,
+            self._wait(kernel(
+                self.queue, (tx, min(band, ty - y0)), (1, 1), *bufs,
                 np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
-                np.int32(nx), np.int32(ny), b_label, b_status, global_offset=(0, y0)),
-                "power_labels_tile")
+                np.int32(nx), np.int32(ny), *args, global_offset=(0, y0)), name)
 
     def compute(self, points, weights=None, distance=True, neighbors=False):
         """Label the raster and estimate every power cell's inscribed circle.
@@ -479,19 +474,11 @@ class PowerRaster:
             with self.timings("centroids"):
                 return est.centroids(density)
         t0 = time.perf_counter()
-        pts, bufs, (nbx, nby, bw, bh), wmax = self._upload_sites(points, weights)
-        ny, nx = self.shape
-        dom = self.domain
+        pts, bufs, grid, wmax = self._upload_sites(points, weights)
         b_density, b_pts, acc, b_acc = self._sums_buffers(pts, density)
         b_status = self._site_buffer("status", np.zeros(1, np.int32))
-        tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
-        for y0 in range(0, ty, self._tile_band(tx)):
-            self._wait(self._k_fused(
-                self.queue, (tx, min(self._tile_band(tx), ty - y0)), (1, 1), *bufs,
-                np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
-                np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
-                np.int32(nx), np.int32(ny), b_density, b_pts, np.int32(len(pts)), b_status, b_acc,
-                global_offset=(0, y0)), "power_sums_tile")
+        self._run_tiles(self._k_fused, "power_sums_tile", bufs, grid, wmax,
+                        b_density, b_pts, np.int32(len(pts)), b_status, b_acc)
         self._check_status(b_status)
         self.timings.add("raster_labels", time.perf_counter() - t0)
         with self.timings("centroids"):
@@ -536,7 +523,8 @@ class PowerRaster:
         dom = self.domain
         b_status = self._site_buffer("status", np.zeros(1, np.int32))
         if not distance and self.layout == "tile":
-            self._label_tiles(*bufs, grid, wmax, maps["label"][0], b_status)
+            self._run_tiles(self._k_tile, "power_labels_tile", bufs, grid, wmax,
+                            maps["label"][0], b_status)
         t = self.tile
         gx, gy = padded(nx, t), padded(ny, t)
         # bands of tile rows, at most max_groups * 64 grid cells each, one at
