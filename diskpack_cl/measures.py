@@ -7,14 +7,15 @@ Distances are periodic (minimum image) on a torus and plain on a rectangle.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .domain import Domain
 
-__all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "ball_candidates", "hexagonal_radius",
-           "nearest_neighbors",
-           "nearest_neighbor_distances",
-           "min_distance", "min_distance_at_most", "normalized_radius", "coincident_pairs", "kdtree"]
+__all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "ball_candidates", "bucket_order", "close_pairs",
+           "hexagonal_radius", "nearest_neighbors", "nearest_neighbor_distances", "min_distance",
+           "min_distance_at_most", "min_distance_since", "normalized_radius", "coincident_pairs", "kdtree"]
 
 #: Area per point of the densest (hexagonal) packing of unit disks, ``2 sqrt(3)``:
 #: n disks of radius r pack at best into area ``2 sqrt(3) n r^2``.
@@ -209,25 +210,149 @@ def _grid_min_distance(X, reach, domain):
     cells' width less the margin), so ``dmin`` is the exact smallest distance
     when it is below ``side`` (``inf`` if no pair is adjacent).  Distances are computed as the KD-tree path computes them.
     """
-    grid = _grid_cells(X, reach, domain)
-    if grid is None:
+    found = _grid_candidates(X, reach, domain)
+    if found is None:
         return None
-    X, cell, shape, extent = grid
-    order, ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape, domain.periodic)
+    xy, ranges, grid = found
+    d2 = min(_range_pairs(xy, first, count, domain)[2].min(initial=np.inf) for first, count in ranges)
+    return float(np.sqrt(d2)), grid.side
+
+
+def _grid_candidates(X, reach, domain):
+    """``(xy, ranges, grid)``: :func:`_grid_min_distance`'s coordinates in cell order,
+    the partners' ranges (:func:`_candidate_ranges`) and the :class:`_SortedGrid`;
+    None where the grid does not serve."""
+    cells = _grid_cells(X, reach, domain)
+    if cells is None:
+        return None
+    X, cell, shape, extent, lo = cells
+    grid, ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape, domain.periodic)
     if sum(int(c.sum()) for _, c in ranges) > _GRID_PAIRS_PER_POINT * len(X):
         return None
-    xy = [np.ascontiguousarray(X[order, k]) for k in (0, 1)]
-    d2 = min((_min_square_distance(xy, first, count, domain) for first, count in ranges),
-             default=np.inf)
     # along an axis of one cell (a box's) every point shares it: no limit there
     width = np.where(shape > 1, extent / shape, np.inf).min()
-    return float(np.sqrt(d2)), float(width) / _GRID_MARGIN
+    grid = grid._replace(lo=lo, per_length=_per_length(shape, extent), side=float(width) / _GRID_MARGIN)
+    return [np.ascontiguousarray(X[grid.order, k]) for k in (0, 1)], ranges, grid
+
+
+class _SortedGrid(NamedTuple):
+    """Points sorted by the cells of a grid: ``order``, and per flat cell the
+    ``start`` and ``count`` of its run in that order; the cells' geometry
+    (:func:`_grid_cells`); pairs closer than ``side`` lie in adjacent cells."""
+    order: np.ndarray
+    start: np.ndarray
+    count: np.ndarray
+    shape: np.ndarray
+    lo: np.ndarray = None
+    per_length: np.ndarray = None
+    side: float = 0.0
+
+    def cells(self, X):
+        """``(column, row)`` of each of the points X (clamped into the grid)."""
+        return np.clip((X - self.lo) * self.per_length, 0, self.shape - 1).astype(np.int64)
+
+
+class ClosePairs(NamedTuple):
+    """:func:`close_pairs`' answer: the pairs ``(i[k], j[k])``, ``i < j``, their
+    distances ``d``, the `reach` asked, and the grid that found them."""
+    i: np.ndarray
+    j: np.ndarray
+    d: np.ndarray
+    reach: float
+    grid: _SortedGrid
+
+
+def close_pairs(points, reach, domain=Domain.torus()):
+    """Every pair of points at most `reach` apart, with its exact distance (as
+    :func:`min_distance` measures it), or None for a clustered set (the grid of
+    cells this searches would hold too many pairs; a KD-tree serves there).
+
+    Returns
+    -------
+    ClosePairs or None
+
+    Examples
+    --------
+    >>> p = [[0.05, 0.5], [0.95, 0.5], [0.5, 0.5], [0.5, 0.1]]
+    >>> found = close_pairs(p, 0.2)
+    >>> found.i.tolist(), found.j.tolist(), np.round(found.d, 12).tolist()
+    ([0], [1], [0.1])
+    """
+    X = np.asarray(points, np.float64)
+    found = _grid_candidates(X, reach, domain)
+    if found is None:
+        return None
+    xy, ranges, grid = found
+    parts = []
+    for first, count in ranges:
+        i, j, d2 = _range_pairs(xy, first, count, domain)
+        d = np.sqrt(d2)
+        keep = d <= reach
+        i, j = grid.order[i[keep]], grid.order[j[keep]]
+        parts.append((np.minimum(i, j), np.maximum(i, j), d[keep]))
+    i, j, d = (np.concatenate(a) for a in zip(*parts))
+    return ClosePairs(i, j, d, float(reach), grid)
+
+
+def min_distance_since(points, before, pairs, domain=Domain.torus()):
+    """Smallest pairwise distance of `points` if it is at most ``pairs.reach``
+    (else ``inf``), exact, from the :func:`close_pairs` of an earlier state of them.
+
+    The pairs of points that did not move since `before` keep their
+    distances; the points that moved are searched again, among themselves
+    and in the cells of the earlier grid: after a few local moves, a small
+    part of a full search.
+
+    Parameters
+    ----------
+    points, before : (n, 2) array_like
+        The points now, and when `pairs` was found.
+    pairs : ClosePairs
+        ``close_pairs(before, reach, domain)``.
+    domain : Domain
+
+    Examples
+    --------
+    >>> p = np.array([[0.05, 0.5], [0.95, 0.5], [0.5, 0.5], [0.5, 0.1]])
+    >>> q = p.copy(); q[2] = [0.5, 0.25]
+    >>> round(min_distance_since(q, p, close_pairs(p, 0.2)), 12)
+    0.1
+    >>> q[0] = [0.5, 0.35]
+    >>> round(min_distance_since(q, p, close_pairs(p, 0.2)), 12)
+    0.1
+    """
+    X, old = (np.asarray(a, np.float64) for a in (points, before))
+    if domain.periodic:   # as close_pairs saw them, and the cells take them
+        X, old = domain.wrap(X), domain.wrap(old)
+    moved = np.any(X != old, axis=1)
+    still = ~(moved[pairs.i] | moved[pairs.j])
+    best = float(pairs.d[still].min(initial=np.inf))
+    M = np.flatnonzero(moved)
+    if len(M) >= 2:
+        best = min(best, min_distance_at_most(X[M], pairs.reach, domain))
+    if len(M):
+        best = min(best, _to_unmoved(X, M, moved, pairs, domain))
+    return best
+
+
+def _to_unmoved(X, M, moved, pairs, domain):
+    """Smallest distance at most ``pairs.reach`` from a point of `M` to a point that
+    did not move (``inf`` if none): those sit in the earlier grid's cells, and a
+    partner within its side lies in the 3 x 3 cells around a point's own."""
+    grid = pairs.grid
+    near = _neighbour_cells(grid.cells(X[M]), grid.shape, domain.periodic)
+    count = np.where(near >= 0, grid.count[near], 0).ravel()
+    i = np.repeat(np.repeat(M, len(_NEIGHBOURS)), count)
+    j = grid.order[_range_indices(grid.start[near].ravel(), count)]
+    keep = ~moved[j]
+    d = _pair_distances(X, i[keep], j[keep], domain)
+    return float(d[d <= pairs.reach].min(initial=np.inf))
 
 
 def _grid_cells(X, reach, domain):
-    """``(X, cell, shape, extent)``: the points (wrapped on a torus), each one's
+    """``(X, cell, shape, extent, lo)``: the points (wrapped on a torus), each one's
     ``(column, row)`` in a grid of ``shape`` cells of side at least ``reach``
-    over ``extent``, or None where a grid does not serve (non-finite points,
+    over ``extent`` from ``lo``, or None where a grid does not serve (non-finite points,
     fewer than 3 cells across a torus, where neighbour cells would repeat)."""
     if not np.all(np.isfinite(X)):
         return None
@@ -243,8 +368,13 @@ def _grid_cells(X, reach, domain):
     shape = np.maximum(np.floor(extent / side), 1).astype(np.int64)
     if domain.periodic and shape.min() < 3:
         return None
-    per_length = np.divide(shape, extent, out=np.zeros(2), where=extent > 0)
-    return X, np.minimum((X - lo) * per_length, shape - 1).astype(np.int64), shape, extent
+    per_length = _per_length(shape, extent)
+    return X, np.minimum((X - lo) * per_length, shape - 1).astype(np.int64), shape, extent, lo
+
+
+def _per_length(shape, extent):
+    """Cells per unit length along each axis (0 along an axis of no extent)."""
+    return np.divide(shape, extent, out=np.zeros(2), where=extent > 0)
 
 
 def ball_candidates(points, centres, reach, domain=Domain.torus()):
@@ -269,7 +399,7 @@ def ball_candidates(points, centres, reach, domain=Domain.torus()):
     grid = _grid_cells(np.asarray(points, np.float64), reach, domain)
     if grid is None:
         return None
-    _, cell, shape, _ = grid
+    _, cell, shape, _, _ = grid
     flat = cell[:, 0] * shape[1] + cell[:, 1]
     near = _neighbour_cells(cell[centres], shape, domain.periodic).ravel()
     inside = near >= 0
@@ -299,21 +429,41 @@ def _neighbour_cells(cell, shape, periodic):
 
 
 def _candidate_ranges(flat, shape, periodic):
-    """``(order, ranges)``: the points' order by cell, and per neighbour offset
-    ``(first, count)`` of each sorted point's partners (contiguous in that
-    order): the later points of its own cell, then all points of each of
-    half its neighbour cells."""
-    order = np.argsort(flat, kind="stable")
+    """``(grid, ranges)``: the points sorted by cell (a :class:`_SortedGrid` without
+    its geometry), and per neighbour offset ``(first, count)`` of each sorted
+    point's partners (contiguous in that order): the later points of its own
+    cell, then all points of each of half its neighbour cells."""
+    order = bucket_order(flat)
     own = flat[order]
     count = np.bincount(own, minlength=int(shape.prod()))
     start = np.cumsum(count) - count
     i = np.arange(len(own))
     ranges = [(i + 1, start[own] + count[own] - i - 1)]
+    grid = _SortedGrid(order, start, count, shape)
     count, start = count.reshape(tuple(shape)), start.reshape(tuple(shape))
     for offset in _HALF_NEIGHBOURS:
         n_count = _shifted(count, offset, periodic).ravel()
         ranges.append((_shifted(start, offset, periodic).ravel()[own], n_count[own]))
-    return order, ranges
+    return grid, ranges
+
+
+def bucket_order(bid):
+    """``np.argsort(bid, kind="stable")`` for non-negative integer bucket ids.
+
+    Below 2^32, as two passes of 16-bit keys (least significant first),
+    which numpy sorts stably by radix, several times faster than its merge
+    sort of 64-bit keys.
+
+    Examples
+    --------
+    >>> bucket_order(np.array([70000, 3, 70000, 0, 3])).tolist()
+    [3, 1, 4, 0, 2]
+    """
+    bid = np.asarray(bid)
+    if not len(bid) or bid.max() >= 2 ** 32:
+        return np.argsort(bid, kind="stable")
+    low = np.argsort((bid & 0xFFFF).astype(np.uint16), kind="stable")
+    return low[np.argsort((bid[low] >> 16).astype(np.uint16), kind="stable")]
 
 
 def _shifted(grid, offset, periodic):
@@ -332,21 +482,19 @@ def _range_indices(first, count):
     return np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
 
 
-def _min_square_distance(xy, first, count, domain):
-    """Smallest squared distance between each point i and the points
-    ``first[i] .. first[i] + count[i] - 1`` (``inf`` if none), as
-    :func:`_pair_distances` computes it (sqrt is monotone: the same minimum)."""
+def _range_pairs(xy, first, count, domain):
+    """``(i, j, d2)``: each point i paired with the points ``first[i] .. first[i] +
+    count[i] - 1``, and their squared distance as :func:`_pair_distances` computes it
+    (its square root is that distance, bit for bit)."""
     i = np.repeat(np.arange(len(first)), count)
-    if not len(i):
-        return np.inf
     j = _range_indices(first, count)
     d2 = np.zeros(len(i))
-    for k, (coord, size) in enumerate(zip(xy, domain.size)):
+    for coord, size in zip(xy, domain.size):
         d = coord[i] - coord[j]
         if domain.periodic:
             d -= np.round(d / size) * size
         d2 += d * d
-    return float(d2.min())
+    return i, j, d2
 
 
 def normalized_radius(points, domain=Domain.torus()):

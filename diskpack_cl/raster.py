@@ -21,9 +21,10 @@ from ._device import describe, get_context, group_size, padded, wait_for
 from ._kernels import build_program
 from ._timing import Stopwatch
 from .domain import Domain
+from .measures import bucket_order
 from .labels import cell_centroids
 
-__all__ = ["PowerRaster", "RasterResult", "auto_grid", "bucket_order"]
+__all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
 TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/power_diagram.cl)
@@ -36,25 +37,6 @@ MAX_GROUPS = 4096   # 8 x 8 work-groups per enqueue of power_labels (about 0.26 
 REDUCE_GROUP = 256
 #: Status bits of diskpack_cl/kernels/power_diagram.cl (ST_* in common.h): why a labelling is refused.
 STATUS = {"ring_limit": 1, "no_owner": 2}
-
-
-def bucket_order(bid):
-    """``np.argsort(bid, kind="stable")`` for non-negative integer bucket ids.
-
-    Below 2^32, as two passes of 16-bit keys (least significant first),
-    which numpy sorts stably by radix, several times faster than its merge
-    sort of 64-bit keys.
-
-    Examples
-    --------
-    >>> bucket_order(np.array([70000, 3, 70000, 0, 3])).tolist()
-    [3, 1, 4, 0, 2]
-    """
-    bid = np.asarray(bid)
-    if not len(bid) or bid.max() >= 2 ** 32:
-        return np.argsort(bid, kind="stable")
-    low = np.argsort((bid & 0xFFFF).astype(np.uint16), kind="stable")
-    return low[np.argsort((bid[low] >> 16).astype(np.uint16), kind="stable")]
 
 
 def auto_grid(n, domain, cells_per_site=16):

@@ -11,6 +11,7 @@ rho never decreases.
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +19,8 @@ import numpy as np
 from .domain import Domain
 from .engine import BACKENDS, make_engine
 from .options import check_fields, option
-from .measures import HEXAGONAL_CELL, coincident_pairs, hexagonal_radius, min_distance, normalized_radius
+from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius, min_distance,
+                       normalized_radius)
 
 __all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
            "RadiusResult", "STALL_GAIN", "OVER_RELAX"]
@@ -63,6 +65,11 @@ class RelaxOptions:
 #: within the seeds' spread), and leave 1.5-1.6 % of the points bad: the set goes
 #: local after them, one MIC call sooner.
 OVER_RELAX = (1.8, 1.2)
+
+#: The local route measures its last rho from the pairs closer than this many
+#: ``eps r_max``: none is left below 2, and the smallest is just above (a search
+#: at 2 would come back empty and grow, about 1 s at 1M).
+FINAL_REACH = 2.1
 
 #: Progress that counts: within ``patience`` iterations rho must grow by this
 #: share of itself or of its gap to eps (the smaller), or the run stops as
@@ -228,9 +235,12 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
                                       verify, stats, local)
     went_local = reason == "local"
     if went_local:   # the local route measures its last rho on the host itself
-        with engine.timings("local"):
+        with engine.timings("local"), ThreadPoolExecutor(1) as pool:
+            # the pairs that hold the last rho, searched on the other core meanwhile
+            reach = FINAL_REACH * eps * hexagonal_radius(len(X), dom.area)
+            before = X, pool.submit(close_pairs, X, reach, dom)
             X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience,
-                                           callback, stats, _local_solver(engine, dom))
+                                           callback, stats, _local_solver(engine, dom), before)
     seconds = time.perf_counter() - t_start
     if not went_local or reason != "eps":
         _certify_rho(X, rho[-1], dom)
@@ -339,10 +349,12 @@ def _local_solver(engine, dom):
     return None if cells is None else CellMIC(dom, device=cells.ctx)
 
 
-def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, solver=None):
+def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, solver=None,
+              before=None):
     """Local iterations after `it` global ones (their cells solved by `solver`, a
-    :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured on the host."""
-    from .measures import min_distance_at_most
+    :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured on the
+    host, from `before` where given: X then, and a future of its
+    :func:`~diskpack_cl.measures.close_pairs` within :data:`FINAL_REACH`."""
     from .relax_local import relax_local
 
     X, more, reason = relax_local(X, nn, eps, dom, max_iter=max_iter - it, patience=patience,
@@ -352,10 +364,20 @@ def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, sol
     rho = rho + more
     if reason == "eps":   # no pair left below 2 eps r_max: the exact rho is just above
         r_max = hexagonal_radius(len(X), dom.area)
-        # a query at 2 eps r_max itself would come back empty (about 1 s at 1M): start at
-        # the first grown bound; every pair within it is found, so the minimum is exact
-        rho[-1] = 0.5 * min_distance_at_most(X, 2.1 * eps * r_max, dom, grow=True) / r_max
+        rho[-1] = 0.5 * _final_distance(X, FINAL_REACH * eps * r_max, dom, before) / r_max
     return X, rho, it + len(more), reason
+
+
+def _final_distance(X, reach, dom, before):
+    """The exact smallest distance of X: from the pairs within `reach` of the earlier X
+    of `before` (:func:`_go_local`), where they serve, searching again only the points
+    moved since; else by a search of all of X."""
+    from .measures import min_distance_at_most, min_distance_since
+
+    pairs = None if before is None else before[1].result()
+    d = np.inf if pairs is None else min_distance_since(X, before[0], pairs, dom)
+    # every pair within the reach is found, so a minimum at most the reach is exact
+    return d if d <= reach else min_distance_at_most(X, reach, dom, grow=True)
 
 
 def _mic(engine, X, stats, certify=True):

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl import measures
-from diskpack_cl.measures import (coincident_pairs, hexagonal_radius, min_distance,
+from diskpack_cl.measures import (bucket_order, coincident_pairs, hexagonal_radius, min_distance,
                                   min_distance_at_most, nearest_neighbor_distances,
                                   normalized_radius)
 
@@ -212,6 +212,62 @@ def test_ball_candidates_hold_every_pair_within_reach_once(case, reach, seed):
         assert set(zip(i[near].tolist(), j[near].tolist())) <= set(got)
 
 
+@settings(max_examples=300, deadline=None)
+@given(case=awkward_sets(), reach=st.floats(1e-6, 0.4))
+def test_close_pairs_are_the_brute_force_pairs_within_reach(case, reach):
+    pts, dom = case
+    found = measures.close_pairs(pts, reach, dom)
+    if found is not None:    # None: too few cells on the torus or too many pairs
+        X = dom.wrap(pts) if dom.periodic else np.asarray(pts, np.float64)
+        i, j = np.triu_indices(len(X), 1)
+        d = measures._pair_distances(X, i, j, dom)
+        near = d <= reach
+        want = dict(zip(zip(i[near].tolist(), j[near].tolist()), d[near].tolist()))
+        got = dict(zip(zip(found.i.tolist(), found.j.tolist()), found.d.tolist()))
+        assert len(got) == len(found.i) and got == want
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=awkward_sets(), reach=st.floats(1e-6, 0.4), seed=st.integers(0, 2**32 - 1),
+       how=st.sampled_from(["far", "near", "onto", "none"]))
+def test_min_distance_since_is_the_brute_force_minimum(case, reach, seed, how):
+    """Points moved anywhere, a little, onto others or not at all after the pairs were
+    found: the minimum of the moved set, exact, wherever it is within the reach."""
+    pts, dom = case
+    before = np.asarray(pts, np.float64)
+    found = measures.close_pairs(before, reach, dom)
+    if found is None:
+        return
+    rng = np.random.default_rng(seed)
+    after = before.copy()
+    moved = rng.random(len(after)) < 0.3
+    if how == "far":
+        after[moved] = rng.random((moved.sum(), 2)) * dom.size
+    elif how == "near":
+        after[moved] += rng.normal(0, reach, (moved.sum(), 2))
+    elif how == "onto":
+        after[moved] = before[rng.integers(0, len(before), moved.sum())]
+    if not dom.periodic:
+        after = np.clip(after, 0, dom.size)
+    best = _all_pairs_min(after, dom)
+    got = measures.min_distance_since(after, before, found, dom)
+    assert got == (best if best <= reach else np.inf)
+
+
+def test_min_distance_since_drops_the_pairs_of_moved_points():
+    p = np.array([[0.05, 0.5], [0.95, 0.5], [0.5, 0.5], [0.5, 0.25]])
+    found = measures.close_pairs(p, 0.3)         # (0, 1) at 0.1, (2, 3) at 0.25
+    q = p.copy()
+    q[0] = [0.3, 0.8]                           # (0, 1) goes; (0, 2) at 0.36 is past the reach
+    assert measures.min_distance_since(q, p, found) == pytest.approx(0.25, abs=1e-15)
+    q[3] = [0.45, 0.8]                          # (2, 3) goes; moved (0, 3) at 0.15 comes
+    assert measures.min_distance_since(q, p, found) == pytest.approx(0.15, abs=1e-15)
+    q[1], q[3] = [0.5, 0.31], [0.1, 0.1]        # moved to unmoved: (1, 2) at 0.19
+    assert measures.min_distance_since(q, p, found) == pytest.approx(0.19, abs=1e-15)
+    q[2] = [0.75, 0.6]                          # nothing within the reach
+    assert measures.min_distance_since(q, p, found) == np.inf
+
+
 def test_ball_candidates_of_a_large_set_and_no_centre():
     dom = Domain.torus()
     pts = np.random.default_rng(3).random((20000, 2))
@@ -238,3 +294,12 @@ def test_min_distance_at_most_tiny_sets():
     assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1) == 0.0     # the seam: one point
     assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1, Domain.rect(1, 1)) == np.inf
     assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1, Domain.rect(1, 1), grow=True) == 1.0
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(0, 2 ** 32 + 5), max_size=300), st.sampled_from([2 ** 8, 2 ** 17, 2 ** 33]))
+def test_bucket_order_is_the_stable_argsort(ids, top):
+    """The two 16-bit radix passes give numpy's stable argsort, ties in index
+    order, for ids on both sides of 2^16 (and the plain sort from 2^32)."""
+    bid = np.array(ids, dtype=np.int64) % top
+    np.testing.assert_array_equal(bucket_order(bid), np.argsort(bid, kind="stable"))

@@ -536,14 +536,3 @@ def test_power_ties_go_to_the_lowest_index(ctx, order, layout):
     assert np.all(lab[:, 2] == 0) and np.array_equal(lab, rl)
     left = order.index(0)                         # the site on the left owns columns 0, 1
     assert np.all(lab[:, :2] == left) and np.all(lab[:, 3:] == 1 - left)
-
-
-@settings(max_examples=200, deadline=None)
-@given(st.lists(st.integers(0, 2 ** 32 + 5), max_size=300), st.sampled_from([2 ** 8, 2 ** 17, 2 ** 33]))
-def test_bucket_order_is_the_stable_argsort(ids, top):
-    """The two 16-bit radix passes give numpy's stable argsort, ties in index
-    order, for ids on both sides of 2^16 (and the plain sort from 2^32)."""
-    from diskpack_cl.raster import bucket_order
-
-    bid = np.array(ids, dtype=np.int64) % top
-    np.testing.assert_array_equal(bucket_order(bid), np.argsort(bid, kind="stable"))
