@@ -55,9 +55,16 @@ class Domain:
         Only the coordinates outside ``[0, size)`` (and -0.0) go through
         ``np.mod``: a relaxed set has few, and a million-point ``np.mod``
         costs about 20 ms a call.  Coordinates inside are unchanged by
-        ``np.mod`` anyway, so the result is the same bit for bit.
+        ``np.mod`` anyway, so the result is the same bit for bit.  A set
+        that lies inside already (as most sets wrapped again do) costs a
+        copy and two reductions, a fifth of the search for the outside ones.
         """
         q = np.array(points, dtype=np.float64)
+        q += 0.0   # -0.0 becomes 0.0, as np.mod makes it; every other value stays
+        flat = q.ravel()
+        if q.ndim == 2 and q.shape[1] == 2 and len(flat) and flat.min() >= 0.0 \
+                and flat.max() < min(self.width, self.height):   # NaN fails both
+            return q
         size = np.broadcast_to(self.size, q.shape)
         out = np.nonzero(np.signbit(q) | ~(q < size))   # ~(<): NaN too, as np.mod has it
         if len(out[0]):

@@ -97,6 +97,17 @@ def test_wrap_is_np_mod_bit_for_bit(rows, size):
     assert not np.may_share_memory(got, X)
 
 
+@pytest.mark.parametrize("size", [(1.0, 1.0), (2.0, 0.5)])
+def test_wrap_of_a_set_inside_is_a_copy_with_positive_zeros(size):
+    """The fast path of a set inside the domain: the same bits as np.mod, -0.0 too."""
+    dom = Domain(*size, periodic=True)
+    X = np.random.default_rng(1).random((1000, 2)) * 0.5
+    X[3] = [-0.0, 0.25]
+    got = dom.wrap(X)
+    assert got.view(np.uint64).tolist() == np.mod(X, dom.size).view(np.uint64).tolist()
+    assert not np.may_share_memory(got, X) and np.signbit(X[3, 0])
+
+
 def test_nearest_neighbor_distances_plane_and_torus():
     pts = [[0.05, 0.5], [0.95, 0.5], [0.5, 0.5]]
     assert nearest_neighbor_distances(pts).tolist() == pytest.approx([0.1, 0.1, 0.45])
