@@ -281,7 +281,10 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         Passed to :func:`diskpack_cl.relax_poisson`.
     local : bool
         Torus: end with local iterations (:func:`diskpack_cl.relax_poisson`),
-        2-3x faster from 10k points; ``False``: Algorithm 1 throughout.
+        2-3x faster from 10k points; in a box, iterations that take the
+        device's proven MICs without the host's re-solve of every cell (the
+        set returned is certified on the host either way); ``False``:
+        Algorithm 1 throughout.
     dim : {2, 3}
         3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
         centres of the maximal inscribed spheres of their 3D Voronoi cells

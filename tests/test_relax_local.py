@@ -230,6 +230,22 @@ def test_local_is_ignored_in_a_box():
     assert "local_iterations" not in a.stats
 
 
+def test_local_in_a_box_on_the_device_skips_the_host_resolve(ctx):
+    """A box's tail stays global, but with ``local`` its iterates take the kernel's
+    proven MICs without the host's re-solve, as the torus's global iterates do: the
+    same iterations, the points within rounding of Algorithm 1's, rho certified."""
+    box = Domain.rect(2.0, 1.0)
+    X = dart_throwing(3000, rel_radius=0.6, seed=11) * (2, 1)
+    fast = relax_poisson(X, 0.8, backend="opencl", device=ctx, domain=box, local=True)
+    plain = relax_poisson(X, 0.8, backend="opencl", device=ctx, domain=box)
+    assert "refine" not in fast.timings and "refine" in plain.timings
+    assert "local_iterations" not in fast.stats and fast.iterations == plain.iterations
+    np.testing.assert_allclose(fast.points, plain.points, rtol=0, atol=1e-9)
+    exact = min_distance_at_most(fast.points, 1.0, box, grow=True)
+    assert fast.rho[-1] == pytest.approx(exact / 2 / hexagonal_radius(3000, box.area), abs=1e-12)
+    assert fast.rho[-1] >= 0.8
+
+
 @settings(max_examples=40, deadline=None)
 @given(n=st.integers(2, 60), seed=st.integers(0, 2**32 - 1), periodic=st.booleans(),
        scale=st.floats(0.3, 3.0))
