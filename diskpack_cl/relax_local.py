@@ -91,24 +91,43 @@ def _pairs_near(X, C, r, domain):
     return i, j, _diff(X[i], X[j], domain)
 
 
-def _near(X, B, M, domain):
-    """Indices of a superset of the points within `M` of the points `B` (a grid of cells
-    at least `M` wide: the 3 x 3 cells around each of B's), and whether it is all of them."""
-    nx, ny = int(domain.width // M), int(domain.height // M)
-    if min(nx, ny) < 4:
-        return np.arange(len(X)), True
-    cx = np.minimum((X[:, 0] * (nx / domain.width)).astype(np.int64), nx - 1)
-    cy = np.minimum((X[:, 1] * (ny / domain.height)).astype(np.int64), ny - 1)
-    flat = cy * nx + cx     # a flat gather: about a third faster than grown[cy, cx] at 1M
-    mark = np.zeros((ny + 2, nx + 2), dtype=bool)
-    mark[cy[B] + 1, cx[B] + 1] = True
-    if domain.periodic:
-        mark[0], mark[-1], mark[:, 0], mark[:, -1] = mark[-2], mark[1], mark[:, -2], mark[:, 1]
-    grown = np.zeros((ny, nx), dtype=bool)
-    for dy in range(3):
-        for dx in range(3):
-            grown |= mark[dy:dy + ny, dx:dx + nx]
-    return np.flatnonzero(grown.ravel()[flat]), False
+class _Neighbourhoods:
+    """Each point's cell in a grid of cells at least `side` wide, kept as the points move:
+    :meth:`near` finds the points around a few without a pass over all of them (at 1M
+    points, 2 ms against 13 ms a local step)."""
+
+    def __init__(self, X, side, domain):
+        self.side, self.domain = side, domain
+        self.nx, self.ny = int(domain.width // side), int(domain.height // side)
+        self.n = len(X)
+        self.flat = self._cells(X) if min(self.nx, self.ny) >= 4 else None
+
+    def _cells(self, X):
+        cx = np.minimum((X[:, 0] * (self.nx / self.domain.width)).astype(np.int64), self.nx - 1)
+        cy = np.minimum((X[:, 1] * (self.ny / self.domain.height)).astype(np.int64), self.ny - 1)
+        return cy * self.nx + cx     # a flat gather: about a third faster than grown[cy, cx] at 1M
+
+    def moved(self, idx, X):
+        """The points `idx` of X moved: their cells again."""
+        if self.flat is not None:
+            self.flat[idx] = self._cells(X[idx])
+
+    def near(self, B):
+        """Indices of a superset of the points within `side` of the points `B` (the 3 x 3
+        cells around each of B's), and whether it is all of them."""
+        if self.flat is None:
+            return np.arange(self.n), True
+        nx, ny = self.nx, self.ny
+        cy, cx = np.divmod(self.flat[B], nx)
+        mark = np.zeros((ny + 2, nx + 2), dtype=bool)
+        mark[cy + 1, cx + 1] = True
+        if self.domain.periodic:
+            mark[0], mark[-1], mark[:, 0], mark[:, -1] = mark[-2], mark[1], mark[:, -2], mark[:, 1]
+        grown = np.zeros((ny, nx), dtype=bool)
+        for dy in range(3):
+            for dx in range(3):
+                grown |= mark[dy:dy + ny, dx:dx + nx]
+        return np.flatnonzero(grown.ravel()[self.flat]), False
 
 
 def _bad_pairs(X, B, d_eps, domain):
@@ -126,7 +145,14 @@ def _within(X, C, r, domain):
     return np.unique(j[(q * q).sum(axis=1) <= r * r])
 
 
-def local_step(X, B, eps, domain, halo=HALO, solver=None):
+def _reach(n, domain, halo):
+    """How far from a bad point a local step's sub-problem reaches: the moving
+    points' :data:`MOVE_RADIUS` and the `halo`, in spacings."""
+    s = 2.0 * hexagonal_radius(n, domain.area)
+    return MOVE_RADIUS * s + halo * s
+
+
+def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None):
     """One local iteration on the bad points `B`: move their neighbourhoods, in place.
 
     Parameters
@@ -143,6 +169,9 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None):
         Solves the moving cells on the device (:meth:`CellMIC.solve
         <diskpack_cl.cells.CellMIC.solve>` with `cells`, certified as by
         :func:`exact_mic`); None: :func:`exact_mic` on the host.
+    cells : _Neighbourhoods, optional
+        The points' cells from the last step (:func:`relax_local` keeps them;
+        None, or another halo's: found again).
 
     Returns
     -------
@@ -166,7 +195,9 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None):
     n = len(X)
     s = 2.0 * hexagonal_radius(n, domain.area)
     move = MOVE_RADIUS * s
-    S, everything = _near(X, B, move + halo * s, domain)
+    if cells is None or cells.side != _reach(n, domain, halo):
+        cells = _Neighbourhoods(X, _reach(n, domain, halo), domain)
+    S, everything = cells.near(B)
     pos = np.full(n, -1)
     pos[S] = np.arange(len(S))
     XS, BS = X[S], pos[B]
@@ -176,6 +207,7 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None):
     ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
     XS[A[ok]] = mic.centers[ok]
     X[S] = XS
+    cells.moved(S[A[ok]], X)
     i, j, d = _bad_pairs(XS, BS, 2.0 * eps * hexagonal_radius(n, domain.area), domain)
     return S[np.unique(np.concatenate([i, j]))], float(d.min()) if len(d) else np.inf, int((~ok).sum())
 
@@ -226,11 +258,14 @@ def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=Non
     X = np.array(X, dtype=np.float64)
     r_max = hexagonal_radius(len(X), domain.area)
     B = bad_points(nn, eps, domain.area)
-    rho, best, best_at, halo = [], float(nn.min()) / (2 * r_max), 0, HALO
+    rho, best, best_at, halo, held = [], float(nn.min()) / (2 * r_max), 0, HALO, 0
+    cells = None
     for it in range(max_iter):
         if not len(B):
             return X, rho, "eps"
-        B, d_min, held = local_step(X, B, eps, domain, halo, solver)
+        if cells is None or held:   # a grown halo, a wider grid
+            cells = _Neighbourhoods(X, _reach(len(X), domain, halo), domain)
+        B, d_min, held = local_step(X, B, eps, domain, halo, solver, cells)
         halo = halo * 1.5 if held else halo
         rho.append(min(d_min / (2 * r_max), eps))
         if callback is not None:

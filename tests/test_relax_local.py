@@ -11,7 +11,7 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.measures import hexagonal_radius, min_distance_at_most, nearest_neighbor_distances
 from diskpack_cl.relax import OVER_RELAX, _moved, relax_poisson
-from diskpack_cl.relax_local import _bad_pairs, _within, bad_points, local_step, relax_local
+from diskpack_cl.relax_local import HALO, _bad_pairs, _within, bad_points, local_step, relax_local
 from diskpack_cl.sampling import dart_throwing
 
 TORUS = Domain.torus()
@@ -126,6 +126,45 @@ def test_relax_local_reaches_eps_and_its_rho_is_the_brute_force_one(seed):
     assert reason == "eps" and [it for it, _ in seen] == list(range(1, len(rho) + 1))
     assert ref.min_distance_ref(Y, TORUS) >= 2 * eps * hexagonal_radius(n)
     assert np.all(np.diff(rho) >= 0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), step=st.floats(0.01, 0.3))
+def test_kept_cells_find_every_point_near_after_moves(seed, step):
+    """After points move (across cells too) and are reported, :meth:`near` still holds
+    every point within the grid's side of the chosen points."""
+    from diskpack_cl.relax_local import _Neighbourhoods
+
+    rng = np.random.default_rng(seed)
+    X = rng.random((600, 2))
+    cells = _Neighbourhoods(X, 0.08, TORUS)
+    moved = rng.choice(600, 200, replace=False)
+    X[moved] = TORUS.wrap(X[moved] + rng.normal(0, step, (200, 2)))
+    cells.moved(moved, X)
+    B = rng.choice(600, 5, replace=False)
+    S, everything = cells.near(B)
+    diff = X[B][:, None, :] - X[None, :, :]
+    diff -= np.round(diff)
+    within = np.flatnonzero((np.hypot(diff[..., 0], diff[..., 1]) <= 0.08).any(axis=0))
+    assert not everything and set(within.tolist()) <= set(S.tolist())
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_relax_local_keeps_the_cells_of_the_points_it_moves(seed):
+    """The grid cells kept from step to step give the steps that cells found anew give."""
+    n, eps = 20000, 0.78
+    X = dart_throwing(n, rel_radius=0.6, seed=seed)
+    Y, rho, reason = relax_local(X, nearest_neighbor_distances(X), eps, TORUS)
+    Z = X.copy()
+    B = bad_points(nearest_neighbor_distances(Z), eps, 1.0)
+    halo, again = HALO, []
+    while len(B):
+        B, d, held = local_step(Z, B, eps, TORUS, halo)
+        halo = halo * 1.5 if held else halo
+        again.append(min(d / (2 * hexagonal_radius(n)), eps))
+    assert reason == "eps" and len(rho) > 2
+    np.testing.assert_array_equal(Y, Z)
+    assert rho == again
 
 
 @pytest.mark.parametrize("n", [300, 3000])
