@@ -121,6 +121,31 @@ def test_relaxation_3d(box, ctx):
         assert np.all(np.diff(res.rho) >= -1e-12)
 
 
+@pytest.mark.parametrize("box", [None, "1x2x0.5"])
+def test_uncertified_iterates_3d(box, ctx, monkeypatch):
+    """certify=False: the device's proven spheres (within 1e-9 of the certified ones,
+    no host re-solve; cells it could not prove still go to exact_mis), the same
+    iterations; rho still the brute-force one."""
+    import diskpack_cl.cells3 as cells3
+
+    dom = as_box3(box)
+    X = np.random.default_rng(4).random((500, 3)) * dom.size
+    eng = CellMIC3(dom, ctx)
+    sure = eng.solve(X)
+    def refused(*args, **kwargs):
+        raise AssertionError("the host re-solved a cell")
+    monkeypatch.setattr(cells3, "refine_basis", refused)   # the first step of the host's check
+    fast = eng.solve(X, certify=False)
+    np.testing.assert_allclose(fast.radii, sure.radii, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.centers, sure.centers, rtol=0, atol=1e-9)
+    a = relax_poisson3(X, 0.75, domain=dom, device=ctx, certify=False)
+    monkeypatch.undo()
+    b = relax_poisson3(X, 0.75, domain=dom, device=ctx)
+    assert a.iterations == b.iterations and a.stop_reason == "eps"
+    np.testing.assert_allclose(a.points, b.points, rtol=0, atol=1e-8)
+    assert a.rho[-1] == pytest.approx(_brute_rho(a.points, dom), rel=1e-12)
+
+
 def test_3d_errors():
     with pytest.raises(ValueError, match=r"shape \(n, 3\)"):
         Domain3.torus().check(np.zeros((4, 2)))
