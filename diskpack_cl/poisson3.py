@@ -55,7 +55,7 @@ def normalized_radius3(points, domain=Domain3.torus()):
 
     X = domain.check(points)
     tree = cKDTree(X, boxsize=domain.size if domain.periodic else None)
-    d, _ = tree.query(X, k=2)
+    d, _ = tree.query(X, k=2, workers=-1)   # every core: half the time at 100k points
     return 0.5 * float(d[:, 1].min()) / fcc_radius(len(X), domain.volume)
 
 
