@@ -240,10 +240,54 @@ def exact_mis(points, domain, cells=None, *, k=64):
     >>> m.radii.shape, bool(np.all(m.radii > 0))
     ((30,), True)
     """
-    from scipy.spatial import cKDTree
-
     X = domain.check(points)
     cells = np.arange(len(X)) if cells is None else np.asarray(cells, dtype=np.intp)
+    if len(cells) * _FEW <= len(X):
+        found = _exact_mis_near(X, domain, cells, k)
+        if found is not None:
+            return found
+    return _exact_mis(X, domain, cells, k)
+
+
+#: :func:`exact_mis` of at most one cell in this many first solves them among the
+#: sites around them (:func:`_exact_mis_near`): the images and trees of all sites
+#: cost 0.3-0.45 s a call at 100 000 sites, for the one cell the kernel left.
+_FEW = 50
+#: How far around its cells' sites :func:`_exact_mis_near` keeps sites, in mean spacings,
+#: and how many it needs there (about 2000 in a set of even density).
+_NEAR_SPACINGS = 8.0
+_NEAR_SITES = 100
+
+
+def _exact_mis_near(X, domain, cells, k):
+    """:func:`exact_mis` of `cells` among the sites within :data:`_NEAR_SPACINGS` mean
+    spacings ``rho`` of theirs, or None where a sphere reaches too far for that.
+
+    A site farther than ``|q| + 2 R`` from a sphere's centre cannot cut it, so
+    one farther than ``rho >= 2 (|q| + R)`` from the cell's site cannot: the
+    sphere of the fewer sites is then feasible among all, and as its cell
+    holds the true one, it is the true one."""
+    from scipy.spatial import cKDTree
+
+    rho = _NEAR_SPACINGS * (domain.volume / len(X)) ** (1 / 3)
+    if domain.periodic and 2.0 * rho >= domain.size.min():
+        return None
+    tree = cKDTree(X, boxsize=domain.size if domain.periodic else None)
+    lists = tree.query_ball_point(X[cells], rho)
+    if min(map(len, lists)) < _NEAR_SITES:   # a lone site: its cell reaches far
+        return None
+    near = np.unique(np.concatenate(lists).astype(np.intp))
+    mis = _exact_mis(X[near], domain, np.searchsorted(near, cells), k)
+    q = mis.centers - X[cells]
+    if domain.periodic:
+        q -= np.round(q / domain.size) * domain.size
+    return mis if np.all(2.0 * (np.linalg.norm(q, axis=1) + mis.radii) <= rho) else None
+
+
+def _exact_mis(X, domain, cells, k):
+    """:func:`exact_mis` of `cells` among all the sites X."""
+    from scipy.spatial import cKDTree
+
     margin = _margin(domain, len(X))
     pos, _ = domain.images(X, margin)
     tree = cKDTree(pos)

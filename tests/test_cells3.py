@@ -5,6 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import diskpack_cl.cells3 as cells3
 from diskpack_cl.cells3 import CellMIC3, Domain3, certify_mis, exact_mis, inscribed_sphere_linprog
 from diskpack_cl.poisson3 import (FCC_DENSITY, as_box3, dart_throwing3, fcc_radius, normalized_radius3,
                                   relax_poisson3)
@@ -96,6 +97,37 @@ def test_exact_mis_and_certificate():
     assert certify_mis(X, m.centers, m.radii, dom).all()
     # a sphere one part in a million too large is refused
     assert not certify_mis(X, m.centers, m.radii * (1 + 1e-6), dom).all()
+
+
+@pytest.mark.parametrize("box", [None, "1x2x0.5"])
+def test_exact_mis_of_a_few_cells_among_many(box):
+    """A few cells of a large set are solved among the sites around them: the answers of
+    the whole set; an isolated site, whose sphere reaches past them, is solved among all."""
+    dom = as_box3(box)
+    rng = np.random.default_rng(7)
+    X = rng.random((20000, 3)) * dom.size
+    X = X[np.linalg.norm(X - 0.5 * dom.size, axis=1) > 0.35]
+    X = np.vstack([X, 0.5 * dom.size])                     # alone in a hole of radius 0.35
+    cells = np.array([3, 500, len(X) - 1])
+    few = exact_mis(X, dom, cells=cells)
+    for t, i in enumerate(cells):
+        alone = cells3._exact_mis(dom.check(X), dom, np.array([i]), 64)
+        assert few.radii[t] == pytest.approx(alone.radii[0], abs=1e-12)
+        np.testing.assert_allclose(few.centers[t], alone.centers[0], rtol=0, atol=1e-12)
+    assert few.radii[-1] > 0.17   # 2 R past the 8 spacings (0.32) kept around it
+    near = cells3._exact_mis_near(dom.check(X), dom, cells[:2], 64)
+    assert near is not None and cells3._exact_mis_near(dom.check(X), dom, cells, 64) is None
+    np.testing.assert_allclose(near.radii, few.radii[:2], rtol=0, atol=1e-12)
+
+
+def test_exact_mis_near_refuses_a_sphere_that_reaches_past_its_sites(monkeypatch):
+    X = np.random.default_rng(8).random((20000, 3))
+    wide = lambda S, dom, cells, k: cells3.MIS(S[cells], np.full(len(cells), 0.2))
+    monkeypatch.setattr(cells3, "_exact_mis", wide)   # 2 R = 0.4 past the 0.29 kept
+    assert cells3._exact_mis_near(X, Domain3.torus(), np.array([5]), 64) is None
+    narrow = lambda S, dom, cells, k: cells3.MIS(S[cells], np.full(len(cells), 0.1))
+    monkeypatch.setattr(cells3, "_exact_mis", narrow)
+    assert cells3._exact_mis_near(X, Domain3.torus(), np.array([5]), 64) is not None
 
 
 def test_fcc_rho():
