@@ -106,7 +106,7 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     for _ in range(max_batches):
         cand = rng.random((max(1024, 2 * (n - len(pts))), 3)) * (domain.size - 2 * inset) + inset
         if len(pts):
-            dist, _ = cKDTree(pts, boxsize=box).query(cand, distance_upper_bound=d)
+            dist, _ = cKDTree(pts, boxsize=box).query(cand, distance_upper_bound=d, workers=-1)
             cand = cand[dist >= d]
         cand = cand[_first_come(cand, d, box)] if len(cand) else cand
         pts = np.vstack([pts, cand[: n - len(pts)]])
