@@ -280,11 +280,11 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
     backend, device, max_iter, patience, callback :
         Passed to :func:`diskpack_cl.relax_poisson`.
     local : bool
-        Torus: end with local iterations (:func:`diskpack_cl.relax_poisson`),
-        2-3x faster from 10k points; in a box and in 3D, iterations that take
-        the device's proven MICs without the host's re-solve of every cell
-        (the set returned is measured exactly on the host either way);
-        ``False``: Algorithm 1 throughout, every cell certified.
+        2D: end with local iterations (:func:`diskpack_cl.relax_poisson`),
+        2-3x faster from 10k points; 3D: iterations that take the device's
+        proven spheres without the host's re-solve of every cell (the set
+        returned is measured exactly on the host either way); ``False``:
+        Algorithm 1 throughout, every cell certified.
     dim : {2, 3}
         3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
         centres of the maximal inscribed spheres of their 3D Voronoi cells

@@ -203,12 +203,12 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         the smallest MIC radius still never does after the first.
     local : bool
         Once few points are closer than ``2 eps r_max``, move only their
-        neighbourhoods (:mod:`diskpack_cl.relax_local`; torus only): rho never
-        decreases, far cheaper, but the iterates differ from Algorithm 1's.
-        The global iterations before then (in a box, all of them) take the
-        device's proven MICs without the host's re-solve of every cell
-        (unless `verify`): the rho returned is measured exactly on the host
-        in any case.  Their
+        neighbourhoods (:mod:`diskpack_cl.relax_local`): rho never
+        decreases there, far cheaper, but the iterates differ from
+        Algorithm 1's.  The global iterations before then take the device's
+        proven MICs without the host's re-solve of every cell (unless
+        `verify`): the rho returned is measured exactly on the host in any
+        case.  Their
         first moves are over-relaxed (:data:`OVER_RELAX`), so the set goes
         local an iteration sooner with the same spectrum.
 
@@ -260,11 +260,9 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
     """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason,
     nearest-neighbour distances)``; the reason ``"local"`` hands over to local iterations."""
     # an engine that gives nearest-neighbour distances gives rho with the MICs
-    # the local route measures the rho it returns on the host (in a box, where its tail
-    # stays global, too): its iterates need the device's proven MICs, not the host's
-    # re-solve of every cell (verify still has it)
+    # the local route measures the rho it returns on the host: its global iterates need
+    # the device's proven MICs, not the host's re-solve of every cell (verify still has it)
     certify = not local
-    local = local and dom.periodic
     step = _mic(engine, X, stats, certify) if engine.gives_nn else None
     nn = None if step is None else step.nn
     rho = [_rho(X, nn, verify, dom)]

@@ -26,6 +26,12 @@ in the sub-problem: a site farther than ``|q| + 2 R`` from the centre
 (``q`` the move) cannot, and the sub-problem holds every site within the
 halo of the point; a cell that reaches past it is not moved this time, and
 the halo grows for the next iteration.
+
+In a box both facts need the radii the bounds use, which a wall can take
+away (it cuts the disk of half the nearest-neighbour distance around a point
+near it): a point moves only where its MIC radius is at least half the
+set's smallest distance (a bad point) or ``d_eps / 2`` (any other).  On a
+torus every point has that.
 """
 
 from __future__ import annotations
@@ -152,7 +158,7 @@ def _reach(n, domain, halo):
     return MOVE_RADIUS * s + halo * s
 
 
-def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None):
+def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None):
     """One local iteration on the bad points `B`: move their neighbourhoods, in place.
 
     Parameters
@@ -172,6 +178,9 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None):
     cells : _Neighbourhoods, optional
         The points' cells from the last step (:func:`relax_local` keeps them;
         None, or another halo's: found again).
+    d_min : float, optional
+        The smallest distance of X (in a box: what a bad point's MIC radius
+        must reach twice to move; None: found from the bad pairs).
 
     Returns
     -------
@@ -205,11 +214,26 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None):
     mic = exact_mic(XS, domain=domain, cells=A) if solver is None else solver.solve(XS, cells=A)
     q = _diff(mic.centers, XS[A], domain)
     ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
+    held = int((~ok).sum())
+    d_eps = 2.0 * eps * hexagonal_radius(n, domain.area)
+    if not domain.periodic:
+        ok &= _wide_enough(XS, A, BS, mic.radii, d_eps, d_min, domain)
     XS[A[ok]] = mic.centers[ok]
     X[S] = XS
     cells.moved(S[A[ok]], X)
-    i, j, d = _bad_pairs(XS, BS, 2.0 * eps * hexagonal_radius(n, domain.area), domain)
-    return S[np.unique(np.concatenate([i, j]))], float(d.min()) if len(d) else np.inf, int((~ok).sum())
+    i, j, d = _bad_pairs(XS, BS, d_eps, domain)
+    return S[np.unique(np.concatenate([i, j]))], float(d.min()) if len(d) else np.inf, held
+
+
+def _wide_enough(XS, A, BS, radii, d_eps, d_min, domain):
+    """Which of the moving points `A` (MIC radii `radii`) may move in a box: a bad one
+    (of `BS`) where its radius is at least half the smallest distance `d_min` (None:
+    that of the bad pairs), any other where it is at least ``d_eps / 2``."""
+    if d_min is None:
+        d_min = float(_bad_pairs(XS, BS, d_eps, domain)[2].min(initial=d_eps))
+    bad = np.zeros(len(XS), dtype=bool)
+    bad[BS] = True
+    return radii >= 0.5 * np.where(bad[A], d_min, d_eps)
 
 
 def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=None, first=1,
@@ -258,14 +282,15 @@ def relax_local(X, nn, eps, domain, *, max_iter=1000, patience=100, callback=Non
     X = np.array(X, dtype=np.float64)
     r_max = hexagonal_radius(len(X), domain.area)
     B = bad_points(nn, eps, domain.area)
-    rho, best, best_at, halo, held = [], float(nn.min()) / (2 * r_max), 0, HALO, 0
+    d_min = float(nn.min())
+    rho, best, best_at, halo, held = [], d_min / (2 * r_max), 0, HALO, 0
     cells = None
     for it in range(max_iter):
         if not len(B):
             return X, rho, "eps"
         if cells is None or held:   # a grown halo, a wider grid
             cells = _Neighbourhoods(X, _reach(len(X), domain, halo), domain)
-        B, d_min, held = local_step(X, B, eps, domain, halo, solver, cells)
+        B, d_min, held = local_step(X, B, eps, domain, halo, solver, cells, d_min)
         halo = halo * 1.5 if held else halo
         rho.append(min(d_min / (2 * r_max), eps))
         if callback is not None:

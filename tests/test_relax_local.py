@@ -260,26 +260,60 @@ def test_only_the_local_routes_first_moves_are_over_relaxed():
     assert not np.array_equal(local, plain)
 
 
-def test_local_is_ignored_in_a_box():
-    box = Domain.rect(2.0, 1.0)
-    X = np.random.default_rng(5).random((200, 2)) * (2, 1)
-    a = relax_poisson(X, 0.75, backend="exact", domain=box, local=True)
-    b = relax_poisson(X, 0.75, backend="exact", domain=box)
-    np.testing.assert_array_equal(a.points, b.points)
-    assert "local_iterations" not in a.stats
+@pytest.mark.parametrize("size", [(2.0, 1.0), (1.0, 0.1)])
+def test_local_in_a_box_reaches_eps_certified(size):
+    """A box goes local too: the last rho is the brute-force one, and rho does not fall
+    in the local steps (their moving points have the MIC radii the bounds use)."""
+    box = Domain.rect(*size)
+    X = dart_throwing(3000, rel_radius=0.6, seed=9) * size
+    res = relax_poisson(X, 0.8, backend="exact", domain=box, local=True)
+    assert res.stop_reason == "eps" and res.stats["local_iterations"] > 0
+    k = res.stats["local_iterations"]
+    assert np.all(np.diff(res.rho[-k - 1:]) >= -1e-15)
+    exact = ref.min_distance_ref(res.points, box)
+    assert res.rho[-1] == pytest.approx(exact / 2 / hexagonal_radius(3000, box.area), abs=1e-12)
+    assert res.rho[-1] >= 0.8
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(8, 150), seed=st.integers(0, 2**32 - 1), eps=st.floats(0.6, 0.85),
+       size=st.sampled_from([(1.0, 1.0), (2.0, 0.5), (1.0, 0.1)]))
+def test_a_local_step_in_a_box_keeps_the_minimum_and_finds_every_bad_point(n, seed, eps, size):
+    """Walls cut the disks the bounds need: only the points with wide enough MICs move,
+    so the minimum distance does not fall and the bad points returned are all of them."""
+    box = Domain.rect(*size)
+    X = np.random.default_rng(seed).random((n, 2)) * size
+    D0 = _box_distances(X)
+    B = bad_points(D0.min(axis=1), eps, box.area)
+    if not len(B):
+        return
+    Y = X.copy()
+    B2, d, held = local_step(Y, B, eps, box, d_min=float(D0.min()))
+    D1 = _box_distances(Y)
+    assert D1.min() >= D0.min() * (1 - 1e-12)
+    np.testing.assert_array_equal(np.sort(B2), bad_points(D1.min(axis=1), eps, box.area))
+    Z = X.copy()   # the smallest distance found from the bad pairs when not given
+    local_step(Z, B, eps, box)
+    np.testing.assert_array_equal(Z, Y)
+
+
+def _box_distances(X):
+    D = np.hypot(*(X[:, None, :] - X[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(D, np.inf)
+    return D
 
 
 def test_local_in_a_box_on_the_device_skips_the_host_resolve(ctx):
-    """A box's tail stays global, but with ``local`` its iterates take the kernel's
-    proven MICs without the host's re-solve, as the torus's global iterates do: the
-    same iterations, the points within rounding of Algorithm 1's, rho certified."""
+    """A box's global iterates take the kernel's proven MICs without the host's re-solve,
+    as the torus's do, and its tail goes local; rho is certified."""
     box = Domain.rect(2.0, 1.0)
     X = dart_throwing(3000, rel_radius=0.6, seed=11) * (2, 1)
     fast = relax_poisson(X, 0.8, backend="opencl", device=ctx, domain=box, local=True)
+    again = relax_poisson(X, 0.8, backend="opencl", device=ctx, domain=box, local=True)
     plain = relax_poisson(X, 0.8, backend="opencl", device=ctx, domain=box)
+    np.testing.assert_array_equal(fast.points, again.points)
     assert "refine" not in fast.timings and "refine" in plain.timings
-    assert "local_iterations" not in fast.stats and fast.iterations == plain.iterations
-    np.testing.assert_allclose(fast.points, plain.points, rtol=0, atol=1e-9)
+    assert fast.stats["local_iterations"] > 0 and "local_iterations" not in plain.stats
     exact = min_distance_at_most(fast.points, 1.0, box, grow=True)
     assert fast.rho[-1] == pytest.approx(exact / 2 / hexagonal_radius(3000, box.area), abs=1e-12)
     assert fast.rho[-1] >= 0.8
