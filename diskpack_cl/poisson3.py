@@ -93,8 +93,6 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     >>> p.shape, bool(normalized_radius3(p) >= 0.65)
     ((500, 3), True)
     """
-    from scipy.spatial import cKDTree
-
     from .sampling import _first_come, _rng
 
     rng = _rng(seed)
@@ -102,17 +100,41 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     box = domain.size if domain.periodic else None
     # in a box, darts keep a radius from the walls, as relaxed points do
     inset = 0.0 if domain.periodic else min(0.5 * d, 0.25 * domain.size.min())
-    pts = np.empty((0, 3))
+    pts, kept = np.empty((0, 3)), _KeptDarts(d, box)
     for _ in range(max_batches):
         cand = rng.random((max(1024, 2 * (n - len(pts))), 3)) * (domain.size - 2 * inset) + inset
-        if len(pts):
-            dist, _ = cKDTree(pts, boxsize=box).query(cand, distance_upper_bound=d, workers=-1)
-            cand = cand[dist >= d]
+        cand = cand[kept.free(pts, cand)]
         cand = cand[_first_come(cand, d, box)] if len(cand) else cand
         pts = np.vstack([pts, cand[: n - len(pts)]])
         if len(pts) == n:
             break
     return pts
+
+
+class _KeptDarts:
+    """Which darts lie at least `d` from the points kept so far: the points in two
+    KD-trees, one of them kept while the points added since are fewer than a quarter
+    of it (at 100 000 points 30 batches rebuilt a tree of all points each, 1.4 s)."""
+
+    def __init__(self, d, box):
+        self.d, self.box, self.big, self.size = d, box, None, 0
+
+    def free(self, pts, cand):
+        """A mask of the darts `cand` at least d from every point of `pts` (the points so
+        far: those of the last call and more after them)."""
+        from scipy.spatial import cKDTree
+
+        if not len(pts):
+            return np.ones(len(cand), dtype=bool)
+        if self.big is None or len(pts) - self.size > 0.25 * self.size:
+            self.big, self.size = cKDTree(pts, boxsize=self.box), len(pts)
+        dist = self._nearest(self.big, cand)
+        if len(pts) > self.size:
+            dist = np.minimum(dist, self._nearest(cKDTree(pts[self.size:], boxsize=self.box), cand))
+        return dist >= self.d
+
+    def _nearest(self, tree, cand):
+        return tree.query(cand, distance_upper_bound=self.d, workers=-1)[0]
 
 
 def relax_poisson3(points, eps=0.75, *, domain=None, max_iter=1000, patience=100, backend="auto",

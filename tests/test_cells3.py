@@ -130,6 +130,25 @@ def test_exact_mis_near_refuses_a_sphere_that_reaches_past_its_sites(monkeypatch
     assert cells3._exact_mis_near(X, Domain3.torus(), np.array([5]), 64) is not None
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans())
+def test_kept_darts_match_one_tree_of_all_points(seed, periodic):
+    """The two trees of the 3D darts answer what one tree of all points answers, as
+    points are added batch after batch."""
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.poisson3 import _KeptDarts
+
+    rng = np.random.default_rng(seed)
+    box, d = (np.ones(3) if periodic else None), 0.08
+    kept, pts = _KeptDarts(d, box), np.empty((0, 3))
+    for size in rng.integers(1, 200, 8):
+        pts = np.vstack([pts, rng.random((size, 3))])
+        cand = rng.random((300, 3))
+        want = cKDTree(pts, boxsize=box).query(cand, distance_upper_bound=d)[0] >= d
+        np.testing.assert_array_equal(kept.free(pts, cand), want)
+
+
 def test_fcc_rho():
     # FCC: the cubic cell of side a holds 4 spheres of radius a / (2 sqrt 2): rho = 1
     m = 3
