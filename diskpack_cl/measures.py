@@ -226,13 +226,15 @@ def _grid_candidates(X, reach, domain):
     if cells is None:
         return None
     X, cell, shape, extent, lo = cells
-    grid, ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape, domain.periodic)
+    (order, start, count), ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape,
+                                                      domain.periodic)
     if sum(int(c.sum()) for _, c in ranges) > _GRID_PAIRS_PER_POINT * len(X):
         return None
     # along an axis of one cell (a box's) every point shares it: no limit there
     width = np.where(shape > 1, extent / shape, np.inf).min()
-    grid = grid._replace(lo=lo, per_length=_per_length(shape, extent), side=float(width) / _GRID_MARGIN)
-    return [np.ascontiguousarray(X[grid.order, k]) for k in (0, 1)], ranges, grid
+    grid = _SortedGrid(order, start, count, shape, lo, _per_length(shape, extent),
+                       float(width) / _GRID_MARGIN)
+    return [np.ascontiguousarray(X[order, k]) for k in (0, 1)], ranges, grid
 
 
 class _SortedGrid(NamedTuple):
@@ -243,9 +245,9 @@ class _SortedGrid(NamedTuple):
     start: np.ndarray
     count: np.ndarray
     shape: np.ndarray
-    lo: np.ndarray = None
-    per_length: np.ndarray = None
-    side: float = 0.0
+    lo: np.ndarray
+    per_length: np.ndarray
+    side: float
 
     def cells(self, X):
         """``(column, row)`` of each of the points X (clamped into the grid)."""
@@ -340,10 +342,8 @@ def _to_unmoved(X, M, moved, pairs, domain):
     did not move (``inf`` if none): those sit in the earlier grid's cells, and a
     partner within its side lies in the 3 x 3 cells around a point's own."""
     grid = pairs.grid
-    near = _neighbour_cells(grid.cells(X[M]), grid.shape, domain.periodic)
-    count = np.where(near >= 0, grid.count[near], 0).ravel()
-    i = np.repeat(np.repeat(M, len(_NEIGHBOURS)), count)
-    j = grid.order[_range_indices(grid.start[near].ravel(), count)]
+    near = _neighbour_cells(grid.cells(X[M]), grid.shape, domain.periodic).ravel()
+    i, j = _partners(M, near, grid.start, grid.count, grid.order)
     keep = ~moved[j]
     d = _pair_distances(X, i[keep], j[keep], domain)
     return float(d[d <= pairs.reach].min(initial=np.inf))
@@ -408,8 +408,14 @@ def ball_candidates(points, centres, reach, domain=Domain.torus()):
     order = np.flatnonzero(mark[flat])
     order = order[np.argsort(flat[order], kind="stable")]
     count = np.bincount(flat[order], minlength=len(mark))
-    start = np.cumsum(count) - count
-    count = np.where(inside, count[near], 0)
+    return _partners(centres, near, np.cumsum(count) - count, count, order)
+
+
+def _partners(centres, near, start, count, order):
+    """``(i, j)``: each of `centres` paired with every point of the 3 x 3 cells `near`
+    around it (flat indices, the centres' nine in a row, -1 for none), from points
+    sorted by cell: `order`, and per cell the `start` and `count` of its run."""
+    count = np.where(near >= 0, count[near], 0)
     i = np.repeat(np.repeat(centres, len(_NEIGHBOURS)), count)
     return i, order[_range_indices(start[near], count)]
 
@@ -429,22 +435,23 @@ def _neighbour_cells(cell, shape, periodic):
 
 
 def _candidate_ranges(flat, shape, periodic):
-    """``(grid, ranges)``: the points sorted by cell (a :class:`_SortedGrid` without
-    its geometry), and per neighbour offset ``(first, count)`` of each sorted
-    point's partners (contiguous in that order): the later points of its own
-    cell, then all points of each of half its neighbour cells."""
+    """``((order, start, count), ranges)``: the points' order by cell with each
+    flat cell's ``start`` and ``count`` in it, and per neighbour offset ``(first,
+    count)`` of each sorted point's partners (contiguous in that order): the
+    later points of its own cell, then all points of each of half its neighbour
+    cells."""
     order = bucket_order(flat)
     own = flat[order]
     count = np.bincount(own, minlength=int(shape.prod()))
     start = np.cumsum(count) - count
     i = np.arange(len(own))
     ranges = [(i + 1, start[own] + count[own] - i - 1)]
-    grid = _SortedGrid(order, start, count, shape)
+    runs = order, start, count
     count, start = count.reshape(tuple(shape)), start.reshape(tuple(shape))
     for offset in _HALF_NEIGHBOURS:
         n_count = _shifted(count, offset, periodic).ravel()
         ranges.append((_shifted(start, offset, periodic).ravel()[own], n_count[own]))
-    return grid, ranges
+    return runs, ranges
 
 
 def bucket_order(bid):

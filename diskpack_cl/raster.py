@@ -21,8 +21,8 @@ from ._device import describe, get_context, group_size, padded, wait_for
 from ._kernels import build_program
 from ._timing import Stopwatch
 from .domain import Domain
-from .measures import bucket_order
 from .labels import cell_centroids
+from .measures import bucket_order
 
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 

@@ -204,8 +204,9 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None
     n = len(X)
     s = 2.0 * hexagonal_radius(n, domain.area)
     move = MOVE_RADIUS * s
-    if cells is None or cells.side != _reach(n, domain, halo):
-        cells = _Neighbourhoods(X, _reach(n, domain, halo), domain)
+    reach = _reach(n, domain, halo)
+    if cells is None or cells.side != reach:
+        cells = _Neighbourhoods(X, reach, domain)
     S, everything = cells.near(B)
     pos = np.full(n, -1)
     pos[S] = np.arange(len(S))
