@@ -398,8 +398,9 @@ class CellMIC:
         if self.domain.periodic:
             centers = self.domain.wrap(centers)
         nn = out["mic"][:, 3].copy()
-        if np.any(flags & _NN):
-            nn = _nearest(X, self.domain, pos)
+        far = np.flatnonzero(flags & _NN)   # only these: a cell's nn must not depend on the others
+        if len(far):
+            nn[far] = _nearest(X, self.domain, pos[far])
         stats = {"flagged": int(np.count_nonzero(~proven)), "rejected": int(np.count_nonzero(proven & ~accepted)),
                  "fallback": int(len(bad)), "empty": int(empty.sum())}
         raised = flags[flags != 0]   # few cells: one pass over all, then over these
