@@ -380,21 +380,20 @@ class CellMIC:
         `certify`, the device's answers), exact_mic for the rest."""
         flags = out["codes"][:, 3]
         proven = (flags & ~_NN) == 0
-        Xc = np.take(X, pos, axis=0)
         if certify:
             q, R, accepted = self._refine(X, w, out, pos)
-        else:
-            q, R, accepted = out["mic"][:, :2] - Xc, out["mic"][:, 2].copy(), True
+            centers = np.take(X, pos, axis=0) + q
+        else:   # the kernel's centres, x_i + q as it rounded them
+            centers, R, accepted = out["mic"][:, :2].copy(), out["mic"][:, 2].copy(), True
         good = proven & accepted
         bad = np.nonzero(~good)[0]
         with self.timings("fallback"):
             if len(bad):
                 mic = exact_mic(X, w, self.domain, cells=pos[bad])
-                q[bad] = mic.centers - Xc[bad]
+                centers[bad] = mic.centers
                 R[bad] = mic.radii
         empty = R < 0
-        centers = Xc + q
-        centers[empty] = Xc[empty]
+        centers[empty] = X[pos[empty]]
         if self.domain.periodic:
             centers = self.domain.wrap(centers)
         nn = out["mic"][:, 3].copy()

@@ -280,9 +280,7 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     n = len(X)
     todo = _checked_cells(cells, n)
     c_est, r_est = _start_estimate(X, estimate)
-    q0 = c_est - X
-    if domain.periodic:
-        q0 -= np.round(q0 / (domain.width, domain.height)) * (domain.width, domain.height)
+    q0 = domain.shortest(c_est - X)
     q, R, stats = _solve_with_margin(X, w, q0, r_est, domain, todo, k)
     R, c_est, r_est = R[todo], c_est[todo], r_est[todo]
     centers, empty = _centres(X[todo], q[todo], R, domain)
@@ -886,9 +884,7 @@ def certify_disks(centers, radii, domain):
     i, j = np.concatenate(i), np.concatenate(j)
     keep = j > i
     i, j = i[keep], j[keep]
-    d = C[j] - C[i]
-    if domain.periodic:
-        d -= np.round(d / (domain.width, domain.height)) * (domain.width, domain.height)
+    d = domain.shortest(C[j] - C[i])
     gaps = np.hypot(d[:, 0], d[:, 1]) - r[i] - r[j]
     pair_gap = float(gaps.min()) if len(gaps) else np.inf
     disjoint = pair_gap > 0 if len(gaps) else True

@@ -183,9 +183,7 @@ def _kdtree_min_distance_at_most(points, bound, domain, grow):
 
 def _pair_distances(X, i, j, domain):
     """Distances of the pairs ``(i[k], j[k])`` of X (minimum image on a torus)."""
-    d = X[i] - X[j]
-    if domain.periodic:
-        d -= np.round(d / domain.size) * domain.size
+    d = domain.shortest(X[i] - X[j])
     return np.sqrt((d * d).sum(axis=1))
 
 

@@ -304,9 +304,7 @@ def _moved(X, mic, rho, domain, omega):
     if omega == 1.0:
         return mic.centers
     d_min = 2.0 * rho * hexagonal_radius(len(X), domain.area)
-    past = np.subtract(mic.centers, X)
-    if domain.periodic:   # the shortest offsets
-        past -= np.round(past / domain.size) * domain.size
+    past = domain.shortest(np.subtract(mic.centers, X))
     z = past.view(np.complex128).ravel()   # one (x, y) row a number: |z| without column copies
     z *= omega - 1.0
     length = np.abs(z)
