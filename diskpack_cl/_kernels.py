@@ -21,12 +21,16 @@ def kernel_dir() -> Path:
 def build_program(ctx, stem: str, defines: dict | None = None):
     """Build ``diskpack_cl/kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
 
+    ``INLINE_MATH`` is defined too: 1 on PoCL (see ``kernels/common.h``), else 0.
+
     Built programs and their kernel objects are memoized by
     (context, stem, defines), so each combination compiles once per process.
     """
     import pyopencl as cl
 
-    defines = dict(sorted((defines or {}).items()))
+    # PoCL's builtins stay calls unless the kernels use clang's (kernels/common.h)
+    pocl = "Portable Computing Language" in ctx.devices[0].platform.name
+    defines = dict(sorted({"INLINE_MATH": int(pocl), **(defines or {})}.items()))
     key = (ctx.int_ptr, stem, tuple(defines.items()))
     if key not in _PROGRAMS:
         src = (kernel_dir() / f"{stem}.cl").read_text()

@@ -81,7 +81,7 @@ static int inv3(const double *ax, const double *ay, double *inv)
 {
     const double c0 = ay[1] - ay[2], c1 = ay[2] - ay[0], c2 = ay[0] - ay[1];
     const double det = ax[0] * c0 + ax[1] * c1 + ax[2] * c2;
-    if (fabs(det) < 1e-14) return 0;
+    if (FABS(det) < 1e-14) return 0;
     const double id = 1.0 / det;
     /* columns of the inverse follow the rows of the matrix */
     inv[0] = c0 * id;                          inv[1] = c1 * id;                          inv[2] = c2 * id;
@@ -116,7 +116,7 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
         for (int k = 0; k < 3; ++k) {
             const double u = L->nx[e] * inv[k] + L->ny[e] * inv[3 + k] + inv[6 + k];
             if (u > 1e-12) {
-                const double r = fmax(inv[6 + k], 0.0) / u;
+                const double r = FMAX(inv[6 + k], 0.0) / u;
                 if (r < best) { best = r; out = k; }
             }
         }
@@ -173,7 +173,7 @@ static void start_basis(const clist *L, int first, int *b)
 static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
                      int code)
 {
-    const double len = sqrt(len2), il = 1.0 / len;
+    const double len = SQRT(len2), il = 1.0 / len;
     L->nx[k] = ax * il;
     L->ny[k] = ay * il;
     L->be[k] = 0.5 * (len2 - wj + wi) * il;
@@ -207,10 +207,10 @@ static int replace_slackest(clist *L, const int *b, const double *z, double sl,
 static double cutter_reach(const double *z, double wi, double wmax, double near_tol,
                            double *Rp, double *qn, double *reach2)
 {
-    *Rp = fmax(z[2], 0.0) + near_tol;
-    *qn = sqrt(z[0] * z[0] + z[1] * z[1]);
+    *Rp = FMAX(z[2], 0.0) + near_tol;
+    *qn = SQRT(z[0] * z[0] + z[1] * z[1]);
     *reach2 = (*qn + *Rp) * (*qn + *Rp) - wi;
-    return *Rp + sqrt(fmax(*reach2 + wmax, 0.0));
+    return *Rp + SQRT(FMAX(*reach2 + wmax, 0.0));
 }
 
 /* The cutter radius `rad` (from the global weight maximum) narrowed to the
@@ -221,8 +221,8 @@ static double cutter_reach(const double *z, double wi, double wmax, double near_
 static double local_reach(double rad, double Rp, double reach2, double wloc,
                           double cx, double cy, double4 win)
 {
-    const double inside = fmin(fmin(cx - win.x, win.z - cx), fmin(cy - win.y, win.w - cy));
-    return rad <= inside ? fmin(rad, Rp + sqrt(fmax(reach2 + wloc, 0.0))) : rad;
+    const double inside = FMIN(FMIN(cx - win.x, win.z - cx), FMIN(cy - win.y, win.w - cy));
+    return rad <= inside ? FMIN(rad, Rp + SQRT(FMAX(reach2 + wloc, 0.0))) : rad;
 }
 
 /* Add site (xj + shift) as a constraint of cell i, unless it coincides with
@@ -237,7 +237,7 @@ static void push_site(clist *L, double ax, double ay, double wj, double wi, int 
 static int site_code(int j, int qx, int qy, int *flag)
 {
     if (qx < -1 || qx > 1 || qy < -1 || qy > 1) *flag |= F_SHIFT;
-    return 9 * j + 3 * (clamp(qx, -1, 1) + 1) + (clamp(qy, -1, 1) + 1);
+    return 9 * j + 3 * (iclamp(qx, -1, 1) + 1) + (iclamp(qy, -1, 1) + 1);
 }
 
 /* Does the basis still hold one of the artificial half-planes? */
@@ -256,7 +256,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
 {
     for (int dy = -ring; dy <= ring; ++dy) {
         for (int dx = -ring; dx <= ring; ++dx) {
-            if (max(abs(dx), abs(dy)) != ring) continue;
+            if (imax(iabs(dx), iabs(dy)) != ring) continue;
             int cx = hx + dx, cy = hy + dy, qx, qy;
             if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int b = cy * nbx + cx;
@@ -264,23 +264,23 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                 if (t == s && qx == 0 && qy == 0) continue;
                 const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
                 const double len2 = ax * ax + ay * ay;
-                *nn2 = fmin(*nn2, len2);
+                *nn2 = FMIN(*nn2, len2);
                 if (L->m < GATHER_CAP) {
                     push_site(L, ax, ay, weight[t], wi, site_code(t, qx, qy, flag));
                     continue;
                 }
                 /* full: keep the GATHER_CAP nearest (before the first solve; after
                  * it the basis indexes the list), remember the nearest dropped */
-                const double len = sqrt(len2);
-                if (!replace) { *dropped = fmin(*dropped, len); continue; }
+                const double len = SQRT(len2);
+                if (!replace) { *dropped = FMIN(*dropped, len); continue; }
                 int far = fixed;
                 for (int k = fixed + 1; k < L->m; ++k)
                     if (L->d[k] > L->d[far]) far = k;
                 if (len < L->d[far]) {
-                    *dropped = fmin(*dropped, L->d[far]);
+                    *dropped = FMIN(*dropped, L->d[far]);
                     set_site(L, far, ax, ay, len2, weight[t], wi, site_code(t, qx, qy, flag));
                 } else {
-                    *dropped = fmin(*dropped, len);
+                    *dropped = FMIN(*dropped, len);
                 }
             }
         }
@@ -313,7 +313,7 @@ __kernel void cell_mic(
     const int s = cells[i];
     const double2 xi = site[s];
     const double wi = weight[s];
-    const int hx = clamp((int)(xi.x / bw), 0, nbx - 1), hy = clamp((int)(xi.y / bh), 0, nby - 1);
+    const int hx = iclamp((int)(xi.x / bw), 0, nbx - 1), hy = iclamp((int)(xi.y / bh), 0, nby - 1);
     int flag = 0;
     clist L;
     L.m = 0;
@@ -355,7 +355,7 @@ __kernel void cell_mic(
         cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
         /* every site within G of x_i is in the list: the rings cover their
          * width, and a full list kept the nearest, none dropped closer */
-        G = fmin(ring * fmin(bw, bh), dropped);
+        G = FMIN(ring * FMIN(bw, bh), dropped);
         /* grown far enough when the disk and its equal-weight neighbours'
          * reach are covered: the scan below then finds a few heavier cutters */
         if (!is_artificial(&L, b) && qn + 2.0 * Rp <= G) break;
@@ -364,14 +364,14 @@ __kernel void cell_mic(
                     fixed, 0, &L, &nn2, &dropped, &flag);
         flag |= dual_simplex(&L, b, z, tol);
     }
-    const double Gnn = ring * fmin(bw, bh);
+    const double Gnn = ring * FMIN(bw, bh);
 
     /* 3. prove it by scanning the buckets the proof ball touches */
     int round = 0;
     /* the list holds every site of the gathered rings until one is dropped
      * or evicted: the scan can skip those buckets */
     int inner = dropped == INFINITY;
-    double box = 2.0 * (ring + 1) * fmax(bw, bh);   /* half-width of the scan box */
+    double box = 2.0 * (ring + 1) * FMAX(bw, bh);   /* half-width of the scan box */
     const double wloc = bwloc[hy * nbx + hx];
     const double4 window = (double4)((hx - win) * bw, (hy - win) * bh,
                                      (hx + win + 1) * bw, (hy + win + 1) * bh);
@@ -383,34 +383,34 @@ __kernel void cell_mic(
         const int partial = rad > box;
         const double reach = partial ? box : rad;
         /* (clamped before the conversion: a huge ball must not overflow int) */
-        int x0 = (int)floor(fmax((cxp - reach) / bw, -1e8)), x1 = (int)floor(fmin((cxp + reach) / bw, 1e8));
-        int y0 = (int)floor(fmax((cyp - reach) / bh, -1e8)), y1 = (int)floor(fmin((cyp + reach) / bh, 1e8));
+        int x0 = (int)FLOOR(FMAX((cxp - reach) / bw, -1e8)), x1 = (int)FLOOR(FMIN((cxp + reach) / bw, 1e8));
+        int y0 = (int)FLOOR(FMAX((cyp - reach) / bh, -1e8)), y1 = (int)FLOOR(FMIN((cyp + reach) / bh, 1e8));
 #if PERIODIC
         /* past one period the images repeat: the scan would only grow */
         if (x1 - x0 > MAX_SCAN || y1 - y0 > MAX_SCAN) { flag |= F_SCAN_WIDE; break; }
 #else
         /* a rectangle has no buckets outside the grid: the whole grid at most */
-        x0 = max(x0, 0); y0 = max(y0, 0); x1 = min(x1, nbx - 1); y1 = min(y1, nby - 1);
+        x0 = imax(x0, 0); y0 = imax(y0, 0); x1 = imin(x1, nbx - 1); y1 = imin(y1, nby - 1);
 #endif
         int added = 0, waiting = 0;
         for (int by = y0; by <= y1; ++by) {
             for (int bx = x0; bx <= x1; ++bx) {
-                if (inner && abs(bx - hx) <= ring && abs(by - hy) <= ring) continue;
+                if (inner && iabs(bx - hx) <= ring && iabs(by - hy) <= ring) continue;
                 int cx = bx, cy = by, qx, qy;
                 if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
                 const int bb = cy * nbx + cx;
                 /* distance from the centre to this bucket (with its shift) */
                 const double ox = bx * bw, oy = by * bh;
-                const double ddx = fmax(fmax(ox - cxp, cxp - ox - bw), 0.0);
-                const double ddy = fmax(fmax(oy - cyp, cyp - oy - bh), 0.0);
-                const double bd = sqrt(ddx * ddx + ddy * ddy);
-                if (bd > Rp + sqrt(fmax(reach2 + bwmax[bb], 0.0))) continue;
+                const double ddx = FMAX(FMAX(ox - cxp, cxp - ox - bw), 0.0);
+                const double ddy = FMAX(FMAX(oy - cyp, cyp - oy - bh), 0.0);
+                const double bd = SQRT(ddx * ddx + ddy * ddy);
+                if (bd > Rp + SQRT(FMAX(reach2 + bwmax[bb], 0.0))) continue;
                 for (int t = bstart[bb]; t < bstart[bb + 1]; ++t) {
                     if (t == s && qx == 0 && qy == 0) continue;
                     const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
                     const double len2 = ax * ax + ay * ay;
                     if (len2 == 0.0) continue;
-                    const double len = sqrt(len2);
+                    const double len = SQRT(len2);
                     const double be = (len2 - weight[t] + wi) / (2.0 * len);
                     const double sl = be - (ax * z[0] + ay * z[1]) / len - z[2];
                     if (sl >= near_tol) continue;
@@ -460,5 +460,5 @@ __kernel void cell_mic(
     if (nnear > MAXNEAR) flag |= F_NEAR_FULL;
     for (int k = nnear; k < MAXNEAR; ++k) out[4 + k] = -9;
     out[0] = L.code[b[0]]; out[1] = L.code[b[1]]; out[2] = L.code[b[2]]; out[3] = flag;
-    mic[i] = (double4)(xi.x + z[0], xi.y + z[1], z[2], sqrt(nn2));
+    mic[i] = (double4)(xi.x + z[0], xi.y + z[1], z[2], SQRT(nn2));
 }

@@ -11,6 +11,34 @@
 #error "define PERIODIC to 0 or 1"
 #endif
 
+/* Scalar math without calls where the compiler is PoCL's.
+ *
+ * PoCL links its builtin library into a kernel after optimizing the kernel, so
+ * every sqrt, fmin, fmax, fabs, floor, clamp, min, max or abs stays a call, and
+ * around each call every live floating-point value is spilled (x86-64 keeps
+ * none across calls).  The host's build_program sets INLINE_MATH for PoCL:
+ * these are then clang's builtins, one instruction each; other compilers need
+ * not know those and get the OpenCL builtins.  Either gives the same IEEE
+ * results.  The integer ones are plain code everywhere. */
+#if INLINE_MATH
+#define SQRT(x) __builtin_sqrt(x)
+#define FMIN(a, b) __builtin_fmin(a, b)
+#define FMAX(a, b) __builtin_fmax(a, b)
+#define FABS(x) __builtin_fabs(x)
+#define FLOOR(x) __builtin_floor(x)
+#else
+#define SQRT(x) sqrt(x)
+#define FMIN(a, b) fmin(a, b)
+#define FMAX(a, b) fmax(a, b)
+#define FABS(x) fabs(x)
+#define FLOOR(x) floor(x)
+#endif
+
+inline int imin(int a, int b) { return a < b ? a : b; }
+inline int imax(int a, int b) { return a > b ? a : b; }
+inline int iabs(int a) { return a < 0 ? -a : a; }
+inline int iclamp(int a, int lo, int hi) { return a < lo ? lo : a > hi ? hi : a; }
+
 /* Bits of a kernel's status word (atomic_or), mirrored in diskpack_cl/raster.py:
  * the host refuses a result that has any. */
 #define ST_RING_LIMIT 1   /* a bucket ring search reached its limit */

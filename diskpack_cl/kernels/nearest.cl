@@ -27,7 +27,7 @@ __kernel void nearest(
     const int s = get_global_id(0);
     if (s >= n) return;
     const double2 xi = site[s];
-    const int hx = clamp((int)(xi.x / bw), 0, nbx - 1), hy = clamp((int)(xi.y / bh), 0, nby - 1);
+    const int hx = iclamp((int)(xi.x / bw), 0, nbx - 1), hy = iclamp((int)(xi.y / bh), 0, nby - 1);
     double nn2 = INFINITY;
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
@@ -37,10 +37,10 @@ __kernel void nearest(
             for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
                 if (t == s) continue;   /* its own periodic images are no other site */
                 const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
-                nn2 = fmin(nn2, ax * ax + ay * ay);
+                nn2 = FMIN(nn2, ax * ax + ay * ay);
             }
         }
     }
-    const double side = fmin(bw, bh);
-    nn[s] = nn2 <= side * side ? sqrt(nn2) : -1.0;
+    const double side = FMIN(bw, bh);
+    nn[s] = nn2 <= side * side ? SQRT(nn2) : -1.0;
 }
