@@ -56,8 +56,8 @@ static int solve4(const basis *B, int tr, const double *r, double *z)
     for (int k = 0; k < 4; k++) a[k][4] = r[k];
     for (int c = 0; c < 4; c++) {
         int p = c;
-        for (int k = c + 1; k < 4; k++) if (fabs(a[k][c]) > fabs(a[p][c])) p = k;
-        if (fabs(a[p][c]) < 1e-13) return 0;
+        for (int k = c + 1; k < 4; k++) if (FABS(a[k][c]) > FABS(a[p][c])) p = k;
+        if (FABS(a[p][c]) < 1e-13) return 0;
         for (int t = 0; t < 5; t++) { const double s = a[c][t]; a[c][t] = a[p][t]; a[p][t] = s; }
         for (int k = 0; k < 4; k++) {
             if (k == c) continue;
@@ -75,7 +75,7 @@ static void site_plane(__global const double *site, int j, int3 shift, double3 x
 {
     const double3 a = (double3)(site[3 * j], site[3 * j + 1], site[3 * j + 2])
                       + convert_double3(shift) * size - xi;
-    const double L = sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+    const double L = SQRT(a.x * a.x + a.y * a.y + a.z * a.z);
     nv[0] = a.x / L; nv[1] = a.y / L; nv[2] = a.z / L;
     *be = 0.5 * L;
 }
@@ -93,7 +93,7 @@ static double most_violated(__global const double *site, __global const int *sta
 #if PERIODIC
         shift = (int3)(floordiv(bx, nb.x), floordiv(by, nb.y), floordiv(bz, nb.z));
         b -= shift * nb;
-        if (any(abs(shift) > 2)) { *flag |= F_SHIFT; continue; }
+        if (iabs(shift.x) > 2 || iabs(shift.y) > 2 || iabs(shift.z) > 2) { *flag |= F_SHIFT; continue; }
 #else
         if (any(b < 0) || any(b >= nb)) continue;
 #endif

@@ -38,9 +38,9 @@ typedef float real;
 inline void add_run(__global long *acc, int l, int nsite, real m, real mx, real my)
 {
     if (!owned(l, nsite)) return;
-    atom_add(&acc[3 * l], (long)rint(m * FIX));
-    atom_add(&acc[3 * l + 1], (long)rint(mx * FIX));
-    atom_add(&acc[3 * l + 2], (long)rint(my * FIX));
+    atom_add(&acc[3 * l], (long)RINT(m * FIX));
+    atom_add(&acc[3 * l + 1], (long)RINT(mx * FIX));
+    atom_add(&acc[3 * l + 2], (long)RINT(my * FIX));
 }
 
 /* Offsets of site l's x and grid row py (periodic: the nearest image);
@@ -68,7 +68,7 @@ __kernel void cell_sums(
     const int iy = row0 + get_global_id(1);
     const int ix0 = get_global_id(0) * SEG;
     if (iy >= ny || ix0 >= nx) return;
-    const int ix1 = min(ix0 + SEG, nx);
+    const int ix1 = imin(ix0 + SEG, nx);
     const size_t base = (size_t)iy * nx;
     const real py = iy + (real)0.5;
     int cur = label[base + ix0];
@@ -85,7 +85,7 @@ __kernel void cell_sums(
         const real d = density[base + ix];
         real dx = (ix + (real)0.5) - sx;
 #if PERIODIC
-        dx -= nx * rint(dx / nx);
+        dx -= nx * RINT(dx / nx);
 #endif
         m += d;
         mx += d * dx;
@@ -150,8 +150,8 @@ void power_sums_tile(
             const real d = density[base + gx0 + c];
             real dx = (gx0 + c + (real)0.5) - sx, dy = py - sy;
 #if PERIODIC
-            dx -= nx * rint(dx / nx);
-            dy -= ny * rint(dy / ny);
+            dx -= nx * RINT(dx / nx);
+            dy -= ny * RINT(dy / ny);
 #endif
             m += d;
             mx += d * dx;

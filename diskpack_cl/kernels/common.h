@@ -21,17 +21,25 @@
  * not know those and get the OpenCL builtins.  Either gives the same IEEE
  * results.  The integer ones are plain code everywhere. */
 #if INLINE_MATH
-#define SQRT(x) __builtin_sqrt(x)
-#define FMIN(a, b) __builtin_fmin(a, b)
-#define FMAX(a, b) __builtin_fmax(a, b)
-#define FABS(x) __builtin_fabs(x)
-#define FLOOR(x) __builtin_floor(x)
+#define MATH1(F, B) \
+    inline __attribute__((overloadable)) float F(float x) { return B##f(x); } \
+    inline __attribute__((overloadable)) double F(double x) { return B(x); }
+#define MATH2(F, B) \
+    inline __attribute__((overloadable)) float F(float x, float y) { return B##f(x, y); } \
+    inline __attribute__((overloadable)) double F(double x, double y) { return B(x, y); }
+MATH1(SQRT, __builtin_sqrt)
+MATH1(FABS, __builtin_fabs)
+MATH1(FLOOR, __builtin_floor)
+MATH1(RINT, __builtin_rint)
+MATH2(FMIN, __builtin_fmin)
+MATH2(FMAX, __builtin_fmax)
 #else
 #define SQRT(x) sqrt(x)
-#define FMIN(a, b) fmin(a, b)
-#define FMAX(a, b) fmax(a, b)
 #define FABS(x) fabs(x)
 #define FLOOR(x) floor(x)
+#define RINT(x) rint(x)
+#define FMIN(a, b) fmin(a, b)
+#define FMAX(a, b) fmax(a, b)
 #endif
 
 inline int imin(int a, int b) { return a < b ? a : b; }
@@ -54,9 +62,9 @@ inline float len2(float dx, float dy) { return dx * dx + dy * dy; }
 /* Distance from point (px,py) to the axis-aligned box [x0,x1] x [y0,y1]. */
 inline float box_dist(float px, float py, float x0, float y0, float x1, float y1)
 {
-    float dx = fmax(fmax(x0 - px, px - x1), 0.0f);
-    float dy = fmax(fmax(y0 - py, py - y1), 0.0f);
-    return sqrt(dx * dx + dy * dy);
+    float dx = FMAX(FMAX(x0 - px, px - x1), 0.0f);
+    float dy = FMAX(FMAX(y0 - py, py - y1), 0.0f);
+    return SQRT(dx * dx + dy * dy);
 }
 
 /* Floor division for bucket indices that may leave the grid on a torus. */

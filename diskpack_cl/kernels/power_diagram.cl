@@ -53,7 +53,7 @@
                          wmax, cpos, cw, cid, status);                                  \
     barrier(CLK_LOCAL_MEM_FENCE);                                                       \
     const int total = count_l;                                                          \
-    const int m = min(total - chunk * CAP, CAP)
+    const int m = imin(total - chunk * CAP, CAP)
 
 __kernel __attribute__((reqd_work_group_size(TILE, TILE, 1)))
 void power_labels(
@@ -77,12 +77,12 @@ void power_labels(
     const float hx = W / nx, hy = H / ny;
     /* out-of-range work items shadow a real grid cell so that every work
        item runs the same loops (they write nothing) */
-    const float px = (min(ix, nx - 1) + 0.5f) * hx, py = (min(iy, ny - 1) + 0.5f) * hy;
+    const float px = (imin(ix, nx - 1) + 0.5f) * hx, py = (imin(iy, ny - 1) + 0.5f) * hy;
     /* the tile's grid-cell centres span this box */
     /* (not get_group_id: the host enqueues bands of tile rows with a global offset) */
     const int gx0 = ix - lx, gy0 = iy - ly;
     const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
-    const float x1 = (min(gx0 + TILE, nx) - 0.5f) * hx, y1 = (min(gy0 + TILE, ny) - 0.5f) * hy;
+    const float x1 = (imin(gx0 + TILE, nx) - 0.5f) * hx, y1 = (imin(gy0 + TILE, ny) - 0.5f) * hy;
     /* float rounding must never drop a needed site: pad the bounds */
     const float pad = 1e-4f * (hx * hx + hy * hy);
 
@@ -123,30 +123,30 @@ void power_labels(
 
     /* pass 2: distance to the nearest bounding line of the owner's cell */
     const float xi = best_x.x, yi = best_x.y, wi = best_w;
-    const float ri = sqrt(len2(px - xi, py - yi));
+    const float ri = SQRT(len2(px - xi, py - yi));
 #if PERIODIC
     /* the owner's own images bound its cell to half a period around it */
-    float D = 0.5f * fmin(W, H);
+    float D = 0.5f * FMIN(W, H);
     int D_id = best_id;
 #else
-    float D = fmin(fmin(px, W - px), fmin(py, H - py));
+    float D = FMIN(FMIN(px, W - px), FMIN(py, H - py));
     int D_id = -1;
 #endif
     if (second_id >= 0) {
-        const float sep = sqrt(len2(second_x.x - xi, second_x.y - yi));
+        const float sep = SQRT(len2(second_x.x - xi, second_x.y - yi));
         if (sep > 0.0f) {
             const float dj = (second - best) / (2.0f * sep);
             if (dj < D) { D = dj; D_id = second_id; }
         }
     }
     /* gather radius for the whole tile: site j matters for p only within
-       D + sqrt((D + ri)^2 + w_j - w_i); take the tile's largest D + ri
+       D + SQRT((D + ri)^2 + w_j - w_i); take the tile's largest D + ri
        and the smallest w_i, and add w_j per site in the gather */
     red[lid] = D + ri;
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid == 0) {
         float a = 0.0f;
-        for (int t = 0; t < TILE * TILE; ++t) a = fmax(a, red[t]);
+        for (int t = 0; t < TILE * TILE; ++t) a = FMAX(a, red[t]);
         bound_l = a;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
@@ -156,19 +156,19 @@ void power_labels(
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid == 0) {
         float wlo = INFINITY;
-        for (int t = 0; t < TILE * TILE; ++t) wlo = fmin(wlo, red[t]);
+        for (int t = 0; t < TILE * TILE; ++t) wlo = FMIN(wlo, red[t]);
         bound_l = wlo;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     const float wlo = bound_l;
     /* |p - x_j| <= A + sqrt(A^2 + w_j - wlo), and boxdist <= |p - x_j| */
-    const float g1 = A * (1.0f + 1e-5f) + sqrt(pad), g2 = A * A * (1.0f + 1e-4f) + pad - wlo;
+    const float g1 = A * (1.0f + 1e-5f) + SQRT(pad), g2 = A * A * (1.0f + 1e-4f) + pad - wlo;
     for (int chunk = 0; ; ++chunk) {
         barrier(CLK_LOCAL_MEM_FENCE);
         GATHER_CHUNK(GATHER_DIST, g1, g2);
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
-            const float sep = sqrt(len2(s.x - xi, s.y - yi));
+            const float sep = SQRT(len2(s.x - xi, s.y - yi));
             if (sep == 0.0f) continue;      /* the owner itself (or a duplicate) */
             const float dj = (len2(px - s.x, py - s.y) - cw[c] - best) / (2.0f * sep);
             if (dj < D || (dj == D && cid[c] < D_id)) { D = dj; D_id = cid[c]; }
@@ -176,7 +176,7 @@ void power_labels(
         if (total <= (chunk + 1) * CAP) break;
     }
     if (valid) {
-        dist[pix] = fmax(D, 0.0f);
+        dist[pix] = FMAX(D, 0.0f);
         nbr[pix] = D_id;
     }
 }
@@ -195,7 +195,7 @@ void power_labels_tile(
     if (gx0 >= nx || gy0 >= ny) return;
     int8 best_id[TH];
     tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
-    const int cols = min(TW, nx - gx0);
+    const int cols = imin(TW, nx - gx0);
     for (int r = 0; r < TH && gy0 + r < ny; ++r) {
         __global int *row = label + (size_t)(gy0 + r) * nx + gx0;
         if (cols == TW) {

@@ -24,9 +24,9 @@
 inline float boxbox(float ax0, float ay0, float ax1, float ay1,
                     float bx0, float by0, float bx1, float by1)
 {
-    const float dx = fmax(fmax(bx0 - ax1, ax0 - bx1), 0.0f);
-    const float dy = fmax(fmax(by0 - ay1, ay0 - by1), 0.0f);
-    return sqrt(dx * dx + dy * dy);
+    const float dx = FMAX(FMAX(bx0 - ax1, ax0 - bx1), 0.0f);
+    const float dy = FMAX(FMAX(by0 - ay1, ay0 - by1), 0.0f);
+    return SQRT(dx * dx + dy * dy);
 }
 
 /* Rings a gather walks at most.  A rectangle's rings leave the grid after
@@ -38,9 +38,9 @@ inline float boxbox(float ax0, float ay0, float ax1, float ay1,
 inline int gather_limit(int nbx, int nby, int span)
 {
 #if PERIODIC
-    return 2 * (max(nbx, nby) + span) + 4;
+    return 2 * (imax(nbx, nby) + span) + 4;
 #else
-    return max(nbx, nby) + 1;
+    return imax(nbx, nby) + 1;
 #endif
 }
 
@@ -60,10 +60,10 @@ inline int gather(int mode, float bound, float bound2, int skip,
                   __local float2 *cpos, __local float *cw, __local int *cid,
                   __global int *status)
 {
-    const int bx0 = clamp((int)floor(x0 / bw), -(1 << 20), 1 << 20);
-    const int by0 = clamp((int)floor(y0 / bh), -(1 << 20), 1 << 20);
-    const int bx1 = (int)floor(x1 / bw), by1 = (int)floor(y1 / bh);
-    const int rmax = gather_limit(nbx, nby, max(bx1 - bx0, by1 - by0));
+    const int bx0 = iclamp((int)FLOOR(x0 / bw), -(1 << 20), 1 << 20);
+    const int by0 = iclamp((int)FLOOR(y0 / bh), -(1 << 20), 1 << 20);
+    const int bx1 = (int)FLOOR(x1 / bw), by1 = (int)FLOOR(y1 / bh);
+    const int rmax = gather_limit(nbx, nby, imax(bx1 - bx0, by1 - by0));
     int total = 0;
     int r = 0;
     for (; r <= rmax; ++r) {
@@ -78,10 +78,10 @@ inline int gather(int mode, float bound, float bound2, int skip,
             if (by0 - r < 0) gb = INFINITY;
             if (by1 + r >= nby) gt = INFINITY;
 #endif
-            const float gap = fmin(fmin(gl, gr), fmin(gb, gt));
+            const float gap = FMIN(FMIN(gl, gr), FMIN(gb, gt));
             if (gap > 0.0f) {
                 if (mode == GATHER_OWNER && gap * gap - wmax > bound) break;
-                if (mode == GATHER_DIST && gap > bound + sqrt(fmax(bound2 + wmax, 0.0f))) break;
+                if (mode == GATHER_DIST && gap > bound + SQRT(FMAX(bound2 + wmax, 0.0f))) break;
             }
 #if !PERIODIC
             if (bx0 - r < 0 && by0 - r < 0 && bx1 + r >= nbx && by1 + r >= nby) break;
@@ -93,15 +93,15 @@ inline int gather(int mode, float bound, float bound2, int skip,
            images have rings far longer than the grid is wide) */
         int cy_lo = by0 - r, cy_hi = by1 + r;
 #if !PERIODIC
-        cy_lo = max(cy_lo, 0);
-        cy_hi = min(cy_hi, nby - 1);
+        cy_lo = imax(cy_lo, 0);
+        cy_hi = imin(cy_hi, nby - 1);
 #endif
         for (int cy0 = cy_lo; cy0 <= cy_hi; ++cy0) {
             const int edge_row = (r == 0 || cy0 == by0 - r || cy0 == by1 + r);
             const int step = edge_row ? 1 : (bx1 - bx0 + 2 * r);
             int cx_lo = bx0 - r, cx_hi = bx1 + r;
 #if !PERIODIC
-            if (edge_row) { cx_lo = max(cx_lo, 0); cx_hi = min(cx_hi, nbx - 1); }
+            if (edge_row) { cx_lo = imax(cx_lo, 0); cx_hi = imin(cx_hi, nbx - 1); }
 #endif
             for (int cx0 = cx_lo; cx0 <= cx_hi; cx0 += (step > 0 ? step : 1)) {
                 int cx = cx0, cy = cy0;
@@ -112,14 +112,14 @@ inline int gather(int mode, float bound, float bound2, int skip,
                 const float d = boxbox(x0, y0, x1, y1, ex0, ey0, ex0 + bw, ey0 + bh);
                 const float wb = bucket_wmax[b];
                 if (mode == GATHER_OWNER && d * d - wb > bound) continue;
-                if (mode == GATHER_DIST && d > bound + sqrt(fmax(bound2 + wb, 0.0f))) continue;
+                if (mode == GATHER_DIST && d > bound + SQRT(FMAX(bound2 + wb, 0.0f))) continue;
                 for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
                     const float2 s = site[k];
                     const float xs = s.x + sx, ys = s.y + sy;
                     const float ds = box_dist(xs, ys, x0, y0, x1, y1);
                     const float wk = weight[k];
                     const int pass = (mode == GATHER_OWNER) ? (ds * ds - wk <= bound)
-                                                            : (ds <= bound + sqrt(fmax(bound2 + wk, 0.0f)));
+                                                            : (ds <= bound + SQRT(FMAX(bound2 + wk, 0.0f)));
                     if (!pass) continue;
                     const int slot = total - skip;
                     if (slot >= 0 && slot < CAP) {
@@ -148,22 +148,22 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
                         __global const int *bucket_start,
                         int nbx, int nby, float bw, float bh, float W, float H)
 {
-    const int bx = clamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
-    const int by = clamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
+    const int bx = iclamp((int)(0.5f * (x0 + x1) / bw), 0, nbx - 1);
+    const int by = iclamp((int)(0.5f * (y0 + y1) / bh), 0, nby - 1);
     float U1 = INFINITY, U2 = INFINITY;
-    const int rmax = max(nbx, nby) + 1;
+    const int rmax = imax(nbx, nby) + 1;
     for (int r = 0; (U2 == INFINITY || r <= 1) && r <= rmax; ++r) {
         /* ring r only (its perimeter), clipped to the grid in a rectangle */
         int dy_lo = -r, dy_hi = r;
 #if !PERIODIC
-        dy_lo = max(dy_lo, -by);
-        dy_hi = min(dy_hi, nby - 1 - by);
+        dy_lo = imax(dy_lo, -by);
+        dy_hi = imin(dy_hi, nby - 1 - by);
 #endif
         for (int dy = dy_lo; dy <= dy_hi; ++dy) {
             const int edge = (dy == -r || dy == r);
             int dx_lo = -r, dx_hi = r;
 #if !PERIODIC
-            if (edge) { dx_lo = max(dx_lo, -bx); dx_hi = min(dx_hi, nbx - 1 - bx); }
+            if (edge) { dx_lo = imax(dx_lo, -bx); dx_hi = imin(dx_hi, nbx - 1 - bx); }
 #endif
             for (int dx = dx_lo; dx <= dx_hi; dx += (edge ? 1 : 2 * r)) {
                 int cx = bx + dx, cy = by + dy;
@@ -172,15 +172,15 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
                 const int b = cy * nbx + cx;
                 for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
                     const float xs = site[k].x + sx, ys = site[k].y + sy;
-                    const float fx = fmax(fabs(x0 - xs), fabs(x1 - xs));
-                    const float fy = fmax(fabs(y0 - ys), fabs(y1 - ys));
+                    const float fx = FMAX(FABS(x0 - xs), FABS(x1 - xs));
+                    const float fy = FMAX(FABS(y0 - ys), FABS(y1 - ys));
                     const float u = fx * fx + fy * fy - weight[k];
                     if (u < U1) { U2 = U1; U1 = u; } else if (u < U2) { U2 = u; }
                 }
             }
         }
     }
-    return U2 + pad + 1e-5f * fabs(U2);
+    return U2 + pad + 1e-5f * FABS(U2);
 }
 
 /* The first arguments of both labelling kernels (power_labels and
@@ -221,7 +221,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
 {
     const float hx = W / nx, hy = H / ny;
     const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
-    const float x1 = (min(gx0 + TW, nx) - 0.5f) * hx, y1 = (min(gy0 + TH, ny) - 0.5f) * hy;
+    const float x1 = (imin(gx0 + TW, nx) - 0.5f) * hx, y1 = (imin(gy0 + TH, ny) - 0.5f) * hy;
     const float pad = 1e-4f * (hx * hx + hy * hy);
     const float U = tile_bound(x0, y0, x1, y1, pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
 
@@ -231,7 +231,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
     float py[TH];
     float8 best[TH];
     for (int r = 0; r < TH; ++r) {
-        py[r] = (min(gy0 + r, ny - 1) + 0.5f) * hy;
+        py[r] = (imin(gy0 + r, ny - 1) + 0.5f) * hy;
         best[r] = (float8)(INFINITY);
         best_id[r] = (int8)(INT_MAX);
     }
@@ -239,7 +239,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
         const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
                                  site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
                                  cpos, cw, cid, status);
-        const int m = min(total - chunk * CAP, CAP);
+        const int m = imin(total - chunk * CAP, CAP);
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
             const float wc = cw[c];
