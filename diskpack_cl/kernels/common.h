@@ -18,8 +18,8 @@
  * around each call every live floating-point value is spilled (x86-64 keeps
  * none across calls).  The host's build_program sets INLINE_MATH for PoCL:
  * these are then clang's builtins, one instruction each; other compilers need
- * not know those and get the OpenCL builtins.  Either gives the same IEEE
- * results.  The integer ones are plain code everywhere. */
+ * not know those (Oclgrind's interpreter knows no llvm.abs, for one) and get
+ * the OpenCL builtins.  Either gives the same IEEE results. */
 #if INLINE_MATH
 #define MATH1(F, B) \
     inline __attribute__((overloadable)) float F(float x) { return B##f(x); } \
@@ -33,6 +33,10 @@ MATH1(FLOOR, __builtin_floor)
 MATH1(RINT, __builtin_rint)
 MATH2(FMIN, __builtin_fmin)
 MATH2(FMAX, __builtin_fmax)
+inline int imin(int a, int b) { return a < b ? a : b; }
+inline int imax(int a, int b) { return a > b ? a : b; }
+inline int iabs(int a) { return a < 0 ? -a : a; }
+inline int iclamp(int a, int lo, int hi) { return a < lo ? lo : a > hi ? hi : a; }
 #else
 #define SQRT(x) sqrt(x)
 #define FABS(x) fabs(x)
@@ -40,12 +44,11 @@ MATH2(FMAX, __builtin_fmax)
 #define RINT(x) rint(x)
 #define FMIN(a, b) fmin(a, b)
 #define FMAX(a, b) fmax(a, b)
+#define imin(a, b) min(a, b)
+#define imax(a, b) max(a, b)
+#define iabs(a) abs(a)
+#define iclamp(a, lo, hi) clamp(a, lo, hi)
 #endif
-
-inline int imin(int a, int b) { return a < b ? a : b; }
-inline int imax(int a, int b) { return a > b ? a : b; }
-inline int iabs(int a) { return a < 0 ? -a : a; }
-inline int iclamp(int a, int lo, int hi) { return a < lo ? lo : a > hi ? hi : a; }
 
 /* Bits of a kernel's status word (atomic_or), mirrored in diskpack_cl/raster.py:
  * the host refuses a result that has any. */
