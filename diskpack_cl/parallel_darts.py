@@ -125,20 +125,44 @@ class _Grid:
         return _round(self, live, rng, room, empty)
 
 
+def _keys(rng):
+    """A round's three keys (uniforms along x, along y, priorities) from `rng`."""
+    return rng.integers(0, 2**64, size=3, dtype=np.uint64)
+
+
+def _uniform(key, cells):
+    """Uniforms in [0, 1), one per cell of `cells`: the top 53 bits of splitmix64's
+    output number ``cell + 1`` of the stream `key`, as ``uniform`` in
+    ``kernels/dart_round.cl`` (the device draws its darts itself: 3.5M uniforms
+    and priorities a round at 1M points, drawn and uploaded, were a fifth of the start).
+
+    Examples
+    --------
+    >>> u = _uniform(np.uint64(7), np.arange(4))
+    >>> bool(((u >= 0) & (u < 1)).all()), bool(u[2] == _uniform(np.uint64(7), [2])[0])
+    (True, True)
+    """
+    z = key + (np.asarray(cells).astype(np.uint64) + np.uint64(1)) * np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return ((z ^ (z >> np.uint64(31))) >> np.uint64(11)).astype(np.float64) * 2.0**-53
+
+
 def _round(grid, live, rng, room, empty):
     """One round: a dart into every live cell at once, with a random priority each
     (`empty`: the grid holds no point yet).
 
     Returns the cells still live and how many points were placed (at most `room`).
     """
+    ku, kv, kp = _keys(rng)
     row, col = np.divmod(live, grid.g)
-    x = (col + rng.random(live.size)) * grid.c
-    y = (row + rng.random(live.size)) * grid.c
+    x = (col + _uniform(ku, live)) * grid.c
+    y = (row + _uniform(kv, live)) * grid.c
     flat = grid.flat(live)
     keep = np.arange(live.size) if empty else np.flatnonzero(grid.free(flat, x, y))
     darts = _Grid(grid.d)
     prio = np.full(grid.G * grid.G, -1.0)
-    mine = rng.random(keep.size)
+    mine = _uniform(kp, live[keep])
     darts.spread((darts.x, darts.y, prio), live[keep], ((x[keep], True), (y[keep], True),
                                                          (mine, False)))
     keep = keep[darts.free(flat[keep], x[keep], y[keep], prio, mine)][:room]
@@ -151,11 +175,12 @@ def _round(grid, live, rng, room, empty):
 class _DeviceGrid:
     """The grid of :class:`_Grid` on an OpenCL device (``kernels/dart_round.cl``).
 
-    The host draws the darts' uniforms and priorities with the same
-    generator calls and keeps a copy of the points; the kernels place the
-    darts and do the distance tests in the same float64 operations, so both
-    give the same points for a seed.  The host computes the coordinates of
-    the kept darts only (a pass over 3.5M cells fewer in the first round).  The
+    The host draws a round's keys with the same generator calls and keeps a
+    copy of the points; the kernels hash the darts' uniforms and priorities
+    from the keys as :func:`_uniform` does, place the darts and do the
+    distance tests in the same float64 operations, so both give the same
+    points for a seed.  The host computes the coordinates of the kept darts
+    only (a pass over 3.5M cells fewer in the first round).  The
     grids of points, darts and priorities stay on the device from round to
     round and every kernel takes a list of cells: after two rounds a quarter
     of the cells are live, and dense passes over the whole grid (3.5M cells
@@ -241,39 +266,39 @@ class _DeviceGrid:
         return self._test("dart_free", m, self.b_pt, b_cells, self.b_dart, m, np.int32(self.g),
                           np.float64(self.d2))
 
-    def place(self, cells, u, v):
+    def place(self, cells, ku, kv):
         """Put the darts ``((col + u) c, (row + v) c)`` of the distinct `cells` (int32,
-        non-empty) into the dart grid, on the device."""
+        non-empty) into the dart grid, on the device: u, v the uniforms of keys `ku`, `kv`."""
         m = np.int32(len(cells))
-        self._launch("dart_place", m, self.b_dart, self._up(cells), self._up(u), self._up(v), m,
-                     np.int32(self.g), np.float64(self.c))
+        self._launch("dart_place", m, self.b_dart, self._up(cells), m, np.int32(self.g),
+                     np.float64(self.c), np.uint64(ku), np.uint64(kv))
 
-    def kept(self, cells, xy, prio):
-        """Which free darts, one in each of the distinct `cells` (int32), with priorities
-        `prio` in [0, 1), have no dart of higher priority within d: `xy`, or (None) those
-        in the dart grid."""
+    def kept(self, cells, xy, key):
+        """Which free darts, one in each of the distinct `cells` (int32), with the
+        priorities of key `key` (:func:`_uniform`), have no dart of higher priority
+        within d: `xy`, or (None) those in the dart grid."""
         k = np.int32(len(cells))
         if not k:
             return np.zeros(0, dtype=bool)
         b_cells = self._darts_at(cells, xy)
-        self._put("put_one", self.b_prio, b_cells, prio)
+        self._launch("set_prio", k, self.b_prio, b_cells, k, np.uint64(key), np.int32(0))
         kept = self._test("dart_keep", k, self.b_dart, self.b_prio, b_cells, k,
                           np.int32(self.g), np.float64(self.d2))
         # clear these priorities, so that the next round's darts see none of them
-        self._put("put_one", self.b_prio, b_cells, np.full(k, -1.0))
+        self._launch("set_prio", k, self.b_prio, b_cells, k, np.uint64(key), np.int32(1))
         return kept
 
     def throw(self, live, rng, room, empty):
         """One round (as :func:`_round`): the cells still live and the points placed."""
-        u, v = rng.random(live.size), rng.random(live.size)
-        self.place(live, u, v)
+        ku, kv, kp = _keys(rng)
+        self.place(live, ku, kv)
         # no point yet: every dart is free
         keep = np.arange(live.size) if empty else np.flatnonzero(self.free(live))
-        keep = keep[self.kept(live[keep], None, rng.random(keep.size))]
-        keep = keep[:room]
-        row, col = np.divmod(live[keep], self.g)
+        keep = keep[self.kept(live[keep], None, kp)][:room]
+        cells = live[keep]
+        row, col = np.divmod(cells, self.g)
         # (col + u) c and (row + v) c as in _round and dart_place, for the kept darts only
-        self.insert(live[keep], (col + u[keep]) * self.c, (row + v[keep]) * self.c)
+        self.insert(cells, (col + _uniform(ku, cells)) * self.c, (row + _uniform(kv, cells)) * self.c)
         gone = np.zeros(live.size, dtype=bool)
         gone[keep] = True
         return live[~gone], keep.size

@@ -160,7 +160,7 @@ def cells3_torus(ctx):
 
 
 def dart_round(ctx):
-    """dart_place, dart_free, dart_keep, cell_covered, put_pair and put_one: parallel dart
+    """dart_place, set_prio, dart_free, dart_keep, cell_covered and put_pair: parallel dart
     throwing on a 68 x 68 grid (edge cells wrap)."""
     from diskpack_cl.parallel_darts import parallel_darts
 

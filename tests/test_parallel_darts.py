@@ -60,7 +60,7 @@ def test_no_lattice_peaks_in_the_spectrum():
 @given(n=st.integers(1200, 6000), rel=st.floats(0.5, 0.74), seed=st.integers(0, 2**32 - 1))
 def test_the_device_kernels_give_the_numpy_points(ctx, n, rel, seed):
     """kernels/dart_round.cl does the distance tests of the numpy path in the same float64
-    operations, on the same host-drawn darts: the same points, bit for bit."""
+    operations, on the same hashed darts: the same points, bit for bit."""
     from diskpack_cl import parallel_darts as pd
 
     assert isinstance(pd._grid_for(2 * rel * hexagonal_radius(n), ctx), pd._DeviceGrid)
@@ -74,6 +74,15 @@ def _torus_d2(a, b):
     diff = a[:, None, :] - b[None, :, :]
     diff -= np.round(diff)
     return (diff ** 2).sum(axis=-1)
+
+
+def _unbeaten(darts, cells, key, d2):
+    """Which of the darts in `cells` no dart of higher priority (of key `key`) lies within
+    sqrt(d2) of, by brute force."""
+    from diskpack_cl.parallel_darts import _uniform
+
+    prio = _uniform(key, cells)
+    return ~((_torus_d2(darts, darts) < d2) & (prio[None, :] > prio[:, None])).any(axis=1)
 
 
 def _grid_case(ctx, g, seed, coarse, fill):
@@ -112,11 +121,10 @@ def test_the_list_kernels_answer_as_every_pair_does(ctx, g, seed, coarse, fill):
     free = grid.free(cells, darts)
     np.testing.assert_array_equal(free, (_torus_d2(darts, pts) >= d2).all(axis=1))
 
-    prio = np.random.default_rng(seed).random(cells.size)
-    near = _torus_d2(darts, darts) < d2
-    beaten = (near & (prio[None, :] > prio[:, None])).any(axis=1)
-    for _ in range(2):   # the second time: the first call's priorities were cleared
-        np.testing.assert_array_equal(grid.kept(cells, darts, prio), ~beaten)
+    key = np.uint64(seed)
+    np.testing.assert_array_equal(grid.kept(cells, darts, key), _unbeaten(darts, cells, key, d2))
+    # again: the first call's priorities were cleared
+    np.testing.assert_array_equal(grid.kept(cells, darts, key), _unbeaten(darts, cells, key, d2))
 
     # covered: the 4 corners and the centre each within d of a point of the 8 cells around
     row, col = np.divmod(cells, g)
@@ -136,9 +144,9 @@ def test_the_list_kernels_answer_as_every_pair_does(ctx, g, seed, coarse, fill):
 def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
     """One point, and a dart in each of the 24 cells around its own (wrapping at the edges)
     at the spot of that cell nearest the point: the corner cells of the ring decide only
-    here.  Free darts, and darts beaten by a top-priority dart in the point's place,
-    against brute force."""
-    from diskpack_cl.parallel_darts import _DeviceGrid
+    here.  Free darts, and darts beaten by a top-priority dart in the point's place (or by
+    one another), against brute force."""
+    from diskpack_cl.parallel_darts import _DeviceGrid, _uniform
 
     grid = _DeviceGrid(np.sqrt(2.0) / (g - 1) * (1 - 1e-9), ctx)
     r, c = divmod(cell % (g * g), g)
@@ -151,30 +159,51 @@ def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
     assert near.any()
     grid.insert(np.array([r * g + c]), p[:1], p[1:])
     np.testing.assert_array_equal(grid.free(cells, darts), ~near)
-    top = _DeviceGrid(grid.d, ctx)   # the point as a dart of the highest priority
-    kept = top.kept(np.append(cells, r * g + c).astype(np.int32), np.vstack((darts, p)),
-                    np.append(np.full(len(cells), 0.5), 0.9))
-    np.testing.assert_array_equal(kept, np.append(~near, True))
+    # the point as a dart too, of the highest priority (the first key that gives it that)
+    every = np.append(cells, r * g + c).astype(np.int32)
+    key = next(np.uint64(k) for k in range(1000) if np.argmax(_uniform(np.uint64(k), every)) == 24)
+    kept = _DeviceGrid(grid.d, ctx).kept(every, np.vstack((darts, p)), key)
+    want = _unbeaten(np.vstack((darts, p)), every, key, grid.d2)
+    np.testing.assert_array_equal(kept, want)
+    assert kept[-1] and not kept[:-1][near].any()
 
 
 @settings(max_examples=20, deadline=None)
-@given(g=st.integers(5, 300), seed=st.integers(0, 2**32 - 1), edges=st.booleans())
-def test_dart_place_computes_the_hosts_coordinates_bit_for_bit(ctx, g, seed, edges):
-    """dart_place puts ``((col + u) c, (row + v) c)`` into the dart grid as numpy rounds it
-    (uniforms 0 and just under 1 too), and dart_free reads the darts it placed."""
+@given(g=st.integers(5, 300), seed=st.integers(0, 2**32 - 1), key=st.integers(0, 2**64 - 1))
+def test_dart_place_computes_the_hosts_coordinates_bit_for_bit(ctx, g, seed, key):
+    """dart_place puts ``((col + u) c, (row + v) c)`` into the dart grid as numpy rounds
+    it, u and v the hashed uniforms of numpy's _uniform (keys up to 2**64 - 1), set_prio
+    writes that hash's priorities bit for bit, and dart_free reads the darts placed."""
     import pyopencl as cl
 
-    from diskpack_cl.parallel_darts import _DeviceGrid
+    from diskpack_cl.parallel_darts import _DeviceGrid, _uniform
 
     rng = np.random.default_rng(seed)
     grid = _DeviceGrid(np.sqrt(2.0) / g * (1 + 1e-12), ctx)
-    cells = np.sort(rng.choice(grid.g * grid.g, rng.integers(1, 2 * grid.g), replace=False))
-    uv = (rng.choice([0.0, 1 - 2.0**-53, 0.5], (2, cells.size)) if edges
-          else rng.random((2, cells.size)))
-    grid.place(cells.astype(np.int32), *uv)
+    cells = np.sort(rng.choice(grid.g * grid.g, rng.integers(1, 2 * grid.g), replace=False)).astype(np.int32)
+    ku, kv = np.uint64(key), np.uint64(key ^ 0x5555)
+    grid.place(cells, ku, kv)
     got = np.empty((grid.g * grid.g, 2))
     cl.enqueue_copy(grid.queue, got, grid.b_dart)
     row, col = np.divmod(cells, grid.g)
-    want = np.column_stack(((col + uv[0]) * grid.c, (row + uv[1]) * grid.c))
+    want = np.column_stack(((col + _uniform(ku, cells)) * grid.c, (row + _uniform(kv, cells)) * grid.c))
     np.testing.assert_array_equal(got[cells], want)
-    np.testing.assert_array_equal(grid.free(cells.astype(np.int32)), np.ones(cells.size, bool))
+    grid._launch("set_prio", len(cells), grid.b_prio, grid._up(cells), np.int32(len(cells)), ku, np.int32(0))
+    prio = np.empty(grid.g * grid.g)
+    cl.enqueue_copy(grid.queue, prio, grid.b_prio)
+    np.testing.assert_array_equal(prio[cells], _uniform(ku, cells))
+    np.testing.assert_array_equal(grid.free(cells), np.ones(cells.size, bool))
+
+
+def test_the_hashed_uniforms_are_uniform():
+    """_uniform over a million counters of one key: mean, variance and a 64-bin histogram
+    within a few standard errors of U(0, 1), and a different key gives other numbers."""
+    from diskpack_cl.parallel_darts import _uniform
+
+    u = _uniform(np.uint64(12345), np.arange(1_000_000))
+    assert abs(u.mean() - 0.5) < 5 * np.sqrt(1 / 12 / u.size)
+    assert abs(u.var() - 1 / 12) < 0.002
+    counts = np.bincount((u * 64).astype(int), minlength=64)
+    chi2 = ((counts - u.size / 64) ** 2 / (u.size / 64)).sum()
+    assert chi2 < 120   # 63 degrees of freedom: p < 1e-5 above
+    assert not np.array_equal(u[:100], _uniform(np.uint64(12346), np.arange(100)))

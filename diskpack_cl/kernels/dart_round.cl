@@ -9,16 +9,18 @@
  * cell on the far side, shifted by one period.  The kernels take lists of cells, so
  * that a round costs its live cells and not the whole grid.
  *
- * The host draws the darts' uniforms and their priorities (numpy, so that a seed gives
- * the same set with or without a device) and does the bookkeeping; these kernels place
- * the darts and do the distance tests, in the same float64 operations as the numpy path
- * (no contraction):
- *   dart_place   a live cell's dart from the host's two uniforms, into the dart grid;
+ * The host draws three 64-bit keys a round and does the bookkeeping; the darts' uniforms
+ * and priorities are a hash of a key and the cell (uniform(), which numpy computes the
+ * same, so that a seed gives the same set with or without a device, and nothing is
+ * uploaded but lists of cells).  These kernels place the darts and do the distance
+ * tests, in the same float64 operations as the numpy path (no contraction):
+ *   dart_place   a live cell's dart, into the dart grid;
+ *   set_prio     the priorities of the free darts (or -1 again, after the round);
  *   dart_free    a dart is free when no point lies within d;
  *   dart_keep    a free dart is kept when no free dart of higher priority lies within d;
  *   cell_covered a live cell is covered when its corners and centre all lie within d
  *                of a point of the 8 cells around it;
- *   put_pair, put_one  write values into grid cells (points, darts, priorities).
+ *   put_pair     writes points (or given darts) into grid cells.
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
@@ -62,21 +64,42 @@ static int near_point(__global const double2 *pt, int r, int c, int g, double2 q
     return 0;
 }
 
+/* A uniform double in [0, 1): the top 53 bits of splitmix64's output number n + 1
+ * of the stream `key` (G. L. Steele, D. Lea and C. H. Flood, "Fast splittable
+ * pseudorandom number generators", OOPSLA 2014); parallel_darts._uniform in numpy. */
+static double uniform(ulong key, ulong n)
+{
+    ulong z = key + (n + 1) * 0x9E3779B97F4A7C15UL;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9UL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBUL;
+    return (double)((z ^ (z >> 31)) >> 11) * (1.0 / 9007199254740992.0);
+}
+
 __kernel void dart_place(
     __global double2 *dart,         /* g*g: written at `cells` */
     __global const int *cells,      /* m live cells, row * g + col, no cell twice */
-    __global const double *u,       /* m: uniforms in [0, 1) along x */
-    __global const double *v,       /* m: uniforms in [0, 1) along y */
     const int m,                    /* number of live cells */
     const int g,                    /* grid side */
-    const double c)                 /* cell side, 1 / g */
+    const double c,                 /* cell side, 1 / g */
+    const ulong ku, const ulong kv) /* the round's keys of the uniforms along x and y */
 {
     const int i = get_global_id(0);
     if (i >= m) return;
     const int k = cells[i];
     /* ((col + u) c, (row + v) c): numpy's add of the int column and the uniform,
      * then its scaling, rounded as there */
-    dart[k] = (double2)(((double)(k % g) + u[i]) * c, ((double)(k / g) + v[i]) * c);
+    dart[k] = (double2)(((double)(k % g) + uniform(ku, k)) * c, ((double)(k / g) + uniform(kv, k)) * c);
+}
+
+__kernel void set_prio(
+    __global double *prio,          /* g*g: written at `cells` */
+    __global const int *cells,      /* m cells holding a free dart, no cell twice */
+    const int m,                    /* number of those cells */
+    const ulong key,                /* the round's key of the priorities */
+    const int clear)                /* 1: write -1 (no dart) instead */
+{
+    const int i = get_global_id(0);
+    if (i < m) prio[cells[i]] = clear ? -1.0 : uniform(key, cells[i]);
 }
 
 __kernel void dart_free(
@@ -153,16 +176,6 @@ __kernel void put_pair(
     __global double2 *grid,         /* g*g: points or darts, written at `cells` */
     __global const int *cells,      /* m cells, no cell twice */
     __global const double2 *value,  /* m: what each cell gets */
-    const int m)                    /* number of cells */
-{
-    const int i = get_global_id(0);
-    if (i < m) grid[cells[i]] = value[i];
-}
-
-__kernel void put_one(
-    __global double *grid,          /* g*g: priorities, written at `cells` */
-    __global const int *cells,      /* m cells, no cell twice */
-    __global const double *value,   /* m: what each cell gets */
     const int m)                    /* number of cells */
 {
     const int i = get_global_id(0);
