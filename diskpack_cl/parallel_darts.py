@@ -148,6 +148,12 @@ def _uniform(key, cells):
     return ((z ^ (z >> np.uint64(31))) >> np.uint64(11)).astype(np.float64) * 2.0**-53
 
 
+def _room(keep, room, rng):
+    """`keep`, or `room` of them at random where it holds more (in their order): the
+    first `room` would fill the last round's rows from the bottom of the torus up."""
+    return keep if len(keep) <= room else np.sort(rng.choice(keep, room, replace=False))
+
+
 def _round(grid, live, rng, room, empty):
     """One round: a dart into every live cell at once, with a random priority each
     (`empty`: the grid holds no point yet).
@@ -165,7 +171,7 @@ def _round(grid, live, rng, room, empty):
     mine = _uniform(kp, live[keep])
     darts.spread((darts.x, darts.y, prio), live[keep], ((x[keep], True), (y[keep], True),
                                                          (mine, False)))
-    keep = keep[darts.free(flat[keep], x[keep], y[keep], prio, mine)][:room]
+    keep = _room(keep[darts.free(flat[keep], x[keep], y[keep], prio, mine)], room, rng)
     grid.insert(live[keep], x[keep], y[keep])
     gone = np.zeros(live.size, dtype=bool)
     gone[keep] = True
@@ -294,7 +300,7 @@ class _DeviceGrid:
         self.place(live, ku, kv)
         # no point yet: every dart is free
         keep = np.arange(live.size) if empty else np.flatnonzero(self.free(live))
-        keep = keep[self.kept(live[keep], None, kp)][:room]
+        keep = _room(keep[self.kept(live[keep], None, kp)], room, rng)
         cells = live[keep]
         row, col = np.divmod(cells, self.g)
         # (col + u) c and (row + v) c as in _round and dart_place, for the kept darts only

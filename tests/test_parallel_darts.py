@@ -23,6 +23,16 @@ def test_count_range_and_every_distance(n, rel, seed):
         assert ref.min_distance_ref(p, Domain.torus()) >= 2 * rel * hexagonal_radius(n)
 
 
+@settings(max_examples=20, deadline=None)
+@given(n=st.integers(500, 5000), rel=st.floats(0.2, 0.7), seed=st.integers(0, 2**32 - 1))
+def test_the_points_cover_the_torus_evenly(n, rel, seed):
+    """The last round's surplus is dropped at random: keeping the first darts in row
+    order put every point of 2000 at rel 0.3 in the bottom half of the torus."""
+    p = parallel_darts(n, rel_radius=rel, seed=seed)
+    for axis in (0, 1):
+        assert abs((p[:, axis] < 0.5).mean() - 0.5) < 5 * 0.5 / np.sqrt(n)
+
+
 def test_a_radius_past_saturation_shrinks_and_keeps_the_distance_it_says():
     n = 2000
     p = parallel_darts(n, rel_radius=0.77, seed=3)
