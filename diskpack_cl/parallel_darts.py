@@ -334,11 +334,11 @@ class _DeviceGrid:
 
 def _throw_rounds(grid, n, rng, max_rounds):
     """Rounds until the grid holds `n` points (or `max_rounds`); the points."""
-    taken = np.zeros(grid.g * grid.g, dtype=bool)
     pts = grid.points()
-    taken[grid.cells_of(pts)] = True
     # int32 cells: what the kernels take, and integer division at half the cost
-    live, m = np.flatnonzero(~taken).astype(np.int32), len(pts)
+    live, m = np.arange(grid.g * grid.g, dtype=np.int32), len(pts)
+    if m:
+        live = np.setdiff1d(live, grid.cells_of(pts), assume_unique=True).astype(np.int32)
     for r in range(max_rounds):
         live, placed = grid.throw(live, rng, n - m, m == 0)
         m += placed
