@@ -383,8 +383,10 @@ class CellMIC:
         if certify:
             q, R, accepted = self._refine(X, w, out, pos)
             centers = np.take(X, pos, axis=0) + q
-        else:   # the kernel's centres, x_i + q as it rounded them
-            centers, R, accepted = out["mic"][:, :2].copy(), out["mic"][:, 2].copy(), True
+        else:   # the kernel's centres, x_i + q as it rounded them (one 16-byte element a
+            # row: numpy's copy of a strided (n, 2) slice is three times slower)
+            centers = out["mic"].view(np.complex128)[:, 0].copy().view(np.float64).reshape(-1, 2)
+            R, accepted = out["mic"][:, 2].copy(), True
         good = proven & accepted
         bad = np.nonzero(~good)[0]
         with self.timings("fallback"):
