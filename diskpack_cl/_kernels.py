@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib.resources
 from pathlib import Path
 
-__all__ = ["kernel_dir", "build_program"]
+__all__ = ["kernel_dir", "build_program", "inline_math"]
 
 _PROGRAMS: dict = {}
 
@@ -18,19 +18,26 @@ def kernel_dir() -> Path:
     return p
 
 
+def inline_math(ctx) -> int:
+    """1 where the kernels should use clang's builtins for their scalar math: PoCL's
+    CPU device, whose own builtins stay calls (``kernels/common.h``); else 0."""
+    import pyopencl as cl
+
+    dev = ctx.devices[0]
+    return int("Portable Computing Language" in dev.platform.name and bool(dev.type & cl.device_type.CPU))
+
+
 def build_program(ctx, stem: str, defines: dict | None = None):
     """Build ``diskpack_cl/kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
 
-    ``INLINE_MATH`` is defined too: 1 on PoCL (see ``kernels/common.h``), else 0.
+    ``INLINE_MATH`` is defined too, as :func:`inline_math` says, unless `defines` sets it.
 
     Built programs and their kernel objects are memoized by
     (context, stem, defines), so each combination compiles once per process.
     """
     import pyopencl as cl
 
-    # PoCL's builtins stay calls unless the kernels use clang's (kernels/common.h)
-    pocl = "Portable Computing Language" in ctx.devices[0].platform.name
-    defines = dict(sorted({"INLINE_MATH": int(pocl), **(defines or {})}.items()))
+    defines = dict(sorted({"INLINE_MATH": inline_math(ctx), **(defines or {})}.items()))
     key = (ctx.int_ptr, stem, tuple(defines.items()))
     if key not in _PROGRAMS:
         src = (kernel_dir() / f"{stem}.cl").read_text()

@@ -16,7 +16,7 @@
  * PoCL links its builtin library into a kernel after optimizing the kernel, so
  * every sqrt, fmin, fmax, fabs, floor, clamp, min, max or abs stays a call, and
  * around each call every live floating-point value is spilled (x86-64 keeps
- * none across calls).  The host's build_program sets INLINE_MATH for PoCL:
+ * none across calls).  The host's build_program sets INLINE_MATH for PoCL's CPU device:
  * these are then clang's builtins, one instruction each; other compilers need
  * not know those (Oclgrind's interpreter knows no llvm.abs, for one) and get
  * the OpenCL builtins.  Either gives the same IEEE results. */
