@@ -58,7 +58,7 @@ class Domain:
         that lies inside already (as most sets wrapped again do) costs a
         copy and two reductions; the search for the outside ones goes a
         column at a time (a comparison with an ``(n, 2)`` broadcast of the
-        size runs numpy's inner loop two values at a time, three times slower).
+        size runs numpy's inner loop two values at a time).
         """
         q = np.array(points, dtype=np.float64)
         q += 0.0   # -0.0 becomes 0.0, as np.mod makes it; every other value stays

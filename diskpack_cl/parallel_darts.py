@@ -133,8 +133,8 @@ def _keys(rng):
 def _uniform(key, cells):
     """Uniforms in [0, 1), one per cell of `cells`: the top 53 bits of splitmix64's
     output number ``cell + 1`` of the stream `key`, as ``uniform`` in
-    ``kernels/dart_round.cl`` (the device draws its darts itself: 3.5M uniforms
-    and priorities a round at 1M points, drawn and uploaded, were a fifth of the start).
+    ``kernels/dart_round.cl``: the device draws its darts itself, and nothing but
+    lists of cells goes up to it.
 
     Examples
     --------

@@ -93,9 +93,9 @@ def _pairs_near(X, C, r, domain):
 
 
 class _Neighbourhoods:
-    """Each point's cell in a grid of cells a :data:`FINE` th of `side` wide, kept as the
-    points move: :meth:`near` finds the points around a few without a pass over all of
-    them (at 1M points, 2 ms against 13 ms a local step)."""
+    """Each point's cell in a grid of cells ``side / FINE`` wide (:data:`FINE`), kept as
+    the points move: :meth:`near` finds the points around a few without a pass over
+    all of them."""
 
     def __init__(self, X, side, domain):
         self.side, self.domain = side, domain
@@ -113,7 +113,7 @@ class _Neighbourhoods:
     def _stencil(self, radius):
         """``(dy, dx)`` of the cells that hold a point within `radius` (at most `side`) of a
         point of cell (0, 0): those whose gap to it is under `radius` (a disk of cells, not
-        a square: at 1M points the first local step's sub-problem is half the size)."""
+        a square, which would hold about twice the points)."""
         if radius not in self._stencils:
             cw, ch = self.domain.width / self.nx, self.domain.height / self.ny
             d = np.arange(-FINE, FINE + 1)
@@ -168,8 +168,8 @@ def _within(X, B, r, domain, cells=None):
 
 def _candidates(X, B, r, cells):
     """``(C, B)``: sorted indices of a superset of the points within `r` of `B` (all of
-    X without `cells`), and B's positions in C (the searches' grids then sort C, not X:
-    at 1M points the first local step's 350 000 sites hold about 100 000 such)."""
+    X without `cells`), and B's positions in C: the searches' grids then sort C, a
+    small part of a step's sites."""
     if cells is None:
         return np.arange(len(X)), B
     C = cells.near(B, r)[0]
