@@ -75,6 +75,20 @@ class Domain3:
     def volume(self):
         return self.width * self.height * self.depth
 
+    def shortest(self, offsets):
+        """The offsets `offsets` (``(n, 3)`` float64) made shortest over the periods, in
+        place (a box's stay as they are); returns them, as :meth:`Domain.shortest
+        <diskpack_cl.domain.Domain.shortest>` does in 2D.
+
+        Examples
+        --------
+        >>> Domain3.torus().shortest(np.array([[0.75, -0.5, 0.25]])).tolist()
+        [[-0.25, -0.5, 0.25]]
+        """
+        if self.periodic:
+            offsets -= np.round(offsets / self.size) * self.size
+        return offsets
+
     def check(self, points, minimum=2):
         """`points` as a float64 (n, 3) copy: wrapped on the torus, checked inside a box."""
         X = np.array(points, dtype=np.float64)
@@ -198,9 +212,7 @@ def certify_mis(points, centers, radii, domain, *, cells=None, k=48, tol=1e-10):
 
     S = domain.check(points)
     X = S if cells is None else S[cells]
-    q = np.asarray(centers) - X
-    if domain.periodic:
-        q -= np.round(q / domain.size) * domain.size
+    q = domain.shortest(np.asarray(centers) - X)
     reach = np.linalg.norm(q, axis=1) + 2.0 * radii
     # every image that can cut a sphere is in the tree (few sites: wide cells)
     margin = max(_margin(domain, len(S)), 1.01 * float(reach.max(initial=0.0)))
@@ -278,9 +290,7 @@ def _exact_mis_near(X, domain, cells, k):
         return None
     near = np.unique(np.concatenate(lists).astype(np.intp))
     mis = _exact_mis(X[near], domain, np.searchsorted(near, cells), k)
-    q = mis.centers - X[cells]
-    if domain.periodic:
-        q -= np.round(q / domain.size) * domain.size
+    q = domain.shortest(mis.centers - X[cells])
     return mis if np.all(2.0 * (np.linalg.norm(q, axis=1) + mis.radii) <= rho) else None
 
 
