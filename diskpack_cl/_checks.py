@@ -73,7 +73,7 @@ def check_sites(points, weights, domain, minimum=1):
     if not np.all(np.isfinite(X)):
         raise ValueError("points contain NaN or infinite coordinates")
     if domain.periodic:
-        X = domain.wrap(X)
+        X = domain.wrap(X, copy=False)
     w = np.zeros(n) if weights is None else np.array(weights, dtype=np.float64)
     if w.shape != (n,) or not np.all(np.isfinite(w)):
         raise ValueError("weights must be n finite numbers")

@@ -27,7 +27,7 @@ from ._device import describe, get_context, group_size, padded, preferred_multip
 from ._kernels import build_program
 from ._timing import Stopwatch
 from .domain import Domain
-from .geometry import MIC, _checked_cells, _cramer, _vertex, exact_mic
+from .geometry import MIC, _centres, _checked_cells, _cramer, _vertex, exact_mic
 
 __all__ = ["CellMIC", "has_fp64", "FLAGS"]
 
@@ -141,7 +141,8 @@ class CellMIC:
         self.profile = profile
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
-        self._kernel = build_program(self.ctx, "cell_mic", defines)["cell_mic"]
+        kernels = build_program(self.ctx, "cell_mic", defines)
+        self._kernel, self._rows_kernel = kernels["cell_mic"], kernels["mic_rows"]
         dev = self.ctx.devices[0]
         self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
         # whole groups per enqueue: the last group of one must not reach into the next
@@ -177,18 +178,20 @@ class CellMIC:
         cl.enqueue_copy(self.queue, buf, host, is_blocking=False)
         return buf
 
-    def _grid(self, n):
+    def _grid(self, n, density=None):
         dom = self.domain
-        side = np.sqrt(dom.area * self.sites_per_bucket / max(n, 1))
+        density = max(n, 1) / dom.area if density is None else density
+        side = np.sqrt(self.sites_per_bucket / density)
         nbx = max(1, int(np.ceil(dom.width / side)))
         nby = max(1, int(np.ceil(dom.height / side)))
         return nbx, nby, dom.width / nbx, dom.height / nby
 
-    def _buckets(self, pts, w):
-        """Sites sorted by bucket; the last order is reused, so re-sorting a
-        slowly moving set costs about a linear pass (timsort on sorted runs)."""
+    def _buckets(self, pts, w, density=None):
+        """Sites sorted by bucket (a grid for `density`, :meth:`solve`); the last order is
+        reused, so re-sorting a slowly moving set costs about a linear pass (timsort on
+        sorted runs)."""
         n = len(pts)
-        nbx, nby, bw, bh = self._grid(n)
+        nbx, nby, bw, bh = self._grid(n, density)
         bx = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
         by = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
         bid = by * nbx + bx
@@ -225,7 +228,7 @@ class CellMIC:
         return loc.ravel(), win
 
     # -- work --------------------------------------------------------------
-    def solve(self, points, weights=None, *, certify=True, cells=None):
+    def solve(self, points, weights=None, *, certify=True, cells=None, density=None):
         """MIC of every power cell, or of the cells `cells`, certified as by :func:`exact_mic`.
 
         Parameters
@@ -247,6 +250,13 @@ class CellMIC:
             ``exact_mic(..., cells=cells)``).  The kernel runs on these cells
             only: the few cells of a local step cost what they cost on the
             device, not about 25 us each in ``exact_mic``.
+        density : float, optional
+            Sites per unit area where the sites lie, which sizes the grid of
+            buckets the kernel gathers from (default: their number over the
+            domain's area).  A sub-problem in a small part of the domain (a
+            local step's) passes its whole set's: a grid sized for its own
+            count would put tens of sites in each bucket there, and every
+            cell's scan would go through them.
 
         Returns
         -------
@@ -275,16 +285,13 @@ class CellMIC:
         w -= w.min()   # as exact_mic: the diagram ignores a common shift
         # everything below runs in bucket order: neighbours sit close in memory
         with self.timings("buckets"):
-            order, start, bwmax, grid = self._buckets(X, w)
+            order, start, bwmax, grid = self._buckets(X, w, density)
             # np.take: numpy's row gather X[order] is several times slower (40 against 5 ms at 1M)
             Xs, ws = np.take(X, order, axis=0), w[order]
             pos, rows = _positions(order, None if cells is None else _checked_cells(cells, len(X)))
         with self.timings("device"):
-            out = self._run(Xs, ws, start, bwmax, grid, pos)
-        res = self._finish(Xs, ws, out, certify, pos)
-        for name in ("centers", "radii", "empty", "nn"):
-            setattr(res, name, _scatter(getattr(res, name), rows))
-        return res
+            out = self._run(Xs, ws, start, bwmax, grid, pos, rows, certify)
+        return self._finish(Xs, ws, out, pos, rows)
 
     def nearest(self, points):
         """Distance from every site to its nearest other site (periodic on a torus), exact.
@@ -326,8 +333,11 @@ class CellMIC:
             nn[far] = _nearest(Xs, dom, far)
         return _scatter(nn, order)
 
-    def _run(self, Xs, ws, start, bwmax, grid, pos):
-        """The kernel on the cells at sorted positions `pos`; outputs in their order."""
+    def _run(self, Xs, ws, start, bwmax, grid, pos, rows, codes):
+        """The kernels on the cells at sorted positions `pos`: ``center``, ``radius`` and
+        ``nn`` by result row (`rows`: ``mic_rows`` puts them there), ``flags`` in the order
+        of `pos`, and with `codes`, cell_mic's ``mic`` and ``codes`` in that order too (for
+        the host's re-solve; 48 of the 80 bytes a cell)."""
         import pyopencl as cl
 
         n = len(pos)
@@ -336,10 +346,11 @@ class CellMIC:
         scale = max(dom.width, dom.height)
         bwloc, win = self._local_wmax(bwmax, grid, ws.max())
         up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
-              "bwmax": bwmax, "bwloc": bwloc, "cells": pos}
-        b_site, b_w, b_start, b_wmax, b_wloc, b_cells = (self._upload(k, v) for k, v in up.items())
-        # two output arrays, so two readbacks (each enqueue costs on small sets)
-        outs = {"mic": np.empty((n, 4)), "codes": np.empty((n, 4 + MAXNEAR), np.int32)}
+              "bwmax": bwmax, "bwloc": bwloc, "cells": pos, "rows": rows.astype(np.int32)}
+        b_site, b_w, b_start, b_wmax, b_wloc, b_cells, b_rows = (self._upload(k, v) for k, v in up.items())
+        outs = {"mic": np.empty((n, 4)), "codes": np.empty((n, 4 + MAXNEAR), np.int32),
+                "center": np.empty((n, 2)), "radius": np.empty(n), "nn": np.empty(n),
+                "flags": np.empty(n, np.int32)}
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
         near_tol = 1e-7 * np.sqrt(dom.area / len(Xs))
         events = []
@@ -357,6 +368,11 @@ class CellMIC:
         if self.profile:
             self.timings.kernel("cell_mic", sum((ev.profile.end - ev.profile.start) * 1e-9
                                                 for ev in events))
+        self._rows_kernel(self.queue, (padded(n, 64),), (64,), b_site, b_cells, b_rows, np.int32(n),
+                          np.float64(dom.width), np.float64(dom.height), bufs["mic"], bufs["codes"],
+                          bufs["center"], bufs["radius"], bufs["nn"], bufs["flags"])
+        if not codes:
+            del outs["mic"], outs["codes"]
         for k, v in outs.items():
             cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
         self.queue.finish()
@@ -375,39 +391,43 @@ class CellMIC:
                      & np.all(np.abs(X[pos] + q - out["mic"][:, :2]) <= 1e-9 * scale, axis=1))
         return q, R, ok & agree
 
-    def _finish(self, X, w, out, certify, pos):
-        """Host re-solve and check of the cells at sorted positions `pos` (without
-        `certify`, the device's answers), exact_mic for the rest."""
-        flags = out["codes"][:, 3]
-        proven = (flags & ~_NN) == 0
-        if certify:
-            q, R, accepted = self._refine(X, w, out, pos)
-            centers = np.take(X, pos, axis=0) + q
-        else:   # the kernel's centres, x_i + q as it rounded them (one 16-byte element a
-            # row: numpy copies a strided (n, 2) slice two values a loop)
-            centers = out["mic"].view(np.complex128)[:, 0].copy().view(np.float64).reshape(-1, 2)
-            R, accepted = out["mic"][:, 2].copy(), True
-        good = proven & accepted
-        bad = np.nonzero(~good)[0]
+    def _finish(self, X, w, out, pos, rows):
+        """The MICs of the cells at sorted positions `pos`, by result row (`rows`): the
+        device's, or where :meth:`_run` read back its codes, the host's re-solve of them
+        (:meth:`_certified`); exact_mic for the cells the device could not prove or the
+        host refused."""
+        flags = out["flags"]
+        raised = np.flatnonzero(flags)   # few cells: one pass over all, then over these
+        unproven = raised[(flags[raised] & ~_NN) != 0]
+        if "codes" in out:
+            centers, R, refused = self._certified(X, w, out, pos, rows)
+        else:
+            centers, R, refused = out["center"], out["radius"], unproven[:0]
+        bad = np.concatenate([unproven, refused])
         with self.timings("fallback"):
             if len(bad):
                 mic = exact_mic(X, w, self.domain, cells=pos[bad])
-                centers[bad] = mic.centers
-                R[bad] = mic.radii
-        empty = R < 0
-        centers[empty] = X[pos[empty]]
-        if self.domain.periodic:
-            centers = self.domain.wrap(centers)
-        nn = out["mic"][:, 3].copy()
-        far = np.flatnonzero(flags & _NN)   # only these: a cell's nn must not depend on the others
+                centers[rows[bad]] = mic.centers
+                R[rows[bad]] = mic.radii
+        nn = out["nn"]
+        far = raised[(flags[raised] & _NN) != 0]   # only these: a cell's nn must not depend on the others
         if len(far):
-            nn[far] = _nearest(X, self.domain, pos[far])
-        stats = {"flagged": int(np.count_nonzero(~proven)), "rejected": int(np.count_nonzero(proven & ~accepted)),
-                 "fallback": int(len(bad)), "empty": int(empty.sum())}
-        raised = flags[flags != 0]   # few cells: one pass over all, then over these
-        stats.update({name: int(np.count_nonzero(raised & bit)) for name, bit in FLAGS.items()})
+            nn[rows[far]] = _nearest(X, self.domain, pos[far])
+        empty = R < 0
+        stats = {"flagged": len(unproven), "rejected": len(refused), "fallback": len(bad),
+                 "empty": int(empty.sum())}
+        stats.update({name: int(np.count_nonzero(flags[raised] & bit)) for name, bit in FLAGS.items()})
         stats.update(self.transfers)
         return MIC(centers, R, empty, stats, nn)
+
+    def _certified(self, X, w, out, pos, rows):
+        """``(centers, R, refused)``: the host's re-solve of the cells at sorted positions
+        `pos`, by result row (`rows`), and the positions in `pos` of the cells the device
+        proved and the host refused."""
+        q, R, accepted = self._refine(X, w, out, pos)
+        refused = np.flatnonzero(~accepted & ((out["flags"] & ~_NN) == 0))
+        centers, _ = _centres(np.take(X, pos, axis=0), q, R, self.domain)
+        return _scatter(centers, rows), _scatter(R, rows), refused
 
 
 def _scatter(a, rows):

@@ -49,23 +49,23 @@ class Domain:
     def area(self):
         return self.width * self.height
 
-    def wrap(self, points):
-        """Wrap points into [0,W) x [0,H) (periodic domains only); a new array.
+    def wrap(self, points, *, copy=True):
+        """Wrap points into [0,W) x [0,H) (periodic domains only); a new array, or
+        without `copy`, the float64 array `points` itself, wrapped in place.
 
         Only the coordinates outside ``[0, size)`` (and -0.0) go through
         ``np.mod``: a relaxed set has few.  Coordinates inside are unchanged
         by ``np.mod`` anyway, so the result is the same bit for bit.  A set
-        that lies inside already (as most sets wrapped again do) costs a
-        copy and two reductions; the search for the outside ones goes a
-        column at a time (a comparison with an ``(n, 2)`` broadcast of the
-        size runs numpy's inner loop two values at a time).
+        that lies inside already (as most sets wrapped again do) costs two
+        reductions (and the copy); the search for the outside ones goes
+        along :meth:`_axes`.
         """
-        q = np.array(points, dtype=np.float64)
+        q = np.array(points, dtype=np.float64) if copy else points
         q += 0.0   # -0.0 becomes 0.0, as np.mod makes it; every other value stays
         flat = q.ravel()
         if len(flat) and flat.min() >= 0.0 and flat.max() < min(self.width, self.height):   # NaN fails both
             return q
-        for col, s in zip(q.reshape(-1, 2).T, (self.width, self.height)):
+        for col, s in self._axes(q):
             out = np.flatnonzero(~((col >= 0.0) & (col < s)))   # NaN too, as np.mod has it
             if len(out):
                 v = np.mod(col[out], s)
@@ -83,9 +83,18 @@ class Domain:
         [[-0.25, -0.5], [0.25, -0.5]]
         """
         if self.periodic:
-            for col, s in zip(offsets.reshape(-1, 2).T, (self.width, self.height)):
+            for col, s in self._axes(offsets):
                 col -= np.round(col / s) * s
         return offsets
+
+    def _axes(self, a):
+        """``(values, period)`` pairs of the ``(..., 2)`` array `a` (views): one of all its
+        values where the periods are equal and `a` is contiguous (a square: one pass), else
+        one a column (an ``(n, 2)`` broadcast of the size would run numpy's inner loop two
+        values at a time)."""
+        if self.width == self.height and a.flags.c_contiguous:
+            return [(a.reshape(-1), self.width)]
+        return zip(a.reshape(-1, 2).T, (self.width, self.height))
 
     def images(self, points, margin):
         """The points and their periodic images within `margin` of the domain.

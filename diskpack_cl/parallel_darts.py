@@ -327,7 +327,8 @@ class _DeviceGrid:
         if not self.placed:
             return np.empty((0, 2))
         cells, xy = (np.concatenate(a) for a in zip(*self.placed))
-        return xy[np.argsort(cells, kind="stable")]
+        # np.take: a row gather several times faster than xy[...] (as in cells.CellMIC.solve)
+        return np.take(xy, np.argsort(cells, kind="stable"), axis=0)
 
     cells_of = _Grid.cells_of
 

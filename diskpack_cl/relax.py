@@ -232,16 +232,19 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
                          profile=profile, verify=verify)
     stats = {"engine": engine.name, **({"fallback": engine.fallback} if engine.fallback else {})}
     t_start = time.perf_counter()
-    X, rho, it, reason, nn = _iterate(engine, dom, X, eps, int(max_iter), patience, callback,
-                                      verify, stats, local)
-    went_local = reason == "local"
-    if went_local:   # the local route measures its last rho on the host itself
-        with engine.timings("local"), ThreadPoolExecutor(1) as pool:
-            # the pairs that hold the last rho, searched on the other core meanwhile
-            reach = FINAL_REACH * eps * hexagonal_radius(len(X), dom.area)
-            before = X, pool.submit(close_pairs, X, reach, dom)
-            X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience,
-                                           callback, stats, _local_solver(engine, dom), before)
+    with ThreadPoolExecutor(1) as pool:
+        # the local route measures its last rho on the host itself, from the pairs that
+        # hold it, searched on the other core meanwhile (from the set it will go local with)
+        reach = FINAL_REACH * eps * hexagonal_radius(len(X), dom.area)
+        pairs = (lambda Y: (Y, pool.submit(close_pairs, Y, reach, dom))) if local else None
+        X, rho, it, reason, nn, before = _iterate(engine, dom, X, eps, int(max_iter), patience,
+                                                  callback, verify, stats, pairs)
+        went_local = reason == "local"
+        if went_local:
+            with engine.timings("local"):
+                X, rho, it, reason = _go_local(X, nn, rho, it, eps, dom, int(max_iter), patience,
+                                               callback, stats, _local_solver(engine, dom),
+                                               before or pairs(X))
     seconds = time.perf_counter() - t_start
     if not went_local or reason != "eps":
         _certify_rho(X, rho[-1], dom)
@@ -256,9 +259,13 @@ def _check_run(eps, max_iter):
         raise ValueError(f"max_iter must be >= 0, got {max_iter}")
 
 
-def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, local):
+def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, pairs):
     """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason,
-    nearest-neighbour distances)``; the reason ``"local"`` hands over to local iterations."""
+    nearest-neighbour distances, before)``; the reason ``"local"`` hands over to local
+    iterations.  `pairs` (None: no local iterations) starts the search of an iterate's
+    close pairs, ``(X, future)``: from the iterate that will probably go local, alongside
+    its nearest neighbours (`before`, None where none did)."""
+    local = pairs is not None
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     # the local route measures the rho it returns on the host: its global iterates need
     # the device's proven MICs, not the host's re-solve of every cell (verify still has it)
@@ -270,10 +277,11 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
     guess = True   # nearest neighbours alone where the next iterate will probably go local
+    before = None
     while rho[-1] < eps and it < max_iter:
         nn, ready, soon = _local_state(X, nn, eps, dom) if local else (nn, False, False)
         if ready:
-            return X, rho, it, "local", nn
+            return X, rho, it, "local", nn, before
         # an iterate without its MICs that did not go local: the guess failed, so no more
         # (at a high eps the share of bad points hovers above the local one for long)
         guess = guess and (it == 0 or step is not None)
@@ -281,6 +289,7 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
         step = step or _mic(engine, X, stats, certify)
         omega = OVER_RELAX[it - 1] if local and it <= len(OVER_RELAX) else 1.0
         X = _moved(X, step, rho[-1], dom, omega)
+        before = pairs(X) if soon and guess else None
         step, nn = _after_move(engine, X, stats, certify, soon and guess)
         rho.append(_rho(X, nn, verify, dom))
         if callback is not None:
@@ -292,7 +301,7 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, l
         elif it - best_at >= patience:
             reason = "stalled"
             break
-    return X, rho, it, reason, None
+    return X, rho, it, reason, None, None
 
 
 def _moved(X, mic, rho, domain, omega):
@@ -309,9 +318,10 @@ def _moved(X, mic, rho, domain, omega):
     z *= omega - 1.0
     length = np.abs(z)
     room = np.maximum(mic.radii - 0.5 * d_min, 0.0)
-    z *= np.divide(room, length, out=np.ones_like(length), where=length > room)
+    with np.errstate(divide="ignore", invalid="ignore"):   # fmin takes 1 over 0/0's NaN
+        z *= np.fmin(room / length, 1.0)
     past += mic.centers
-    return domain.wrap(past)
+    return domain.wrap(past, copy=False)
 
 
 def _local_state(X, nn, eps, dom):

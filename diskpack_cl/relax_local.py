@@ -237,7 +237,10 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None
     pos[S] = np.arange(len(S))
     XS, BS = X[S], pos[B]
     A = pos[_within(X, B, move, domain, cells)]
-    mic = exact_mic(XS, domain=domain, cells=A) if solver is None else solver.solve(XS, cells=A)
+    if solver is None:
+        mic = exact_mic(XS, domain=domain, cells=A)
+    else:   # buckets as fine as the whole set's
+        mic = solver.solve(XS, cells=A, density=n / domain.area)
     q = domain.shortest(mic.centers - XS[A])
     ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
     held = int((~ok).sum())

@@ -462,3 +462,47 @@ __kernel void cell_mic(
     out[0] = L.code[b[0]]; out[1] = L.code[b[1]]; out[2] = L.code[b[2]]; out[3] = flag;
     mic[i] = (double4)(xi.x + z[0], xi.y + z[1], z[2], SQRT(nn2));
 }
+
+/* A coordinate wrapped into [0, s) as numpy's np.mod wraps it, bit for bit
+ * (fmod is exact; -0.0 becomes 0.0; a sum that rounds up to s becomes 0.0):
+ * the host's Domain.wrap gives the same centres. */
+inline double wrap_coord(double v, double s)
+{
+    if (v >= 0.0 && v < s) return v + 0.0;   /* most: no call to PoCL's fmod */
+    double m = fmod(v, s);
+    if (m < 0.0) m += s;
+    return m >= s ? 0.0 : m + 0.0;
+}
+
+/* cell_mic's answers in the caller's order, as CellMIC.solve returns them:
+ * one work item per cell of the list, which writes row rows[i] of the centres
+ * (wrapped on a torus; the site itself for an empty cell), the radii and the
+ * nearest-neighbour distances, and copies its flag word to flags[i] (list
+ * order).  The host then reads back these alone, not the constraint codes,
+ * and needs no pass over the cells of its own but over the few flagged ones. */
+__kernel void mic_rows(
+    __global const double2 *site,    /* sites sorted by bucket */
+    __global const int *cells,       /* m sorted positions, as cell_mic had them */
+    __global const int *rows,        /* m result rows: cell i's answer goes to row rows[i] */
+    const int m,
+    const double W, const double H,  /* domain size */
+    __global const double4 *mic,     /* cell_mic's answers */
+    __global const int *codes,       /* cell_mic's codes (flag word at 3) */
+    __global double2 *center,        /* out, by row */
+    __global double *radius,         /* out, by row */
+    __global double *nn,             /* out, by row */
+    __global int *flags)             /* out, by list position */
+{
+    const int i = get_global_id(0);
+    if (i >= m) return;
+    const double4 c = mic[i];
+    const int r = rows[i];
+    double2 p = c.z < 0.0 ? site[cells[i]] : c.xy;
+#if PERIODIC
+    p = (double2)(wrap_coord(p.x, W), wrap_coord(p.y, H));
+#endif
+    center[r] = p;
+    radius[r] = c.z;
+    nn[r] = c.w;
+    flags[i] = codes[(size_t)i * (4 + MAXNEAR) + 3];
+}
