@@ -232,7 +232,7 @@ def _grid_candidates(X, reach, domain):
     width = np.where(shape > 1, extent / shape, np.inf).min()
     grid = _SortedGrid(order, start, count, shape, lo, _per_length(shape, extent),
                        float(width) / _GRID_MARGIN)
-    return [np.ascontiguousarray(X[order, k]) for k in (0, 1)], ranges, grid
+    return list(np.take(X, order, axis=0).T.copy()), ranges, grid
 
 
 class _SortedGrid(NamedTuple):
@@ -368,7 +368,10 @@ def _grid_cells(X, reach, domain):
     if domain.periodic and shape.min() < 3:
         return None
     per_length = _per_length(shape, extent)
-    return X, np.minimum((X - lo) * per_length, shape - 1).astype(np.int64), shape, extent, lo
+    cell = np.empty(X.shape, np.int64)
+    for k in range(2):   # a column at a time: an (n, 2) broadcast runs two values a loop
+        cell[:, k] = np.minimum((X[:, k] - lo[k]) * per_length[k], shape[k] - 1)
+    return X, cell, shape, extent, lo
 
 
 def _per_length(shape, extent):

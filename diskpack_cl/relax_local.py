@@ -104,6 +104,7 @@ class _Neighbourhoods:
         self.nx, self.ny = int(domain.width // (side / FINE)), int(domain.height // (side / FINE))
         self.flat = self._cells(X) if coarse >= 4 else None
         self._stencils = {}
+        self._rows, self._cols = (_index_table(m, domain.periodic) for m in (self.ny, self.nx))
 
     def _cells(self, X):
         cx = np.minimum((X[:, 0] * (self.nx / self.domain.width)).astype(np.int64), self.nx - 1)
@@ -133,17 +134,22 @@ class _Neighbourhoods:
         `B` (the cells of the stencil around each of B's), and whether it is all of them."""
         if self.flat is None:
             return np.arange(self.n), True
-        nx, ny = self.nx, self.ny
+        nx = self.nx
         dy, dx = self._stencil(self.side if radius is None else radius)
         cy, cx = np.divmod(np.unique(self.flat[B]), nx)
-        y = cy[:, None] + dy
-        x = cx[:, None] + dx
-        if self.domain.periodic:
-            y, x = y % ny, x % nx
-        inside = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
-        mark = np.zeros(nx * ny, dtype=bool)
-        mark[(y * nx + x)[inside]] = True
+        y = self._rows[cy[:, None] + (dy + FINE)]
+        x = self._cols[cx[:, None] + (dx + FINE)]
+        mark = np.zeros(nx * self.ny, dtype=bool)
+        mark[(y * nx + x)[(y >= 0) & (x >= 0)]] = True
         return np.flatnonzero(mark[self.flat]), False
+
+
+def _index_table(m, periodic):
+    """The row (or column) of each index ``-FINE .. m + FINE - 1`` of a grid m cells
+    across: wrapped on a torus, -1 off a box (a lookup, where a modulo a cell would
+    cost a division)."""
+    k = np.arange(-FINE, m + FINE)
+    return k % m if periodic else np.where((k >= 0) & (k < m), k, -1)
 
 
 def _bad_pairs(X, B, d_eps, domain, cells=None):
