@@ -126,23 +126,19 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
     return F_PIVOTS;
 }
 
-/* The nearer (smaller beta) of the list's constraints j and k; -1 stands for none. */
-static int nearer(const clist *L, int j, int k)
-{
-    return j < 0 || (k >= 0 && L->be[k] < L->be[j]) ? k : j;
-}
-
 /* Make b the basis of the nearest half-planes of three 120-degree sectors of
- * normal directions, made of the sextants `first` + 0..5 (mod 6) of `near`
- * pairwise, when the three bound a triangle: their normals span the plane
+ * normal directions, made of the sextants `first` + 0..5 (mod 6) pairwise (`near`
+ * the nearest constraint of each sextant, -1 for none, `nbe` its beta, INFINITY
+ * for none), when the three bound a triangle: their normals span the plane
  * positively, the dual multipliers (third row of the basis inverse) are > 0.
  * Returns whether it did. */
-static int sector_basis(const clist *L, const int *near, int first, int *b)
+static int sector_basis(const clist *L, const int *near, const double *nbe, int first, int *b)
 {
     int c[3];
     double ax[3], ay[3], inv[9];
     for (int k = 0; k < 3; ++k) {
-        c[k] = nearer(L, near[(first + 2 * k) % 6], near[(first + 2 * k + 1) % 6]);
+        const int u = first + 2 * k, v = u == 5 ? 0 : u + 1;
+        c[k] = nbe[v] < nbe[u] ? near[v] : near[u];   /* the nearer; the first on a tie */
         if (c[k] < 0) return 0;
         ax[k] = L->nx[c[k]]; ay[k] = L->ny[c[k]];
     }
@@ -161,13 +157,18 @@ static int sector_basis(const clist *L, const int *near, int first, int *b)
 static void start_basis(const clist *L, int first, int *b)
 {
     int near[6] = {-1, -1, -1, -1, -1, -1};   /* nearest in each 60-degree sextant */
+    double nbe[6] = {INFINITY, INFINITY, INFINITY, INFINITY, INFINITY, INFINITY};
     for (int k = first; k < L->m; ++k) {
-        const double x = L->nx[k];
-        const int s = L->ny[k] >= 0.0 ? (x > 0.5 ? 0 : x > -0.5 ? 1 : 2)
-                                      : (x < -0.5 ? 3 : x < 0.5 ? 4 : 5);
-        near[s] = nearer(L, near[s], k);
+        /* sextants 0 1 2 above the x axis from the right, 3 4 5 below from the left;
+         * computed and kept without branches: the directions are random, and
+         * mispredicted branches here cost more than the simplex */
+        const double x = L->nx[k], be = L->be[k];
+        const int s = L->ny[k] >= 0.0 ? 2 - (x > 0.5) - (x > -0.5) : 3 + !(x < -0.5) + !(x < 0.5);
+        const int take = be < nbe[s];
+        near[s] = take ? k : near[s];
+        nbe[s] = take ? be : nbe[s];
     }
-    if (!sector_basis(L, near, 0, b)) sector_basis(L, near, 1, b);
+    if (!sector_basis(L, near, nbe, 0, b)) sector_basis(L, near, nbe, 1, b);
 }
 
 static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
