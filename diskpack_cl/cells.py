@@ -145,6 +145,7 @@ class CellMIC:
         self._kernel, self._rows_kernel = kernels["cell_mic"], kernels["mic_rows"]
         dev = self.ctx.devices[0]
         self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
+        self._rows_group = group_size(self._rows_kernel, dev, 64)
         # whole groups per enqueue: the last group of one must not reach into the next
         self.chunk = CHUNK - CHUNK % self.group
         self._bufs = {}
@@ -340,37 +341,20 @@ class CellMIC:
         the host's re-solve; 48 of the 80 bytes a cell)."""
         import pyopencl as cl
 
-        n = len(pos)
-        nbx, nby, bw, bh = grid
-        dom = self.domain
-        scale = max(dom.width, dom.height)
+        n, dom = len(pos), self.domain
         bwloc, win = self._local_wmax(bwmax, grid, ws.max())
         up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
               "bwmax": bwmax, "bwloc": bwloc, "cells": pos, "rows": rows.astype(np.int32)}
-        b_site, b_w, b_start, b_wmax, b_wloc, b_cells, b_rows = (self._upload(k, v) for k, v in up.items())
+        b = {k: self._upload(k, v) for k, v in up.items()}
         outs = {"mic": np.empty((n, 4)), "codes": np.empty((n, 4 + MAXNEAR), np.int32),
                 "center": np.empty((n, 2)), "radius": np.empty(n), "nn": np.empty(n),
                 "flags": np.empty(n, np.int32)}
         bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
-        near_tol = 1e-7 * np.sqrt(dom.area / len(Xs))
-        events = []
-        for off in range(0, n, self.chunk):
-            events.append(self._kernel(
-                self.queue, (padded(min(self.chunk, n - off), self.group),), (self.group,), b_site, b_w, b_start, b_wmax, b_wloc, np.int32(win),
-                b_cells, np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
-                np.float64(dom.width), np.float64(dom.height), np.float64(ws.max()),
-                np.float64(1e-12 * scale), np.float64(near_tol), np.int32(off),
-                bufs["mic"], bufs["codes"]))
-        for ev in events:
-            # a chunk takes well under a second, so a plain wait per chunk
-            # answers Ctrl-C in time without wait_for's helper thread
-            ev.wait()
-        if self.profile:
-            self.timings.kernel("cell_mic", sum((ev.profile.end - ev.profile.start) * 1e-9
-                                                for ev in events))
-        self._rows_kernel(self.queue, (padded(n, 64),), (64,), b_site, b_cells, b_rows, np.int32(n),
-                          np.float64(dom.width), np.float64(dom.height), bufs["mic"], bufs["codes"],
-                          bufs["center"], bufs["radius"], bufs["nn"], bufs["flags"])
+        self._solve_cells(b, bufs, n, len(Xs), grid, win, ws.max())
+        self._rows_kernel(self.queue, (padded(n, self._rows_group),), (self._rows_group,),
+                          b["site"], b["cells"], b["rows"], np.int32(n), np.float64(dom.width),
+                          np.float64(dom.height), bufs["mic"], bufs["codes"], bufs["center"],
+                          bufs["radius"], bufs["nn"], bufs["flags"])
         if not codes:
             del outs["mic"], outs["codes"]
         for k, v in outs.items():
@@ -379,6 +363,29 @@ class CellMIC:
         self.transfers = {"bytes_to_device": int(sum(v.nbytes for v in up.values())),
                           "bytes_from_device": int(sum(v.nbytes for v in outs.values()))}
         return outs
+
+    def _solve_cells(self, b, bufs, n, n_sites, grid, win, wmax):
+        """cell_mic on the `n` cells of ``b["cells"]`` (uploaded inputs `b`, outputs
+        ``bufs["mic"]`` and ``bufs["codes"]``), a chunk of work items an enqueue."""
+        nbx, nby, bw, bh = grid
+        dom = self.domain
+        tol = 1e-12 * max(dom.width, dom.height)
+        near_tol = 1e-7 * np.sqrt(dom.area / n_sites)
+        events = []
+        for off in range(0, n, self.chunk):
+            events.append(self._kernel(
+                self.queue, (padded(min(self.chunk, n - off), self.group),), (self.group,),
+                b["site"], b["weight"], b["start"], b["bwmax"], b["bwloc"], np.int32(win),
+                b["cells"], np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw),
+                np.float64(bh), np.float64(dom.width), np.float64(dom.height), np.float64(wmax),
+                np.float64(tol), np.float64(near_tol), np.int32(off), bufs["mic"], bufs["codes"]))
+        for ev in events:
+            # a chunk takes well under a second, so a plain wait per chunk
+            # answers Ctrl-C in time without wait_for's helper thread
+            ev.wait()
+        if self.profile:
+            self.timings.kernel("cell_mic", sum((ev.profile.end - ev.profile.start) * 1e-9
+                                                for ev in events))
 
     def _refine(self, X, w, out, pos):
         """Host re-solve and check of the cells at sorted positions `pos`: ``(q, R, accepted)``."""

@@ -420,3 +420,64 @@ def test_the_call_free_math_gives_the_builtins_answers(ctx, dom, monkeypatch):
                         lambda c, stem, defines=None: build(c, stem, {**(defines or {}), "INLINE_MATH": 0}))
     for a, b in zip(first, answers()):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("dom", [Domain.torus(), Domain(3.0, 2.0, True), Domain.rect(3.0, 2.0)])
+def test_the_rows_kernel_wraps_and_places_as_the_host_does(ctx, dom):
+    """``mic_rows`` (cell_mic.cl) puts each cell's answer in its result row, the site
+    itself for an empty cell, and on a torus wraps the centre as ``Domain.wrap`` (numpy's
+    mod) does, bit for bit: -0.0, a sum that rounds up to the period, a period or more
+    out.  Its flag words stay in list order."""
+    import pyopencl as cl
+    import pyopencl.array as cla
+
+    from diskpack_cl._device import padded
+    from diskpack_cl._kernels import build_program
+    from diskpack_cl.cells import MAXC, MAXNEAR
+
+    W, H = dom.width, dom.height
+    edge = [-1e-17, -0.0, 0.0, W, np.nextafter(W, 0), -0.25 * W, 1.25 * W, 2.5 * W, -3.75 * W, 0.5 * W]
+    rng = np.random.default_rng(2)
+    m = 64
+    cx = np.concatenate([edge, rng.uniform(-W, 2 * W, m - len(edge))])
+    cy = np.concatenate([rng.uniform(-H, 2 * H, m - len(edge)), np.array(edge) * H / W])
+    R = np.where(rng.random(m) < 0.2, -1.0, rng.random(m))
+    mic = np.column_stack([cx, cy, R, rng.random(m)])
+    codes = rng.integers(-9, 500, (m, 4 + MAXNEAR)).astype(np.int32)
+    site = rng.random((m + 5, 2)) * (W, H)
+    cells = np.sort(rng.choice(m + 5, m, replace=False)).astype(np.int32)
+    rows = rng.permutation(m).astype(np.int32)
+    q = cl.CommandQueue(ctx)
+    dev = {k: cla.to_device(q, np.ascontiguousarray(v)) for k, v in
+           {"site": site, "cells": cells, "rows": rows, "mic": mic, "codes": codes}.items()}
+    out = {"center": cla.empty(q, (m, 2), np.float64), "radius": cla.empty(q, m, np.float64),
+           "nn": cla.empty(q, m, np.float64), "flags": cla.empty(q, m, np.int32)}
+    kernel = build_program(ctx, "cell_mic", {"PERIODIC": int(dom.periodic), "MAXC": MAXC,
+                                             "MAXNEAR": MAXNEAR})["mic_rows"]
+    kernel(q, (padded(m, 1),), None, dev["site"].data, dev["cells"].data, dev["rows"].data,
+           np.int32(m), np.float64(W), np.float64(H), dev["mic"].data, dev["codes"].data,
+           *(a.data for a in out.values()))
+    centre = np.where((R < 0)[:, None], site[cells], mic[:, :2])
+    want = {"center": _scatter(dom.wrap(centre) if dom.periodic else centre, rows),
+            "radius": _scatter(R, rows), "nn": _scatter(mic[:, 3], rows), "flags": codes[:, 3]}
+    for name, a in out.items():
+        assert a.get().tobytes() == np.ascontiguousarray(want[name]).tobytes(), name
+
+
+def test_a_sub_problem_with_its_whole_sets_density_gets_the_same_mics(solvers):
+    """A local step's sub-problem (the sites around a few, out of many) solved on buckets
+    sized for the whole set's density, as ``relax_local`` asks: the MICs of exact_mic."""
+    dom = Domain.torus()
+    pts = dart_throwing(20000, rel_radius=0.7, seed=4)
+    rng = np.random.default_rng(4)
+    centres = pts[rng.choice(len(pts), 30, replace=False)]
+    near = dom.shortest(pts[:, None, :] - centres[None, :, :])
+    sub = pts[(np.hypot(*near.transpose(2, 0, 1)) < 0.03).any(axis=1)]
+    cells = np.flatnonzero((np.hypot(*dom.shortest(sub[:, None, :] - centres[None]).transpose(2, 0, 1))
+                            < 0.012).any(axis=1))
+    solver = solvers(dom)
+    want = exact_mic(sub, domain=dom, cells=cells)
+    for density in (None, len(pts) / dom.area):
+        got = solver.solve(sub, cells=cells, density=density)
+        np.testing.assert_allclose(got.radii, want.radii, rtol=0, atol=1e-12)
+        assert _wrapped_diff(got.centers, want.centers, dom) <= 1e-9

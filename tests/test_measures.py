@@ -98,6 +98,25 @@ def test_wrap_is_np_mod_bit_for_bit(rows, size):
 
 
 @pytest.mark.parametrize("size", [(1.0, 1.0), (2.0, 0.5)])
+def test_wrap_in_place_and_shortest_on_views_give_the_copies_answers(size):
+    """``wrap(copy=False)`` wraps the very array; ``shortest`` changes a strided view
+    (columns of a wider array) in place as it does a contiguous copy, on a square torus
+    (one pass over all values) and a rectangular one (a column at a time)."""
+    dom = Domain(*size, periodic=True)
+    rng = np.random.default_rng(6)
+    X = rng.uniform(-2, 3, (500, 2)) * dom.size
+    want = dom.wrap(X)
+    got = dom.wrap(X, copy=False)
+    assert got is X and got.view(np.uint64).tolist() == want.view(np.uint64).tolist()
+    wide = rng.uniform(-2, 3, (500, 4))
+    view = wide[:, 1:3]
+    want = dom.shortest(view.copy())
+    dom.shortest(view)
+    assert wide[:, 1:3].view(np.uint64).tolist() == want.view(np.uint64).tolist()
+    assert np.all(np.abs(want) <= 0.5 * dom.size)
+
+
+@pytest.mark.parametrize("size", [(1.0, 1.0), (2.0, 0.5)])
 def test_wrap_of_a_set_inside_is_a_copy_with_positive_zeros(size):
     """The fast path of a set inside the domain: the same bits as np.mod, -0.0 too."""
     dom = Domain(*size, periodic=True)
