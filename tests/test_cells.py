@@ -481,3 +481,21 @@ def test_a_sub_problem_with_its_whole_sets_density_gets_the_same_mics(solvers):
         got = solver.solve(sub, cells=cells, density=density)
         np.testing.assert_allclose(got.radii, want.radii, rtol=0, atol=1e-12)
         assert _wrapped_diff(got.centers, want.centers, dom) <= 1e-9
+
+
+@SETTINGS
+@given(periodic=st.booleans(), n=st.integers(2, 30), lattice=st.booleans(),
+       seed=st.integers(0, 2**32 - 1))
+def test_nearest_on_grids_of_one_or_two_buckets_across(solvers, periodic, n, lattice, seed):
+    """CellMIC.nearest where the bucket grid is one to four buckets across: a row's three
+    buckets are then not one run of sites, and on a torus the same bucket comes back
+    shifted by a period; lattices put sites on bucket edges."""
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    rng = np.random.default_rng(seed)
+    if lattice:
+        k = int(np.ceil(np.sqrt(n)))
+        pts = np.stack(np.meshgrid(np.arange(k) / k, np.arange(k) / k), -1).reshape(-1, 2)[:n]
+    else:
+        pts = rng.random((n, 2))
+    pts = pts * (dom.width, dom.height)
+    assert np.abs(solvers(dom).nearest(pts) - _brute_nearest(pts, dom)).max() <= 1e-15

@@ -15,6 +15,19 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #include "common.h"
 
+/* Bucket index c, at most one bucket off a row of n, onto the row: on a torus wrapped,
+ * with its period shift in q; on a rectangle, 0 when it lies off the row (wrap_bucket
+ * without its divisions, for offsets of one bucket). */
+inline int step_into(int *c, int *q, int n)
+{
+#if PERIODIC
+    if (*c < 0) { *c += n; *q = -1; } else if (*c >= n) { *c -= n; *q = 1; }
+    return 1;
+#else
+    return *c >= 0 && *c < n;
+#endif
+}
+
 __kernel void nearest(
     __global const double2 *site,    /* sites sorted by bucket */
     __global const int *bstart,      /* bucket b holds sorted sites bstart[b] .. bstart[b+1]-1 */
@@ -30,10 +43,23 @@ __kernel void nearest(
     const int hx = iclamp((int)(xi.x / bw), 0, nbx - 1), hy = iclamp((int)(xi.y / bh), 0, nby - 1);
     double nn2 = INFINITY;
     for (int dy = -1; dy <= 1; ++dy) {
+        int cy = hy + dy, qy = 0;
+        if (!step_into(&cy, &qy, nby)) continue;
+        const int row = cy * nbx;
+        if (hx >= 1 && hx + 1 < nbx) {
+            /* the row's three buckets are one run of sites, none shifted: one loop
+             * rather than three short ones, whose ends the branches mispredict */
+            for (int t = bstart[row + hx - 1]; t < bstart[row + hx + 2]; ++t) {
+                if (t == s) continue;
+                const double ax = site[t].x - xi.x, ay = site[t].y + qy * H - xi.y;
+                nn2 = FMIN(nn2, ax * ax + ay * ay);
+            }
+            continue;
+        }
         for (int dx = -1; dx <= 1; ++dx) {
-            int cx = hx + dx, cy = hy + dy, qx, qy;
-            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
-            const int b = cy * nbx + cx;
+            int cx = hx + dx, qx = 0;
+            if (!step_into(&cx, &qx, nbx)) continue;
+            const int b = row + cx;
             for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
                 if (t == s) continue;   /* its own periodic images are no other site */
                 const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
