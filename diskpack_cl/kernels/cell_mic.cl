@@ -247,8 +247,41 @@ static int is_artificial(const clist *L, const int *b)
     return L->code[b[0]] <= -5 || L->code[b[1]] <= -5 || L->code[b[2]] <= -5;
 }
 
+/* Add the sites t0 .. t1-1 (shifted by qx, qy periods) to the list, and track the
+ * nearest one; a full list keeps the GATHER_CAP nearest (before the first solve:
+ * `replace`; after it the basis indexes the list) and remembers the nearest dropped. */
+static void gather_run(__global const double2 *site, __global const double *weight,
+                       int s, double2 xi, double wi, int t0, int t1, int qx, int qy,
+                       double W, double H, int fixed, int replace, clist *L, double *nn2,
+                       double *dropped, int *flag)
+{
+    for (int t = t0; t < t1; ++t) {
+        if (t == s && qx == 0 && qy == 0) continue;
+        const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
+        const double len2 = ax * ax + ay * ay;
+        *nn2 = FMIN(*nn2, len2);
+        if (L->m < GATHER_CAP) {
+            push_site(L, ax, ay, weight[t], wi, site_code(t, qx, qy, flag));
+            continue;
+        }
+        const double len = SQRT(len2);
+        if (!replace) { *dropped = FMIN(*dropped, len); continue; }
+        int far = fixed;
+        for (int k = fixed + 1; k < L->m; ++k)
+            if (L->d[k] > L->d[far]) far = k;
+        if (len < L->d[far]) {
+            *dropped = FMIN(*dropped, L->d[far]);
+            set_site(L, far, ax, ay, len2, weight[t], wi, site_code(t, qx, qy, flag));
+        } else {
+            *dropped = FMIN(*dropped, len);
+        }
+    }
+}
+
 /* Add the sites of the buckets at Chebyshev distance `ring` from the home
- * bucket (hx, hy) to the list, and track the nearest one. */
+ * bucket (hx, hy) to the list (gather_run), row by row, each row from the left.
+ * The top and bottom rows' buckets are one run of sites where the row does not
+ * wrap: one loop, not 2 ring + 1 short ones. */
 static void gather_ring(__global const double2 *site, __global const double *weight,
                         __global const int *bstart,
                         int s, double2 xi, double wi, int hx, int hy, int ring,
@@ -256,34 +289,21 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                         int fixed, int replace, clist *L, double *nn2, double *dropped, int *flag)
 {
     for (int dy = -ring; dy <= ring; ++dy) {
-        for (int dx = -ring; dx <= ring; ++dx) {
-            if (imax(iabs(dx), iabs(dy)) != ring) continue;
+        const int edge = dy == -ring || dy == ring;
+        if (edge && hx - ring >= 0 && hx + ring < nbx) {
+            int cx = hx, cy = hy + dy, qx, qy;
+            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+            const int row = cy * nbx;
+            gather_run(site, weight, s, xi, wi, bstart[row + hx - ring], bstart[row + hx + ring + 1],
+                       0, qy, W, H, fixed, replace, L, nn2, dropped, flag);
+            continue;
+        }
+        for (int dx = -ring; dx <= ring; dx += edge ? 1 : imax(2 * ring, 1)) {
             int cx = hx + dx, cy = hy + dy, qx, qy;
             if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int b = cy * nbx + cx;
-            for (int t = bstart[b]; t < bstart[b + 1]; ++t) {
-                if (t == s && qx == 0 && qy == 0) continue;
-                const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
-                const double len2 = ax * ax + ay * ay;
-                *nn2 = FMIN(*nn2, len2);
-                if (L->m < GATHER_CAP) {
-                    push_site(L, ax, ay, weight[t], wi, site_code(t, qx, qy, flag));
-                    continue;
-                }
-                /* full: keep the GATHER_CAP nearest (before the first solve; after
-                 * it the basis indexes the list), remember the nearest dropped */
-                const double len = SQRT(len2);
-                if (!replace) { *dropped = FMIN(*dropped, len); continue; }
-                int far = fixed;
-                for (int k = fixed + 1; k < L->m; ++k)
-                    if (L->d[k] > L->d[far]) far = k;
-                if (len < L->d[far]) {
-                    *dropped = FMIN(*dropped, L->d[far]);
-                    set_site(L, far, ax, ay, len2, weight[t], wi, site_code(t, qx, qy, flag));
-                } else {
-                    *dropped = FMIN(*dropped, len);
-                }
-            }
+            gather_run(site, weight, s, xi, wi, bstart[b], bstart[b + 1], qx, qy, W, H,
+                       fixed, replace, L, nn2, dropped, flag);
         }
     }
 }
