@@ -135,16 +135,17 @@ def _check_points(points, domain):
         raise ValueError(f"points must have shape (n, 2), got {X.shape}")
     if len(X) < 2:
         raise ValueError(f"need at least 2 points, got {len(X)}")
-    bad = ~np.all(np.isfinite(X), axis=1)
-    if bad.any():
+    # the rows at fault are looked for only where there are some (a reduction along
+    # rows of two runs numpy's inner loop two values at a time: 15 ms at 1M)
+    if not np.isfinite(X).all():
+        bad = ~np.all(np.isfinite(X), axis=1)
         raise ValueError(f"{bad.sum()} point(s) have NaN or infinite coordinates (first: row {np.argmax(bad)})")
     if domain.periodic:
-        X = domain.wrap(X)
-    else:
+        X = domain.wrap(X, copy=False)
+    elif not all(X[:, k].min() >= 0 and X[:, k].max() <= s for k, s in enumerate(domain.size)):
         out = ~np.all((X >= 0) & (X <= domain.size), axis=1)
-        if out.any():
-            raise ValueError(f"{out.sum()} point(s) lie outside the box {domain.width:g} x "
-                             f"{domain.height:g} (first: row {np.argmax(out)})")
+        raise ValueError(f"{out.sum()} point(s) lie outside the box {domain.width:g} x "
+                         f"{domain.height:g} (first: row {np.argmax(out)})")
     dup = coincident_pairs(X, domain)
     if len(dup):
         where = "on the torus" if domain.periodic else "in the box"
