@@ -11,7 +11,9 @@ fail the check, to :func:`diskpack_cl.geometry.exact_mic`.  The results are
 the same MICs as ``exact_mic`` computes for all cells, at a fraction of its
 cost.  ``solve(..., certify=False)`` skips the host's re-solve and takes the
 device's answer wherever the device proved it (the global iterates of
-``relax_poisson(local=True)``, whose returned rho a KD-tree measures).
+``relax_poisson(local=True)``, whose returned rho a KD-tree measures); the
+kernel ``mic_rows`` then puts those answers into the caller's order on the
+device, and they are all that comes back.
 
 Devices without ``cl_khr_fp64`` cannot run this kernel; :func:`has_fp64`
 tells, and the engines fall back to the raster estimate refined by

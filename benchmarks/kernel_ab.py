@@ -1,0 +1,87 @@
+"""Two or more versions of the cell_mic kernel, timed against each other in one process.
+
+    python benchmarks/kernel_ab.py OLD.cl NEW.cl [MORE.cl ...] [--n 1000000] [--rounds 8]
+        [--box] [--include DIR]
+
+Each file is built as :class:`diskpack_cl.cells.CellMIC` builds
+``kernels/cell_mic.cl`` (with ``kernels/`` on the include path, or
+``--include``; a ``FILE.cl@DIR`` argument takes its own).  A dart-throwing
+start of ``--n`` points and that set moved once (over-relaxed, as the
+relaxation's first move) are solved with each version in turn, the order
+rotating every round, so that the load of a shared machine falls on all
+versions alike.  Printed per version: the median device seconds of the
+kernel, and the medians (and quartiles) of its CPU seconds and kernel
+seconds over the first version's, call by call; and whether its MICs are
+the first version's bit for bit.  Separate processes timed one after the
+other move by 10-15 % with the load on the development VM; these ratios by
+a few percent.
+"""
+
+import argparse
+import hashlib
+import pathlib
+import time
+
+import numpy as np
+
+from diskpack_cl.cells import MAXC, MAXNEAR, CellMIC
+from diskpack_cl.domain import Domain
+from diskpack_cl.parallel_darts import parallel_darts
+from diskpack_cl.relax import _moved
+from diskpack_cl._kernels import inline_math, kernel_dir
+
+
+def build(solver, spec, include, periodic):
+    """The cell_mic kernel of the source `spec` (``FILE`` or ``FILE@INCLUDE_DIR``)."""
+    import pyopencl as cl
+
+    path, _, inc = spec.partition("@")
+    defines = {"INLINE_MATH": inline_math(solver.ctx), "PERIODIC": int(periodic), "MAXC": MAXC,
+               "MAXNEAR": MAXNEAR}
+    opts = ["-I", inc or include] + [f"-D{k}={v}" for k, v in sorted(defines.items())]
+    return cl.Program(solver.ctx, pathlib.Path(path).read_text()).build(options=opts).cell_mic
+
+
+def sets(n, domain):
+    """The start set and the set after one over-relaxed move."""
+    X = parallel_darts(n, rel_radius=0.72, seed=2)
+    if not domain.periodic:
+        X = X * (domain.width, domain.height)
+    res = CellMIC(domain).solve(X, certify=False)
+    return X, _moved(X, res, 0.72, domain, 1.5)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("sources", nargs="+")
+    ap.add_argument("--n", type=int, default=1_000_000)
+    ap.add_argument("--rounds", type=int, default=8)
+    ap.add_argument("--box", action="store_true", help="a 2 x 1 box instead of the torus")
+    ap.add_argument("--include", default=str(kernel_dir()))
+    args = ap.parse_args()
+    domain = Domain.rect(2.0, 1.0) if args.box else Domain.torus()
+    solver = CellMIC(domain, profile=True)
+    kernels = [build(solver, s, args.include, domain.periodic) for s in args.sources]
+    points = sets(args.n, domain)
+    cpu = [[] for _ in kernels]
+    dev = [[] for _ in kernels]
+    digest = [hashlib.sha256() for _ in kernels]
+    for r in range(args.rounds):
+        for k in np.roll(np.arange(len(kernels)), r):
+            solver._kernel = kernels[k]
+            for X in points:
+                mark, c0 = solver.timings.mark(), time.process_time()
+                res = solver.solve(X, certify=False)
+                cpu[k].append(time.process_time() - c0)
+                dev[k].append(solver.timings.since(mark)["kernel"])
+                digest[k].update(res.centers.tobytes() + res.radii.tobytes())
+    for k, spec in enumerate(args.sources):
+        rc, rd = np.array(cpu[k]) / cpu[0], np.array(dev[k]) / dev[0]
+        q1, q3 = np.percentile(rc, [25, 75])
+        print(f"{spec}: kernel {np.median(dev[k]):.3f} s; cpu / first {np.median(rc):.3f} "
+              f"({q1:.3f}-{q3:.3f}), kernel / first {np.median(rd):.3f}; "
+              f"same MICs: {digest[k].hexdigest() == digest[0].hexdigest()}")
+
+
+if __name__ == "__main__":
+    main()
