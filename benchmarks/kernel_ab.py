@@ -51,6 +51,24 @@ def sets(n, domain):
     return X, _moved(X, res, 0.72, domain, 1.5)
 
 
+def rotate(solver, kernels, points, rounds):
+    """Each kernel on each set, the order rotating every round: per kernel its CPU
+    seconds and kernel seconds call by call, and a digest of its MICs."""
+    cpu = [[] for _ in kernels]
+    dev = [[] for _ in kernels]
+    digest = [hashlib.sha256() for _ in kernels]
+    for r in range(rounds):
+        for k in np.roll(np.arange(len(kernels)), r):
+            solver._kernel = kernels[k]
+            for X in points:
+                mark, c0 = solver.timings.mark(), time.process_time()
+                res = solver.solve(X, certify=False)
+                cpu[k].append(time.process_time() - c0)
+                dev[k].append(solver.timings.since(mark)["kernel"])
+                digest[k].update(res.centers.tobytes() + res.radii.tobytes())
+    return cpu, dev, [d.hexdigest() for d in digest]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("sources", nargs="+")
@@ -62,25 +80,13 @@ def main():
     domain = Domain.rect(2.0, 1.0) if args.box else Domain.torus()
     solver = CellMIC(domain, profile=True)
     kernels = [build(solver, s, args.include, domain.periodic) for s in args.sources]
-    points = sets(args.n, domain)
-    cpu = [[] for _ in kernels]
-    dev = [[] for _ in kernels]
-    digest = [hashlib.sha256() for _ in kernels]
-    for r in range(args.rounds):
-        for k in np.roll(np.arange(len(kernels)), r):
-            solver._kernel = kernels[k]
-            for X in points:
-                mark, c0 = solver.timings.mark(), time.process_time()
-                res = solver.solve(X, certify=False)
-                cpu[k].append(time.process_time() - c0)
-                dev[k].append(solver.timings.since(mark)["kernel"])
-                digest[k].update(res.centers.tobytes() + res.radii.tobytes())
+    cpu, dev, digest = rotate(solver, kernels, sets(args.n, domain), args.rounds)
     for k, spec in enumerate(args.sources):
         rc, rd = np.array(cpu[k]) / cpu[0], np.array(dev[k]) / dev[0]
         q1, q3 = np.percentile(rc, [25, 75])
         print(f"{spec}: kernel {np.median(dev[k]):.3f} s; cpu / first {np.median(rc):.3f} "
               f"({q1:.3f}-{q3:.3f}), kernel / first {np.median(rd):.3f}; "
-              f"same MICs: {digest[k].hexdigest() == digest[0].hexdigest()}")
+              f"same MICs: {digest[k] == digest[0]}")
 
 
 if __name__ == "__main__":
