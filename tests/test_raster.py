@@ -131,14 +131,15 @@ def test_empty_cell_gets_radius_minus_one(ctx, periodic):
     assert np.all(est.radii[[0, 1]] > 0)
 
 
-def _delaunay_pairs(pts, dom):
-    """Voronoi neighbour pairs: periodic ghosts on a torus, mirror ghosts in a rectangle.
+def _voronoi_edges(pts, dom):
+    """Voronoi neighbour pairs and the longest edge each pair shares: periodic ghosts
+    on a torus, mirror ghosts in a rectangle.
 
     Mirroring the sites across the four edges makes the Voronoi diagram of
     sites plus mirrors, restricted to the rectangle, the clipped diagram, so
-    a Delaunay edge between two real sites is a shared edge inside it.
+    a ridge between two real sites is a shared edge inside it.
     """
-    from scipy.spatial import Delaunay
+    from scipy.spatial import Voronoi
 
     n = len(pts)
     if dom.periodic:
@@ -152,16 +153,14 @@ def _delaunay_pairs(pts, dom):
         pos = np.concatenate(mir)
         site = np.tile(np.arange(n), 5)
         central = real = np.arange(len(pos)) < n
-    tri = Delaunay(pos)
-    pairs = set()
-    for simplex in tri.simplices:
-        for a, b in ((0, 1), (1, 2), (0, 2)):
-            u, v = simplex[a], simplex[b]
-            if (central[u] or central[v]) and real[u] and real[v]:
-                i, j = sorted((site[u], site[v]))
-                if i != j:
-                    pairs.add((int(i), int(j)))
-    return pairs
+    vor = Voronoi(pos)
+    edges = {}
+    for (u, v), ends in zip(vor.ridge_points, vor.ridge_vertices):
+        if (central[u] or central[v]) and real[u] and real[v] and site[u] != site[v]:
+            pair = tuple(sorted((int(site[u]), int(site[v]))))
+            length = np.inf if -1 in ends else float(np.hypot(*np.subtract(*vor.vertices[ends])))
+            edges[pair] = max(edges.get(pair, 0.0), length)
+    return edges
 
 
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -175,14 +174,17 @@ def test_adjacency_is_voronoi_adjacency(ctx, seed, periodic, n):
     _, est, lab, _ = _raster(ctx, dom, (grid, grid), pts)
     adj = {tuple(map(int, p)) for p in est.adjacency()}
     assert all(i < j for i, j in adj)
-    dl = _delaunay_pairs(pts, dom)
+    edges = _voronoi_edges(pts, dom)
     # Raster neighbours that are not Voronoi neighbours are only possible
     # where the two cells come within one grid spacing of each other
     # (across a Voronoi edge shorter than h); check that independently.
-    for i, j in adj - dl:
+    for i, j in adj - set(edges):
         assert ref.cells_within_ref(pts, None, dom, i, j, h * (1 + 1e-9)), (i, j)
-    found = len(adj & dl) / len(dl)
-    assert found >= 0.85, (found, sorted(dl - adj))
+    # and the raster misses only neighbours whose shared edge no row of pixels can
+    # straddle (a few sites gave 5 of 6 pairs where a fraction was asked: an edge
+    # of 0.3 spacings went unseen)
+    missed = {p: edges[p] for p in set(edges) - adj}
+    assert all(length < 2 * h for length in missed.values()), missed
 
 
 def test_adjacency_and_labels_n2_n3_torus_own_images(ctx):
