@@ -249,7 +249,7 @@ class _SortedGrid(NamedTuple):
 
     def cells(self, X):
         """``(column, row)`` of each of the points X (clamped into the grid)."""
-        return np.clip((X - self.lo) * self.per_length, 0, self.shape - 1).astype(np.int64)
+        return _cells_of(X, self.lo, self.per_length, self.shape)
 
 
 class ClosePairs(NamedTuple):
@@ -368,10 +368,17 @@ def _grid_cells(X, reach, domain):
     if domain.periodic and shape.min() < 3:
         return None
     per_length = _per_length(shape, extent)
+    return X, _cells_of(X, lo, per_length, shape), shape, extent, lo
+
+
+def _cells_of(X, lo, per_length, shape):
+    """``(column, row)`` of each of the points X in a grid of ``shape`` cells from `lo`,
+    `per_length` cells per unit length (clamped into the grid), a column at a time: an
+    ``(n, 2)`` broadcast runs numpy's inner loop two values at a time."""
     cell = np.empty(X.shape, np.int64)
-    for k in range(2):   # a column at a time: an (n, 2) broadcast runs two values a loop
-        cell[:, k] = np.minimum((X[:, k] - lo[k]) * per_length[k], shape[k] - 1)
-    return X, cell, shape, extent, lo
+    for k in range(2):
+        cell[:, k] = np.clip((X[:, k] - lo[k]) * per_length[k], 0, shape[k] - 1)
+    return cell
 
 
 def _per_length(shape, extent):
