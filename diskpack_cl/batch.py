@@ -210,7 +210,9 @@ def render_template(template, *, input=None, n=None, seed=None, i=0):
 
 
 def check_outputs(items, check_path, *, make_folders=True):
-    """Refuse, before any work, outputs that two items (or one item twice) would write.
+    """Refuse, before any work, outputs that two items (or one item twice) would write,
+    and outputs that would replace an input of any item
+    (:func:`diskpack_cl.io.check_not_inputs`).
 
     ``check_path(path)`` checks each path (extension, folder); with
     `make_folders` (a batch) missing folders of the rendered paths are
@@ -220,6 +222,8 @@ def check_outputs(items, check_path, *, make_folders=True):
     ------
     ValueError
         The message names both inputs and the shared output.
+    diskpack_cl.io.OutputIsInputError
+        An output is an input of the run (by path or by file).
 
     Examples
     --------
@@ -230,6 +234,8 @@ def check_outputs(items, check_path, *, make_folders=True):
     ...
     ValueError: the output templates map x/cat.jpg and y/cat.jpg to out/cat.svg; add {parent} or {i} to tell them apart
     """
+    from diskpack_cl.io import check_not_inputs
+
     owner = {}
     for item in items:
         for out in item.outputs:
@@ -243,12 +249,20 @@ def check_outputs(items, check_path, *, make_folders=True):
                 raise ValueError(f"the output templates map {names[0]} and {names[1]} to "
                                  f"{out}; add {_telling_apart(other, item)} to tell them apart")
             owner[key] = item
+    check_not_inputs([out for item in items for out in item.outputs],
+                     [path for item in items for path in _item_inputs(item)])
     for item in items:
         for out in item.outputs:
             folder = os.path.dirname(out)
             if folder and make_folders:
                 os.makedirs(folder, exist_ok=True)
             check_path(out)
+
+
+def _item_inputs(item):
+    """The files an item reads: its input and a start set's file (``init``)."""
+    init = item.params.get("init")
+    return [item.input] + ([init] if init not in (None, "dart", "random") else [])
 
 
 def _telling_apart(a, b):

@@ -37,8 +37,10 @@ import numpy as np
 
 __all__ = [
     "POINT_FORMATS",
+    "OutputIsInputError",
     "atomic_write",
     "atomic_writes",
+    "check_not_inputs",
     "check_points_path",
     "check_writable",
     "read_points",
@@ -224,6 +226,65 @@ def check_writable(path):
                          f"{exc.strerror or exc}") from None
     os.close(fd)
     os.unlink(probe)
+
+
+class OutputIsInputError(ValueError):
+    """An output of a run would replace one of its inputs (the command line's status 2)."""
+
+
+def _file_identity(path):
+    """``(st_dev, st_ino)`` of the file `path` reaches, or None where there is none."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):  # missing, a symlink loop, a NUL in the name
+        return None
+    return st.st_dev, st.st_ino
+
+
+def check_not_inputs(outputs, inputs):
+    """Refuse, before any work, an output that would replace an input of the same run.
+
+    An output is refused when its path, with symlinks resolved, is an
+    input's, or when both exist and are the same file (a hard link, a bind
+    mount). The one rule of every command: an output never destroys what
+    the run was given.
+
+    Parameters
+    ----------
+    outputs, inputs : iterable of str or os.PathLike
+        The run's output and input paths (``None`` entries are skipped).
+
+    Raises
+    ------
+    OutputIsInputError
+        A ``ValueError`` naming the output and the input.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> photo = os.path.join(d, "photo.png")
+    >>> open(photo, "w").close()
+    >>> check_not_inputs([os.path.join(d, "out.svg")], [photo])
+    >>> check_not_inputs([os.path.join(d, ".", "photo.png")], [photo])
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.io.OutputIsInputError: output .../photo.png would replace the input .../photo.png: write it elsewhere
+    """
+    given = [os.fspath(x) for x in inputs if x is not None]
+    known = {}
+    for x in given:
+        known.setdefault(os.path.realpath(x), x)
+        ident = _file_identity(x)
+        if ident is not None:
+            known.setdefault(ident, x)
+    for out in outputs:
+        out = os.fspath(out)
+        ident = _file_identity(out)
+        hit = known.get(os.path.realpath(out)) or (ident and known.get(ident))
+        if hit is not None:
+            raise OutputIsInputError(f"output {out} would replace the input {hit}: write it "
+                                     f"elsewhere")
 
 
 def check_points_path(path, *, for_writing=False):

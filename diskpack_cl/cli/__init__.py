@@ -121,6 +121,7 @@ def main(argv=None):
     import signal
 
     from diskpack_cl import NoOpenCLError
+    from diskpack_cl.io import OutputIsInputError
     from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
 
     parser = build_parser()
@@ -141,7 +142,7 @@ def main(argv=None):
         print(f"{PROG}{f' {args.command}' if usage else ''}: error: {exc.render(flag_name)}",
               file=sys.stderr)
         return 2 if usage else 1
-    except _UsageError as exc:
+    except (_UsageError, OutputIsInputError) as exc:
         print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:

@@ -165,9 +165,11 @@ class _UsageError(ValueError):
     """Options that contradict each other: :func:`main` returns 2, as argparse does."""
 
 
-def _checked_outputs(args):
-    """The ``-o`` paths, each checked (extension, folder) and given once, before any work."""
+def _checked_outputs(args, inputs):
+    """The ``-o`` paths, each checked (extension, folder), given once and none of the
+    `inputs`, before any work."""
     from diskpack_cl.export import check_output_path
+    from diskpack_cl.io import check_not_inputs
 
     outputs = [str(o) for o in args.output]
     seen = set()
@@ -177,4 +179,5 @@ def _checked_outputs(args):
         if key in seen:
             raise ValueError(f"output given twice: {out}")
         seen.add(key)
+    check_not_inputs(outputs, inputs)
     return outputs

@@ -66,10 +66,11 @@ def _run_analyze(args):
         raise ValueError("nothing to do: give -o REPORT.png for a figure and/or --json")
     plot = args.output is not None
     if plot:
-        from diskpack_cl.io import check_writable
+        from diskpack_cl.io import check_not_inputs, check_writable
         from diskpack_cl.plots import figure_format
 
         figure_format(args.output)
+        check_not_inputs([args.output], [*args.inputs, args.image])
         check_writable(args.output)
         if not have_matplotlib() and not args.json:
             raise ValueError(f"{PLOT_HINT} (the numbers print without it with --json)")

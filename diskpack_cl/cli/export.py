@@ -39,7 +39,7 @@ def _run_export(args):
 
     write = from_namespace(WriteOptions, args)
     t0 = time.perf_counter()
-    outputs = _checked_outputs(args)
+    outputs = _checked_outputs(args, [args.input])
     res = read_stipple(args.input)
     if res is None:
         raise ValueError(f"{args.input} is a point set, not a stippling (no radii, width and "

@@ -112,11 +112,13 @@ def _report(args, line, summary):
 
 
 def _run_poisson(args):
-    from diskpack_cl.io import check_points_path
+    from diskpack_cl.io import check_not_inputs, check_points_path
 
     if _batch_mode(args, [], [args.output]):
         return _run_poisson_batch(args)
     check_points_path(args.output, for_writing=True)
+    check_not_inputs([args.output], [args.mask, args.density, args.init if args.init not in
+                                     ("dart", "random") else None])
     if args.radius is not None:
         return _run_poisson_radius(args)
     if args.min_distance is not None or args.mask or args.density or args.dim == 3 or (
