@@ -28,7 +28,7 @@ import argparse
 import dataclasses
 import math
 
-__all__ = ["option", "check_fields", "describe", "add_arguments", "from_namespace",
+__all__ = ["option", "check_fields", "describe", "add_arguments", "cli_fields", "from_namespace",
            "NamedOptionError", "OptionConflict", "flag_name", "changed"]
 
 
@@ -261,25 +261,49 @@ def add_arguments(parser, cls, *, groups=None, skip=()):
     """
     groups = {} if groups is None else groups
     have = {a.dest for a in parser._actions}
-    for f in dataclasses.fields(cls):
+    for f, choices, parse in cli_fields(cls, skip=(*skip, *have)):
         m = f.metadata
-        if "help" not in m or not m["cli"] or f.name in skip or f.name in have:
-            continue
         title = m["group"]
         target = parser if title is None else groups.setdefault(
             title, parser.add_argument_group(title))
         if isinstance(f.default, bool):
             target.add_argument(flag_name(f.name), action="store_true", help=m["help"])
             continue
-        kw = dict(default=f.default, help=m["help"], metavar=m["metavar"])
-        choices = m["cli_choices"] or m["choices"]
+        kw = dict(default=f.default, help=m["help"], metavar=m["metavar"], type=parse)
         if choices is not None:
             kw.update(choices=choices)
             kw.pop("metavar")
-        else:
-            kw["type"] = m["cli_type"] or _argparse_type(f.name, m)
         target.add_argument(flag_name(f.name), **kw)
     return groups
+
+
+def cli_fields(cls, *, skip=()):
+    """The command-line fields of ``cls`` not in ``skip``, each with what it takes.
+
+    Yields ``(field, choices, parse)``: a flag (a bool field) takes neither;
+    a choice its ``choices`` and, for choices that are not strings, their
+    ``parse``; any other field the ``parse`` that reads the text and checks
+    it as the dataclass does (raising ``argparse.ArgumentTypeError``). Every
+    command line built from the dataclasses (argparse's, the vpype plugin's
+    click options) goes through it.
+
+    Examples
+    --------
+    >>> from diskpack_cl import ToneOptions
+    >>> [(f.name, parse("0.5")) for f, _, parse in cli_fields(ToneOptions)][0]
+    ('black_point', 0.5)
+    """
+    for f in dataclasses.fields(cls):
+        m = f.metadata
+        if "help" not in m or not m["cli"] or f.name in skip:
+            continue
+        choices = m["cli_choices"] or m["choices"]
+        if isinstance(f.default, bool):
+            yield f, None, None
+        elif choices is not None:
+            yield f, tuple(choices), m["cli_type"]   # choices that are not strings (--dim 3)
+        else:
+            yield f, None, m["cli_type"] or _argparse_type(f.name, m)
 
 
 def changed(obj):

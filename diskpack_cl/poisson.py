@@ -23,16 +23,17 @@ search over n.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
 from .domain import Domain
 from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
-from .relax import relax_poisson
+from .options import check_fields, option
+from .relax import RelaxOptions, relax_poisson
 
-__all__ = ["PoissonDisk", "PoissonDiskResult", "as_box", "count_for_distance", "poisson_disk",
-           "start_points"]
+__all__ = ["PoissonDisk", "PoissonDiskResult", "PoissonOptions", "as_box", "count_for_distance",
+           "poisson_disk", "poisson_job", "poisson_summary", "start_points"]
 
 #: Grid cells per side on which a callable mask or density is sampled.
 FIELD_SAMPLES = 512
@@ -43,6 +44,59 @@ FIELD_SAMPLES = 512
 #: about 0.2 s more of throwing (8 rounds instead of 4); at 0.74 the throwing
 #: needs 19 rounds and a shrink, and saves no further iteration.
 START_RADIUS = 0.72
+
+#: The start sets :func:`poisson_disk` draws.
+STARTS = ("dart", "random")
+
+
+def _check_start(init):
+    if init not in STARTS:
+        raise ValueError(f"init must be 'dart' or 'random', got {init!r}")
+
+
+@dataclass(frozen=True)
+class PoissonOptions(RelaxOptions):
+    """The options of a Poisson disk set (:func:`poisson_disk`, ``diskpack poisson``).
+
+    The relaxation's fields (:class:`~diskpack_cl.relax.RelaxOptions`) and
+    the start set, the dimension and the route.
+
+    Examples
+    --------
+    >>> PoissonOptions(dart_radius=0.7).replace(eps=0.75).eps
+    0.75
+    >>> PoissonOptions(init="grid")
+    Traceback (most recent call last):
+    ...
+    ValueError: init must be 'dart' or 'random', got 'grid'
+    """
+
+    init: str = option("dart", "start set: dart throwing (default) or uniform random; on the "
+                       "command line also a point file, relaxed as `diskpack relax` relaxes it",
+                       check=_check_start, cli_type=str, metavar="dart|random|FILE",
+                       group="start set")
+    dart_radius: float = option(START_RADIUS, "relative radius of the dart-throwing start",
+                                lo=0, hi=0.78, lo_open=True, hi_open=True, metavar="R",
+                                group="start set")
+    rho_max: float = option(0.8, "with a minimum distance: the largest rho it may ask for",
+                            lo=0, hi=1, lo_open=True, hi_open=True, metavar="RHO")
+    patience: int = option(100, "iterations without progress before the run stops as stalled",
+                           integer=True, lo=1, metavar="N")
+    dim: int = option(2, "3: points in the unit 3-torus or a box WxHxD, relaxed to the centres "
+                      "of the largest spheres in their 3D Voronoi cells (rho against FCC)",
+                      choices=(2, 3), cli_type=int)
+    local: bool = option(True, "end with local iterations (the fast route); False: Algorithm 1 "
+                         "throughout, every cell certified", cli=False)
+
+    def __post_init__(self):
+        check_fields(self)
+
+    def replace(self, **changes):
+        """A copy with `changes` (option names), checked."""
+        return replace(self, **changes)
+
+
+_OPTION_NAMES = {f.name for f in fields(PoissonOptions)}
 
 
 @dataclass
@@ -73,6 +127,11 @@ class PoissonDiskResult:
     timings : dict
         Seconds per stage of the relaxation (:attr:`RelaxResult.timings`;
         ``local``: the local tail iterations and the final KD-tree measure).
+    rho_start : float
+        Normalized radius of the start set (NaN for a density).
+    backend, device : str
+        Where the relaxation ran (:attr:`RelaxResult.backend`; empty for a
+        density).
 
     Examples
     --------
@@ -92,6 +151,9 @@ class PoissonDiskResult:
     start_seconds: float
     eps: float
     timings: dict = field(default_factory=dict)
+    rho_start: float = float("nan")
+    backend: str = ""
+    device: str = ""
 
 
 def as_box(box):
@@ -129,30 +191,37 @@ def box_sizes(box, form):
     return size
 
 
-def count_for_distance(min_distance, area, rho_max=0.8):
+def count_for_distance(min_distance, area, rho_max=0.8, dim=2):
     """The most points whose hexagonal radius makes `min_distance` a rho of at most `rho_max`.
 
-    ``n = floor(area rho_max^2 / (2 sqrt(3) (min_distance / 2)^2))``.
+    ``n = floor(area rho_max^2 / (2 sqrt(3) (min_distance / 2)^2))``; for
+    ``dim=3`` `area` is a volume and the radius the FCC packing's:
+    ``n = floor(volume rho_max^3 / (4 sqrt(2) (min_distance / 2)^3))``.
 
     Examples
     --------
     >>> count_for_distance(0.026, 1.0)    # the paper's Fig. 7 radius 0.013
     1093
+    >>> count_for_distance(0.1, 1.0, dim=3)
+    724
     """
     if not (np.isfinite(min_distance) and min_distance > 0):
         raise ValueError(f"min_distance must be positive, got {min_distance}")
     if not 0.0 < rho_max < 1.0:
         raise ValueError(f"rho_max must be in (0, 1), got {rho_max}")
+    if dim == 3:
+        return int(np.floor(area * rho_max ** 3 / (4 * np.sqrt(2) * (0.5 * min_distance) ** 3)))
     return int(np.floor(area * rho_max ** 2 / (HEXAGONAL_CELL * (0.5 * min_distance) ** 2)))
 
 
-def start_points(n, domain, seed=None, device=None):
-    """A dart-throwing start set of `n` points on the torus or in a box.
+def start_points(n, domain, seed=None, device=None, *, init="dart", dart_radius=START_RADIUS):
+    """A start set of `n` points on the torus or in a box: dart throwing or uniform random.
 
     The darts are thrown in parallel rounds
     (:func:`diskpack_cl.parallel_darts.parallel_darts`, relative radius
     :data:`START_RADIUS`; ``docs/poisson.md`` describes the rounds and what
-    they cost).  In a box ``W x H`` the darts are thrown on a square torus of side
+    they cost; ``dart_radius``: their relative radius).  ``init="random"``:
+    independent uniform points instead.  In a box ``W x H`` the darts are thrown on a square torus of side
     ``max(W, H)`` with enough points that at least `n` fall in the box
     inset by a disk radius (where relaxed points end up: the walls push
     them that far in, so the relaxation saves most of its iterations); the
@@ -169,14 +238,16 @@ def start_points(n, domain, seed=None, device=None):
     from .sampling import _rng
 
     rng = _rng(seed)
+    if init == "random":
+        return rng.random((n, 2)) * domain.size
     if domain.periodic:
-        return parallel_darts(n, rel_radius=START_RADIUS, seed=rng, device=device)
+        return parallel_darts(n, rel_radius=dart_radius, seed=rng, device=device)
     inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
     inner = domain.size - 2.0 * inset
     side = max(inner)
     m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
     while True:
-        pts = parallel_darts(m, rel_radius=START_RADIUS, seed=rng, device=device) * side
+        pts = parallel_darts(m, rel_radius=dart_radius, seed=rng, device=device) * side
         pts = pts[np.all(pts <= inner, axis=1)]
         if len(pts) >= n:
             return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
@@ -247,8 +318,8 @@ def _region(mask, polygon, domain):
 
 
 def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None, density=None,
-                 seed=None, eps=0.8, rho_max=0.8, backend="auto", device=None, max_iter=1000,
-                 patience=100, callback=None, dim=2, local=True):
+                 seed=None, walls="disks", options=None, device=None, callback=None, verify=False,
+                 profile=False, **overrides):
     """A Poisson disk set by disk packing: a count or a minimum distance, torus or box.
 
     Parameters
@@ -273,23 +344,34 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         Relative point density over the box (variable spacing), by unequal
         disk packing (:func:`diskpack_cl.stipple`); needs `n`.
     seed : int, numpy.random.Generator or None, optional
-    eps : float, optional
-        With `n`: the rho to reach (the paper's 0.8).
-    rho_max : float, optional
-        With `min_distance`: the largest rho the distance may ask for.
-    backend, device, max_iter, patience, callback :
+    walls : {"disks", "points"}, optional
+        What a box's walls bound.  ``"disks"`` (default): the disks of
+        radius half the spacing lie inside the box, so the points keep half
+        a spacing from the walls.  ``"points"`` (the meaning of
+        :class:`diskpack_cl.PoissonDisk` and scipy's, where the spacing is
+        between points only): the points reach the walls.  The disks are
+        packed in the box grown by their radius on every side and the points
+        moved back; a point the relaxation left a little nearer a grown wall
+        than its radius would lie outside the box and is dropped.  No mask,
+        polygon or density.
+    options : PoissonOptions, optional
+        The start set, the relaxation and the route (default
+        ``PoissonOptions()``): ``eps`` (with `n`: the rho to reach, the
+        paper's 0.8), ``rho_max`` (with `min_distance`: the largest rho the
+        distance may ask for), ``init`` and ``dart_radius`` (the start set),
+        ``dim`` (3: points in the unit 3-torus or a box ``WxHxD``, relaxed to
+        the centres of the maximal inscribed spheres of their 3D Voronoi
+        cells, rho normalized by the FCC packing; no mask or density),
+        ``local`` (2D: end with local iterations; 3D: take the device's proven
+        spheres without the host's re-solve of every cell; the set returned
+        is measured exactly on the host either way; ``False``: Algorithm 1
+        throughout, every cell certified), ``backend``, ``max_iter``,
+        ``patience``, ``grid``.
+    device, callback, verify, profile :
         Passed to :func:`diskpack_cl.relax_poisson`.
-    local : bool
-        2D: end with local iterations (:func:`diskpack_cl.relax_poisson`),
-        2-3x faster from 10k points; 3D: iterations that take the device's
-        proven spheres without the host's re-solve of every cell (the set
-        returned is measured exactly on the host either way); ``False``:
-        Algorithm 1 throughout, every cell certified.
-    dim : {2, 3}
-        3: points in the unit 3-torus or a box ``WxHxD``, relaxed to the
-        centres of the maximal inscribed spheres of their 3D Voronoi cells
-        (:func:`diskpack_cl.poisson3.relax_poisson3`; rho normalized by the
-        FCC packing) from a 3D dart-throwing start; no mask or density.
+    **overrides
+        Fields of `options` by name (``eps=0.85``), checked as the object
+        checks them.
 
     Returns
     -------
@@ -309,26 +391,136 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
     """
     if (n is None) == (min_distance is None):
         raise ValueError("give exactly one of n or min_distance")
-    options = dict(backend=backend, device=device, max_iter=max_iter, patience=patience,
-                   callback=callback)
-    if dim == 3:
+    opt = (options or PoissonOptions()).replace(**overrides)
+    if walls != "disks":
+        grown, inset = _grown_box(walls, n, min_distance, box, opt, (mask, polygon, density))
+        res = poisson_disk(n, min_distance=min_distance, box=tuple(grown.size + 2 * inset),
+                           seed=seed, options=opt, device=device, callback=callback,
+                           verify=verify, profile=profile)
+        pts = res.points - inset
+        return replace(res, points=pts[np.all((pts >= 0) & (pts <= grown.size), axis=1)],
+                       domain=grown)
+    relax = dict(backend=opt.backend, device=device, max_iter=opt.kwargs()["max_iter"],
+                 patience=opt.patience, callback=callback)
+    if opt.dim == 3:
         if mask is not None or polygon is not None or density is not None:
             raise ValueError("3D sets take no mask, polygon or density")
-        return _relaxed3(n, min_distance, box, seed, eps, rho_max, dict(options, certify=not local))
-    if dim != 2:
-        raise ValueError(f"dim must be 2 or 3, got {dim!r}")
+        return _relaxed3(n, min_distance, box, seed, opt, dict(relax, certify=not opt.local))
     domain = as_box(box)
     if density is not None:
         if min_distance is not None or mask is not None or polygon is not None:
             raise ValueError("a density sets the spacing itself: give n, without a mask")
-        return _with_density(n, density, domain, seed, backend, device)
+        return _with_density(n, density, domain, seed, opt.backend, device)
     share, inside = 1.0, None
     if mask is not None or polygon is not None:
         if domain.periodic:
             raise ValueError("a mask or polygon needs a box (box='WxH')")
         inside, share = _region(mask, polygon, domain)
-    n_all, eps = _count_and_eps(n, min_distance, domain.area, share, eps, rho_max)
-    return _relaxed(n_all, domain, eps, seed, inside, min_distance, dict(options, local=local))
+    n_all, eps = _count_and_eps(n, min_distance, domain.area, share, opt.eps, opt.rho_max)
+    relax.update(local=opt.local, grid=opt.grid, verify=verify, profile=profile)
+    return _relaxed(n_all, domain, eps, seed, inside, min_distance, opt, relax)
+
+
+def _finite_or_none(value):
+    return float(value) if np.isfinite(value) else None
+
+
+def poisson_summary(res):
+    """The summary of a Poisson disk set that every door reports (``--json``, batch records).
+
+    The keys are those of :func:`diskpack_cl.relax.relax_summary` for the same
+    quantities, in 2D and 3D; a radius that does not apply (a density's) is
+    None.
+
+    Examples
+    --------
+    >>> s = poisson_summary(poisson_disk(100, seed=0, backend="exact"))
+    >>> s["n"], s["dim"], s["torus"], s["reached"]
+    (100, 2, True, True)
+    """
+    return {"n": int(len(res.points)), "dim": int(res.points.shape[1]),
+            "box": [float(v) for v in res.domain.size], "torus": bool(res.domain.periodic),
+            "iterations": int(res.iterations), "rho_start": _finite_or_none(res.rho_start),
+            "rho_final": _finite_or_none(res.rho), "eps": _finite_or_none(res.eps),
+            "min_distance": float(res.min_distance), "reached": bool(res.reached),
+            "stop_reason": res.stop_reason, "seconds": float(res.seconds),
+            "init_seconds": float(res.start_seconds), "backend": res.backend,
+            "device": res.device, "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
+
+
+def poisson_job(n, outputs, options=None, *, seed=None, device=None, callback=None, verify=False,
+                profile=False, **where):
+    """Make one Poisson disk set and write it: what the command line and a batch item run.
+
+    Parameters
+    ----------
+    n : int or None
+        The count (None with ``min_distance`` in `where`).
+    outputs : sequence of str
+        Point files (``.npz`` also hold ``rho``, ``eps`` and, in a box, ``box``).
+    options : PoissonOptions, optional
+    seed : int, optional
+        The seed (None: a fresh one); the summary records it, so that the set
+        can be made again.
+    device, callback, verify, profile :
+        As for :func:`poisson_disk`.
+    **where
+        ``min_distance``, ``box``, ``mask``, ``polygon``, ``density`` of
+        :func:`poisson_disk`.
+
+    Returns
+    -------
+    result : PoissonDiskResult
+    summary : dict
+        :func:`poisson_summary` with ``seed``, ``init`` and ``files``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> out = os.path.join(tempfile.mkdtemp(), "a.npz")
+    >>> res, summary = poisson_job(64, [out], seed=3, backend="exact")
+    >>> bool(np.array_equal(np.load(out)["points"], poisson_disk(64, seed=3, backend="exact").points))
+    True
+    """
+    from .io import box_record, write_points
+
+    opt = (options or PoissonOptions()).replace(**{k: where.pop(k) for k in list(where)
+                                                   if k in _OPTION_NAMES})
+    if seed is None:
+        seed = int(np.random.SeedSequence().entropy % 2**31)
+    res = poisson_disk(n, seed=seed, options=opt, device=device, callback=callback, verify=verify,
+                       profile=profile, **where)
+    for out in outputs:
+        extra = {}
+        if str(out).lower().endswith(".npz"):
+            extra = {"rho": res.rho, "eps": res.eps, **box_record(out, res.domain)}
+        write_points(out, res.points, **extra)
+    summary = {**poisson_summary(res), "seed": seed, "init": opt.init,
+               "files": [str(out) for out in outputs]}
+    return res, summary
+
+
+def _grown_box(walls, n, distance, box, opt, region):
+    """``walls="points"``: the box and how far its walls move out, the disks' radius (half
+    the distance; for a count ``eps r_max(n)`` in the grown box, a fixed point reached
+    from below, so the radius the relaxation reaches is never smaller)."""
+    from .poisson3 import as_box3, fcc_radius
+
+    if walls != "points":
+        raise ValueError(f"walls must be 'disks' or 'points', got {walls!r}")
+    if any(v is not None for v in region):
+        raise ValueError("walls='points' takes no mask, polygon or density")
+    domain = as_box(box) if opt.dim == 2 else as_box3(box)
+    if domain.periodic:
+        raise ValueError("walls='points' needs a box")
+    if distance is not None:
+        return domain, 0.5 * float(distance)
+    from ._checks import check_count
+
+    r_max, inset, n = (hexagonal_radius if opt.dim == 2 else fcc_radius), 0.0, check_count(n, 2)
+    for _ in range(100):   # each step shrinks the gap to the fixed point by 0.9 or more
+        inset = opt.eps * r_max(n, float(np.prod(domain.size + 2 * inset)))
+    return domain, inset
 
 
 def _count_and_eps(n, distance, area, share, eps, rho_max):
@@ -345,14 +537,15 @@ def _count_and_eps(n, distance, area, share, eps, rho_max):
     return n_all, min(0.5 * distance / hexagonal_radius(n_all, area) * (1 + 1e-9), rho_max)
 
 
-def _relaxed3(n, distance, box, seed, eps, rho_max, options):
+def _relaxed3(n, distance, box, seed, opt, options):
     """The 3D :class:`PoissonDiskResult`: dart throwing, relaxation to the spheres' centres."""
     from ._checks import check_count
     from .poisson3 import as_box3, dart_throwing3, fcc_radius, relax_poisson3
 
     domain = as_box3(box)
+    eps, rho_max = opt.eps, opt.rho_max
     if distance is not None:
-        n = int(np.floor(domain.volume * rho_max ** 3 / (4 * np.sqrt(2) * (0.5 * distance) ** 3)))
+        n = count_for_distance(distance, domain.volume, rho_max, dim=3)
         if n < 2:
             raise ValueError(f"min_distance {distance:g} leaves {n} point(s) at rho <= {rho_max:g}")
         eps = min(0.5 * distance / fcc_radius(n, domain.volume) * (1 + 1e-9), rho_max)
@@ -363,13 +556,15 @@ def _relaxed3(n, distance, box, seed, eps, rho_max, options):
     d_min = float(2 * res.rho[-1] * fcc_radius(n, domain.volume))
     reached = bool(d_min >= distance) if distance is not None else bool(res.rho[-1] >= eps)
     return PoissonDiskResult(res.points, domain, float(res.rho[-1]), d_min, reached,
-                             res.stop_reason, res.iterations, res.seconds, t_start, float(eps))
+                             res.stop_reason, res.iterations, res.seconds, t_start, float(eps),
+                             res.timings, float(res.rho[0]), res.backend, res.device)
 
 
-def _relaxed(n, domain, eps, seed, inside, distance, options):
+def _relaxed(n, domain, eps, seed, inside, distance, opt, options):
     """Start set, relaxation, mask: the :class:`PoissonDiskResult` of one run."""
     t0 = time.perf_counter()
-    start = start_points(n, domain, seed, False if options["backend"] == "exact" else options["device"])
+    start = start_points(n, domain, seed, False if opt.backend == "exact" else options["device"],
+                         init=opt.init, dart_radius=opt.dart_radius)
     t_start = time.perf_counter() - t0
     res = relax_poisson(start, eps, domain=domain, **options)
     pts = res.points
@@ -380,7 +575,8 @@ def _relaxed(n, domain, eps, seed, inside, distance, options):
         pts = pts[inside(pts)]
         d_min = _min_distance(pts, domain) if len(pts) >= 2 else float("inf")
     return PoissonDiskResult(pts, domain, rho, float(d_min), reached, res.stop_reason,
-                             res.iterations, res.seconds, t_start, float(eps), res.timings)
+                             res.iterations, res.seconds, t_start, float(eps), res.timings,
+                             float(res.rho[0]), res.backend, res.device)
 
 
 def _with_density(n, density, domain, seed, backend, device):

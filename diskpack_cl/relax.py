@@ -23,7 +23,7 @@ from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_
                        normalized_radius)
 
 __all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
-           "RadiusResult", "STALL_GAIN", "OVER_RELAX"]
+           "RadiusResult", "STALL_GAIN", "OVER_RELAX", "relax_summary"]
 
 #: Iteration cap of :func:`relax_poisson` when none is given.
 MAX_ITER = 1000
@@ -56,6 +56,26 @@ class RelaxOptions:
         """The keyword arguments of :func:`relax_poisson`."""
         return {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
                 "backend": self.backend, "grid": self.grid}
+
+def relax_summary(res, eps):
+    """The summary of a relaxation that every door reports (``--json``, batch records).
+
+    The keys are those of :func:`diskpack_cl.poisson.poisson_summary` for the same
+    quantities (``docs/guide/formats.md``).
+
+    Examples
+    --------
+    >>> res = relax_poisson(np.random.default_rng(0).random((64, 2)), 0.7, backend="exact")
+    >>> s = relax_summary(res, 0.7)
+    >>> s["n"], s["stop_reason"], s["rho_final"] >= 0.7
+    (64, 'eps', True)
+    """
+    return {"n": int(len(res.points)), "dim": int(res.points.shape[1]),
+            "iterations": int(res.iterations), "rho_start": float(res.rho[0]),
+            "rho_final": float(res.rho[-1]), "eps": float(eps), "stop_reason": res.stop_reason,
+            "seconds": float(res.seconds), "backend": res.backend, "device": res.device,
+            "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
+
 
 #: The local route's first global moves take each point these many times the way to
 #: its MIC centre, one factor a move (successive over-relaxation), as far as keeps rho
