@@ -8,7 +8,7 @@ error-diffusion start.
 Methods: ``diskpack`` (paper disk-packing steps), ``mix`` (the default
 schedule's step: disk packing blended with power-cell centroids, with the
 default's options), ``mix-before`` (the same without ``support`` and
-``capacity``, the default's step before issue 17) and ``lloyd``.
+``capacity``) and ``lloyd``.
 
     python benchmarks/bench_stipple.py [--n 5000 20000 50000] [--sizes 512 2048]
         [--iters 5] [--device pocl] [--json rows.jsonl] [--profile]
@@ -17,8 +17,8 @@ default's options), ``mix-before`` (the same without ``support`` and
 events): all of them (``kernel``) and, in the JSON, per kernel.
 
 With ``--end-to-end N``: whole runs at N dots on the sample instead, the
-default schedule, the default as before issue 17, the former default
-(``classic``) and the paper's Fig. 8 schedule (180 disk-packing and 30
+default schedule, the default without ``support`` and ``capacity``,
+``classic`` and the paper's Fig. 8 schedule (180 disk-packing and 30
 Lloyd iterations: three rounds of 60 + 10), seconds from the image to the
 certified result.
 
@@ -140,7 +140,7 @@ def main(argv=None):
                                   ("lloyd", None)):
                 if method.startswith("mix"):
                     # the default schedule's step: packing + power-cell centroids, its options
-                    # (mix-before: as before issue 17, without support and capacity)
+                    # (mix-before: without support and capacity)
                     kw = dict(SCHEDULE_OPTIONS["default"], schedule=sched)
                     if method == "mix-before":
                         kw.update(support=0.0, capacity=0.0)
@@ -205,7 +205,7 @@ def color_against_mono(a):
 
 
 def end_to_end(n, device, json_path):
-    """Whole stipplings of the sample: the default schedule, as before issue 17, classic and the paper's Fig. 8."""
+    """Whole stipplings of the sample: the default schedule, without support and capacity, classic and the paper's Fig. 8."""
     runs = (("default", {}), ("default before issue 17 (no support, no capacity)",
                               dict(support=0.0, capacity=0.0)),
             ("classic (the former default)", dict(schedule="classic")),

@@ -1,4 +1,4 @@
-"""Relaxation quality figures of issue 2: iterations to rho 0.80 and the highest rho.
+"""Relaxation quality figures: iterations to rho 0.80 and the highest rho.
 
 Usage: python benchmarks/relax_quality.py [--seeds 5] [--converge-iter 3000] [--backend exact]
 

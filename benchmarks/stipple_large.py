@@ -49,7 +49,7 @@ def main():
     ap.add_argument("--mix", type=int, default=3)
     ap.add_argument("--full", action="store_true", help="the whole default schedule")
     ap.add_argument("--before", action="store_true",
-                    help="the default as before issue 17: no support rule, no capacity")
+                    help="the default without the support rule and capacity")
     ap.add_argument("--json", default=None, help="append the run as a JSON line to this file")
     args = ap.parse_args()
     gray = load_gray(sample_image_path())

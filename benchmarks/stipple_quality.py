@@ -5,7 +5,7 @@ Lloyd baseline, the paper's schedule, ablations) from the same error-diffusion
 start and seed on the validation photographs (``tests/data/`` and
 ``tests/data/validation/``, split into a tuning and a held-out part, see
 ``tests/data/validation/README.md``), checks that every output is certified,
-and prints one row per run and a summary over seeds with the issue-11
+and prints one row per run and a summary over seeds with the spacing
 condition (tone at least Lloyd's, P01 >= 0.85, |psi6| below Lloyd's).
 
     python benchmarks/stipple_quality.py [--set heldout] [-n 5000 20000 50000]
@@ -61,7 +61,7 @@ IMAGES = {
     "terrain": ("validation/terrain.png", "heldout2"),
     "hubble_bottom": ("validation/hubble_bottom.png", "heldout2"),
     "retina_bottom": ("validation/retina_bottom.png", "heldout2"),
-    # line art and a silhouette (issue 17; benchmarks/make_lineart.py)
+    # line art and a silhouette (benchmarks/make_lineart.py)
     "shapes": ("lineart/shapes.png", "lineart"),
     "lines": ("lineart/lines.png", "lineart"),
     "horse": ("lineart/horse.png", "lineart"),
@@ -86,14 +86,14 @@ CONFIGS = {
     # disk packing only, 60 iterations (gray radii)
     "pack": dict(schedule="pack"),
     # the default: its phases and options follow the dot spacing
-    # (schedule.SPACING_BANDS; the spacing rule of issue 11)
+    # (schedule.SPACING_BANDS)
     "default": dict(schedule="default"),
     # the default before the spacing bands: 35 + 12 mix steps, radius blur 3 px
     # (rows measured before the change are stored under this name)
     "classic": dict(schedule="classic"),
-    # classic with feature-aware mix steps (radii.detail_fields; issue 11)
+    # classic with feature-aware mix steps (radii.detail_fields)
     "detail": dict(schedule="classic", features="detail"),
-    # the "detail" schedule: 18 + 7 mix steps with features="detail" (issue 11)
+    # the "detail" schedule: 18 + 7 mix steps with features="detail"
     "detail-schedule": dict(schedule="detail"),
     # ablations of classic (one change each)
     "default-gray": dict(schedule="classic", radii="gray", floor=0.1),
@@ -101,12 +101,12 @@ CONFIGS = {
                          schedule_override=[("pack", 47)]),
     "default-lloyd-end": dict(schedule="classic", schedule_override=[("mix", 35, 0.5), ("mix", 12, 0.5)]),
     "mix-voronoi": dict(schedule="classic", blend_cell="voronoi"),
-    # a candidate for dense stipplings (issue 11, tuned at n = 50000 on 512 px
+    # a candidate for dense stipplings (tuned at n = 50000 on 512 px
     # photographs): 12 mix steps for the tone, then 3 disk-packing steps,
     # which restore the spacing and lower |psi6|; radii blurred by 1 px
     "mix-pack": dict(schedule="classic", schedule_override=[("mix", 12, 0.6), ("pack", 3)],
                      radius_sigma=1.0),
-    # the bands of the spacing rule of issue 11 (s = sqrt(W * H / n), the dot
+    # the spacing bands without their closing step (s = sqrt(W * H / n), the dot
     # spacing in pixels; tuned on the tuning part, seed 0): s < 2.5
     # "spacing-dense", 2.5 <= s < 3 "spacing-dense2", 3 <= s < 6
     # "detail-schedule", s >= 6 "spacing-coarse"
@@ -116,15 +116,15 @@ CONFIGS = {
                            radius_sigma=1.5),
     "spacing-coarse": dict(schedule="classic", schedule_override=[("mix", 35, 0.6), ("mix", 12, 0.4)],
                            features="detail", radius_sigma=2.0),
-    # the default before issue 17 (its spacing bands, BANDS_BEFORE, no support
+    # the default without support and capacity (BANDS_BEFORE, no support
     # rule, no capacity), and with equal ink per dot (capacity gain 0.1)
     "before": dict(schedule="before", support=0.0, capacity=0.0),
     "capacity": dict(schedule="before", support=0.0, capacity=0.1),
 }
 
-#: The default's spacing bands before issue 17 (``schedule.SPACING_BANDS``
-#: then): configurations with ``schedule="before"`` run the band of the dot
-#: spacing with classic's options, as the default did.
+#: The default's spacing bands without their closing centroid step, with
+#: classic's options (no ``support``, no ``capacity``): configurations with
+#: ``schedule="before"`` run the band of the dot spacing.
 BANDS_BEFORE = (
     (2.5, [("mix", 16, 0.7), ("pack", 3)], {"radius_sigma": 1.5}),
     (3.0, [("mix", 16, 0.7), ("pack", 2)], {"radius_sigma": 1.5}),
@@ -134,7 +134,7 @@ BANDS_BEFORE = (
 
 
 def before_band(kw, width, height, n):
-    """`kw` with ``schedule="before"`` replaced by the pre-issue-17 band's phases and options."""
+    """`kw` with ``schedule="before"`` replaced by the :data:`BANDS_BEFORE` band's phases and options."""
     from diskpack_cl.schedule import SCHEDULE_OPTIONS
 
     spacing = np.sqrt(width * height / n)
@@ -144,13 +144,13 @@ def before_band(kw, width, height, n):
     return dict(out, schedule=phases)
 
 
-#: Reference configuration of the issue-11 condition.
+#: Reference configuration of the spacing condition (:func:`meets_condition`).
 REFERENCE = "lloyd"
 P01_TARGET = 0.85
 
 
 def meets_condition(r, ref):
-    """The issue-11 condition: tone at least ``ref``'s, P01 >= 0.85, |psi6| below ``ref``'s.
+    """The spacing condition: tone at least ``ref``'s, P01 >= 0.85, |psi6| below ``ref``'s.
 
     ``r`` and ``ref`` are dicts with ``tone``, ``p01`` and ``psi6`` (rows or means).
 
@@ -259,7 +259,7 @@ def _round(x):
 MEASURES = ("tone", "tone15", "p01", "p01_pair", "psi6", "stray", "edge", "holes",
             "iterations", "seconds")
 
-#: The picture target (issue 17), against Lloyd (``ref``) and, on
+#: The picture target, against Lloyd (``ref``) and, on
 #: photographs, ``--capacity 0.1`` (``cap``: its tone and the configuration's
 #: own, ``own``, on the seeds both have): each check returns True, False, or
 #: None where a side lacks the measure (an image without strong edges).
