@@ -182,7 +182,7 @@ def end_to_end(ctx):
 
 
 def refused(ctx):
-    """The issue-23 reproduction and its torus variant: a ValueError, no kernel runs."""
+    """NaN weights in a box and on a torus: a ValueError, no kernel runs."""
     from diskpack_cl.raster import PowerRaster
 
     out = {}

@@ -76,7 +76,7 @@ def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
     assert made[-1] == [GPU1]
 
 
-# -- devices that report several kinds (issue 23) ---------------------------
+# -- devices that report several kinds ------------------------------------
 
 BOTH = cl.device_type.GPU | cl.device_type.CPU | cl.device_type.ACCELERATOR | cl.device_type.DEFAULT
 OCLGRIND = _Dev("Oclgrind Simulator", BOTH)

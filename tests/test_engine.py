@@ -150,7 +150,7 @@ def test_every_engine_refuses_sites_it_cannot_bound(ctx, name, periodic, pts, w,
         _engine(name, dom, ctx).mic(pts, w)
 
 
-# -- one protocol, one result type, one factory, one collector (issue 18) ----
+# -- one protocol, one result type, one factory, one collector ---------------
 
 def _protocol_engines(ctx, dom, grid):
     """Every engine the one factory makes, by route."""

@@ -433,14 +433,14 @@ def test_profiling_is_opt_in_and_counts_each_kernel(ctx):
     assert pr.timings.seconds["kernel"] == pytest.approx(sum(kernels.values()))
 
 
-# -- sites the kernels cannot bound their work on (issue 23) ------------------
+# -- sites the kernels cannot bound their work on ------------------------------
 
 _NAN_W = [0.1, np.nan, 0.2, 0.1, 0.3]
 
 
 @pytest.mark.parametrize("periodic", [False, True])
 @pytest.mark.parametrize("pts, w, match", [
-    (None, _NAN_W, "weights must be n finite numbers"),                   # the issue's reproduction
+    (None, _NAN_W, "weights must be n finite numbers"),
     (np.full((5, 2), np.nan), None, "points contain NaN or infinite coordinates"),
     (np.zeros((0, 2)), None, r"need at least 1 point\(s\), got 0"),
     (None, [0.0, 1e31, 0.0, 0.0, 0.0], "weights must span less than 1e"),

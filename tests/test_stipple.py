@@ -520,7 +520,7 @@ def test_largest_valid_k_finds_a_binding_pair_that_no_nearest_neighbour_forms():
     assert largest_valid_k(p[[2, 0, 3, 1]], r[[2, 0, 3, 1]], 100.0, 100.0) == 0.5
 
 
-# -- one timing collector for the whole run (issue 18) -----------------------
+# -- one timing collector for the whole run ----------------------------------
 
 ENGINE_STAGES = ("exact", "raster_labels", "centroids")
 

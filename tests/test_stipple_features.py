@@ -1,4 +1,4 @@
-"""features="detail": feature-aware mix steps (issue 11)."""
+"""features="detail": feature-aware mix steps."""
 
 import numpy as np
 import pytest

@@ -114,7 +114,7 @@ def _png_ink(path, invert=False):
 
 @pytest.fixture(scope="module")
 def big_dots(ctx, tmp_path_factory):
-    """The issue's case: dots several mm wide (190 mm print) drawn with a 0.5 mm pen."""
+    """Dots several mm wide (190 mm print) drawn with a 0.5 mm pen."""
     from PIL import Image
 
     d = tmp_path_factory.mktemp("pen")
