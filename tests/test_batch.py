@@ -379,7 +379,7 @@ def test_collision_hint_names_the_field_that_differs(tmp_path):
         check_outputs([a, b], lambda p: None)
 
 
-# ------------------------------------------- one input: a one-item plan (issue 18)
+# ---------------------------------------------------- one input: a one-item plan
 
 def test_one_input_and_the_same_image_in_a_batch_write_the_same_bytes(ctx, tmp_path, capsys):
     """A single input and a batch item run the same code (batch.stipple_item): the

@@ -308,7 +308,7 @@ def test_png_preview_progress_and_default_size(tmp_path, result):
     assert preview_scale(80, 60) == 2.0 and preview_scale(12000, 8000) * 12000 == 4096
 
 
-# -- each derived quantity in one place (issue 18) ---------------------------
+# -- each derived quantity in one place --------------------------------------
 
 @pytest.mark.parametrize("radius_scale", [1.0, 0.7])
 def test_the_tone_dot_is_the_same_size_through_every_writer_path(tmp_path, result, radius_scale):
