@@ -63,8 +63,8 @@ density radii (floor 0.01), ``k`` from the 15% quantile of ``R_i / r_i``
 and ``capacity=0.1`` (equal ink per dot); below 6 px, centroid density
 blurred by 0.5 px and ``support=8`` (a dot whose largest empty disk leaves
 its cell's ink, or loses an eighth of its tone, goes to the centroid: white
-paper stays white, outlines stay sharp). The former
-defaults remain as ``"classic"`` and ``"detail"``. Options that come with a
+paper stays white, outlines stay sharp). The schedules ``"classic"`` and
+``"detail"`` use one band for every spacing. Options that come with a
 named schedule are in :data:`SCHEDULE_OPTIONS`; explicit keyword arguments
 override them. Measured in ``docs/stipple_quality.md``.
 
