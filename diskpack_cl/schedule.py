@@ -34,8 +34,8 @@ SCHEDULES = {
 }
 # Disk packing blended with Lloyd (see :func:`stipple`, ``"mix"`` phases):
 # 35 steps of MIC + 0.5 (centroid - MIC), then 12 of MIC + 0.4 (centroid - MIC),
-# with the density-consistent radii; the default until the spacing bands
-# below. Measured in docs/stipple_quality.md.
+# with the density-consistent radii, one band for every spacing. Measured in
+# docs/stipple_quality.md.
 SCHEDULES["classic"] = [("mix", 35, 0.5), ("mix", 12, 0.4)]
 # The classic steps, shortened to 18 + 7, with features="detail":
 # fewer packing steps leave the points less hexagonal (lower |psi6|), the
