@@ -12,7 +12,8 @@ from .domain import Domain
 from .geometry import CertificateError, certify_disks, exact_mic
 from .measures import normalized_radius
 from .relax import RadiusResult, RelaxOptions, RelaxResult, max_points_for_radius, relax_poisson
-from .poisson import PoissonDisk, PoissonDiskResult, poisson_disk
+from .poisson import PoissonDiskResult, poisson_disk
+from .qmc import PoissonDisk
 from .sampling import dart_throwing, random_points
 from ._device import NoOpenCLError, describe, get_context, list_devices
 from .dithering import error_diffusion

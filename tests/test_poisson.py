@@ -1,4 +1,4 @@
-"""poisson_disk and PoissonDisk: torus and box, count or distance, mask, polygon, density."""
+"""poisson_disk: torus and box, count or distance, mask, polygon, density."""
 
 import numpy as np
 import pytest
@@ -9,7 +9,7 @@ from scipy.spatial.distance import pdist
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import chebyshev_center_linprog
 from diskpack_cl.measures import HEXAGONAL_CELL
-from diskpack_cl.poisson import PoissonDisk, as_box, count_for_distance, poisson_disk, start_points
+from diskpack_cl.poisson import as_box, count_for_distance, poisson_disk, start_points
 from diskpack_cl.relax import relax_poisson
 
 
@@ -161,19 +161,35 @@ def test_start_points_in_a_box_keep_the_darts_spacing():
     assert _brute_min_distance(p) > 0.5 * np.sqrt(4 / (HEXAGONAL_CELL * 500))
 
 
-def test_scipy_style_engine():
-    eng = PoissonDisk(radius=0.08, l_bounds=(-1, 2), u_bounds=(1, 3), seed=4, backend="exact")
-    pts = eng.fill_space()
-    assert np.all(pts >= (-1, 2)) and np.all(pts <= (1, 3))
-    assert pdist(pts).min() >= 0.08
-    assert eng.random(50).shape == (50, 2)
-    assert PoissonDisk(torus=True, seed=1, backend="exact").random(30).shape == (30, 2)
-    with pytest.raises(ValueError, match="d must be 2"):
-        PoissonDisk(d=4)
-    with pytest.raises(ValueError, match="fill_space needs a radius"):
-        PoissonDisk().fill_space()
+def test_neither_count_nor_distance():
     with pytest.raises(ValueError, match="give exactly one of n or min_distance"):
         poisson_disk()
+
+
+@pytest.mark.parametrize("dim, box, what", [(2, "2x1", dict(min_distance=0.05)),
+                                            (2, "1x1", dict(n=300)),
+                                            (3, "1x1x0.5", dict(min_distance=0.1))])
+def test_walls_points_lets_the_points_reach_the_walls(dim, box, what):
+    size = np.array([float(v) for v in box.split("x")])
+    res = poisson_disk(box=box, walls="points", seed=3, dim=dim, **what)
+    disks = poisson_disk(box=box, seed=3, dim=dim, **what)
+    d_min = pdist(res.points).min()
+    assert np.all((res.points > 0) & (res.points < size)) and d_min >= res.min_distance
+    if "min_distance" in what:
+        assert len(res.points) > len(disks.points) and d_min >= what["min_distance"]
+    gap = np.minimum(res.points.min(axis=0), (size - res.points).min(axis=0))
+    assert np.all(gap < 0.25 * d_min)           # a point near every wall
+    old = np.minimum(disks.points.min(axis=0), (size - disks.points).min(axis=0))
+    assert np.all(old > 0.4 * disks.min_distance)   # the band "disks" leaves
+
+
+def test_walls_points_needs_a_plain_box():
+    for kwargs, match in [(dict(walls="wall"), "walls must be 'disks' or 'points'"),
+                          (dict(walls="points"), "needs a box"),
+                          (dict(walls="points", box="1x1", polygon=[(0, 0), (1, 0), (0, 1)]),
+                           "takes no mask")]:
+        with pytest.raises(ValueError, match=match):
+            poisson_disk(50, **kwargs)
 
 
 def test_generator_seed_is_reproducible():

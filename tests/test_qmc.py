@@ -1,0 +1,92 @@
+"""PoissonDisk as scipy.stats.qmc's engine: scipy's own tests, and the radius across draws."""
+
+import numpy as np
+import pytest
+import scipy
+from hypothesis import given, settings, strategies as st
+from scipy.spatial.distance import pdist
+from scipy.stats import qmc
+
+from diskpack_cl import PoissonDisk
+
+# scipy's tests of its engines, as the installed scipy ships them (1.13 and later do)
+scipy_tests = pytest.importorskip(
+    "scipy.stats.tests.test_qmc",
+    reason=f"scipy {scipy.__version__} ships no scipy.stats.tests.test_qmc")
+
+
+class TestScipyPoisson(scipy_tests.TestPoisson):
+    """scipy's ``TestPoisson`` (and the ``QMCEngineTests`` it inherits) on our engine."""
+
+    qmce = PoissonDisk
+
+    @pytest.fixture(autouse=True)
+    def _our_engine(self, monkeypatch):
+        # a few of scipy's tests name qmc.PoissonDisk instead of the class attribute
+        monkeypatch.setattr(qmc, "PoissonDisk", PoissonDisk)
+
+
+def test_scipy_deterministic(monkeypatch):
+    """scipy's ``test_deterministic`` (every engine's seeding) on our engine."""
+    scipy_tests.test_deterministic(PoissonDisk)
+
+
+def _bounds(d, data):
+    lower = np.array(data.draw(st.lists(st.floats(-5, 5), min_size=d, max_size=d)))
+    span = np.array(data.draw(st.lists(st.floats(0.5, 2), min_size=d, max_size=d)))
+    return lower, lower + span
+
+
+@settings(max_examples=12, deadline=None)
+@given(data=st.data(), d=st.sampled_from([2, 3]), seed=st.integers(0, 2 ** 32 - 1),
+       draws=st.lists(st.integers(0, 60), min_size=1, max_size=4))
+def test_draws_keep_the_radius_and_the_bounds(data, d, seed, draws):
+    lower, upper = _bounds(d, data)
+    radius = data.draw(st.floats(0.12, 0.3) if d == 2 else st.floats(0.25, 0.5))
+    eng = PoissonDisk(d, radius=radius, rng=seed, l_bounds=lower, u_bounds=upper)
+    parts = [eng.random(n) for n in draws] + [eng.fill_space()]
+    assert all(len(p) <= n for p, n in zip(parts, draws))
+    pts = np.vstack(parts)
+    assert pts.shape[1] == d and eng.num_generated == len(pts)
+    assert np.all((pts > lower) & (pts < upper))
+    assert len(pts) < 2 or pdist(pts).min() >= radius
+    again = PoissonDisk(d, radius=radius, rng=seed, l_bounds=lower, u_bounds=upper)
+    assert np.array_equal(np.vstack([again.random(n) for n in draws] + [again.fill_space()]), pts)
+
+
+def test_random_hands_out_what_fits_and_no_more():
+    eng = PoissonDisk(2, radius=0.05, rng=0)
+    first = eng.random(1000)
+    assert 250 < len(first) < 1000 and pdist(first).min() >= 0.05
+    assert eng.random(5).shape == (0, 2) and eng.fill_space().shape == (0, 2)
+    assert np.array_equal(eng.reset().random(7), first[:7])
+
+
+def test_more_and_closer_to_the_walls_than_scipy():
+    ours = PoissonDisk(2, radius=0.05, rng=1).fill_space()
+    theirs = qmc.PoissonDisk(2, radius=0.05, rng=1).fill_space()
+    assert len(ours) > 1.1 * len(theirs)
+    gap = np.minimum(ours, 1 - ours).min(axis=0)   # nearest point to each pair of walls
+    assert np.all(gap < 0.05 / 4)
+
+
+def test_other_dimensions_are_scipys():
+    for d in (1, 4):
+        ours = PoissonDisk(d, radius=0.3, rng=5).random(20)
+        assert np.array_equal(ours, qmc.PoissonDisk(d, radius=0.3, rng=5).random(20))
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(d=2, hypersphere="edge"), ValueError, "'edge' is not a valid hypersphere"),
+    (dict(d=2, ncandidates=-1), ValueError, "ncandidates must be a non-negative integer"),
+    (dict(d=2, radius=0.0), ValueError, "radius must be positive and finite"),
+    (dict(d=2, l_bounds=[0, 0, 0]), ValueError, "must be broadcastable"),
+    (dict(d=2, u_bounds=[1, -1]), ValueError, "Bounds are not consistent"),
+    (dict(d=2, optimization="best"), ValueError, "'best' is not a valid optimization"),
+    (dict(d=-1), ValueError, "d must be a non-negative integer"),
+    (dict(d=2, torus=True), TypeError, "unexpected keyword argument 'torus'"),
+    (dict(d=2, rng=1, seed=1), TypeError, "got multiple values for argument now known as"),
+])
+def test_bad_arguments_raise_at_construction(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        PoissonDisk(**kwargs)
