@@ -67,7 +67,7 @@ def _paint(color, pen_mm):
 
 def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
                     radius_scale=1.0, pen_path="auto", pen_mm=None, dots="tone", pen_order=None,
-                    invert=False, page=None, landscape=False, margin_mm=None,
+                    invert=False, page=None, landscape=False, margin_mm=None, plotter=None,
                     plot_speed_mm_s=PLOT_SPEED_MM_S):
     """Write an SVG with one named layer per pen (see the module docstring).
 
@@ -100,7 +100,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
         raise ValueError("invert has no meaning for colour stippling")
     W, H = float(result.width), float(result.height)
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
-                     landscape=landscape, margin_mm=margin_mm)
+                     landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     pm, rad, moved = _inside_page(np.asarray(result.points) * lay["scale"],
                                   _radii(result, lay["scale"], dots, dot_mm, radius_scale),
                                   *lay["picture"])

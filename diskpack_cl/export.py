@@ -217,13 +217,17 @@ def paper_size(page, *, landscape=False):
 
 
 def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=None,
-               landscape=False, margin_mm=None):
+               landscape=False, margin_mm=None, plotter=None):
     """Where :func:`write_svg` puts a ``width x height`` px picture, all in mm.
 
     Without ``page`` the page is the picture, sized by :func:`mm_per_px`.
     With ``page`` (see :func:`paper_size`) the picture is centred on it,
     sized by ``width_mm``/``height_mm``/``dpi`` when given, else fitted
     inside the margins (``margin_mm``, default :data:`DEFAULT_MARGIN_MM`).
+    With ``plotter`` (a device of vpype's profiles) the margins are those
+    of the part of the page it plots too
+    (:func:`diskpack_cl.plotters.plotting_area`), and the picture is centred
+    there.
 
     Returns
     -------
@@ -238,8 +242,8 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     [226.67, 170.0, 35.17, 20.0]
     """
     if page is None:
-        if margin_mm is not None:
-            raise ValueError("a margin needs a page: give page (e.g. 'a4') too")
+        if margin_mm is not None or plotter is not None:
+            raise ValueError("a margin or a plotter needs a page: give page (e.g. 'a4') too")
         s = mm_per_px(width, height, width_mm, height_mm, dpi)
         return {"scale": s, "picture": (width * s, height * s),
                 "page": (width * s, height * s), "offset": (0.0, 0.0)}
@@ -248,16 +252,23 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     if not 0 <= margin < 0.5 * min(pw, ph):
         raise ValueError(f"margin_mm must be in [0, {0.5 * min(pw, ph):g}) on a "
                          f"{pw:g}x{ph:g} mm page, got {margin_mm}")
+    x0, y0, x1, y1 = margin, margin, pw - margin, ph - margin
+    if plotter is not None:
+        from diskpack_cl.plotters import plotting_area
+
+        ax0, ay0, ax1, ay1 = plotting_area(plotter, (pw, ph))
+        x0, y0, x1, y1 = max(x0, ax0), max(y0, ay0), min(x1, ax1), min(y1, ay1)
     if width_mm is None and height_mm is None and dpi is None:
-        s = mm_per_px(width, height, pw - 2 * margin, ph - 2 * margin)
+        s = mm_per_px(width, height, x1 - x0, y1 - y0)
     else:
         s = mm_per_px(width, height, width_mm, height_mm, dpi)
     w, h = width * s, height * s
-    if w > pw - 2 * margin + 1e-9 or h > ph - 2 * margin + 1e-9:
+    if w > x1 - x0 + 1e-9 or h > y1 - y0 + 1e-9:
         raise ValueError(f"the picture ({w:.1f}x{h:.1f} mm) does not fit inside the "
-                         f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page")
+                         f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page"
+                         + ("" if plotter is None else f" and the plotting area of {plotter}"))
     return {"scale": s, "picture": (w, h), "page": (pw, ph),
-            "offset": (0.5 * (pw - w), 0.5 * (ph - h))}
+            "offset": (0.5 * (x0 + x1 - w), 0.5 * (y0 + y1 - h))}
 
 
 #: Plot-time model of :func:`plot_time`: pen-down and pen-up speed (mm/s)
@@ -273,6 +284,12 @@ def _pen_names(text):
 
 def _check_page(page):
     paper_size(page)
+
+
+def _check_plotter(name):
+    from diskpack_cl.plotters import plotter_config
+
+    plotter_config(name)
 
 
 @dataclass(frozen=True)
@@ -306,6 +323,10 @@ class WriteOptions:
     margin_mm: float = option(None, f"margin around the picture on the --page paper "
                               f"(default {DEFAULT_MARGIN_MM:g})", unit="mm", lo=0,
                               metavar="MM", group=_OUTPUT)
+    plotter: str = option(None, "a plotter of vpype's device profiles (vpype's --device, e.g. "
+                          "hp7475a): the picture stays inside the part of the --page paper it "
+                          "plots, so that vpype write --device NAME --page-size PAPER keeps "
+                          "every dot", check=_check_plotter, metavar="NAME", group=_OUTPUT)
     dots: str = option(None, "dot size in SVG and PNG: tone (default) = one size for all "
                        "dots, chosen so that the total ink equals the image's total darkness; "
                        "packing = each dot its certified packing disk (large where the image "
@@ -345,7 +366,7 @@ class WriteOptions:
             raise OptionConflict(f"{{}} {self.dot_mm:g} and {{}} {self.dots} both set the dot "
                                  f"size; give one", "dot_mm", "dots")
         check_size(self.width_mm, self.height_mm, self.dpi)
-        for name in ("margin_mm", "landscape"):
+        for name in ("margin_mm", "landscape", "plotter"):
             if getattr(self, name) not in (None, False) and self.page is None:
                 raise OptionConflict("{} is for a {} paper: give {} too (e.g. {} a4)",
                                      name, "page", "page", "page")
@@ -353,7 +374,7 @@ class WriteOptions:
     def layout(self):
         """Where the picture goes on paper: the keyword arguments of :func:`svg_layout`."""
         return {k: getattr(self, k) for k in ("width_mm", "height_mm", "dpi", "page",
-                                               "landscape", "margin_mm")}
+                                               "landscape", "margin_mm", "plotter")}
 
     def scale(self, width, height):
         """Millimetres per image pixel of a `width` x `height` picture on this paper."""
@@ -472,7 +493,7 @@ def _svg_head(lay, size, meta, paint, invert):
 
 def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
               radius_scale=1.0, pen_path="auto", layer=LAYER, invert=False, pen_mm=None,
-              dots="tone", page=None, landscape=False, margin_mm=None,
+              dots="tone", page=None, landscape=False, margin_mm=None, plotter=None,
               plot_speed_mm_s=PLOT_SPEED_MM_S):
     """Write an SVG for pen plotters, vpype and Inkscape.
 
@@ -503,8 +524,9 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     invert : bool, optional
         White dots on black paper: a black image in the layer ``% paper
         (not plotted)``, which vpype and plotters skip.
-    page, landscape, margin_mm : optional
-        The paper (:func:`paper_size`, :func:`svg_layout`).
+    page, landscape, margin_mm, plotter : optional
+        The paper and what of it the plotter reaches (:func:`paper_size`,
+        :func:`svg_layout`).
     plot_speed_mm_s : float
         Speed of the plot-time estimate (:func:`plot_time`).
 
@@ -533,7 +555,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     if pen_mm is not None and not pen_mm > 0:
         raise ValueError(f"pen_mm must be > 0, got {pen_mm}")
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
-                     landscape=landscape, margin_mm=margin_mm)
+                     landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
     pm, rad, moved = _inside_page(p * lay["scale"], rad, *lay["picture"])
     pm += lay["offset"]

@@ -22,7 +22,8 @@ MULTIPEN_MODULE = importlib.import_module("diskpack_cl.multipen")
 
 #: Options another option needs to be valid with it.
 COMPANIONS = {"gamma": ["--radii", "gray"], "margin_mm": ["--page", "a4"],
-              "landscape": ["--page", "a4"], "pen_order": ["--colors", "cmy"]}
+              "landscape": ["--page", "a4"], "pen_order": ["--colors", "cmy"],
+              "plotter": ["--page", "a4"]}
 
 
 def _cli_fields(cls):
@@ -39,6 +40,8 @@ def _example(f):
         value = [c for c in choices if c != f.default][-1]
     elif f.name == "page":
         value = "a4"
+    elif f.name == "plotter":
+        value = "hp7475a"
     elif f.name == "pens":
         value = "black=#000,red=#c00"
     elif f.name == "pen_order":

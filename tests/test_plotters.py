@@ -1,0 +1,55 @@
+"""``--plotter NAME``: the picture inside the part of the page vpype's device profile plots."""
+
+import io
+import re
+
+import numpy as np
+import pytest
+import vpype
+
+from diskpack_cl.cli import main
+from diskpack_cl.plotters import plotting_area
+
+PX_PER_MM = 96 / 25.4
+
+
+def _hpgl_pen_downs(doc, **page):
+    """vpype's own HPGL writer, as ``vpype write --device hp7475a --page-size a4`` runs it."""
+    out = io.StringIO()
+    vpype.write_hpgl(out, doc, page_size="a4", center=False, device="hp7475a", velocity=None,
+                     quiet=True, **page)
+    return len(re.findall("PD", out.getvalue()))
+
+
+@pytest.mark.parametrize("landscape", [False, True])
+def test_the_area_is_what_vpype_keeps(landscape):
+    """Ticks just inside each side of the area survive vpype's crop; just outside they go."""
+    page = (297.0, 210.0) if landscape else (210.0, 297.0)
+    x0, y0, x1, y1 = plotting_area("hp7475a", page)
+    mx, my = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    for inset, kept in ((0.2, 4), (-0.2, 0)):
+        ticks = [(x0 + inset, my), (x1 - inset, my), (mx, y0 + inset), (mx, y1 - inset)]
+        doc = vpype.Document(page_size=(page[0] * PX_PER_MM, page[1] * PX_PER_MM))
+        for x, y in ticks:
+            doc.add(vpype.LineCollection([np.array([complex(x, y), complex(x + 0.01, y)])
+                                          * PX_PER_MM]), 1)
+        assert _hpgl_pen_downs(doc, landscape=landscape) == kept
+
+
+def _dots_after_vpype(tmp_path, *plotter):
+    out = tmp_path / "photo.svg"
+    assert main(["stipple", "sample", "-n", "3000", "--page", "a4", *plotter, "-o", str(out),
+                 "-q"]) == 0
+    return _hpgl_pen_downs(vpype.read_multilayer_svg(str(out), 0.1 * PX_PER_MM),
+                           landscape=False)
+
+
+def test_the_readme_pipeline_keeps_every_dot_with_the_plotter(tmp_path):
+    assert _dots_after_vpype(tmp_path) < 3000   # the default margins reach past its area
+    assert _dots_after_vpype(tmp_path, "--plotter", "hp7475a") == 3000
+
+
+def test_an_unknown_plotter_is_refused_with_the_known_ones(capsys):
+    assert main(["stipple", "sample", "-n", "100", "--page", "a4", "--plotter", "hp9999",
+                 "-o", "x.svg"]) == 2
+    assert "hp7475a" in capsys.readouterr().err

@@ -1,0 +1,101 @@
+"""``vpype diskpack``: the stippling inside vpype's pipeline, through vpype's own command line."""
+
+import argparse
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import vpype
+import vpype_cli
+from click.testing import CliRunner
+from PIL import Image
+
+from diskpack_cl import sample_image_path
+from diskpack_cl.color import ColorOptions
+from diskpack_cl.export import WriteOptions
+from diskpack_cl.image import ToneOptions
+from diskpack_cl.options import add_arguments, flag_name
+from diskpack_cl.schedule import StippleOptions
+from diskpack_cl.vpype_plugin import diskpack
+
+PX_PER_MM = 96 / 25.4
+
+
+def _vpype(args):
+    result = CliRunner().invoke(vpype_cli.cli, args, catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    return result
+
+
+def _pen_downs(path):
+    return len(re.findall(r"PD", path.read_text()))
+
+
+def test_the_readme_pipeline_writes_every_dot_to_hpgl(tmp_path):
+    """The installed ``vpype`` command, as a user runs it (vpype's ``write`` leaves its file
+    to the interpreter's exit to close)."""
+    out = tmp_path / "out.hpgl"
+    subprocess.run([sys.executable, "-m", "vpype_cli", "diskpack", str(sample_image_path()),
+                    "-n", "1000", "--pen-mm", "0.5", "layout", "a4", "linesort", "write",
+                    "--device", "hp7475a", str(out)], check=True, capture_output=True)
+    assert _pen_downs(out) == 1000
+
+
+def _color_image(path):
+    """Red, green, blue and dark grey quarters: every pen of CMYK has dots."""
+    img = np.zeros((48, 64, 3), np.uint8)
+    img[:24, :32] = (220, 30, 30)
+    img[:24, 32:] = (30, 200, 40)
+    img[24:, :32] = (40, 40, 210)
+    img[24:, 32:] = (60, 60, 60)
+    Image.fromarray(img).save(path)
+    return path
+
+
+def test_one_layer_per_pen_one_path_per_dot_on_the_page(tmp_path):
+    image = _color_image(tmp_path / "quarters.png")
+    doc = vpype_cli.execute(f"diskpack {image} -n 600 --colors cmyk --page a4 --pen-mm 0.5")
+    names = [layer.property(vpype.METADATA_FIELD_NAME) for layer in doc.layers.values()]
+    assert sorted(names) == ["black", "cyan", "magenta", "yellow"]
+    assert sum(len(layer) for layer in doc.layers.values()) == 600
+    assert doc.page_size == pytest.approx((210 * PX_PER_MM, 297 * PX_PER_MM), rel=1e-6)
+
+
+def test_dots_are_drawn_as_the_svg_draws_them(tmp_path):
+    """A dot wider than the pen: rings whose outermost has radius (dot - pen) / 2."""
+    doc = vpype_cli.execute("diskpack sample -n 300 --width-mm 100 --dot-mm 2 --pen-mm 0.5")
+    (layer,) = doc.layers.values()
+    assert len(layer) == 300
+    for line in list(layer)[:20]:
+        centre = 0.5 * (line.real.min() + line.real.max()) + 0.5j * (line.imag.min() + line.imag.max())
+        reach = np.abs(line - centre).max() / PX_PER_MM
+        assert reach == pytest.approx(0.75, abs=0.01)
+
+
+def test_options_after_the_image_and_values_named_like_commands():
+    """``--method diskpack``: a value, not the next command; ``stat`` is vpype's."""
+    result = _vpype(["diskpack", "sample", "--method", "diskpack", "-n", "200", "stat"])
+    assert "Path count: 200" in result.output
+
+
+def _argparse_options(*classes):
+    parser = argparse.ArgumentParser()
+    groups = {}
+    for cls in classes:
+        add_arguments(parser, cls, groups=groups)
+    return {o for a in parser._actions for o in a.option_strings if o.startswith("--")}
+
+
+def test_the_options_are_those_of_diskpack_stipple():
+    classes = (StippleOptions, ToneOptions, WriteOptions, ColorOptions)
+    mine = {o for p in diskpack.params for o in p.opts if o.startswith("--")}
+    assert mine == _argparse_options(*classes) - {"--help", flag_name("png_scale")}
+
+
+def test_a_bad_value_is_refused_as_diskpack_stipple_refuses_it():
+    result = CliRunner().invoke(vpype_cli.cli, ["diskpack", "sample", "-n", "100",
+                                                "--black-point", "2"])
+    assert result.exit_code == 2
+    assert "--black-point': must be in [0, 1], got 2.0" in result.output
