@@ -34,7 +34,8 @@ from pathlib import Path
 
 from PIL import Image
 
-from diskpack_cl.batch import POCL_THREAD_VARS, default_jobs, poisson_many, stipple_many
+from diskpack_cl.batch import poisson_many, stipple_many
+from diskpack_cl.executors import POCL_THREAD_VARS, default_jobs
 from perf_rows import append, count, medians, num
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
@@ -140,7 +141,7 @@ def bench_memory(work, sizes):
         img = folder / f"sample_{side}.png"
         Image.open(DATA / "astronaut.png").convert("L").resize((side, side), Image.LANCZOS) \
             .save(img)
-        code = ("import json, sys\nfrom diskpack_cl.batch import run_item, plan_stipple\n"
+        code = ("import json, sys\nfrom diskpack_cl.executors import run_item\nfrom diskpack_cl.jobs import plan_stipple\n"
                 f"item = plan_stipple([{str(img)!r}], [{str(folder / 'o.npz')!r}], n={n})[0]\n"
                 "rec = run_item(item)\n"
                 "print(json.dumps({k: rec.get(k) for k in ('status', 'error', 'seconds', "

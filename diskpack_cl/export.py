@@ -295,7 +295,7 @@ def _check_plotter(name):
 @dataclass(frozen=True)
 class WriteOptions:
     """How a stippling is drawn (SVG, PNG): the options of
-    :func:`diskpack_cl.batch.write_stipple_outputs`, ``diskpack stipple`` and
+    :func:`diskpack_cl.jobs.write_stipple_outputs`, ``diskpack stipple`` and
     ``diskpack export``.
 
     Examples

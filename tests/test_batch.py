@@ -18,11 +18,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from diskpack_cl import batch
-from diskpack_cl.batch import (
-    Item, Manifest, derive_seeds, expand_inputs, plan_stipple, poisson_many,
-    render_template, stipple_many,
-)
+from diskpack_cl import executors, jobs
+from diskpack_cl.batch import poisson_many, stipple_many
+from diskpack_cl.executors import Manifest
+from diskpack_cl.jobs import Item, derive_seeds, expand_inputs, plan_stipple, render_template
 from diskpack_cl.cli import main
 from diskpack_cl.export import WriteOptions
 
@@ -286,7 +285,7 @@ def test_jobs_two_gives_the_files_of_jobs_one(ctx, tmp_path):
     # other is still starting), so the pool's size is read from what it gave each
     # worker: half the cores for PoCL
     assert 1 <= len(workers) <= 2 and os.getpid() not in {int(w.split(":")[1]) for w in workers}
-    cores = batch.default_jobs()
+    cores = executors.default_jobs()
     for r in two:  # PoCL capped per worker, one device each
         assert r["worker_env"]["POCL_MAX_PTHREAD_COUNT"] == str(max(1, cores // 2))
         assert r["worker_env"]["DISKPACK_DEVICE"] == "cpu"
@@ -371,7 +370,7 @@ def test_single_input_switches_refused_on_a_batch(tmp_path, capsys, flags):
 
 
 def test_collision_hint_names_the_field_that_differs(tmp_path):
-    from diskpack_cl.batch import check_outputs
+    from diskpack_cl.jobs import check_outputs
 
     a = Item("stipple", 0, str(tmp_path / "cat.jpg"), 0, {}, (str(tmp_path / "cat.svg"),))
     b = Item("stipple", 1, str(tmp_path / "cat.png"), 0, {}, (str(tmp_path / "cat.svg"),))
@@ -382,7 +381,7 @@ def test_collision_hint_names_the_field_that_differs(tmp_path):
 # ---------------------------------------------------- one input: a one-item plan
 
 def test_one_input_and_the_same_image_in_a_batch_write_the_same_bytes(ctx, tmp_path, capsys):
-    """A single input and a batch item run the same code (batch.stipple_item): the
+    """A single input and a batch item run the same code (jobs.stipple_item): the
     same image gives the same files, tone controls and all. (The batch once
     dropped the tone controls from the .npz params that the single run wrote.)"""
     img = _photos(tmp_path / "in")[1]
@@ -449,7 +448,7 @@ def _start_sets(folder):
 
 
 def test_one_relax_input_and_the_same_file_in_a_batch_write_the_same_bytes(tmp_path, capsys):
-    """relax: a single input and a batch item run the same code (batch.relax_item), in a
+    """relax: a single input and a batch item run the same code (jobs.relax_item), in a
     --box too, which a batch once refused (the two had separate paths)."""
     paths = _start_sets(tmp_path / "in")
     opts = ["--box", "2x1", "--eps", "0.7", "--backend", "exact", "-q"]
@@ -481,7 +480,7 @@ def test_a_relax_plan_without_box_keeps_the_old_identity(tmp_path):
     """box and columns enter an item's params only when given: a manifest written before
     them still marks its items done."""
     src, = _start_sets(tmp_path / "in")[:1]
-    item, = batch.plan_relax([str(src)], [str(tmp_path / "o.npz")])
+    item, = jobs.plan_relax([str(src)], [str(tmp_path / "o.npz")])
     assert sorted(item.params) == ["backend", "eps", "grid", "max_iter"]
 
 
@@ -498,7 +497,7 @@ def test_one_poisson_run_prints_the_dart_warning_as_it_comes(tmp_path, capsys, m
         warnings.warn("saturated", DartThrowingWarning)
         return real(*a, **k)
 
-    monkeypatch.setattr(sampling, "dart_throwing", saturated)
+    monkeypatch.setattr(jobs, "dart_throwing", saturated)
     rc, _, err = _cli(["poisson", "-n", 64, "--seed", 1, "--backend", "exact",
                        "-o", tmp_path / "a.npz"], capsys)
     assert rc == 0 and "diskpack: warning: saturated" in err
@@ -511,11 +510,9 @@ def test_a_worker_ignores_a_second_sigterm_while_it_cleans_up():
     partial files on the way out; the pool may terminate the worker again
     meanwhile (it does when another worker exits), and that second SIGTERM must
     not interrupt the removal (a .part file was left behind)."""
-    from diskpack_cl import batch
-
     saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        batch._ignore_interrupts_and_exit_on_term()
+        executors._ignore_interrupts_and_exit_on_term()
         handler = signal.getsignal(signal.SIGTERM)
         with pytest.raises(SystemExit) as exc:
             handler(signal.SIGTERM, None)

@@ -44,9 +44,7 @@ def fake_relax(monkeypatch):
             timings={"raster_labels": 0.01, "mic_estimate": 0.01, "exact_refine": 0.01},
             backend=backend, device="fake", stats={})
 
-    import diskpack_cl.relax
-
-    monkeypatch.setattr(diskpack_cl.relax, "relax_poisson", relax_poisson)
+    monkeypatch.setattr(JOBS, "relax_poisson", relax_poisson)
     return calls
 
 
@@ -162,12 +160,10 @@ def test_no_progress_bar_when_quiet_or_not_a_terminal(fake_relax, tmp_path, caps
 
 
 def test_keyboard_interrupt(monkeypatch, tmp_path, capsys):
-    import diskpack_cl.relax
-
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(diskpack_cl.relax, "relax_poisson", interrupted)
+    monkeypatch.setattr(JOBS, "relax_poisson", interrupted)
     rc = cli.main(["poisson", "-n", "10", "-o", str(tmp_path / "o.npz")])
     assert rc == 130
     assert "diskpack: error: interrupted, nothing written" in capsys.readouterr().err
@@ -290,7 +286,7 @@ def test_readme_commands_match_ci():
 # ------------------------------------------------------------------ stipple
 
 # the package re-exports the function under the module's name: patch the module
-STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
+JOBS = importlib.import_module("diskpack_cl.jobs")  # every run looks stipple up there
 STIPPLE_ARGS = ["-n", "150", "--beta", "3", "--lloyd", "2", "--rounds", "2"]  # 3+2+2 iterations
 
 
@@ -398,7 +394,7 @@ def fake_stipple(monkeypatch):
         calls.append(dict(image=np.asarray(image), n=n, options=options, **kwargs))
         raise ValueError("fake stipple stops here")
 
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", stipple)
+    monkeypatch.setattr(JOBS, "stipple", stipple)
     return calls
 
 
@@ -435,7 +431,7 @@ def test_stipple_interrupt_writes_nothing(monkeypatch, tmp_path, capsys):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", interrupted)
+    monkeypatch.setattr(JOBS, "stipple", interrupted)
     image = _gradient_png(tmp_path / "g.png", 16)
     rc = cli.main(["stipple", str(image), "-n", "10", "-o", str(tmp_path / "o.svg")])
     assert rc == 130 and "interrupted, nothing written" in capsys.readouterr().err
@@ -472,7 +468,7 @@ def test_stipple_bad_inputs(monkeypatch, tmp_path, capsys, case, message):
         def not_called(*args, **kwargs):
             raise AssertionError("stipple() ran although the input was bad")
 
-        monkeypatch.setattr(STIPPLE_MODULE, "stipple", not_called)
+        monkeypatch.setattr(JOBS, "stipple", not_called)
     image = _gradient_png(tmp_path / "g.png", 16)
     out = tmp_path / "o.svg"
     extra = []
@@ -674,7 +670,7 @@ def test_opencl_failure_is_an_error_message(monkeypatch, tmp_path, capsys):
     def broken(*args, **kwargs):
         raise pyopencl.LogicError("clEnqueueNDRangeKernel failed: INVALID_WORK_GROUP_SIZE")
 
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", broken)
+    monkeypatch.setattr(JOBS, "stipple", broken)
     image = _gradient_png(tmp_path / "g.png", 16)
     _bad(tmp_path, capsys, ["stipple", str(image), "-n", "10", "-o", str(tmp_path / "o.svg")], 1,
          "diskpack: error: OpenCL failed (LogicError")

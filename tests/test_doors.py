@@ -29,7 +29,7 @@ def no_work(monkeypatch):
     def not_called(*args, **kwargs):
         raise AssertionError("the work started although an output is an input")
 
-    for module, name in [("diskpack_cl.stipple", "stipple"), ("diskpack_cl.relax", "relax_poisson"),
+    for module, name in [("diskpack_cl.jobs", "stipple"), ("diskpack_cl.jobs", "relax_poisson"),
                          ("diskpack_cl.poisson", "poisson_disk"), ("diskpack_cl.batch", "run_batch"),
                          ("diskpack_cl.export", "read_stipple"), ("diskpack_cl.reports", "analyze")]:
         monkeypatch.setattr(importlib.import_module(module), name, not_called)

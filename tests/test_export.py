@@ -315,7 +315,7 @@ def test_the_tone_dot_is_the_same_size_through_every_writer_path(tmp_path, resul
     """The tone dot size comes from export.tone_dot_size alone: the writers without a
     dot size and write_stipple_outputs (which hands them one) draw the same dots; a
     second formula that forgot radius_scale or the factor 2 would differ."""
-    from diskpack_cl.batch import write_stipple_outputs
+    from diskpack_cl.jobs import write_stipple_outputs
 
     a, b = tmp_path / "a.svg", tmp_path / "b.svg"
     write_svg(a, result, width_mm=160, radius_scale=radius_scale, pen_path="none")

@@ -19,7 +19,7 @@ import pytest
 from diskpack_cl import cli, memory
 from diskpack_cl.io import write_points
 
-STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
+JOBS = importlib.import_module("diskpack_cl.jobs")  # every run looks stipple up there
 
 
 @pytest.fixture
@@ -52,9 +52,8 @@ def no_stipple(monkeypatch):
     def not_called(*args, **kwargs):
         raise AssertionError("the computation ran although an output was unwritable")
 
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", not_called)
-    monkeypatch.setattr(importlib.import_module("diskpack_cl.relax"), "relax_poisson",
-                        not_called)
+    monkeypatch.setattr(JOBS, "stipple", not_called)
+    monkeypatch.setattr(JOBS, "relax_poisson", not_called)
 
 
 # ------------------------------------------------------------------ signals
@@ -201,7 +200,7 @@ def test_gamma_is_accepted_where_it_acts(monkeypatch, tmp_path, capsys):
         calls.append({"gamma": options.gamma, **kwargs})
         raise ValueError("stop")
 
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", fake)
+    monkeypatch.setattr(JOBS, "stipple", fake)
     for extra in (["--schedule", "paper"], ["--radii", "gray"], ["--beta", "4"],
                   ["--method", "lloyd"]):
         rc, _, err = _run(["stipple", "sample", "-n", "9", "-o", str(tmp_path / "a.svg"),

@@ -6,7 +6,7 @@ import importlib
 import numpy as np
 import pytest
 
-from diskpack_cl import batch, cli
+from diskpack_cl import cli, jobs
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions, write_npz
 from diskpack_cl.image import ToneOptions
@@ -15,10 +15,7 @@ from diskpack_cl.relax import RelaxOptions
 from diskpack_cl.schedule import StippleOptions
 from diskpack_cl.stipple import stipple
 
-STIPPLE_MODULE = importlib.import_module("diskpack_cl.stipple")
 IMAGE_MODULE = importlib.import_module("diskpack_cl.image")
-RELAX_MODULE = importlib.import_module("diskpack_cl.relax")
-MULTIPEN_MODULE = importlib.import_module("diskpack_cl.multipen")
 
 #: Options another option needs to be valid with it.
 COMPANIONS = {"gamma": ["--radii", "gray"], "margin_mm": ["--page", "a4"],
@@ -93,7 +90,7 @@ def test_every_stipple_option_reaches_stipple(f, monkeypatch, tmp_path):
         seen["tone"] = kwargs
         return np.asarray(gray, dtype=np.float64)
 
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", fake)
+    monkeypatch.setattr(jobs, "stipple", fake)
     monkeypatch.setattr(IMAGE_MODULE, "adjust_tone", tone)
     _run(["stipple", "sample", "-n", "50", "-o", str(tmp_path / "o.svg"), *argv,
           *COMPANIONS.get(f.name, [])])
@@ -113,7 +110,7 @@ def test_every_stipple_option_reaches_a_batch_item(f, monkeypatch, tmp_path):
                      ToneOptions(**item.params["tone"]), WriteOptions(**item.write)))
         raise Stop
 
-    monkeypatch.setitem(batch._KINDS, "stipple", fake)
+    monkeypatch.setitem(jobs._KINDS, "stipple", fake)
     _run(["stipple", "sample", "-n", "50", "-o", str(tmp_path / "{stem}.svg"), "--manifest",
           str(tmp_path / "m.jsonl"), *argv, *COMPANIONS.get(f.name, [])])
     (objects,) = seen
@@ -131,9 +128,9 @@ def test_every_write_option_reaches_the_writers(f, command, small_result, monkey
         seen["options"] = options
         raise Stop
 
-    monkeypatch.setattr(batch, "write_stipple_outputs", fake)
-    monkeypatch.setattr(STIPPLE_MODULE, "stipple", lambda *a, **k: small_result)
-    monkeypatch.setattr(MULTIPEN_MODULE, "stipple_colors", lambda *a, **k: small_result)
+    monkeypatch.setattr(jobs, "write_stipple_outputs", fake)
+    monkeypatch.setattr(jobs, "stipple", lambda *a, **k: small_result)
+    monkeypatch.setattr(jobs, "stipple_colors", lambda *a, **k: small_result)
     src = tmp_path / "in.npz"
     write_npz(src, small_result)
     head = (["stipple", "sample", "-n", "20"] if command == "stipple" else ["export", str(src)])
@@ -151,7 +148,7 @@ def test_every_color_option_reaches_stipple_colors(f, monkeypatch, tmp_path):
         seen.update(kwargs)
         raise Stop
 
-    monkeypatch.setattr(MULTIPEN_MODULE, "stipple_colors", fake)
+    monkeypatch.setattr(jobs, "stipple_colors", fake)
     pens = [] if f.name in ("colors", "pens") else ["--colors", "cmy"]
     _run(["stipple", "sample", "-n", "50", "-o", str(tmp_path / "o.svg"), *argv, *pens])
     assert seen[{"pens": "colors", "pen_dots": "counts"}.get(f.name, f.name)] == value
@@ -167,7 +164,7 @@ def test_every_relax_option_reaches_relax_poisson(f, command, monkeypatch, tmp_p
         seen.update(kwargs)
         raise Stop
 
-    monkeypatch.setattr(RELAX_MODULE, "relax_poisson", fake)
+    monkeypatch.setattr(jobs, "relax_poisson", fake)
     src = tmp_path / "in.npy"
     np.save(src, np.random.default_rng(0).random((16, 2)))
     head = ["poisson", "-n", "16", "--init", "random"] if command == "poisson" else \

@@ -7,7 +7,7 @@ import os
 import sys
 import time
 
-from diskpack_cl.batch import json_default
+from diskpack_cl.jobs import json_default
 
 from ._common import PROG, _UsageError, _bar
 
@@ -52,10 +52,10 @@ def _batch_run(args):
         try:
             import distributed  # noqa: F401
         except ImportError:
-            from diskpack_cl.batch import DASK_HINT
+            from diskpack_cl.executors import DASK_HINT
 
             raise ValueError(f"--scheduler: {DASK_HINT}") from None
-    from diskpack_cl.batch import default_jobs
+    from diskpack_cl.executors import default_jobs
 
     return dict(manifest=args.manifest, overwrite=args.overwrite, devices=devices,
                 jobs=args.jobs or default_jobs(devices), client=scheduler,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import time
 
-from diskpack_cl.batch import json_default
+from diskpack_cl.jobs import json_default
 
 from ._common import _bar
 
@@ -49,7 +49,7 @@ def _plot_summary(written, speed):
 def _write_and_report(args, write, res, gray, outputs, summary, t0):
     """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
     print it with --json; return the tail of the summary line."""
-    from diskpack_cl.batch import write_stipple_outputs
+    from diskpack_cl.jobs import write_stipple_outputs
 
     t_write = time.perf_counter()
     progress, close = _write_bar(args, len(res.points), outputs)

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from diskpack_cl.batch import json_default
+from diskpack_cl.jobs import json_default
 
 from ._common import PROG, _image_path, _positive_float, _positive_int
 

@@ -6,7 +6,7 @@ import json
 import sys
 import time
 
-from diskpack_cl.batch import json_default
+from diskpack_cl.jobs import json_default
 
 from ._batches import _batch_mode, _batch_run, _report_batch
 from ._common import (PROG, _bar, _batch_options, _checked, _image_path, _nonnegative_int,
@@ -129,8 +129,8 @@ def _run_poisson(args):
 
 def _run_poisson_one(args):
     """A start set relaxed on the torus (or a file's in a --box): a one-item plan without a
-    manifest, run here (:func:`~diskpack_cl.batch.poisson_start`, then ``relax_item``)."""
-    from diskpack_cl.batch import plan_poisson, poisson_start
+    manifest, run here (:func:`~diskpack_cl.jobs.poisson_start`, then ``relax_item``)."""
+    from diskpack_cl.jobs import plan_poisson, poisson_start
 
     drawn = args.init in ("dart", "random")
     (item,) = plan_poisson(1, 1024 if args.n is None and drawn else args.n, [args.output],

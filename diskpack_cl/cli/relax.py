@@ -61,9 +61,9 @@ def _progress(args, label):
 
 
 def _relax_and_write(item, args, points=None, *, extra_summary=None):
-    """Relax and write a one-item plan (:func:`diskpack_cl.batch.relax_item`), report;
+    """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
     return the exit status."""
-    from diskpack_cl.batch import relax_item
+    from diskpack_cl.jobs import relax_item
 
     callback, close = _progress(args, "relax")
     try:
@@ -135,7 +135,8 @@ def _columns(text):
 
 def _run_relax(args):
     """One input: a one-item plan without a manifest, run here; else a batch."""
-    from diskpack_cl.batch import plan_relax, relax_many
+    from diskpack_cl.batch import relax_many
+    from diskpack_cl.jobs import plan_relax
 
     where = dict(box=args.box, columns=args.columns)
     if _batch_mode(args, args.inputs, [args.output]):

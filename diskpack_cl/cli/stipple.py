@@ -174,9 +174,9 @@ def _run_stipple(args):
 
 
 def _run_stipple_one(args, options, tone, write, separation):
-    """One input: a one-item plan, run here (:func:`diskpack_cl.batch.stipple_item`)
+    """One input: a one-item plan, run here (:func:`diskpack_cl.jobs.stipple_item`)
     without a manifest; every refusal comes before the computation."""
-    from diskpack_cl.batch import plan_stipple, stipple_item
+    from diskpack_cl.jobs import plan_stipple, stipple_item
 
     t0 = time.perf_counter()
     (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],

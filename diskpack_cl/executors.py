@@ -1,0 +1,423 @@
+"""Running many items: here, in spawned worker processes or on a Dask cluster, resumable.
+
+:func:`run_batch` runs items (:class:`~diskpack_cl.jobs.Item`, planned by
+:mod:`diskpack_cl.jobs`) in this process, in ``jobs`` spawned worker
+processes, or on a ``dask.distributed`` cluster, and yields one record (a
+JSON-ready dict, :func:`run_item`) per item as it finishes. Each item writes
+its outputs atomically; then the coordinating process appends one line to
+the :class:`Manifest` (``manifest.jsonl``). A rerun skips the items whose
+manifest line matches and whose outputs exist (the example of :func:`run_batch`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import multiprocessing
+import os
+import platform
+import signal
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import replace
+from pathlib import Path
+
+from .io import atomic_write, atomic_writes
+from .jobs import json_default, run_job
+
+__all__ = [
+    "POCL_THREAD_VARS", "DASK_HINT", "MANIFEST_NAME", "Manifest", "default_manifest",
+    "default_jobs", "run_item", "run_batch",
+]
+
+
+POCL_THREAD_VARS = ("POCL_MAX_PTHREAD_COUNT", "POCL_CPU_MAX_CU_NUM")
+"""PoCL's CPU thread count: ``POCL_MAX_PTHREAD_COUNT`` up to PoCL 3 (the
+pip build: its device then reports that many compute units),
+``POCL_CPU_MAX_CU_NUM`` in later releases. Both are set for each worker."""
+
+
+DASK_HINT = 'the Dask path needs the dask extra: pip install "diskpack_cl[dask]"'
+
+
+MANIFEST_NAME = "manifest.jsonl"
+
+
+# ------------------------------------------------------------- manifest
+
+
+def default_manifest(templates):
+    """``manifest.jsonl`` in the folder of the first output template.
+
+    A folder part with template fields is cut at the first of them.
+
+    Examples
+    --------
+    >>> default_manifest(["out/{parent}/{stem}.svg"])
+    'out/manifest.jsonl'
+    >>> default_manifest(["{stem}.png"])
+    'manifest.jsonl'
+    """
+    parts = []
+    for part in Path(os.path.dirname(templates[0])).parts:
+        if "{" in part:
+            break
+        parts.append(part)
+    return os.path.join(*parts, MANIFEST_NAME)
+
+
+class Manifest:
+    """An append-only JSON-lines record of finished items.
+
+    Each line is written with one ``os.write`` on an ``O_APPEND`` descriptor
+    and synced, so a killed run leaves only whole lines (a line torn by a
+    power cut is ignored when read).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> m = Manifest(os.path.join(tempfile.mkdtemp(), "manifest.jsonl"))
+    >>> m.append({"outputs": ["a.npz"], "status": "ok"})
+    >>> m.records()
+    [{'outputs': ['a.npz'], 'status': 'ok'}]
+    """
+
+    def __init__(self, path):
+        self.path = os.fspath(path)
+
+    def records(self):
+        """Every whole line of the manifest, oldest first."""
+        try:
+            with open(self.path, "rb") as fh:
+                lines = fh.read().split(b"\n")
+        except FileNotFoundError:
+            return []
+        out = []
+        for line in lines:
+            with contextlib.suppress(ValueError):
+                record = json.loads(line)
+                if isinstance(record, dict):
+                    out.append(record)
+        return out
+
+    def finished(self):
+        """The latest record per output set: ``{tuple(outputs): record}``."""
+        return {tuple(r.get("outputs") or ()): r for r in self.records()}
+
+    def append(self, record):
+        """Append one record as one line, atomically with respect to other lines."""
+        data = (json.dumps(record, default=json_default) + "\n").encode()
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+        try:
+            os.write(fd, data)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _is_done(item, record):
+    if record is None or record.get("status") != "ok":
+        return False
+    ident = item.identity()
+    if any(record.get(k) != v for k, v in ident.items()):
+        return False
+    return all(os.path.exists(p) for p in item.outputs)
+
+
+# --------------------------------------------------- one item, recorded
+
+
+def default_jobs(devices=None):
+    """Worker processes when ``jobs`` is not given: one per listed device, else one per core.
+
+    On the 2-core development VM two workers (one PoCL thread each) stippled
+    24.4 images a minute at n = 20000, one process with two threads 12.7
+    (README, "Performance").
+
+    Examples
+    --------
+    >>> default_jobs(["0:0", "0:1", "1:0"])
+    3
+    """
+    if devices:
+        return len(devices)
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+               else os.cpu_count() or 1)
+
+
+def _peak_rss_mib():
+    try:
+        import resource  # POSIX only: elsewhere no peak RSS
+    except ImportError:  # pragma: no cover - not POSIX
+        return None
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return round(rss / (1 << 20 if sys.platform == "darwin" else 1 << 10), 1)
+
+
+def run_item(item, *, device=None, collect=False, progress=None):
+    """Run one item and return its record; a failure is recorded, not raised.
+
+    Parameters
+    ----------
+    item : Item
+    device : str, optional
+        OpenCL device (default: ``DISKPACK_DEVICE``, then the usual choice).
+    collect : bool
+        Write the outputs in a temporary folder and return their bytes under
+        ``"data"`` (``{path: bytes}``) for the caller to write (Dask
+        ``--collect``), instead of writing them in place.
+    progress : callable, optional
+        ``progress(iteration, text)`` after each iteration.
+
+    Returns
+    -------
+    dict
+        The item's identity plus ``status`` (``"ok"`` or ``"failed"``),
+        ``error``, ``summary``, ``certificate``, ``seconds``, ``worker``
+        (host and process id), ``peak_rss_mib`` of the process so far and
+        ``worker_env`` (the PoCL thread cap and ``DISKPACK_DEVICE``, if set).
+
+    Examples
+    --------
+    >>> from diskpack_cl.jobs import Item
+    >>> rec = run_item(Item("relax", 0, "missing.npz", None, {}, ("out.npz",)))
+    >>> rec["status"], rec["error"]
+    ('failed', 'missing.npz: no such file')
+    """
+    t0 = time.perf_counter()
+    record = {"i": item.i, **item.identity(), "status": "failed", "error": item.error}
+    if item.error is None:
+        try:
+            with tempfile.TemporaryDirectory(prefix="diskpack-collect-") if collect \
+                    else contextlib.nullcontext() as tmp:
+                run = item
+                if collect:
+                    run = replace(item, outputs=tuple(
+                        os.path.join(tmp, f"{k}-{os.path.basename(p)}")
+                        for k, p in enumerate(item.outputs)))
+                summary = run_job(run, device=device, progress=progress)
+                if collect:
+                    record["data"] = {}
+                    for out, tmp_out in zip(item.outputs, run.outputs):
+                        with open(tmp_out, "rb") as fh:
+                            record["data"][out] = fh.read()
+                    for f in summary.get("files", ()):
+                        f["path"] = item.outputs[run.outputs.index(f["path"])]
+            record.update(status="ok", summary=summary,
+                          certificate=summary.pop("certificate", None))
+        except Exception as exc:  # recorded, the batch goes on
+            record["error"] = _error_text(item, exc)
+    record.update(seconds=time.perf_counter() - t0, finished=time.time(),
+                  worker=f"{platform.node()}:{os.getpid()}", peak_rss_mib=_peak_rss_mib(),
+                  worker_env={k: os.environ[k] for k in (*POCL_THREAD_VARS, "DISKPACK_DEVICE")
+                              if k in os.environ})
+    return record
+
+
+def _error_text(item, exc):
+    text = str(exc) or type(exc).__name__
+    if not isinstance(exc, (ValueError, FileNotFoundError, OSError)):
+        text = f"{type(exc).__name__}: {text}"
+    if item.input is not None and item.input not in text:
+        text = f"{item.input}: {text}"
+    return text
+
+
+# ------------------------------------------------------------ executors
+
+
+def _ignore_interrupts_and_exit_on_term():
+    """Worker signals: Ctrl-C is the coordinator's; SIGTERM ends cleanly (no .part files)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_on_first_term)
+
+
+def _exit_on_first_term(*_):
+    """SystemExit(143), once: a second SIGTERM (the pool terminates its other workers
+    when one exits) must not interrupt the removal of the partial files."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    sys.exit(143)
+
+
+def _init_worker(slots, devices, threads):
+    slot = slots.get()
+    if threads:
+        for var in POCL_THREAD_VARS:
+            os.environ.setdefault(var, str(threads))
+    if devices:
+        os.environ["DISKPACK_DEVICE"] = devices[slot % len(devices)]
+    _ignore_interrupts_and_exit_on_term()
+
+
+def _run_in_worker(item, collect):
+    try:
+        return run_item(item, collect=collect)
+    except SystemExit:  # SIGTERM: the partial files are removed on the way here
+        os._exit(143)
+
+
+def _failed(item, error):
+    return {"i": item.i, **item.identity(), "status": "failed", "error": error,
+            "finished": time.time()}
+
+
+def _local_pool(todo, jobs, devices, collect):
+    """Yield records from ``jobs`` spawned worker processes (spawn: OpenCL does not survive fork)."""
+    ctx = multiprocessing.get_context("spawn")
+    slots = ctx.Queue()
+    for k in range(jobs):
+        slots.put(k)
+    threads = max(1, default_jobs() // jobs)
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
+                               initargs=(slots, devices, threads))
+    try:
+        futures = {pool.submit(_run_in_worker, item, collect): item for item in todo}
+        for fut in as_completed(futures):
+            try:
+                yield fut.result()
+            except BrokenProcessPool as exc:
+                yield _failed(futures[fut], f"worker process died: {exc}")
+    finally:  # stop the workers first: shutdown() forgets them
+        _stop_workers(pool)
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _stop_workers(pool):
+    """Send SIGTERM to the pool's workers (they remove their partial files and exit)."""
+    stop = getattr(pool, "terminate_workers", None)  # Python >= 3.14
+    if stop is not None:
+        stop()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
+
+
+def _dask_client(client):
+    try:
+        import distributed  # the optional dask extra, loaded only for a cluster
+    except ImportError:
+        raise ImportError(DASK_HINT) from None
+    if isinstance(client, distributed.Client):
+        return client, False
+    return distributed.Client(client), True
+
+
+def _dask(todo, client, device, collect):
+    """Yield records from the items sent to a ``dask.distributed`` cluster."""
+    from distributed import as_completed  # the optional dask extra, loaded only for a cluster
+
+    client, own = _dask_client(client)
+    futures = {}
+    try:
+        for item in todo:
+            fut = client.submit(run_item, item, device=device, collect=collect, pure=False,
+                                key=f"diskpack-{item.kind}-{item.i}-{os.getpid()}-{time.time_ns()}")
+            futures[fut] = item
+        for fut in as_completed(futures):
+            try:
+                yield fut.result()
+            except Exception as exc:  # the worker died or the cluster lost the task
+                yield _failed(futures[fut], f"Dask task failed: {type(exc).__name__}: {exc}")
+    finally:
+        client.cancel(list(futures))
+        if own:
+            client.close()
+
+
+def _write_collected(record):
+    """Write the bytes a worker returned (``collect``), atomically; the record updated."""
+    data = record.pop("data", None)
+    if not data:
+        return record
+    try:
+        with atomic_writes():
+            for path, blob in data.items():
+                with atomic_write(path, "wb") as fh:
+                    fh.write(blob)
+    except OSError as exc:
+        record.update(status="failed", error=f"writing {path}: {exc}")
+    return record
+
+
+def run_batch(items, *, manifest=None, overwrite=False, jobs=1, devices=None, client=None,
+              collect=False, progress=None):
+    """Run items and yield one record per item, as each finishes.
+
+    Items whose manifest line matches (same input size and time, parameters,
+    seed and outputs, status ok) and whose outputs exist are yielded with
+    status ``"skipped"`` and get no new line. Every other item runs and its
+    record is appended to the manifest, by this process only.
+
+    Parameters
+    ----------
+    items : list of Item
+    manifest : str, optional
+        Manifest path; None: no manifest (nothing is skipped).
+    overwrite : bool
+        Redo every item.
+    jobs : int
+        1: run in this process; more: that many spawned worker processes,
+        each with its own OpenCL context, PoCL capped at ``cores // jobs``
+        threads (:data:`POCL_THREAD_VARS`), and with ``devices`` one device
+        per worker (through ``DISKPACK_DEVICE``).
+    devices : list of str, optional
+        OpenCL devices (``jobs == 1`` or Dask: the first is used).
+    client : distributed.Client or str, optional
+        Send the items to this Dask cluster (a client or a scheduler
+        address) instead; ``jobs`` is then not used.
+    collect : bool
+        With Dask: workers return the outputs' bytes and this process writes
+        them (for workers without the shared output folder).
+    progress : callable, optional
+        ``progress(item, iteration, text)`` during an item, in this process
+        only (``jobs == 1`` without Dask).
+
+    Yields
+    ------
+    dict
+        The record (see :func:`run_item`); ``"skipped"`` ones hold the
+        identity and the earlier record's ``summary``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from diskpack_cl.jobs import plan_poisson
+    >>> out = tempfile.mkdtemp()
+    >>> items = plan_poisson(2, 64, [os.path.join(out, "{i}.npz")], seed=1)
+    >>> manifest = os.path.join(out, "manifest.jsonl")
+    >>> [r["status"] for r in run_batch(items, manifest=manifest)]
+    ['ok', 'ok']
+    >>> [r["status"] for r in run_batch(items, manifest=manifest)]   # done already
+    ['skipped', 'skipped']
+    """
+    man = Manifest(manifest) if manifest is not None else None
+    folder = os.path.dirname(manifest or "")
+    if folder and not os.path.isdir(folder):
+        raise FileNotFoundError(f"the manifest's folder does not exist: {folder}")
+    finished = {} if (man is None or overwrite) else man.finished()
+    todo = []
+    for item in items:
+        old = finished.get(tuple(item.outputs))
+        if _is_done(item, old):
+            yield {**old, "status": "skipped"}
+        else:
+            todo.append(item)
+    if client is not None:
+        source = _dask(todo, client, devices[0] if devices else None, collect)
+    elif jobs > 1 and len(todo) > 1:
+        source = _local_pool(todo, min(jobs, len(todo)), devices, collect)
+    else:
+        source = (run_item(item, device=devices[0] if devices else None, collect=collect,
+                           progress=None if progress is None
+                           else (lambda it, text, item=item: progress(item, it, text)))
+                  for item in todo)
+    with contextlib.closing(source):
+        for record in source:
+            record = _write_collected(record)
+            if man is not None:
+                man.append(record)
+            yield record
