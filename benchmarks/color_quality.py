@@ -37,7 +37,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from diskpack_cl import stipple
-from diskpack_cl.analysis import spacing
+from diskpack_cl.picture_measures import spacing
 from diskpack_cl.color import PALETTES, color_measures, load_rgb, pen_tone_radii, separate
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.multipen import stipple_colors

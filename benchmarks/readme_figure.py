@@ -22,7 +22,8 @@ import numpy as np  # noqa: E402
 from PIL import Image  # noqa: E402
 
 from diskpack_cl import load_gray, poisson_disk, sample_image_path, stipple  # noqa: E402
-from diskpack_cl.analysis import periodogram, render_dots  # noqa: E402
+from diskpack_cl.analysis import periodogram  # noqa: E402
+from diskpack_cl.picture_measures import render_dots
 
 ROOT = Path(__file__).resolve().parents[1]
 

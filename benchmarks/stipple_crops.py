@@ -1,7 +1,7 @@
 """Crops of stipplings side by side: the photograph, then one drawing per configuration.
 
 Each drawing shows every dot with one radius (the equal-ink radius of
-:func:`diskpack_cl.analysis.tone_radius`, the drawing the tone measure sees),
+:func:`diskpack_cl.picture_measures.tone_radius`, the drawing the tone measure sees),
 rendered at ``--scale`` output pixels per image pixel; the label gives the
 configuration and, over the whole image, its tone SSIM (sigma 3), edge
 fidelity and stray dots per 10 000 (:mod:`diskpack_cl.analysis`).
@@ -22,7 +22,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 import stipple_quality as sq
-from diskpack_cl.analysis import edge_fidelity, render_dots, stray_dots, tone_radius, tone_ssim
+from diskpack_cl.picture_measures import edge_fidelity, render_dots, stray_dots, tone_radius, tone_ssim
 
 
 def drawing(points, darkness, box, scale):

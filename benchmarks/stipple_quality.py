@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskpack_cl.analysis import stipple_measures
+from diskpack_cl.picture_measures import stipple_measures
 from diskpack_cl.image import load_gray
 from diskpack_cl.stipple import stipple
 

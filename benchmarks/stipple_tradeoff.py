@@ -14,7 +14,7 @@ have |psi6| below Lloyd's; the star is the default itself.
 condition and, where none does, what binds (|psi6|, tone with P01, or tone);
 ``--map`` draws the same as one coloured cell per pair. Every row also has
 ``p01_pair``, P01 read against the pair's mean spacing
-(``analysis.spacing(normalize="pair")``), and the share of the P01 tail on
+(``picture_measures.spacing(normalize="pair")``), and the share of the P01 tail on
 tone edges.
 
     python benchmarks/stipple_tradeoff.py astronaut:5000 camera:5000 astronaut:50000 \\
@@ -52,7 +52,7 @@ def close_pairs(points, darkness, change=0.25):
     """Where the close pairs are, and P01 with the pair's spacing as the unit.
 
     A dot is *on an edge* where the expected darkness (blurred by 3 px, as in
-    :func:`diskpack_cl.analysis.spacing`) changes by more than ``change``
+    :func:`diskpack_cl.picture_measures.spacing`) changes by more than ``change``
     (relative) over one local dot spacing ``1 / sqrt(rho_i)``: there its
     nearest neighbour may sit on the denser side, at that side's spacing.
     Returns ``{"edge_tail": share of edge dots among the dots below the 1st
@@ -61,7 +61,7 @@ def close_pairs(points, darkness, change=0.25):
     """
     from scipy import ndimage
 
-    from diskpack_cl.analysis import spacing
+    from diskpack_cl.picture_measures import spacing
 
     sp = spacing(points, darkness)
     gy, gx = np.gradient(ndimage.gaussian_filter(darkness, 3.0, mode="reflect"))

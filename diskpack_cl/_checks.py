@@ -24,6 +24,26 @@ def check_count(n, minimum=1, name="n"):
     return int(n)
 
 
+def check_points(points, name="points"):
+    """`points` as a float64 (n, 2) array, checked to be finite.
+
+    Examples
+    --------
+    >>> check_points([[0.5, 0.25]]).dtype
+    dtype('float64')
+    >>> check_points([[0.5, float("nan")]])
+    Traceback (most recent call last):
+    ...
+    ValueError: points must be finite
+    """
+    p = np.asarray(points, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (n, 2), got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"{name} must be finite")
+    return p
+
+
 #: Widest spread of power weights the engines accept: the raster kernels
 #: compute power distances in float32 (largest finite value about 3.4e38).
 WEIGHT_SPREAD = 1e30

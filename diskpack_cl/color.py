@@ -42,8 +42,8 @@ black (white, no ink), so near-black areas are drawn by one pen.
 
 Measures (:func:`color_measures`): mean CIELAB Delta E (CIE 1976) between the
 photograph and the rendered stippling, both blurred by about one dot
-spacing; SSIM per separated layer (:func:`diskpack_cl.analysis.tone_ssim`);
-spacing P01 per pen and of all dots (:func:`diskpack_cl.analysis.spacing`).
+spacing; SSIM per separated layer (:func:`diskpack_cl.picture_measures.tone_ssim`);
+spacing P01 per pen and of all dots (:func:`diskpack_cl.picture_measures.spacing`).
 """
 
 from __future__ import annotations
@@ -440,7 +440,7 @@ def render_pens(points, pen, radii, colors, shape, *, scale=3):
     """Linear-light RGB (H, W, 3) of dots drawn with their pens' inks, overprinting where they overlap.
 
     Each pen's dots (radius ``radii[p]`` px) are drawn at `scale` times the
-    image resolution (:func:`diskpack_cl.analysis.render_dots`), coverage
+    image resolution (:func:`diskpack_cl.picture_measures.render_dots`), coverage
     clipped at 1; inks multiply, ``prod_p (1 - a_p (1 - c_p))``, so pens
     side by side mix by area and overlapping dots overprint; the result is
     averaged back to the image's pixels.
@@ -451,7 +451,7 @@ def render_pens(points, pen, radii, colors, shape, *, scale=3):
     >>> round(float(img[..., 0].mean()), 3)   # 1 - pi / 16
     0.804
     """
-    from .analysis import render_dots
+    from .picture_measures import render_dots
 
     p = np.asarray(points, dtype=np.float64)
     pen = np.asarray(pen)
@@ -477,7 +477,7 @@ def pen_tone_radii(layers, counts):
     >>> pen_tone_radii(np.full((2, 10, 10), 0.5), [50, 0]).round(4).tolist()
     [0.5642, 1.0]
     """
-    from .analysis import tone_radius
+    from .picture_measures import tone_radius
 
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
 
@@ -498,7 +498,7 @@ def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
     """Spacing P01 of each pen's dots and of all dots together.
 
     Each set's nearest-neighbour distances are read against the spacing its
-    density asks for (:func:`diskpack_cl.analysis.spacing`, 1st percentile):
+    density asks for (:func:`diskpack_cl.picture_measures.spacing`, 1st percentile):
     with `layers`, a pen's layer and, for all dots, all layers' coverage
     (what the dots were placed to follow); without, the density of the dots
     themselves (histogram blurred over two of their spacings), which needs
@@ -531,7 +531,7 @@ def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
     >>> out["p01"][0] > 0.5, round(out["p01_joint"], 2) > 0.5
     (True, True)
     """
-    from .analysis import spacing
+    from .picture_measures import spacing
 
     p, pen = np.asarray(points, float), np.asarray(pen)
     P = pens or (int(pen.max()) + 1 if layers is None else len(layers))
@@ -574,7 +574,7 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
         ``delta_e``: mean CIE 1976 Delta E*ab between the photograph and the
         drawing (:func:`render_pens`, each pen's dots at the radius holding
         its layer's ink), both blurred by `sigma` in linear light;
-        ``ssim``: per pen, :func:`diskpack_cl.analysis.tone_ssim` of its
+        ``ssim``: per pen, :func:`diskpack_cl.picture_measures.tone_ssim` of its
         dots against its layer; ``p01`` and ``p01_joint``: :func:`pen_spacing`
         against the layers (SSIM and P01 None for a pen of fewer than
         :data:`MIN_DOTS` dots).
@@ -590,7 +590,7 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
     """
     from scipy import ndimage
 
-    from .analysis import tone_ssim
+    from .picture_measures import tone_ssim
 
     p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
     P, H, W = layers.shape

@@ -65,7 +65,7 @@ def _dot_radii(result, radii, scale, dots, radius_scale):
 
     ``"tone"``: one size for all dots, ``result.tone_radius`` (the radius at
     which the dots' ink equals the image's darkness, see
-    :func:`diskpack_cl.analysis.tone_radius`); ``"packing"``: each dot its
+    :func:`diskpack_cl.picture_measures.tone_radius`); ``"packing"``: each dot its
     certified packing radius. Both times ``radius_scale``.
     """
     if dots not in DOTS:
@@ -81,7 +81,7 @@ def tone_dot_size(result, scale, radius_scale=1.0, *, gray=None, invert=False):
     """Diameter of the tone dots in output units (``scale`` of them per pixel).
 
     The one place it is derived: twice the radius at which ``n`` equal dots
-    hold the image's darkness as ink (:func:`diskpack_cl.analysis.tone_radius`),
+    hold the image's darkness as ink (:func:`diskpack_cl.picture_measures.tone_radius`),
     from ``gray`` (the image stippled, before ``invert``) when given, else
     the result's own ``tone_radius``; times ``radius_scale``.
 
@@ -92,7 +92,7 @@ def tone_dot_size(result, scale, radius_scale=1.0, *, gray=None, invert=False):
     0.6000000000000001
     """
     if gray is not None:
-        from .analysis import tone_radius
+        from .picture_measures import tone_radius
 
         tone = tone_radius(len(result.points), gray if invert else 1.0 - gray)
     elif getattr(result, "tone_radius", None) is None:

@@ -40,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._timing import Stopwatch
-from .analysis import tone_radius
+from .picture_measures import tone_radius
 from .color import pen_tone_radii, separate
 from .dithering import error_diffusion
 from .domain import Domain

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from . import analysis
+from . import analysis, picture_measures
 from .io import atomic_write
 
 __all__ = ["figure_format", "point_set_numbers", "point_set_report", "stipple_numbers",
@@ -322,9 +322,9 @@ def stipple_numbers(points, radii, darkness, certificate=None, *, sigma=3.0):
     >>> numbers["n"], numbers["radius_max"], "certificate" in numbers
     (50, 1.0, False)
     """
-    p, d = analysis._stipple_inputs(points, darkness)
-    numbers = {key: _num(v) for key, v in analysis.stipple_measures(p, d, sigma=sigma).items()}
-    numbers["tone_radius"] = _num(analysis.tone_radius(len(p), d))
+    p, d = picture_measures._stipple_inputs(points, darkness)
+    numbers = {key: _num(v) for key, v in picture_measures.stipple_measures(p, d, sigma=sigma).items()}
+    numbers["tone_radius"] = _num(picture_measures.tone_radius(len(p), d))
     if radii is not None:
         r = np.asarray(radii, dtype=np.float64).ravel()
         if r.shape != (len(p),):
@@ -340,9 +340,9 @@ def _spacing_panel(ax_h, sp):
     vals = sp.values[np.isfinite(sp.values)]
     hi = max(1.6, float(np.percentile(vals, 99.5)) if vals.size else 1.6)
     ax_h.hist(np.clip(vals, 0, hi), bins=60, range=(0, hi), color="0.35")
-    ax_h.axvline(analysis.HEXAGONAL_SPACING, color="k", ls="--", lw=1)
+    ax_h.axvline(picture_measures.HEXAGONAL_SPACING, color="k", ls="--", lw=1)
     ax_h.axvline(sp.p01, color="k", ls=":", lw=1.2)
-    ax_h.text(analysis.HEXAGONAL_SPACING, 0.97, " hex 1.075", transform=ax_h.get_xaxis_transform(),
+    ax_h.text(picture_measures.HEXAGONAL_SPACING, 0.97, " hex 1.075", transform=ax_h.get_xaxis_transform(),
               va="top", fontsize=7)
     ax_h.text(sp.p01, 0.85, f" P01 {sp.p01:.3f}", transform=ax_h.get_xaxis_transform(),
               va="top", fontsize=7)
@@ -379,10 +379,10 @@ def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0
     """One figure of a stippling beside its input, and its numbers.
 
     Panels: the input darkness and the rendered stippling (every dot drawn
-    with the equal-ink radius of :func:`diskpack_cl.analysis.tone_radius`, as
+    with the equal-ink radius of :func:`diskpack_cl.picture_measures.tone_radius`, as
     a pen with one nib would draw it); the same two blurred with a Gaussian of
     ``sigma`` pixels, with the tone SSIM; the histogram of the spacing
-    (:func:`diskpack_cl.analysis.spacing`, hexagonal packing 1.075 marked);
+    (:func:`diskpack_cl.picture_measures.spacing`, hexagonal packing 1.075 marked);
     and the numbers with the certificate.
 
     Parameters
@@ -405,7 +405,7 @@ def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0
     Returns
     -------
     dict
-        :func:`diskpack_cl.analysis.stipple_measures` plus ``tone_radius``,
+        :func:`diskpack_cl.picture_measures.stipple_measures` plus ``tone_radius``,
         ``radius_min``, ``radius_median``, ``radius_max`` (when radii are
         given) and ``certificate`` (a dict of its fields, when given).
 
@@ -420,14 +420,14 @@ def stipple_report(points, radii, darkness, path, certificate=None, *, sigma=3.0
     """
     fmt = figure_format(path)
     numbers = stipple_numbers(points, radii, darkness, certificate, sigma=sigma)
-    p, d = analysis._stipple_inputs(points, darkness)
+    p, d = picture_measures._stipple_inputs(points, darkness)
     r_tone = numbers["tone_radius"]
     cert = numbers.get("certificate")
 
-    drawing = analysis.render_dots(p, r_tone, d.shape)
+    drawing = picture_measures.render_dots(p, r_tone, d.shape)
     blur_draw = ndimage.gaussian_filter(drawing, sigma, mode="reflect")
     blur_dark = ndimage.gaussian_filter(d, sigma, mode="reflect")
-    sp = analysis.spacing(p, d, sigma=sigma)
+    sp = picture_measures.spacing(p, d, sigma=sigma)
 
     ny, nx = d.shape
     fig = _figure((10, 6.6))

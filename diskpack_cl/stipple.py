@@ -81,7 +81,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._timing import Stopwatch
-from .analysis import tone_radius
+from .picture_measures import tone_radius
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
@@ -129,7 +129,7 @@ class StippleResult:
         ``"opencl"`` or ``"exact"``: the engine's backend (see :mod:`diskpack_cl.engine`).
     tone_radius : float
         Radius (px) at which n equal dots hold the image's darkness as ink
-        (:func:`diskpack_cl.analysis.tone_radius`): what the writers draw by
+        (:func:`diskpack_cl.picture_measures.tone_radius`): what the writers draw by
         default.
 
     Examples

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskpack_cl import analysis
+from diskpack_cl import analysis, picture_measures
 from diskpack_cl.domain import Domain
 from diskpack_cl.measures import hexagonal_radius, min_distance, normalized_radius
 from diskpack_cl.image import load_gray
@@ -374,7 +374,7 @@ def _render(points, r, shape, scale=1.0, crop=None):
                 & (p[:, 1] > y0 - 3 * r) & (p[:, 1] < y0 + size + 3 * r))
         p = p[keep] - [x0, y0]
         H = W = size
-    ink = analysis.render_dots(p * scale, r * scale, (int(H * scale), int(W * scale)), samples=4)
+    ink = picture_measures.render_dots(p * scale, r * scale, (int(H * scale), int(W * scale)), samples=4)
     return 1.0 - np.clip(ink, 0.0, 1.0)
 
 
@@ -391,7 +391,7 @@ def _show(ax, img, title, crop_box=None):
 
 
 def _stipple_numbers(points, darkness, result=None):
-    m = analysis.stipple_measures(points, darkness)
+    m = picture_measures.stipple_measures(points, darkness)
     psi = analysis.hexatic_order(points, periodic=False).psi6
     m["psi6_frac_above_0.9"] = float(np.mean(psi > 0.9))
     if result is not None:
@@ -406,7 +406,7 @@ def _stipple_input(name, n):
     """A test photograph's gray image, darkness, error-diffusion start and equal-ink radius."""
     gray = load_gray(DATA / f"{name}.png")
     dark = 1.0 - gray
-    return gray, dark, error_diffusion(gray, n, seed=0), analysis.tone_radius(n, dark)
+    return gray, dark, error_diffusion(gray, n, seed=0), picture_measures.tone_radius(n, dark)
 
 
 def fig5(out, quick):
@@ -458,7 +458,7 @@ def fig9_10(out, quick):
     start = error_diffusion(gray, n, seed=0)
     dp = stipple(gray, n, seed=0)
     ll = stipple(gray, n, seed=0, method="lloyd")
-    r = analysis.tone_radius(n, dark)
+    r = picture_measures.tone_radius(n, dark)
     crops = [(200, 60, 96), (330, 380, 96)]  # face / coat and lawn / tripod
     sets = [("error diffusion", start, None), ("weighted Lloyd (Secord)", ll.points, ll),
             ("disk packing (ours)", dp.points, dp)]

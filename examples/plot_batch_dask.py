@@ -18,7 +18,7 @@ from distributed import Client, LocalCluster
 from PIL import Image
 
 from diskpack_cl import load_gray, read_stipple, sample_image_path
-from diskpack_cl.analysis import render_dots
+from diskpack_cl.picture_measures import render_dots
 from diskpack_cl.batch import stipple_many
 
 # three small crops of the sample photograph as the "photos" folder

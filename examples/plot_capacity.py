@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from diskpack_cl import load_gray, sample_image_path, stipple
-from diskpack_cl.analysis import render_dots, spacing, tone_ssim
+from diskpack_cl.picture_measures import render_dots, spacing, tone_ssim
 
 gray = load_gray(sample_image_path())[40:200, 170:330]
 darkness = 1 - gray

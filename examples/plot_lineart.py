@@ -6,7 +6,7 @@ Drawings are mostly white paper with sharp outlines. The default schedule
 keeps white paper white (no stray dots) and keeps the dots on the ink, so
 outlines stay sharp; weighted Lloyd stippling (``method="lloyd"``), the
 classic look, is drawn beside it. The titles count the stray dots, dots on
-white paper (:func:`diskpack_cl.analysis.stray_dots`). Thin lines need
+white paper (:func:`diskpack_cl.picture_measures.stray_dots`). Thin lines need
 enough dots: with far fewer, both methods leave stray dots beside them.
 """
 
@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from diskpack_cl import load_gray, stipple
-from diskpack_cl.analysis import render_dots, stray_dots
+from diskpack_cl.picture_measures import render_dots, stray_dots
 
 # tests/data/lineart holds the drawings of the quality benchmark
 here = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()

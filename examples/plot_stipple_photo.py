@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from diskpack_cl import load_gray, sample_image_path, stipple
-from diskpack_cl.analysis import render_dots
+from diskpack_cl.picture_measures import render_dots
 
 gray = load_gray(sample_image_path())[40:200, 170:330]   # rows, columns: the face
 res = stipple(gray, 2500, seed=0)

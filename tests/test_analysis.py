@@ -10,6 +10,7 @@ from scipy import ndimage
 from scipy.spatial import Delaunay
 
 from diskpack_cl import analysis as A
+from diskpack_cl import picture_measures as P
 from diskpack_cl.domain import Domain
 
 def hex_lattice(m, r, shift=(0.0, 0.0)):
@@ -329,7 +330,7 @@ def test_psi6_errors():
 
 def test_ssim_of_identical_images_is_one():
     img = np.random.default_rng(8).random((40, 30))
-    assert A.ssim(img, img) == pytest.approx(1.0, abs=1e-12)
+    assert P.ssim(img, img) == pytest.approx(1.0, abs=1e-12)
 
 
 @settings(max_examples=20, deadline=None)
@@ -348,14 +349,14 @@ def test_ssim_matches_scikit_image(ny, nx, seed, blur, noise):
     ref = skimage_metrics.structural_similarity(
         a, b, gaussian_weights=True, sigma=1.5, use_sample_covariance=False, data_range=1
     )
-    assert A.ssim(a, b) == pytest.approx(ref, abs=1e-6)
+    assert P.ssim(a, b) == pytest.approx(ref, abs=1e-6)
 
 
 def test_ssim_errors():
     with pytest.raises(ValueError, match="images must be at least 11 x 11 pixels"):
-        A.ssim(np.zeros((8, 20)), np.zeros((8, 20)))
+        P.ssim(np.zeros((8, 20)), np.zeros((8, 20)))
     with pytest.raises(ValueError, match="images must be 2-D with equal shapes"):
-        A.ssim(np.zeros((20, 20)), np.zeros((20, 21)))
+        P.ssim(np.zeros((20, 20)), np.zeros((20, 21)))
 
 
 def brute_render(points, radius, shape, s=64):
@@ -379,7 +380,7 @@ def brute_render(points, radius, shape, s=64):
 def test_render_dots_matches_fine_supersampling(n, seed, radius):
     rng = np.random.default_rng(seed)
     pts = rng.random((n, 2)) * [8, 6] + 9
-    img = A.render_dots(pts, radius, (24, 26))
+    img = P.render_dots(pts, radius, (24, 26))
     ref = brute_render(pts, radius, (24, 26))
     assert np.max(np.abs(img - ref)) < 0.03 * n
     # each dot holds exactly pi r^2 of ink (they lie inside the image)
@@ -387,15 +388,15 @@ def test_render_dots_matches_fine_supersampling(n, seed, radius):
 
 
 def test_render_dots_clips_at_the_image_edge_and_handles_tiny_dots():
-    img = A.render_dots([[0.0, 5.0]], 2.0, (10, 10))
+    img = P.render_dots([[0.0, 5.0]], 2.0, (10, 10))
     assert img.sum() == pytest.approx(0.5 * math.pi * 4.0, rel=0.02)
-    tiny = A.render_dots([[3.2, 4.7]], 1e-3, (8, 8))
+    tiny = P.render_dots([[3.2, 4.7]], 1e-3, (8, 8))
     assert tiny[4, 3] == pytest.approx(math.pi * 1e-6)
     assert tiny.sum() == pytest.approx(math.pi * 1e-6)
-    mixed = A.render_dots([[2.0, 2.0], [6.0, 6.0]], [0.5, 1.5], (9, 9))
+    mixed = P.render_dots([[2.0, 2.0], [6.0, 6.0]], [0.5, 1.5], (9, 9))
     assert mixed.sum() == pytest.approx(math.pi * (0.25 + 2.25))
     with pytest.raises(ValueError, match="radius must be positive and finite"):
-        A.render_dots([[2.0, 2.0]], 0.0, (5, 5))
+        P.render_dots([[2.0, 2.0]], 0.0, (5, 5))
 
 
 @settings(max_examples=15, deadline=None)
@@ -403,12 +404,12 @@ def test_render_dots_clips_at_the_image_edge_and_handles_tiny_dots():
 def test_tone_drawing_total_ink_equals_total_darkness(n, level, seed):
     rng = np.random.default_rng(seed)
     darkness = level * rng.random((40, 50))
-    R = A.tone_radius(n, darkness)
+    R = P.tone_radius(n, darkness)
     # keep every dot inside the image so no ink is clipped
     pts = R + rng.random((n, 2)) * (np.array([50, 40]) - 2 * R)
     if np.any(pts < R) or np.any(pts > [50 - R, 40 - R]):
         return
-    drawing = A.render_dots(pts, R, darkness.shape)
+    drawing = P.render_dots(pts, R, darkness.shape)
     assert drawing.sum() == pytest.approx(darkness.sum(), rel=1e-10)
 
 
@@ -424,9 +425,9 @@ def test_tone_ssim_prefers_the_stippling_of_the_right_image():
     cdf = np.concatenate([[0.0], np.cumsum(ramp[0]) / ramp[0].sum()])
     x = np.interp(u, cdf, np.arange(nx + 1.0))
     pts = np.column_stack([x, rng.random(n) * ny])
-    good = A.tone_ssim(pts, ramp)
-    bad = A.tone_ssim(pts, flipped)
-    flat = A.tone_ssim(rng.random((n, 2)) * [nx, ny], ramp)
+    good = P.tone_ssim(pts, ramp)
+    bad = P.tone_ssim(pts, flipped)
+    flat = P.tone_ssim(rng.random((n, 2)) * [nx, ny], ramp)
     assert good > 0.7 > flat > 0.2 > bad
 
 
@@ -434,7 +435,7 @@ def test_tone_ssim_of_a_hexagonal_packing_at_uniform_darkness_is_near_one():
     a = 2.0
     pts = hex_packing(a, 40, 46, origin=(0.5, 0.6))
     darkness = np.full((int(46 * a * math.sqrt(3) / 2), 80), 0.3)
-    assert A.tone_ssim(pts, darkness) > 0.95
+    assert P.tone_ssim(pts, darkness) > 0.95
 
 
 # ---------------------------------------------------------------------------
@@ -447,11 +448,11 @@ def test_spacing_of_a_hexagonal_packing_at_uniform_darkness(level):
     pts = hex_packing(a, m, r, origin=(1.0, 1.0))
     width, height = m * a, r * a * math.sqrt(3) / 2  # 100 x 100.46: density n / area
     darkness = np.full((round(height), round(width)), level)
-    s = A.spacing(pts, darkness)
+    s = P.spacing(pts, darkness)
     assert s.values.shape == (m * r,)
-    assert s.median == pytest.approx(A.HEXAGONAL_SPACING, rel=5e-3)
-    assert s.p01 == pytest.approx(A.HEXAGONAL_SPACING, rel=5e-3)
-    assert A.HEXAGONAL_SPACING == pytest.approx(1.0746, abs=1e-4)
+    assert s.median == pytest.approx(P.HEXAGONAL_SPACING, rel=5e-3)
+    assert s.p01 == pytest.approx(P.HEXAGONAL_SPACING, rel=5e-3)
+    assert P.HEXAGONAL_SPACING == pytest.approx(1.0746, abs=1e-4)
 
 
 def two_density_halves(height, step):
@@ -470,7 +471,7 @@ def two_density_halves(height, step):
 def test_spacing_follows_local_density():
     # two halves: dark left with 4x the density of the light right, each half a square grid
     dark, pts = two_density_halves(80, 2.0)
-    s = A.spacing(pts, dark)
+    s = P.spacing(pts, dark)
     # a square grid gives d * sqrt(1 / d^2) = 1 away from the boundary between halves
     assert s.median == pytest.approx(1.0, abs=0.02)
     # the expected density it used: n D(x_i) / sum(D), 4x on the dark half away from the step
@@ -487,8 +488,8 @@ def test_pair_spacing_against_brute_force():
     pts = rng.random((250, 2)) * [90, 60]
     pts[:3] = [[3.0, 3.0], [3.5, 3.0], [45.0, 30.0]]
     pts[3] = pts[2]  # a coincident pair: distance 0 either way
-    s = A.spacing(pts, dark)
-    q = A.spacing(pts, dark, normalize="pair")
+    s = P.spacing(pts, dark)
+    q = P.spacing(pts, dark, normalize="pair")
     D = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
     np.fill_diagonal(D, np.inf)
     j = D.argmin(1)
@@ -502,15 +503,15 @@ def test_pair_spacing_against_brute_force():
     assert q.values[0] == q.values[1] == 0.0  # in the white corner
     assert q.values[2] == q.values[3] == 0.0
     with pytest.raises(ValueError, match="normalize must be 'dot' or 'pair'"):
-        A.spacing(pts, dark, normalize="max")
+        P.spacing(pts, dark, normalize="max")
 
 
 def test_pair_spacing_across_a_tone_edge():
     # dark left half: grid spacing 4; light right half (1/4 the darkness): spacing 8,
     # its first column tangent-like at the mean spacing 6 from the last dark column
     dark, pts = two_density_halves(160, 4.0)
-    s = A.spacing(pts, dark)
-    q = A.spacing(pts, dark, normalize="pair")
+    s = P.spacing(pts, dark)
+    q = P.spacing(pts, dark, normalize="pair")
     inner = (np.abs(pts[:, 0] - 160) > 20) & (pts[:, 0] > 10) & (pts[:, 0] < 310) \
         & (pts[:, 1] > 10) & (pts[:, 1] < 150)
     np.testing.assert_allclose(q.values[inner], s.values[inner], rtol=1e-9)
@@ -525,7 +526,7 @@ def test_stipple_measures_and_errors():
     dark = np.full((48, 48), 0.3)
     pts = rng.random((300, 2)) * 48
     before = pts.copy()
-    m = A.stipple_measures(pts, dark)
+    m = P.stipple_measures(pts, dark)
     np.testing.assert_array_equal(pts, before)
     assert set(m) == {"n", "tone_ssim", "tone_ssim_fine", "spacing_p01", "spacing_median",
                       "spacing_p01_pair", "psi6_mean", "stray_per_10k", "edge_ssim", "holes_per_10k"}
@@ -533,14 +534,14 @@ def test_stipple_measures_and_errors():
     assert m["stray_per_10k"] == 0       # every pixel is inked
     assert m["holes_per_10k"] == 0       # no pixel is solid-dark (0.3 < 0.5)
     # uniform random points leave gaps wider than a spacing in a solid-dark region
-    assert A.holes(pts, np.full((48, 48), 0.6)).per_10k > 0
+    assert P.holes(pts, np.full((48, 48), 0.6)).per_10k > 0
     assert m["n"] == 300
-    assert 0 < m["spacing_p01"] < m["spacing_median"] < A.HEXAGONAL_SPACING
+    assert 0 < m["spacing_p01"] < m["spacing_median"] < P.HEXAGONAL_SPACING
     assert 0.2 < m["psi6_mean"] < 0.5
     assert -1 <= m["tone_ssim"] <= 1
     with pytest.raises(ValueError, match="darkness is all zero \\(a white image\\): nothing to stipple"):
-        A.stipple_measures(pts, np.zeros((48, 48)))
+        P.stipple_measures(pts, np.zeros((48, 48)))
     with pytest.raises(ValueError, match=r"darkness values must lie in \[0, 1\]"):
-        A.tone_ssim(pts, np.full((48, 48), 1.5))
+        P.tone_ssim(pts, np.full((48, 48), 1.5))
     with pytest.raises(ValueError, match="darkness must be a non-empty 2-D array"):
-        A.spacing(pts, np.ones(10))
+        P.spacing(pts, np.ones(10))

@@ -351,7 +351,7 @@ def test_colour_line_art_keeps_its_dots_on_the_ink(ctx):
     blur by the joint ink (3000 dots on 940 inked pixels): with the page's
     (supersample 3, blur 0.5 px) the lines' dots spill onto the paper.
     (OpenCL: the exact engine takes a minute for these two runs.)"""
-    from diskpack_cl.analysis import edge_fidelity, stray_dots
+    from diskpack_cl.picture_measures import edge_fidelity, stray_dots
     from test_stipple_support import rings
 
     g = rings()

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy import ndimage
 
-from diskpack_cl import analysis as A
+from diskpack_cl import picture_measures as P
 
 
 def brute_stray(points, darkness, threshold):
@@ -39,7 +39,7 @@ def test_stray_dots_match_brute_force(seed, n, threshold):
     if n > 3:
         pts[1] = pts[0] + 1e-3 * rng.random(2)   # a near-coincident pair: reach ~0
         pts[2] = np.floor(pts[2])                # a dot on pixel corners
-    got = A.stray_dots(pts, dark, threshold=threshold)
+    got = P.stray_dots(pts, dark, threshold=threshold)
     want = brute_stray(pts, dark, threshold)
     np.testing.assert_array_equal(got.mask, want)
     assert got.count == want.sum()
@@ -51,7 +51,7 @@ def test_stray_dots_on_a_drawing():
     dark[10:20, 10:20] = 1.0
     inside = np.array([[12.0, 12.0], [15.0, 15.0], [18.0, 12.0]])
     on_paper = np.array([[27.0, 27.0], [3.0, 25.0]])
-    res = A.stray_dots(np.vstack([inside, on_paper]), dark)
+    res = P.stray_dots(np.vstack([inside, on_paper]), dark)
     assert res.mask.tolist() == [False, False, False, True, True]
     assert res.per_10k == pytest.approx(4000.0)
 
@@ -63,8 +63,8 @@ def test_ssim_map_matches_scikit_image():
     b = ndimage.gaussian_filter(rng.random((40, 36)), 1.0)
     _, full = metrics.structural_similarity(a, b, gaussian_weights=True, sigma=1.5,
                                             use_sample_covariance=False, data_range=1.0, full=True)
-    np.testing.assert_allclose(A.ssim_map(a, b), full, atol=1e-12)
-    assert A.ssim(a, b) == pytest.approx(float(full[5:-5, 5:-5].mean()), abs=1e-12)
+    np.testing.assert_allclose(P.ssim_map(a, b), full, atol=1e-12)
+    assert P.ssim(a, b) == pytest.approx(float(full[5:-5, 5:-5].mean()), abs=1e-12)
 
 
 def brute_edge_band(dark, edge, width):
@@ -101,9 +101,9 @@ def test_edge_fidelity_matches_brute_force():
     width = 2.0 * math.sqrt(dark.sum() / (150 * level))
     _, band = brute_edge_band(dark, 0.25, width)
     band[:5], band[-5:], band[:, :5], band[:, -5:] = False, False, False, False
-    drawing = A.render_dots(pts, A.tone_radius(150, dark), dark.shape)
-    smap = A.ssim_map(ndimage.gaussian_filter(drawing, 1.0), ndimage.gaussian_filter(dark, 1.0))
-    assert A.edge_fidelity(pts, dark) == pytest.approx(float(smap[band].mean()), abs=1e-12)
+    drawing = P.render_dots(pts, P.tone_radius(150, dark), dark.shape)
+    smap = P.ssim_map(ndimage.gaussian_filter(drawing, 1.0), ndimage.gaussian_filter(dark, 1.0))
+    assert P.edge_fidelity(pts, dark) == pytest.approx(float(smap[band].mean()), abs=1e-12)
 
 
 def test_edge_fidelity_sees_a_ragged_edge():
@@ -114,8 +114,8 @@ def test_edge_fidelity_sees_a_ragged_edge():
     ragged = sharp.copy()
     rim = sharp[:, 0] > 20
     ragged[rim, 0] += np.where(np.arange(rim.sum()) % 2, 3.0, -3.0)   # a scalloped outline
-    assert A.edge_fidelity(sharp, dark) > A.edge_fidelity(ragged, dark) + 0.02
-    assert np.isnan(A.edge_fidelity(sharp, np.full((48, 48), 0.5)))
+    assert P.edge_fidelity(sharp, dark) > P.edge_fidelity(ragged, dark) + 0.02
+    assert np.isnan(P.edge_fidelity(sharp, np.full((48, 48), 0.5)))
 
 
 def brute_holes(points, dark, solid, sigma):
@@ -137,7 +137,7 @@ def test_holes_match_brute_force(seed, n):
     dark = ndimage.gaussian_filter(rng.random((14, 12)), 1.5)
     dark = np.clip((dark - dark.min()) / max(np.ptp(dark), 1e-9), 0, 1)
     pts = rng.random((n, 2)) * [12, 14]
-    got = A.holes(pts, dark, solid=0.5, sigma=2.0)
+    got = P.holes(pts, dark, solid=0.5, sigma=2.0)
     want = brute_holes(pts, dark, 0.5, 2.0)
     np.testing.assert_array_equal(got.mask, want)
     assert got.per_10k == pytest.approx(1e4 * want.sum() / max((dark >= 0.5).sum(), 1))
@@ -149,5 +149,5 @@ def test_holes_see_a_broken_line():
     xs = np.arange(1.0, 60.0, 2.0)
     whole = np.column_stack([xs, np.full_like(xs, 20.0)])
     broken = whole[(xs < 20) | (xs > 40)]
-    assert A.holes(whole, dark).count == 0
-    assert A.holes(broken, dark).count > 0
+    assert P.holes(whole, dark).count == 0
+    assert P.holes(broken, dark).count > 0

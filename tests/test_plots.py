@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from diskpack_cl import analysis, plots
+from diskpack_cl import analysis, picture_measures, plots
 
 pytest.importorskip("matplotlib")
 
@@ -76,10 +76,10 @@ def test_stipple_report_writes_png_and_returns_numbers(tmp_path):
         im.load()
         assert im.format == "PNG"
     assert out.stat().st_size < 300_000
-    measures = analysis.stipple_measures(pts, darkness)
+    measures = picture_measures.stipple_measures(pts, darkness)
     for key, value in measures.items():
         assert numbers[key] == (None if np.isnan(value) else pytest.approx(value))
-    assert numbers["tone_radius"] == pytest.approx(analysis.tone_radius(len(pts), darkness))
+    assert numbers["tone_radius"] == pytest.approx(picture_measures.tone_radius(len(pts), darkness))
     assert numbers["radius_min"] == numbers["radius_max"] == pytest.approx(0.8)
     assert numbers["certificate"] == {"valid": True, "min_gap": 0.0123, "pairs_checked": 4567}
     json.dumps(numbers, allow_nan=False)

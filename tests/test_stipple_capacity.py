@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage
 
-from diskpack_cl.analysis import tone_ssim
+from diskpack_cl.picture_measures import tone_ssim
 from diskpack_cl.schedule import StippleOptions
 from diskpack_cl.stipple import INK_RANGE, INK_STEP, equal_ink, stipple
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from diskpack_cl.analysis import edge_fidelity, stray_dots
+from diskpack_cl.picture_measures import edge_fidelity, stray_dots
 from diskpack_cl.schedule import StippleOptions
 from diskpack_cl.stipple import off_support, stipple
 
