@@ -12,16 +12,16 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from pathlib import Path
 from dataclasses import dataclass, replace
-from types import SimpleNamespace
 
 import numpy as np
 
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.options import OptionConflict, check_fields, option
+from diskpack_cl.overlap import cap_radii, ink_figures
 from diskpack_cl.pen_path import PEN_PATHS, path_travel, pen_path_order
+from diskpack_cl.readers import CSV_TAG, csv_name, read_stipple
 
 __all__ = [
     "WRITERS",
@@ -355,6 +355,11 @@ class WriteOptions:
         PLOT_SPEED_MM_S, f"plot-time estimate: pen speed V mm/s drawing and travelling, plus "
         f"{PEN_LIFT_S:g} s to lower and raise the pen per dot (default {PLOT_SPEED_MM_S:g})",
         unit="mm/s", lo=0, lo_open=True, metavar="V", group=_OUTPUT)
+    no_overlap: bool = option(False, "drawn dots never touch, the pen's width included: each "
+                              "dot at most its packing disk (lighter where the tone dots "
+                              "are wider than the packing allows; the summary says how much "
+                              "ink it keeps and which share of the dots touch without it)",
+                              group=_OUTPUT)
     pen_order: object = option(None, "SVG layer order of a colour stippling (--colors, "
                                "--pens; first drawn first; default: lightest pen first)",
                                cli_type=_pen_names, metavar="NAME,...", group=_OUTPUT)
@@ -494,7 +499,7 @@ def _svg_head(lay, size, meta, paint, invert):
 def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
               radius_scale=1.0, pen_path="auto", layer=LAYER, invert=False, pen_mm=None,
               dots="tone", page=None, landscape=False, margin_mm=None, plotter=None,
-              plot_speed_mm_s=PLOT_SPEED_MM_S):
+              plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False):
     """Write an SVG for pen plotters, vpype and Inkscape.
 
     One element per dot, in pen-path order, in one Inkscape layer; user
@@ -529,14 +534,18 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
         :func:`svg_layout`).
     plot_speed_mm_s : float
         Speed of the plot-time estimate (:func:`plot_time`).
+    no_overlap : bool
+        No two drawn dots touch: each at most its packing disk
+        (:func:`diskpack_cl.overlap.cap_radii`).
 
     Returns
     -------
     dict
         ``width_mm``, ``height_mm`` (picture), ``page_mm``, ``n``,
         ``travel_before_mm``, ``travel_after_mm`` (pen-up, from the origin),
-        ``moved_inside``, ``pen_downs``, ``draw_mm``, ``plot_seconds`` and,
-        with ``pen_mm``, ``pen_touches``.
+        ``moved_inside``, ``pen_downs``, ``draw_mm``, ``plot_seconds``,
+        the touching share and ink of :func:`diskpack_cl.overlap.ink_figures`
+        and, with ``pen_mm``, ``pen_touches``.
 
     Examples
     --------
@@ -557,7 +566,11 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
-    pm, rad, moved = _inside_page(p * lay["scale"], rad, *lay["picture"])
+    pm, drawn, moved = _inside_page(p * lay["scale"],
+                                    cap_radii(rad, r * lay["scale"]) if no_overlap else rad,
+                                    *lay["picture"])
+    ink = ink_figures(pm, rad, r * lay["scale"], pen=pen_mm, no_overlap=no_overlap)
+    rad = drawn
     pm += lay["offset"]
     order, before, after = pen_path_order(pm, method=pen_path)
     meta = _svg_meta(result, lay, rad, pen_mm, invert, layer)
@@ -567,7 +580,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
             "page_mm": list(lay["page"]), "n": int(len(p)), "travel_before_mm": before,
             "travel_after_mm": after, "moved_inside": moved, "pen_downs": int(len(p)),
-            "draw_mm": draw,
+            "draw_mm": draw, **ink,
             "plot_seconds": plot_time(len(p), draw, after, speed_mm_s=plot_speed_mm_s)}
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
@@ -684,7 +697,7 @@ def _coverage(c, rad, ow, oh, aa, progress=None):
 
 
 def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=False, aa=4,
-              dots="tone", pen_px=None, progress=None):
+              dots="tone", pen_px=None, progress=None, no_overlap=False):
     """Write an anti-aliased PNG preview (8-bit gray).
 
     Each output pixel's ink is the fraction of its ``aa x aa`` sample
@@ -712,6 +725,8 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         pen touch, a wider one filled (its rings ink the whole disk).
     progress : callable, optional
         ``progress(k)`` after each ``k`` dots stamped (a progress bar).
+    no_overlap : bool
+        As for :func:`write_svg`.
 
     Returns
     -------
@@ -722,7 +737,9 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
     --------
     >>> import os, tempfile
     >>> from PIL import Image
-    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> from types import SimpleNamespace
+    >>> res = SimpleNamespace(points=np.array([[1.0, 1.0], [3.0, 1.0]]),
+    ...                       radii=np.array([0.5, 0.5]), width=4, height=2)
     >>> path = os.path.join(tempfile.mkdtemp(), "dots.png")
     >>> info = write_png(path, res, scale=4.0, dots="packing")
     >>> with Image.open(path) as im:
@@ -744,6 +761,8 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         rad = np.full(len(p), float(dot_px))
     else:
         rad = _dot_radii(result, r, scale, dots, radius_scale)
+    if no_overlap:
+        rad = cap_radii(rad, r * scale)
     if pen_px is not None:
         if not pen_px > 0:
             raise ValueError(f"pen_px must be > 0, got {pen_px}")
@@ -785,7 +804,9 @@ def write_npz(path, result):
     Examples
     --------
     >>> import os, tempfile
-    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> from types import SimpleNamespace
+    >>> res = SimpleNamespace(points=np.array([[1.0, 1.0], [3.0, 1.0]]),
+    ...                       radii=np.array([0.5, 0.5]), width=4, height=2)
     >>> path = os.path.join(tempfile.mkdtemp(), "dots.npz")
     >>> _ = write_npz(path, res)
     >>> np.load(path)["radii"].tolist()
@@ -821,10 +842,6 @@ def _pen_fields(result):
             "pen_radius": np.asarray(result.pen_radius, np.float64)}
 
 
-#: The first line of a stippling CSV starts with this (then ``key=value`` fields).
-CSV_TAG = "# diskpack_cl stippling "
-
-
 def write_csv(path, result):
     """Write ``x,y,r`` rows (pixel units, 17 significant digits: exact round trip).
 
@@ -837,7 +854,10 @@ def write_csv(path, result):
     --------
     >>> import tempfile
     >>> path = Path(tempfile.mkdtemp()) / "dots.csv"
-    >>> _ = write_csv(path, _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2))
+    >>> from types import SimpleNamespace
+    >>> res = SimpleNamespace(points=np.array([[1.0, 1.0], [3.0, 1.0]]),
+    ...                       radii=np.array([0.5, 0.5]), width=4, height=2)
+    >>> _ = write_csv(path, res)
     >>> path.read_text().splitlines()[1:]
     ['x,y,r', '1,1,0.5', '3,1,0.5']
     """
@@ -857,12 +877,13 @@ def write_csv(path, result):
 
 def _write_pen_csv(fh, tag, p, r, result):
     """A colour stippling's CSV: the tag line with ``pens=NAME:#rrggbb;...``, then
-    ``x,y,r,pen`` rows (the pen's name)."""
+    ``x,y,r,pen`` rows (the pen's name); names percent-encoded (:func:`~diskpack_cl.readers.csv_name`)."""
     from diskpack_cl.multipen import hex_color
 
-    pens = ";".join(f"{name}:{hex_color(c)}" for name, c in zip(result.names, result.colors))
+    coded = [csv_name(name) for name in result.names]
+    pens = ";".join(f"{name}:{hex_color(c)}" for name, c in zip(coded, result.colors))
     rows = np.char.mod("%.17g", np.column_stack([p, r])).tolist()
-    names = np.asarray(result.names)[np.asarray(result.pen)].tolist()
+    names = np.asarray(coded)[np.asarray(result.pen)].tolist()
     fh.write(f"{tag} pens={pens}\nx,y,r,pen\n"
              + "".join(",".join(row + [q]) + "\n" for row, q in zip(rows, names)))
 
@@ -916,7 +937,9 @@ def write_stipple(path, result, **opts):
     Examples
     --------
     >>> import os, tempfile
-    >>> res = _stippling(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([0.5, 0.5]), 4, 2)
+    >>> from types import SimpleNamespace
+    >>> res = SimpleNamespace(points=np.array([[1.0, 1.0], [3.0, 1.0]]),
+    ...                       radii=np.array([0.5, 0.5]), width=4, height=2)
     >>> path = os.path.join(tempfile.mkdtemp(), "dots.svg")
     >>> info = write_stipple(path, res, width_mm=40, dots="packing")
     >>> read_stipple(path).points.tolist()
@@ -928,184 +951,3 @@ def write_stipple(path, result, **opts):
 
         return COLOR_WRITERS[ext](path, result, **opts)
     return WRITERS[ext](path, result, **opts)
-
-
-def read_stipple(path):
-    """Read a stippling written by :func:`write_stipple`: ``.npz``, ``.csv`` or ``.svg``.
-
-    A result read back writes again identically: :func:`write_stipple` with
-    the same format and options gives the same file (the same arrays for
-    ``.npz``, whose zip entries carry a time stamp). What each format holds:
-
-    - ``.npz``: everything (the certificate's scalar fields as a namespace);
-    - ``.csv``: ``points``, ``radii``, ``width``, ``height``, ``k``,
-      ``tone_radius`` (from the first line; a CSV without it gets the
-      smallest size holding its dots);
-    - ``.svg``: the drawing in pen-path order: ``points`` (from the mm
-      coordinates, 4 decimals), ``radii`` the drawn dot radii (a pen touch:
-      half the pen, unless all dots have one size), ``tone_radius`` (the
-      result's, else the dots' one size); the layout comes from its
-      ``<metadata>``.
-
-    Parameters
-    ----------
-    path : str or Path
-
-    Returns
-    -------
-    types.SimpleNamespace or None
-        ``points`` ((n, 2) float64, pixels), ``radii`` ((n,) float64),
-        ``width`` and ``height`` (int pixels), ``k`` (float, nan when not
-        stored), ``tone_radius``, ``base_radii`` and ``certificate`` (or
-        None) and ``params`` (a dict, empty when not stored). None for a
-        ``.npz`` point set without ``radii``, ``width`` or ``height`` (as
-        :func:`diskpack_cl.io.write_points` writes it).
-
-    Raises
-    ------
-    FileNotFoundError
-        ``path`` does not exist.
-    ValueError
-        Another extension (a ``.png`` preview holds no dots), or a file
-        that is not a readable stippling of its format.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> res = SimpleNamespace(points=np.array([[2.0, 3.0]]), radii=np.array([1.0]),
-    ...                       width=8, height=6)
-    >>> out = os.path.join(tempfile.mkdtemp(), "s.csv")
-    >>> write_stipple(out, res)
-    {'n': 1}
-    >>> back = read_stipple(out)
-    >>> back.points.tolist(), back.width, back.height
-    ([[2.0, 3.0]], 8, 6)
-    """
-    ext = Path(os.fspath(path)).suffix.lower()
-    readers = {".npz": _read_npz, ".csv": _read_csv, ".svg": _read_svg}
-    if ext not in readers:
-        raise ValueError(f"{path}: read_stipple reads {', '.join(readers)} files"
-                         + ("; a .png preview holds no dots" if ext == ".png" else ""))
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"{path}: no such file")
-    try:
-        return readers[ext](path)
-    except (OSError, ValueError, KeyError, IndexError, EOFError, SyntaxError) as exc:
-        raise ValueError(f"{path}: unreadable {ext} file: {exc}") from None
-
-
-def _stippling(points, radii, width, height, **extra):
-    """The namespace :func:`read_stipple` returns."""
-    fields = dict(k=float("nan"), tone_radius=None, base_radii=None, certificate=None, params={})
-    fields.update({key: v for key, v in extra.items() if v is not None})
-    return SimpleNamespace(points=np.asarray(points, np.float64).reshape(-1, 2),
-                           radii=np.asarray(radii, np.float64).ravel(),
-                           width=int(width), height=int(height), **fields)
-
-
-def _read_npz(path):
-    with np.load(path, allow_pickle=False) as z:
-        if not {"points", "radii", "width", "height"} <= set(z.files):
-            return None
-        try:
-            params = json.loads(str(z["params"])) if "params" in z.files else {}
-        except ValueError:
-            params = {}
-        cert = {k[len("certificate_"):]: z[k].item() for k in z.files
-                if k.startswith("certificate_")}
-        opt = {k: (np.asarray(z[k], np.float64) if k == "base_radii" else float(z[k]))
-               for k in ("k", "tone_radius", "base_radii") if k in z.files}
-        return _stippling(z["points"], z["radii"], z["width"], z["height"], params=params,
-                          certificate=SimpleNamespace(**cert) if cert else None, **opt,
-                          **_read_pens(z))
-
-
-def _read_pens(z):
-    """A colour stippling's ``pen``, ``names``, ``colors``, ``pen_radius`` from an open .npz."""
-    if "pen" not in z.files:
-        return {}
-    return {"pen": np.asarray(z["pen"], np.int64), "names": tuple(str(v) for v in z["pen_names"]),
-            "colors": np.asarray(z["pen_colors"], np.float64),
-            "pen_radius": np.asarray(z["pen_radius"], np.float64)}
-
-
-def _read_csv(path):
-    lines = Path(path).read_text(encoding="utf-8").splitlines()
-    tag = lines.pop(0)[len(CSV_TAG):] if lines and lines[0].startswith(CSV_TAG) else ""
-    meta = dict(f.split("=", 1) for f in tag.split())
-    pens = meta.pop("pens", None)
-    meta = {key: float(v) for key, v in meta.items()}
-    if pens is not None:
-        return _read_pen_csv(lines, pens, meta)
-    if not lines or lines[0].replace(" ", "").lower() != "x,y,r":
-        raise ValueError("the header line must be x,y,r")
-    data = np.loadtxt(lines[1:], delimiter=",", ndmin=2, comments="#").reshape(-1, 3)
-    ext = data[:, :2] + data[:, 2:]
-    width = meta.get("width") or int(np.ceil(ext[:, 0].max(initial=1)))
-    height = meta.get("height") or int(np.ceil(ext[:, 1].max(initial=1)))
-    return _stippling(data[:, :2], data[:, 2], width, height, k=meta.get("k"),
-                      tone_radius=meta.get("tone_radius"))
-
-
-def _read_pen_csv(lines, pens, meta):
-    """A colour stippling's CSV (:func:`_write_pen_csv`): dots, pens, their colours."""
-    from diskpack_cl.color import parse_pens
-
-    names, colors = parse_pens(pens.replace(":", "=").replace(";", ","))
-    if not lines or lines[0].replace(" ", "").lower() != "x,y,r,pen":
-        raise ValueError("the header line of a colour stippling must be x,y,r,pen")
-    rows = [line.split(",") for line in lines[1:] if line.strip()]
-    data = np.array([row[:3] for row in rows], np.float64).reshape(-1, 3)
-    pen = np.array([names.index(row[3]) for row in rows], np.int64)
-    return _stippling(data[:, :2], data[:, 2], meta["width"], meta["height"], k=meta.get("k"),
-                      tone_radius=meta.get("tone_radius"), pen=pen, names=names, colors=colors)
-
-
-_SVG_NS = "{http://www.w3.org/2000/svg}"
-_NUMBER = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
-
-
-def _read_svg(path):
-    import xml.etree.ElementTree as ET
-
-    root = ET.parse(path).getroot()
-    meta = root.find(f"{_SVG_NS}metadata[@id='diskpack_cl']")
-    if meta is None:
-        raise ValueError("not written by diskpack_cl (no <metadata id=\"diskpack_cl\">)")
-    meta = json.loads(meta.text)
-    layers = {g.get("{http://www.inkscape.org/namespaces/inkscape}label"): g
-              for g in root.iter(f"{_SVG_NS}g")}
-    names = meta.get("pens", [meta["layer"]])   # a colour stippling: one layer per pen
-    missing = [name for name in names if name not in layers]
-    if missing:
-        raise ValueError(f"no layer {missing[0]!r} of dots")
-    pen = meta["pen_mm"] or 0.0
-    centres, radii, pens = [], [], []
-    for i, name in enumerate(names):
-        got = _svg_layer_dots(layers[name], pen, centres, radii)
-        pens += [i] * got
-    s = meta["mm_per_px"]
-    points = (np.array(centres).reshape(-1, 2) - meta["offset_mm"]) / s
-    radii = np.full(len(radii), 0.5 * meta["dot_mm"]) if meta["dot_mm"] else np.array(radii)
-    tone = meta["tone_radius"] or (0.5 * meta["dot_mm"] / s if meta["dot_mm"] else None)
-    extra = {} if "pens" not in meta else {
-        "pen": np.array(pens, np.int64), "names": tuple(names),
-        "colors": np.array([[int(layers[n].get("stroke")[k:k + 2], 16) / 255 for k in (1, 3, 5)]
-                            for n in names])}
-    return _stippling(points, radii / s, meta["width"], meta["height"], k=meta["k"],
-                      tone_radius=tone, params={"invert": meta["invert"]}, **extra)
-
-
-def _svg_layer_dots(layer, pen, centres, radii):
-    """Append the centres and radii (mm) of one layer's dots; return how many."""
-    before = len(centres)
-    for el in layer:
-        if el.tag == f"{_SVG_NS}circle":
-            centres.append((float(el.get("cx")), float(el.get("cy"))))
-            radii.append(float(el.get("r")) + 0.5 * pen)
-        elif el.tag == f"{_SVG_NS}path":
-            x, y, third = (float(v) for v in _NUMBER.findall(el.get("d"))[:3])
-            touch = " h " in el.get("d")
-            centres.append((x + 0.5 * third if touch else x - third, y))
-            radii.append(0.5 * pen if touch else third + 0.5 * pen)
-    return len(centres) - before

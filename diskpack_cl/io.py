@@ -31,6 +31,7 @@ import signal
 import tempfile
 import warnings
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +44,7 @@ __all__ = [
     "check_not_inputs",
     "check_points_path",
     "check_writable",
+    "load_npz",
     "read_points",
     "validate_points",
     "write_points",
@@ -382,6 +384,58 @@ def validate_points(points, *, min_points=2, domain=None, source=None, dims=(2,)
     return p
 
 
+def load_npz(path):
+    """Every array of the ``.npz`` archive `path`, read in full: the one reader of the format.
+
+    Refuses, with one line naming the file, what is not a numpy zip archive
+    (a truncated or corrupt one, another file renamed) and arrays that would
+    need pickles.
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    ValueError
+        Not a readable ``.npz`` archive; the message names the file.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "a.npz")
+    >>> np.savez(p, points=np.zeros((2, 2)))
+    >>> sorted(load_npz(p))
+    ['points']
+    >>> _ = Path(p).write_bytes(b"not a zip")
+    >>> load_npz(p)
+    Traceback (most recent call last):
+    ...
+    ValueError: ...a.npz: unreadable .npz file: not a numpy .npz archive (a zip of .npy arrays)
+    """
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"{path}: no such file")
+    try:
+        # our own handle: np.load leaks its file when the zip is broken
+        with open(path, "rb") as fh:
+            if fh.read(4) != b"PK\x03\x04":
+                raise ValueError("not a numpy .npz archive (a zip of .npy arrays)")
+            fh.seek(0)
+            with np.load(fh, allow_pickle=False) as archive:
+                return {key: archive[key] for key in archive.files}
+    except ValueError as exc:
+        detail = str(exc)
+        if "allow_pickle" in detail:
+            detail = "holds an array of Python objects, which is not read"
+        raise ValueError(f"{path}: unreadable .npz file: {_one_line(detail)}") from None
+    except (OSError, EOFError, zipfile.BadZipFile, zlib.error, KeyError) as exc:
+        raise ValueError(f"{path}: unreadable .npz file: truncated or corrupt "
+                         f"({_one_line(exc)})") from None
+
+
+def _one_line(text):
+    """`text` (or an exception's) as one line."""
+    return " ".join(str(text).split())
+
+
 def _header_columns(path, names, columns):
     """Indices of the columns to read from a .csv header (x and y unless `columns` names others)."""
     if columns is None:
@@ -404,9 +458,10 @@ def _read_text(path, suffix, columns=None):
     header with a ``z`` column (3D points) needs them.
     """
     usecols = None if columns is None or isinstance(columns[0], str) else tuple(columns)
-    skiprows = 0
+    skiprows, names = 0, None
     delimiter = "," if suffix == ".csv" else None
-    with open(path, encoding="utf-8", errors="strict") as fh:
+    # utf-8-sig: a byte-order mark (spreadsheets write one) is read past
+    with open(path, encoding="utf-8-sig", errors="strict") as fh:
         for lineno, line in enumerate(fh):
             text = line.split("#", 1)[0].strip()
             if not text:
@@ -427,16 +482,23 @@ def _read_text(path, suffix, columns=None):
                 usecols = _header_columns(path, names, columns)
                 skiprows = lineno + 1
             break
+    # under a header every row is read whole: a row of more values than it names is refused
+    picked, usecols = (usecols, None) if names is not None else (None, usecols)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
             data = np.loadtxt(path, dtype=np.float64, delimiter=delimiter, comments="#",
-                              skiprows=skiprows, usecols=usecols, ndmin=2, encoding="utf-8")
+                              skiprows=skiprows, usecols=usecols, ndmin=2, encoding="utf-8-sig")
     except ValueError as exc:
         detail = str(exc).split("; use `usecols`")[0]
-        raise ValueError(f"{path}: malformed {suffix} file: {detail}") from None
+        raise ValueError(f"{path}: malformed {suffix} file: {_one_line(detail)}") from None
     if data.size == 0:
-        data = data.reshape(0, 2)
+        return data.reshape(0, 2)
+    if names is not None:
+        if data.shape[1] != len(names):
+            raise ValueError(f"{path}: malformed .csv file: the header names {len(names)} "
+                             f"columns ({','.join(names)}), the rows have {data.shape[1]} values")
+        data = data[:, list(picked)]
     return data
 
 
@@ -487,16 +549,11 @@ def read_points(path, *, min_points=2, domain=None, columns=None):
         raise ValueError(f"{path}: not a regular file")
     try:
         if suffix == ".npz":
-            # our own handle: np.load leaks its file when the zip is broken
-            with open(p, "rb") as fh:
-                archive = np.load(fh, allow_pickle=False)
-                if not isinstance(archive, np.lib.npyio.NpzFile):
-                    raise ValueError(f"{path}: unreadable .npz file: not a numpy zip archive")
-                with archive:
-                    if "points" not in archive.files:
-                        raise ValueError(f"{path}: .npz file has no array 'points' "
-                                         f"(keys: {', '.join(archive.files) or 'none'})")
-                    data = archive["points"]
+            archive = load_npz(p)
+            if "points" not in archive:
+                raise ValueError(f"{path}: .npz file has no array 'points' "
+                                 f"(keys: {', '.join(archive) or 'none'})")
+            data = archive["points"]
         elif suffix == ".npy":
             with open(p, "rb") as fh:
                 if fh.read(6) != b"\x93NUMPY":

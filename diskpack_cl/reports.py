@@ -121,7 +121,7 @@ def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large
 
 def _pen_csv(path):
     """Whether `path` is a colour stippling's CSV (its first line names the pens)."""
-    from .export import CSV_TAG
+    from .readers import CSV_TAG
 
     if not str(path).lower().endswith(".csv"):
         return False

@@ -1,9 +1,13 @@
 """Every door: no output replaces an input, every reader checks what it reads, names are
 escaped in every SVG, messages are one line."""
 
+import functools
 import importlib
 import os
+import re
 import shutil
+import tempfile
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -14,7 +18,8 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.export import write_stipple
 from diskpack_cl.geometry import certify_disks
 from diskpack_cl.image import sample_image_path
-from diskpack_cl.io import write_points
+from diskpack_cl.io import read_points, write_points
+from diskpack_cl.readers import read_stipple
 
 
 def _run(argv, capsys):
@@ -139,6 +144,252 @@ def test_poisson_output_is_its_start_or_field_file(tmp_path, no_work, capsys, fl
     rc, _, err = _run(["poisson", flag, str(src), "-o", str(src), "-q"], capsys)
     _refused(rc, err, "start.npz")
     _unchanged(src, before)
+
+
+# ------------------------------------------------------------ readers check what they read
+
+def _color_stippling():
+    res = _stippling()
+    res.pen = np.arange(len(res.points)) % 2
+    res.names = ("a b", "c<d>&\"e\":;=%")
+    res.colors = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    res.pen_radius = np.array([1.0, 1.2])
+    return res
+
+
+def _refuses(path, *words):
+    with pytest.raises(ValueError) as info:
+        read_stipple(path)
+    text = str(info.value)
+    assert str(path) in text and "\n" not in text and "allow_pickle" not in text, text
+    assert all(word in text for word in words), text
+
+
+CSV_HEAD = "# diskpack_cl stippling width=40 height=30\n"
+
+
+@pytest.mark.parametrize("body, words", [
+    ("x,y,r\n5,5,1\n10,5,-0.79\n", ["row 1", "radius", "> 0"]),
+    ("x,y,r\n5,5,1\n10,5,inf\n", ["row 1", "finite"]),
+    ("x,y,r\n5,5,1\nnan,5,1\n", ["row 1", "finite"]),
+    ("x,y,r\n5,5,1\n45,5,1\n", ["row 1", "outside"]),
+    ("x,y,r\n5,5,1\n1e308,1e308,1\n", ["row 1", "outside"]),
+    ("x,y,r\n5,5,1\n0.5,9,1\n", ["row 1", "sticks out"]),
+    ("x,y,r\n5,5,1\n6,5,1\n", ["rows 0 and 1", "overlap"]),
+    ("x,y,r\n5,5,1,4\n10,5,1,4\n", ["header", "3 columns", "4 values"]),
+    ("x,y\n5,5\n", ["header", "x,y,r"]),
+])
+def test_csv_reader_names_the_row_and_the_rule(tmp_path, body, words):
+    path = tmp_path / "dots.csv"
+    path.write_text(CSV_HEAD + body)
+    _refuses(path, *words)
+
+
+@pytest.mark.parametrize("tag", ["width=0 height=30", "width=-4 height=30", "width=40 height=nan",
+                                 "width=40.5 height=30", "width=40 height"])
+def test_csv_reader_refuses_a_picture_without_a_size(tmp_path, tag):
+    path = tmp_path / "dots.csv"
+    path.write_text(f"# diskpack_cl stippling {tag}\nx,y,r\n5,5,1\n")
+    _refuses(path)
+
+
+def test_csv_with_a_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "dots.csv"
+    write_stipple(path, _stippling())
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    assert read_stipple(path).width == 40
+    points = tmp_path / "points.csv"
+    points.write_bytes(b"\xef\xbb\xbfx,y\n0.25,0.5\n0.75,0.5\n")
+    assert read_points(points).tolist() == [[0.25, 0.5], [0.75, 0.5]]
+
+
+def test_point_csv_rows_must_match_the_header(tmp_path):
+    path = tmp_path / "points.csv"
+    path.write_text("x,y,r\n0.1,0.2,0.01,7\n0.3,0.4,0.01,7\n")
+    with pytest.raises(ValueError, match=r"points\.csv: .*header names 3 columns"):
+        read_points(path)
+
+
+def test_npz_reader_refuses_what_the_certificate_refuses(tmp_path):
+    res = _stippling()
+    res.points[1] = res.points[0] + 0.5        # two dots on each other
+    path = tmp_path / "dots.npz"
+    from diskpack_cl.export import write_npz
+    write_npz(path, res)
+    _refuses(path, "rows 0 and 1", "overlap", "certificate")
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("pen", np.array([0, 5] * 8), ["row 1", "pen index"]),
+    ("width", np.array(0), ["width"]),
+    ("radii", np.full(16, -1.0), ["row 0", "radius"]),
+    ("points", np.zeros((16, 3)), ["points", "(n, 2)"]),
+    ("radii", np.array(["a"] * 16), ["radii", "numbers"]),
+])
+def test_npz_reader_checks_every_field(tmp_path, field, value, words):
+    from diskpack_cl.export import write_npz
+    path = tmp_path / "dots.npz"
+    write_npz(path, _color_stippling())
+    arrays = dict(np.load(path))
+    arrays[field] = value
+    np.savez(path, **arrays)
+    _refuses(path, *words)
+
+
+@pytest.mark.parametrize("content, words", [
+    (b"PK\x03\x04", ["truncated"]), (b"\x93NUMPY not a zip", ["not a numpy .npz"]),
+    (b"", ["not a numpy .npz"])])
+def test_npz_that_is_no_zip_or_truncated(tmp_path, content, words):
+    path = tmp_path / "dots.npz"
+    path.write_bytes(content)
+    _refuses(path, *words)
+    with pytest.raises(ValueError, match="dots.npz") as info:
+        read_points(path)
+    assert "allow_pickle" not in str(info.value)
+
+
+def _svg_text(tmp_path):
+    path = tmp_path / "dots.svg"
+    write_stipple(path, _stippling(), width_mm=80, dots="packing")
+    return path, path.read_text()
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda t: t.replace('<metadata id="diskpack_cl">{', '<metadata id="diskpack_cl">{{'),
+     ["<metadata>", "JSON"]),
+    (lambda t: t.replace('<metadata id="diskpack_cl">{', '<metadata id="diskpack_cl">[{')
+              .replace("}</metadata>", "}]</metadata>"), ["JSON object", "list"]),
+    (lambda t: t.replace('"mm_per_px": ', '"mm_per_px": -'), ["mm_per_px", "> 0"]),
+    (lambda t: t.replace('"width": 40', '"width": "40"'), ["width"]),
+    (lambda t: t.replace('<circle cx=', '<circle x=', 1), ["element 0", "cx"]),
+    (lambda t: t.replace('<circle cx="', '<circle cx="-', 1), ["row 0", "outside"]),
+])
+def test_svg_reader_checks_its_metadata_and_dots(tmp_path, edit, words):
+    path, text = _svg_text(tmp_path)
+    path.write_text(edit(text))
+    _refuses(path, *words)
+
+
+def test_export_refuses_overlapping_dots_in_one_line(tmp_path, capsys):
+    path = tmp_path / "dots.csv"
+    path.write_text(CSV_HEAD + "x,y,r\n5,5,1\n6,5,1\n")
+    rc, _, err = _run(["export", str(path), "-o", str(tmp_path / "a.svg")], capsys)
+    assert rc == 1 and len(err.strip().splitlines()) == 1 and "overlap" in err, err
+    assert not (tmp_path / "a.svg").exists()
+
+
+def test_relax_init_file_is_checked(tmp_path, capsys):
+    path = tmp_path / "start.csv"
+    path.write_text("x,y\n0.1,0.2\nnan,0.4\n0.5,0.5\n")
+    rc, _, err = _run(["poisson", "--init", str(path), "-o", str(tmp_path / "o.npz"), "-q"],
+                      capsys)
+    assert rc == 1 and "start.csv" in err and "row 1" in err and "Traceback" not in err, err
+
+
+# -------------------------------------------------- every reader, corrupted and random files
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+#: What the files are made of: the readers, the formats and a valid file of each.
+STIPPLE_FILES = ["dots.npz", "dots.csv", "dots.svg", "pens.npz", "pens.csv", "pens.svg"]
+POINT_FILES = ["points.npz", "points.npy", "points.csv", "points.txt"]
+TOKENS = ["nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "1e999", "abc", "", "7,7",
+          "\ufeff", "\x00", "[]", "{}", "null", "true", "\"x\"", "<", "&", "4.5e-320"]
+
+
+@functools.lru_cache(maxsize=None)
+def _valid_files():
+    """The bytes of a valid file of each kind (not a fixture: hypothesis would print it)."""
+    folder = Path(tempfile.mkdtemp())
+    for name in STIPPLE_FILES:
+        res = _color_stippling() if name.startswith("pens") else _stippling()
+        write_stipple(folder / name, res, **({"width_mm": 80} if name.endswith(".svg") else {}))
+    for name in POINT_FILES:
+        write_points(folder / name, np.random.default_rng(1).random((12, 2)))
+    files = {name: (folder / name).read_bytes() for name in STIPPLE_FILES + POINT_FILES}
+    shutil.rmtree(folder)
+    return files
+
+
+@st.composite
+def corrupted(draw, data):
+    """`data` with one to three corruptions: cut, bytes overwritten, a number or field
+    replaced, a column added, a byte-order mark, lines dropped or repeated."""
+    for _ in range(draw(st.integers(1, 3))):
+        kind = draw(st.sampled_from(["cut", "bytes", "token", "column", "bom", "lines"]))
+        if kind == "cut":
+            data = data[:draw(st.integers(0, max(len(data) - 1, 0)))]
+        elif kind == "bytes":
+            at = draw(st.integers(0, len(data)))
+            data = data[:at] + draw(st.binary(min_size=1, max_size=8)) + data[at + 8:]
+        elif kind == "bom":
+            data = b"\xef\xbb\xbf" + data
+        else:
+            text = data.decode("utf-8", "replace")
+            lines = text.split("\n")
+            i = draw(st.integers(0, len(lines) - 1))
+            if kind == "column":
+                lines[i] += "," + draw(st.sampled_from(TOKENS))
+            elif kind == "lines":
+                lines = lines[:i] + lines[i:i + 1] * draw(st.integers(0, 3)) + lines[i + 1:]
+            else:
+                numbers = list(re.finditer(r"-?[0-9.]+(?:e-?[0-9]+)?|true|false|null|\"[a-z_]+\"",
+                                           lines[i]))
+                if numbers:
+                    m = numbers[draw(st.integers(0, len(numbers) - 1))]
+                    lines[i] = lines[i][:m.start()] + draw(st.sampled_from(TOKENS)) + lines[i][m.end():]
+            data = "\n".join(lines).encode("utf-8", "replace")
+    return data
+
+
+def _read_or_refuse(read, path):
+    """A result, or a ValueError of one line naming the file: nothing else may come out."""
+    try:
+        return read(path)
+    except ValueError as exc:
+        assert path.name in str(exc) and "\n" not in str(exc), str(exc)
+        return None
+
+
+@settings(max_examples=300, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.data())
+def test_every_reader_gives_a_result_or_a_value_error_naming_the_file(tmp_path, data):
+    name = data.draw(st.sampled_from(STIPPLE_FILES + POINT_FILES))
+    path = tmp_path / f"case-{name}"
+    path.write_bytes(data.draw(corrupted(_valid_files()[name])))
+    if name in STIPPLE_FILES:
+        res = _read_or_refuse(read_stipple, path)
+        if res is not None and not name.endswith(".svg"):   # what comes out is a packing
+            assert certify_disks(res.points, res.radii, Domain.rect(res.width, res.height)).valid
+    else:
+        res = _read_or_refuse(read_points, path)
+        if res is not None:
+            assert np.isfinite(res).all() and res.shape[1] == 2
+
+
+ARRAYS = st.one_of(
+    st.sampled_from([np.array(np.nan), np.array(np.inf), np.array(-1.0), np.array(1e308),
+                     np.array(0), np.array("x"), np.array([1.0, 2.0]), np.zeros((16, 3)),
+                     np.full(16, np.nan), np.full(16, 1e308), np.full((16, 2), -5.0),
+                     np.array([1 + 2j]), np.zeros(0), np.arange(16) - 3, np.array(True)]),
+    st.builds(lambda n, v: np.full(n, v), st.integers(0, 20),
+              st.floats(allow_nan=True, allow_infinity=True)))
+
+
+@settings(max_examples=200, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.data())
+def test_npz_readers_take_wrong_arrays_in_every_field(tmp_path, data):
+    name = data.draw(st.sampled_from(["dots.npz", "pens.npz", "points.npz"]))
+    path = tmp_path / f"case-{name}"
+    path.write_bytes(_valid_files()[name])
+    arrays = dict(np.load(path))
+    for _ in range(data.draw(st.integers(1, 3))):
+        arrays[data.draw(st.sampled_from(sorted(arrays)))] = data.draw(ARRAYS)
+    np.savez(path, **arrays)
+    res = _read_or_refuse(read_stipple if name != "points.npz" else read_points, path)
+    if res is not None and name != "points.npz":
+        assert certify_disks(res.points, res.radii, Domain.rect(res.width, res.height)).valid
 
 
 # ------------------------------------------------------------------------ tests that end

@@ -31,7 +31,10 @@ INK = "{http://www.inkscape.org/namespaces/inkscape}"
 def result():
     rng = np.random.default_rng(3)
     W, H = 80, 60
-    pts = np.column_stack([rng.uniform(2, W - 2, 200), rng.uniform(2, H - 2, 200)])
+    # a jittered 20 x 10 grid: disjoint disks inside the picture, as read_stipple demands
+    gx, gy = np.meshgrid(2 + 4 * np.arange(20), 3 + 6 * np.arange(10))
+    pts = np.column_stack([gx.ravel(), gy.ravel()]) + rng.uniform(-0.5, 0.5, (200, 2))
+    pts = pts[rng.permutation(200)]
     radii = rng.uniform(0.3, 1.0, 200)
     cert = certify_disks(pts, radii, Domain.rect(W, H))   # the real certificate type
     return SimpleNamespace(points=pts, radii=radii, k=0.5,
