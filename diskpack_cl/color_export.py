@@ -21,6 +21,7 @@ from .export import (PLOT_SPEED_MM_S, _coverage, _inside_page, _svg_dots, _svg_h
                      _svg_size, plot_time, svg_layout)
 from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
+from .overlap import cap_radii, ink_figures
 
 __all__ = ["layer_order", "write_color_svg", "write_color_png"]
 
@@ -68,7 +69,7 @@ def _paint(color, pen_mm):
 def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
                     radius_scale=1.0, pen_path="auto", pen_mm=None, dots="tone", pen_order=None,
                     invert=False, page=None, landscape=False, margin_mm=None, plotter=None,
-                    plot_speed_mm_s=PLOT_SPEED_MM_S):
+                    plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False):
     """Write an SVG with one named layer per pen (see the module docstring).
 
     The options are those of :func:`diskpack_cl.export.write_svg`, plus
@@ -101,9 +102,13 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     W, H = float(result.width), float(result.height)
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
-    pm, rad, moved = _inside_page(np.asarray(result.points) * lay["scale"],
-                                  _radii(result, lay["scale"], dots, dot_mm, radius_scale),
-                                  *lay["picture"])
+    rad = _radii(result, lay["scale"], dots, dot_mm, radius_scale)
+    packing = np.asarray(result.radii) * lay["scale"]
+    pm, drawn, moved = _inside_page(np.asarray(result.points) * lay["scale"],
+                                    cap_radii(rad, packing) if no_overlap else rad,
+                                    *lay["picture"])
+    ink = ink_figures(pm, rad, packing, pen=pen_mm, no_overlap=no_overlap)
+    rad = drawn
     pm += lay["offset"]
     order = layer_order(result.names, result.colors, pen_order)
     meta = dict(_svg_meta(result, lay, rad, pen_mm, False, result.names[order[0]]),
@@ -129,7 +134,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
             "page_mm": list(lay["page"]), "n": int(len(pm)), "layers": layers,
             "travel_before_mm": before, "travel_after_mm": after, "moved_inside": moved,
-            "pen_downs": int(len(pm)), "draw_mm": draw,
+            "pen_downs": int(len(pm)), "draw_mm": draw, **ink,
             "plot_seconds": plot_time(len(pm), draw, after, speed_mm_s=plot_speed_mm_s)}
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
@@ -137,7 +142,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
 
 
 def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, aa=4, dots="tone",
-                    invert=False, pen_px=None, progress=None):
+                    invert=False, pen_px=None, progress=None, no_overlap=False):
     """Write a colour PNG preview: every pen's dots, inks composited (8-bit sRGB).
 
     Options and the returned dict as :func:`diskpack_cl.export.write_png`;
@@ -161,13 +166,15 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     if invert:
         raise ValueError("invert has no meaning for colour stippling")
     ow, oh = max(1, round(result.width * scale)), max(1, round(result.height * scale))
+    p = np.asarray(result.points) * scale
     rad = (np.full(len(result.points), float(dot_px)) if dot_px is not None
            else _radii(result, scale, dots, None, radius_scale))
+    if no_overlap:
+        rad = cap_radii(rad, np.asarray(result.radii) * scale)
     if pen_px is not None:   # what the pen draws: at least a touch a pen wide
         rad = np.maximum(rad, 0.5 * pen_px)
     lin = np.ones((oh, ow, 3))
     absorb = 1.0 - srgb_to_linear(result.colors)
-    p = np.asarray(result.points) * scale
     for q in range(len(result.names)):
         mine = result.pen == q
         if np.any(mine):

@@ -396,11 +396,11 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     if dot_mm is None and dots == "tone" and not color:
         dot_mm = tone_dot_size(result, scale, o.radius_scale, gray=gray, invert=o.invert)
     svg_opts = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, pen_path=o.pen_path,
-                    invert=o.invert, pen_mm=o.pen_mm, dots=dots,
+                    invert=o.invert, pen_mm=o.pen_mm, dots=dots, no_overlap=o.no_overlap,
                     plot_speed_mm_s=o.plot_speed_mm_s, **o.layout(),
                     **({"pen_order": o.pen_order} if color else {}))
     png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
-                    progress=progress)
+                    no_overlap=o.no_overlap, progress=progress)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
     if o.pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots

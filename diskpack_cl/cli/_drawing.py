@@ -32,18 +32,28 @@ def _write_bar(args, n, outputs):
     return (None, lambda: None) if bar is None else (bar.update, bar.close)
 
 
-def _plot_summary(written, speed):
+def _plot_summary(written, write):
     """Plot figures of the first SVG output, and their text for the summary line."""
     svg = next((w for w in written if w["format"] == "svg"), None)
     if svg is None:
         return None, ""
     plot = {k: svg[k] for k in ("pen_downs", "draw_mm", "travel_before_mm", "travel_after_mm",
-                                "plot_seconds")}
-    plot["plot_speed_mm_s"] = speed
+                                "plot_seconds", "touching_share", "touching_share_uncapped",
+                                "no_overlap_ink")}
+    speed = plot["plot_speed_mm_s"] = write.plot_speed_mm_s
     hours, minutes = divmod(round(plot["plot_seconds"] / 60), 60)
     return plot, (f"; pen-up travel {plot['travel_before_mm']:.0f} -> "
                   f"{plot['travel_after_mm']:.0f} mm, plot about {hours} h {minutes:02d} min "
-                  f"at {speed:g} mm/s")
+                  f"at {speed:g} mm/s; {_touching_text(plot, write.no_overlap)}")
+
+
+def _touching_text(plot, no_overlap):
+    """What the summary line says of the drawn dots that touch, and of --no-overlap's ink."""
+    share, ink = 100 * plot["touching_share"], 100 * plot["no_overlap_ink"]
+    if no_overlap:
+        return (f"{share:.1f} % of the drawn dots touch (without --no-overlap "
+                f"{100 * plot['touching_share_uncapped']:.1f} %), {ink:.0f} % of their ink kept")
+    return f"{share:.1f} % of the drawn dots touch (--no-overlap keeps {ink:.0f} % of the ink)"
 
 
 def _write_and_report(args, write, res, gray, outputs, summary, t0):
@@ -57,7 +67,7 @@ def _write_and_report(args, write, res, gray, outputs, summary, t0):
         dot_mm, written = write_stipple_outputs(res, gray, outputs, write, progress=progress)
     finally:
         close()
-    plot, text = _plot_summary(written, write.plot_speed_mm_s)
+    plot, text = _plot_summary(written, write)
     summary.update(dot_mm=dot_mm, outputs=written, plot=plot,
                    write_seconds=time.perf_counter() - t_write,
                    seconds=time.perf_counter() - t0)
