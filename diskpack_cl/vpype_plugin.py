@@ -167,6 +167,9 @@ def _stippling_document(image, n, kw):
         _, (info,) = write_stipple_outputs(result, gray, [svg], write)
         logging.info(f"diskpack: {result.n} dots, plot about {info['plot_seconds'] / 60:.0f} min")
         doc = vpype.read_multilayer_svg(svg, vpype.convert_length(f"{QUANTIZATION_MM}mm"))
+    # the page in vpype's exact pixels (the SVG reader rounds its mm), which vpype's HPGL
+    # writer matches with its papers
+    doc.page_size = tuple(v * vpype.convert_length("1mm") for v in info["page_mm"])
     source = Path(item.input).resolve()   # not the SVG, gone with its folder
     doc.set_property(vpype.METADATA_FIELD_SOURCE, source)
     doc.sources = {source}
