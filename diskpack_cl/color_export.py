@@ -80,7 +80,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     -------
     dict
         As :func:`diskpack_cl.export.write_svg`'s (all layers together), and
-        ``layers`` (name, colour, n, in drawing order).
+        ``layers`` (name, colour, n and plot seconds, in drawing order).
 
     Examples
     --------
@@ -127,7 +127,9 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
                          f'id="layer{i + 1}" {_paint(c, pen_mm)}>\n')
         text, length = _svg_dots(pm[idx], rad[idx], pen_mm)
         parts.append(text)
-        layers.append({"name": result.names[p], "color": c, "n": int(len(idx))})
+        layers.append({"name": result.names[p], "color": c, "n": int(len(idx)),
+                       "plot_seconds": plot_time(len(idx), length, a,
+                                                 speed_mm_s=plot_speed_mm_s)})
         before, after, draw = before + b, after + a, draw + length
     with atomic_write(path, "w") as fh:
         fh.write("".join(parts) + "  </g>\n</svg>\n")

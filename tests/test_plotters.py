@@ -1,6 +1,7 @@
 """``--plotter NAME``: the picture inside the part of the page vpype's device profile plots."""
 
 import io
+import json
 import re
 
 import numpy as np
@@ -53,3 +54,19 @@ def test_an_unknown_plotter_is_refused_with_the_known_ones(capsys):
     assert main(["stipple", "sample", "-n", "100", "--page", "a4", "--plotter", "hp9999",
                  "-o", "x.svg"]) == 2
     assert "hp7475a" in capsys.readouterr().err
+
+
+def test_each_pen_has_its_plot_time_and_they_add_up(tmp_path, capsys):
+    from PIL import Image
+
+    img = np.zeros((24, 32, 3), np.uint8)
+    img[:, :16] = (220, 30, 30)
+    img[:, 16:] = (30, 60, 200)
+    Image.fromarray(img).save(tmp_path / "two.png")
+    assert main(["stipple", str(tmp_path / "two.png"), "-n", "300", "--colors", "cmyk",
+                 "--pen-mm", "0.5", "--page", "a5", "-o", str(tmp_path / "c.svg"), "--json"]) == 0
+    out, err = capsys.readouterr()
+    plot = json.loads(out.splitlines()[-1])["plot"]
+    assert sum(layer["plot_seconds"] for layer in plot["layers"]) == pytest.approx(
+        plot["plot_seconds"], rel=1e-12)
+    assert all(f"{layer['name']} " in err.split("plot about")[1] for layer in plot["layers"])

@@ -41,10 +41,21 @@ def _plot_summary(written, write):
                                 "plot_seconds", "touching_share", "touching_share_uncapped",
                                 "no_overlap_ink")}
     speed = plot["plot_speed_mm_s"] = write.plot_speed_mm_s
-    hours, minutes = divmod(round(plot["plot_seconds"] / 60), 60)
+    pens = ""
+    if "layers" in svg:   # a colour stippling: each pen's plot time too
+        plot["layers"] = [{k: layer[k] for k in ("name", "n", "plot_seconds")}
+                          for layer in svg["layers"]]
+        pens = " (" + ", ".join(f"{layer['name']} {_duration(layer['plot_seconds'])}"
+                                for layer in svg["layers"]) + ")"
     return plot, (f"; pen-up travel {plot['travel_before_mm']:.0f} -> "
-                  f"{plot['travel_after_mm']:.0f} mm, plot about {hours} h {minutes:02d} min "
-                  f"at {speed:g} mm/s; {_touching_text(plot, write.no_overlap)}")
+                  f"{plot['travel_after_mm']:.0f} mm, plot about "
+                  f"{_duration(plot['plot_seconds'])}{pens} at {speed:g} mm/s; "
+                  f"{_touching_text(plot, write.no_overlap)}")
+
+
+def _duration(seconds):
+    hours, minutes = divmod(round(seconds / 60), 60)
+    return f"{hours} h {minutes:02d} min"
 
 
 def _touching_text(plot, no_overlap):
