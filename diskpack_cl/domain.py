@@ -6,7 +6,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Domain"]
+__all__ = ["Domain", "box_sizes"]
+
+
+def box_sizes(box, form):
+    """The sizes a box names (``"2x1"``, ``(2, 1)``), as many as `form` (``"WxH"``) has, each > 0.
+
+    Examples
+    --------
+    >>> box_sizes("2x1x0.5", "WxHxD")
+    [2.0, 1.0, 0.5]
+    """
+    parts = box.lower().split("x") if isinstance(box, str) else list(np.ravel(box))
+    try:
+        size = [float(v) for v in parts]
+    except (TypeError, ValueError):
+        raise ValueError(f"box must be 'torus' or {form}, got {box!r}") from None
+    if len(size) != len(form.split("x")) or not all(np.isfinite(v) and v > 0 for v in size):
+        raise ValueError(f"box must be {form}: positive finite sizes, got {box!r}")
+    return size
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from .domain import Domain
+from .domain import Domain, box_sizes
 from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
 from .options import check_fields, option
 from .relax import RelaxOptions, relax_poisson
@@ -171,24 +171,6 @@ def as_box(box):
     if isinstance(box, Domain):
         return box
     return Domain.rect(*box_sizes(box, "WxH"))
-
-
-def box_sizes(box, form):
-    """The sizes a box names (``"2x1"``, ``(2, 1)``), as many as `form` (``"WxH"``) has, each > 0.
-
-    Examples
-    --------
-    >>> box_sizes("2x1x0.5", "WxHxD")
-    [2.0, 1.0, 0.5]
-    """
-    parts = box.lower().split("x") if isinstance(box, str) else list(np.ravel(box))
-    try:
-        size = [float(v) for v in parts]
-    except (TypeError, ValueError):
-        raise ValueError(f"box must be 'torus' or {form}, got {box!r}") from None
-    if len(size) != len(form.split("x")) or not all(np.isfinite(v) and v > 0 for v in size):
-        raise ValueError(f"box must be {form}: positive finite sizes, got {box!r}")
-    return size
 
 
 def count_for_distance(min_distance, area, rho_max=0.8, dim=2):

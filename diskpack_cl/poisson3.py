@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from .cells3 import CellMIC3, Domain3, exact_mis
+from .domain import box_sizes
 from .relax import STALL_GAIN, RelaxResult
 
 __all__ = ["FCC_DENSITY", "fcc_radius", "normalized_radius3", "relax_poisson3", "as_box3",
@@ -67,8 +68,6 @@ def as_box3(box):
     >>> as_box3("2x1x1")
     Domain3(width=2.0, height=1.0, depth=1.0, periodic=False)
     """
-    from .poisson import box_sizes
-
     if box is None or (isinstance(box, str) and box == "torus"):
         return Domain3.torus()
     if isinstance(box, Domain3):

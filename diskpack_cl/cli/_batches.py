@@ -9,16 +9,40 @@ import time
 
 from diskpack_cl.jobs import json_default
 
-from ._common import PROG, _UsageError, _bar
+from ._common import PROG, _UsageError, _bar, _positive_int
 
 
-#: The options of the batch group (:func:`~._common._batch_options`): any of them makes a batch.
+#: The options of the batch group (:func:`_batch_options`): any of them makes a batch.
 BATCH_OPTIONS = ("jobs", "manifest", "overwrite", "scheduler", "collect", "count")
 
 #: The rule, as ``--help`` states it.
 BATCH_RULE = ("A command is a batch when it has several inputs, a folder, an output template "
               "({...}) or any option of this group; otherwise its one input runs in this process, "
               "with no manifest.")
+
+
+def _batch_options(p):
+    g = p.add_argument_group(
+        "batch",
+        BATCH_RULE + " Output templates: {stem} {name} {parent} (of the input), {n}, {seed}, "
+        "{i} (item index, e.g. {i:04d}). Each item writes its outputs atomically, then one "
+        "line of the manifest; a rerun of the same command skips the items done.")
+    g.add_argument("--jobs", "-j", type=_positive_int, default=None, metavar="N",
+                   help="worker processes (spawned; PoCL threads per worker capped to "
+                        "cores/N; default: one per --device listed (--device A,B), else one "
+                        "per core)")
+    g.add_argument("--manifest", default=None, metavar="PATH",
+                   help="manifest file (default: manifest.jsonl in the folder of the first -o)")
+    g.add_argument("--overwrite", action="store_true",
+                   help="redo every item, also those the manifest records as done")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="send the items to this dask.distributed scheduler (default: "
+                        "DASK_SCHEDULER_ADDRESS when set); needs pip install "
+                        "\"diskpack_cl[dask]\"")
+    g.add_argument("--collect", action="store_true",
+                   help="with --scheduler: workers return the outputs' bytes and this "
+                        "command writes them (no shared output folder needed)")
+    return g
 
 
 def _batch_mode(args, inputs, outputs):

@@ -78,32 +78,6 @@ def _output_options(p):
                    help="print one JSON summary line on stdout at the end")
 
 
-def _batch_options(p):
-    from ._batches import BATCH_RULE
-
-    g = p.add_argument_group(
-        "batch",
-        BATCH_RULE + " Output templates: {stem} {name} {parent} (of the input), {n}, {seed}, "
-        "{i} (item index, e.g. {i:04d}). Each item writes its outputs atomically, then one "
-        "line of the manifest; a rerun of the same command skips the items done.")
-    g.add_argument("--jobs", "-j", type=_positive_int, default=None, metavar="N",
-                   help="worker processes (spawned; PoCL threads per worker capped to "
-                        "cores/N; default: one per --device listed (--device A,B), else one "
-                        "per core)")
-    g.add_argument("--manifest", default=None, metavar="PATH",
-                   help="manifest file (default: manifest.jsonl in the folder of the first -o)")
-    g.add_argument("--overwrite", action="store_true",
-                   help="redo every item, also those the manifest records as done")
-    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="send the items to this dask.distributed scheduler (default: "
-                        "DASK_SCHEDULER_ADDRESS when set); needs pip install "
-                        "\"diskpack_cl[dask]\"")
-    g.add_argument("--collect", action="store_true",
-                   help="with --scheduler: workers return the outputs' bytes and this "
-                        "command writes them (no shared output folder needed)")
-    return g
-
-
 class _Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors add "did you mean" for a mistyped choice or option."""
 

@@ -59,7 +59,7 @@ def _add_analyze(subparsers):
 
 
 def _run_analyze(args):
-    from diskpack_cl.poisson import box_sizes
+    from diskpack_cl.domain import box_sizes
     from diskpack_cl.reports import PLOT_HINT, analyze, have_matplotlib
 
     if args.output is None and not args.json:

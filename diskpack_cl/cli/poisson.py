@@ -8,8 +8,8 @@ import time
 
 from diskpack_cl.jobs import json_default
 
-from ._batches import _batch_mode, _batch_run, _report_batch
-from ._common import (PROG, _bar, _batch_options, _checked, _image_path, _nonnegative_int,
+from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
+from ._common import (PROG, _bar, _checked, _image_path, _nonnegative_int,
                       _output_options, _point_count, _positive_float, _positive_int, _unit_open)
 from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 

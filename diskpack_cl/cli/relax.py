@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 import sys
 
-from ._batches import _batch_mode, _batch_run, _report_batch
-from ._common import PROG, _bar, _batch_options, _device_options, _output_options
+from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
+from ._common import PROG, _bar, _device_options, _output_options
 
 
 def _relax_options(p):

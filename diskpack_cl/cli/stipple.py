@@ -6,8 +6,8 @@ import argparse
 import sys
 import time
 
-from ._batches import _batch_mode, _batch_run, _report_batch
-from ._common import PROG, _UsageError, _bar, _batch_options, _device_options, _dot_count, _image_path, _positive_float
+from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
+from ._common import PROG, _UsageError, _bar, _device_options, _dot_count, _image_path, _positive_float
 from ._drawing import _drawing_options, _write_and_report
 
 
