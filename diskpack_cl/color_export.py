@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from .color import linear_to_srgb, srgb_to_linear
-from .export import (PLOT_SPEED_MM_S, _coverage, _inside_page, _svg_dots, _svg_head, _svg_meta,
-                     _svg_size, plot_time, svg_layout)
+from .drawing import (PLOT_SPEED_MM_S, ink_coverage, inside_page, plot_time, svg_dots, svg_head,
+                      svg_layout, svg_meta, svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
 from .overlap import cap_radii, ink_figures
@@ -104,16 +104,16 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _radii(result, lay["scale"], dots, dot_mm, radius_scale)
     packing = np.asarray(result.radii) * lay["scale"]
-    pm, drawn, moved = _inside_page(np.asarray(result.points) * lay["scale"],
+    pm, drawn, moved = inside_page(np.asarray(result.points) * lay["scale"],
                                     cap_radii(rad, packing) if no_overlap else rad,
                                     *lay["picture"])
     ink = ink_figures(pm, rad, packing, pen=pen_mm, no_overlap=no_overlap)
     rad = drawn
     pm += lay["offset"]
     order = layer_order(result.names, result.colors, pen_order)
-    meta = dict(_svg_meta(result, lay, rad, pen_mm, False, result.names[order[0]]),
+    meta = dict(svg_meta(result, lay, rad, pen_mm, False, result.names[order[0]]),
                 pens=[result.names[p] for p in order])
-    parts = [_svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta,
+    parts = [svg_head(lay, svg_size(lay, W, H, width_mm, height_mm, page), meta,
                        _paint(hex_color(result.colors[order[0]]), pen_mm), False)]
     layers, before, after, draw = [], 0.0, 0.0, 0.0
     for i, p in enumerate(order):
@@ -123,9 +123,9 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
         idx = idx[path_order]
         c = hex_color(result.colors[p])
         if i:
-            parts.append(f'  </g>\n  <g inkscape:groupmode="layer" inkscape:label="{result.names[p]}" '
+            parts.append(f'  </g>\n  <g inkscape:groupmode="layer" inkscape:label={xml_attr(result.names[p])} '
                          f'id="layer{i + 1}" {_paint(c, pen_mm)}>\n')
-        text, length = _svg_dots(pm[idx], rad[idx], pen_mm)
+        text, length = svg_dots(pm[idx], rad[idx], pen_mm)
         parts.append(text)
         layers.append({"name": result.names[p], "color": c, "n": int(len(idx)),
                        "plot_seconds": plot_time(len(idx), length, a,
@@ -180,7 +180,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     for q in range(len(result.names)):
         mine = result.pen == q
         if np.any(mine):
-            cover = _coverage(p[mine], rad[mine], ow, oh, int(aa), progress)
+            cover = ink_coverage(p[mine], rad[mine], ow, oh, int(aa), progress)
             lin *= 1.0 - cover[..., None] * absorb[q]
     img = Image.fromarray(np.round(linear_to_srgb(lin) * 255).astype(np.uint8), "RGB")
     with atomic_write(path, "wb") as fh:

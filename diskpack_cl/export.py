@@ -17,6 +17,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S,
+                                  check_size, ink_coverage, inside_page, mm_per_px, paper_size,
+                                  plot_time, svg_dots, svg_head, svg_layout, svg_meta, svg_size)
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.options import OptionConflict, check_fields, option
 from diskpack_cl.overlap import cap_radii, ink_figures
@@ -40,7 +43,6 @@ __all__ = [
     "write_csv",
 ]
 
-MM_PER_INCH = 25.4
 _OUTPUT = "output"
 
 
@@ -104,55 +106,6 @@ def tone_dot_size(result, scale, radius_scale=1.0, *, gray=None, invert=False):
     return 2.0 * tone * float(radius_scale) * scale
 
 
-def check_size(width_mm=None, height_mm=None, dpi=None):
-    """The one check of a physical size: by width/height or by dpi, not both.
-
-    Raises :class:`~diskpack_cl.options.OptionConflict` (a ValueError that
-    the command line spells with its flags).
-
-    Examples
-    --------
-    >>> check_size(dpi=300, width_mm=100)
-    Traceback (most recent call last):
-    ...
-    diskpack_cl.options.OptionConflict: give the SVG size either by width_mm/height_mm or by dpi, not both
-    """
-    if dpi is not None and (width_mm is not None or height_mm is not None):
-        raise OptionConflict("give the SVG size either by {}/{} or by {}, not both",
-                             "width_mm", "height_mm", "dpi")
-
-
-def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
-    """Millimetres per image pixel for a physical size, as :func:`write_svg` uses it.
-
-    ``width_mm`` and/or ``height_mm`` (both: fit inside the box, keeping the
-    aspect ratio), else ``dpi`` (default 96).
-
-    Examples
-    --------
-    >>> mm_per_px(512, 256, width_mm=200, height_mm=200)
-    0.390625
-    >>> mm_per_px(512, 512, dpi=25.4)
-    1.0
-    """
-    check_size(width_mm, height_mm, dpi)
-    if width_mm is not None or height_mm is not None:
-        scales = []
-        if width_mm is not None:
-            if not width_mm > 0:
-                raise ValueError(f"width_mm must be > 0, got {width_mm}")
-            scales.append(width_mm / width)
-        if height_mm is not None:
-            if not height_mm > 0:
-                raise ValueError(f"height_mm must be > 0, got {height_mm}")
-            scales.append(height_mm / height)
-        return min(scales)  # fit inside the box, keeping the aspect ratio
-    dpi = 96.0 if dpi is None else float(dpi)
-    if not dpi > 0:
-        raise ValueError(f"dpi must be > 0, got {dpi}")
-    return MM_PER_INCH / dpi
-
-
 #: Long side (px) of the PNG preview when no scale is given.
 PREVIEW_MAX_PX = 4096
 
@@ -180,101 +133,6 @@ def tone_dot_count(darkness, scale, dot_mm):
     """
     ink_mm2 = float(np.mean(darkness)) * np.size(darkness) * scale * scale
     return max(2, int(round(ink_mm2 / (0.25 * np.pi * dot_mm * dot_mm))))
-
-
-def _fmt(v):
-    # numpy 1.x returns an empty input in its own dtype, which np.char.add refuses
-    return np.char.mod("%.4f", v).astype(str)
-
-
-#: Paper sizes (portrait, mm) of ``page=``; ``"WxH"`` or ``"WxHmm"`` gives any other.
-PAPERS = {"a3": (297.0, 420.0), "a4": (210.0, 297.0), "a5": (148.0, 210.0),
-          "letter": (215.9, 279.4)}
-#: Margin (mm) around the picture on a page when none is given.
-DEFAULT_MARGIN_MM = 10.0
-
-
-def paper_size(page, *, landscape=False):
-    """Width and height (mm) of a paper: a name of :data:`PAPERS` or ``"WxH[mm]"``.
-
-    Examples
-    --------
-    >>> paper_size("a4"), paper_size("A4", landscape=True), paper_size("300x200mm")
-    ((210.0, 297.0), (297.0, 210.0), (300.0, 200.0))
-    """
-    text = str(page).strip().lower()
-    if text in PAPERS:
-        w, h = PAPERS[text]
-    else:
-        try:
-            w, h = (float(v) for v in text.removesuffix("mm").split("x"))
-        except ValueError:
-            raise ValueError(f"page must be {', '.join(PAPERS)} or WxHmm (e.g. 300x200mm), "
-                             f"got {page!r}") from None
-        if not (0 < w < float("inf") and 0 < h < float("inf")):
-            raise ValueError(f"page sides must be > 0 mm, got {page!r}")
-    return (max(w, h), min(w, h)) if landscape else (w, h)
-
-
-def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=None,
-               landscape=False, margin_mm=None, plotter=None):
-    """Where :func:`write_svg` puts a ``width x height`` px picture, all in mm.
-
-    Without ``page`` the page is the picture, sized by :func:`mm_per_px`.
-    With ``page`` (see :func:`paper_size`) the picture is centred on it,
-    sized by ``width_mm``/``height_mm``/``dpi`` when given, else fitted
-    inside the margins (``margin_mm``, default :data:`DEFAULT_MARGIN_MM`).
-    With ``plotter`` (a device of vpype's profiles) the margins are those
-    of the part of the page it plots too
-    (:func:`diskpack_cl.plotters.plotting_area`), and the picture is centred
-    there.
-
-    Returns
-    -------
-    dict
-        ``scale`` (mm per px), ``picture`` and ``page`` ((w, h) mm),
-        ``offset`` ((x, y) mm of the picture's corner on the page).
-
-    Examples
-    --------
-    >>> lay = svg_layout(400, 300, page="a4", landscape=True, margin_mm=20)
-    >>> [round(v, 2) for v in (*lay["picture"], *lay["offset"])]
-    [226.67, 170.0, 35.17, 20.0]
-    """
-    if page is None:
-        if margin_mm is not None or plotter is not None:
-            raise ValueError("a margin or a plotter needs a page: give page (e.g. 'a4') too")
-        s = mm_per_px(width, height, width_mm, height_mm, dpi)
-        return {"scale": s, "picture": (width * s, height * s),
-                "page": (width * s, height * s), "offset": (0.0, 0.0)}
-    pw, ph = paper_size(page, landscape=landscape)
-    margin = DEFAULT_MARGIN_MM if margin_mm is None else float(margin_mm)
-    if not 0 <= margin < 0.5 * min(pw, ph):
-        raise ValueError(f"margin_mm must be in [0, {0.5 * min(pw, ph):g}) on a "
-                         f"{pw:g}x{ph:g} mm page, got {margin_mm}")
-    x0, y0, x1, y1 = margin, margin, pw - margin, ph - margin
-    if plotter is not None:
-        from diskpack_cl.plotters import plotting_area
-
-        ax0, ay0, ax1, ay1 = plotting_area(plotter, (pw, ph))
-        x0, y0, x1, y1 = max(x0, ax0), max(y0, ay0), min(x1, ax1), min(y1, ay1)
-    if width_mm is None and height_mm is None and dpi is None:
-        s = mm_per_px(width, height, x1 - x0, y1 - y0)
-    else:
-        s = mm_per_px(width, height, width_mm, height_mm, dpi)
-    w, h = width * s, height * s
-    if w > x1 - x0 + 1e-9 or h > y1 - y0 + 1e-9:
-        raise ValueError(f"the picture ({w:.1f}x{h:.1f} mm) does not fit inside the "
-                         f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page"
-                         + ("" if plotter is None else f" and the plotting area of {plotter}"))
-    return {"scale": s, "picture": (w, h), "page": (pw, ph),
-            "offset": (0.5 * (x0 + x1 - w), 0.5 * (y0 + y1 - h))}
-
-
-#: Plot-time model of :func:`plot_time`: pen-down and pen-up speed (mm/s)
-#: and seconds to lower and raise the pen once per dot (AxiDraw-like).
-PLOT_SPEED_MM_S = 50.0
-PEN_LIFT_S = 0.3
 
 
 def _pen_names(text):
@@ -390,110 +248,8 @@ class WriteOptions:
         return replace(self, **overrides)
 
 
-def plot_time(pen_downs, draw_mm, travel_mm, *, speed_mm_s=PLOT_SPEED_MM_S,
-              pen_lift_s=PEN_LIFT_S):
-    """Estimated plot time in seconds: all lines at ``speed_mm_s``, plus a pen lift per dot.
-
-    Examples
-    --------
-    >>> plot_time(100, 400.0, 600.0)
-    50.0
-    """
-    if not speed_mm_s > 0:
-        raise ValueError(f"plot speed must be > 0 mm/s, got {speed_mm_s}")
-    return (draw_mm + travel_mm) / speed_mm_s + pen_downs * pen_lift_s
-
-
-def _pen_rings(rad, pen):
-    """Ring radii (mm) that fill dots of radius ``rad`` with a pen ``pen`` wide.
-
-    A ring of radius rho inks [rho - pen/2, rho + pen/2]: the outermost is
-    at ``rad - pen/2``, each next one a pen width further in, the innermost
-    at least ``pen/2`` (it inks the centre). Returns an (n, m) array, nan
-    where a dot has fewer rings; a dot not wider than the pen has none (it
-    is one pen touch).
-    """
-    m = np.where(2 * rad <= pen, 0, np.ceil(rad / pen - 1e-9)).astype(np.int64)
-    j = np.arange(max(int(m.max(initial=0)), 1))
-    outer = np.round(rad - 0.5 * pen, 4)  # as written: the rings follow from it when read back
-    rho = np.maximum(outer[:, None] - j[None, :] * pen, 0.5 * pen)
-    return np.where(j[None, :] < m[:, None], rho, np.nan)
-
-
-def _svg_dots(c, rad, pen):
-    """SVG lines of the dots, one element each, and their pen-down length (mm).
-
-    Without a pen: filled ``<circle>``s. With a pen ``pen`` mm wide (see
-    :func:`write_svg`): a ``<circle>`` outline for a one-ring dot, one
-    ``<path>`` of concentric rings joined by short radial lines for a wider
-    dot, a 0.01 mm ``<path>`` (a pen touch) for a dot not wider than the pen.
-    """
-    x, y = c[:, 0], c[:, 1]
-    if pen is None:
-        circles = _join('    <circle cx="', _fmt(x), '" cy="', _fmt(y), '" r="', _fmt(rad), '"/>\n')
-        return "".join(circles.tolist()), float(2 * np.pi * rad.sum())
-    rho = _pen_rings(rad, pen)
-    m = np.count_nonzero(~np.isnan(rho), axis=1)
-    lines = np.empty(len(c), dtype=object)
-    touch = m == 0
-    lines[touch] = _join('    <path d="M ', _fmt(x[touch] - 0.5 * _TOUCH_MM), ',', _fmt(y[touch]),
-                         f' h {_TOUCH_MM}"/>\n')
-    one = m == 1
-    lines[one] = _join('    <circle cx="', _fmt(x[one]), '" cy="', _fmt(y[one]), '" r="',
-                       _fmt(rho[one, 0]), '"/>\n')
-    for k in np.unique(m[m > 1]):  # M to the outer ring, then relative arcs and steps in
-        sel = np.flatnonzero(m == k)
-        d = _join('    <path d="M ', _fmt(x[sel] + rho[sel, 0]), ",", _fmt(y[sel]))
-        for j in range(k):
-            r = _fmt(rho[sel, j])
-            if j:
-                d = _join(d, " l ", _fmt(rho[sel, j] - rho[sel, j - 1]), ",0")
-            d = _join(d, " a ", r, ",", r, " 0 1 0 ", _fmt(-2 * rho[sel, j]), ",0 a ", r, ",",
-                      r, " 0 1 0 ", _fmt(2 * rho[sel, j]), ",0")
-        lines[sel] = _join(d, '"/>\n')
-    rings = np.nan_to_num(rho)
-    draw = (2 * np.pi * rings.sum() + np.sum(rings[:, :-1] - rings[:, 1:], where=rings[:, 1:] > 0)
-            + _TOUCH_MM * np.count_nonzero(touch))
-    return "".join(lines.tolist()), float(draw)
-
-
-def _join(*parts):
-    out = parts[0]
-    for part in parts[1:]:
-        out = np.char.add(np.asarray(out, dtype=str), part)
-    return out
-
-
-# the paper, for --invert: a black 1x1 PNG stretched over the page. vpype and
-# plotters ignore raster images, so the plot and its path count hold the dots only
-_BLACK_PNG = ("data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklE"
-              "QVR4nGNgAAAAAgABSK+kcQAAAABJRU5ErkJggg==")
 #: Label of the layer of the dots in :func:`write_svg`.
 LAYER = "stipples"
-
-
-def _svg_head(lay, size, meta, paint, invert):
-    """Everything of the SVG before the dots: page, metadata, background, the dots' layer."""
-    pw, ph = lay["page"]
-    head = [
-        '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-        '<svg xmlns="http://www.w3.org/2000/svg"',
-        '     xmlns:xlink="http://www.w3.org/1999/xlink"',
-        '     xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"',
-        '     xmlns:sodipodi="http://sodipodi.sourceforge.net/DTD/sodipodi-0.dtd"',
-        f'     {size} viewBox="0 0 {pw:.10g} {ph:.10g}"',
-        '     version="1.1">',
-        '  <sodipodi:namedview inkscape:document-units="mm"/>',
-        f'  <metadata id="diskpack_cl">{json.dumps(meta)}</metadata>',
-    ]
-    if invert:  # the black paper, in a layer that plotters skip (AxiDraw: a name with %)
-        head += ['  <g inkscape:groupmode="layer" inkscape:label="% paper (not plotted)" '
-                 'id="paper" sodipodi:insensitive="true">',
-                 f'    <image x="0" y="0" width="{pw:.10g}" height="{ph:.10g}" '
-                 f'preserveAspectRatio="none" xlink:href="{_BLACK_PNG}"/>', '  </g>']
-    head.append(f'  <g inkscape:groupmode="layer" inkscape:label="{meta["layer"]}" '
-                f'id="layer1" {paint}>')
-    return "\n".join(head) + "\n"
 
 
 def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
@@ -513,7 +269,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     outline, a pen width wider). With ``pen_mm=W`` each dot is drawn as the
     pen draws it: a dot not wider than the pen is one touch (a 0.01 mm
     path, round caps), a wider one one path of concentric rings W apart
-    (:func:`_pen_rings`), the outermost of radius ``(diameter - W) / 2``.
+    (:func:`~diskpack_cl.drawing.pen_rings`), the outermost of radius ``(diameter - W) / 2``.
 
     Parameters
     ----------
@@ -566,15 +322,15 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
-    pm, drawn, moved = _inside_page(p * lay["scale"],
+    pm, drawn, moved = inside_page(p * lay["scale"],
                                     cap_radii(rad, r * lay["scale"]) if no_overlap else rad,
                                     *lay["picture"])
     ink = ink_figures(pm, rad, r * lay["scale"], pen=pen_mm, no_overlap=no_overlap)
     rad = drawn
     pm += lay["offset"]
     order, before, after = pen_path_order(pm, method=pen_path)
-    meta = _svg_meta(result, lay, rad, pen_mm, invert, layer)
-    head = _svg_head(lay, _svg_size(lay, W, H, width_mm, height_mm, page), meta,
+    meta = svg_meta(result, lay, rad, pen_mm, invert, layer)
+    head = svg_head(lay, svg_size(lay, W, H, width_mm, height_mm, page), meta,
                      _svg_paint(pen_mm, invert), invert)
     draw = _write_svg_file(path, head, pm[order], rad[order], pen_mm)
     info = {"width_mm": lay["picture"][0], "height_mm": lay["picture"][1],
@@ -601,7 +357,7 @@ def _write_svg_file(path, head, centres, rad, pen_mm):
     with atomic_write(path, "w") as fh:
         fh.write(head)
         for a in range(0, len(centres), 100_000):
-            text, length = _svg_dots(centres[a : a + 100_000], rad[a : a + 100_000], pen_mm)
+            text, length = svg_dots(centres[a : a + 100_000], rad[a : a + 100_000], pen_mm)
             fh.write(text)
             draw += length
         fh.write("  </g>\n</svg>\n")
@@ -615,85 +371,6 @@ def _svg_radii(result, radii, scale, dot_mm, dots, radius_scale):
     if not dot_mm > 0:
         raise ValueError(f"dot_mm must be > 0, got {dot_mm}")
     return np.full(len(radii), 0.5 * float(dot_mm))
-
-
-def _svg_size(lay, W, H, width_mm, height_mm, page):
-    """The ``width``/``height`` attributes: CSS pixels (exact) for a dpi size, else mm."""
-    if page is None and width_mm is None and height_mm is None:
-        s = lay["scale"] / MM_PER_INCH * 96
-        return f'width="{W * s:.10g}px" height="{H * s:.10g}px"'
-    return f'width="{lay["page"][0]:.10g}mm" height="{lay["page"][1]:.10g}mm"'
-
-
-def _svg_meta(result, lay, rad, pen_mm, invert, layer):
-    """What :func:`read_stipple` needs to read the dots back (JSON in ``<metadata>``)."""
-    same = len(rad) > 0 and bool(np.all(rad == rad[0]))
-    tone = getattr(result, "tone_radius", None)
-    k = float(getattr(result, "k", np.nan))
-    return {"width": int(result.width), "height": int(result.height), "mm_per_px": lay["scale"],
-            "offset_mm": list(lay["offset"]), "pen_mm": pen_mm,
-            "dot_mm": 2 * float(rad[0]) if same else None,
-            "tone_radius": None if tone is None else float(tone),
-            "k": None if np.isnan(k) else k, "invert": bool(invert), "layer": layer}
-
-
-# coordinates are written with 4 decimals: keep dots this far inside the page
-_EDGE_MM = 2e-4
-# a pen touch: a path this long (mm), centred on the dot
-_TOUCH_MM = 0.01
-
-
-def _inside_page(c, rad, wmm, hmm):
-    """Move dots that stick out of the page inward; return (centres, radii, moved)."""
-    rad = np.minimum(rad, 0.5 * min(wmm, hmm) - 2 * _EDGE_MM - _TOUCH_MM)
-    ext = rad + _EDGE_MM + 0.5 * _TOUCH_MM
-    inside = np.column_stack([np.clip(c[:, 0], ext, wmm - ext), np.clip(c[:, 1], ext, hmm - ext)])
-    moved = int(np.count_nonzero(np.any(inside != c, axis=1)))
-    return inside, rad, moved
-
-
-def _coverage(c, rad, ow, oh, aa, progress=None):
-    """Ink coverage in [0, 1] per output pixel: fraction of aa x aa samples in a disk.
-
-    Dots are stamped in windows of their own size (grouped by size, in
-    chunks), and the coverages are summed with ``np.add.at``: exact sample
-    counts for disjoint disks; overlapping dots (fixed or enlarged dot sizes)
-    are summed and clipped at 1. ``progress(k)`` is called after each chunk
-    of ``k`` dots.
-    """
-    ink = np.zeros(ow * oh)
-    sub = (np.arange(aa) + 0.5) / aa
-    m_all = 2 * np.ceil(rad).astype(np.int64) + 2
-    for m in np.unique(m_all):
-        sel = np.flatnonzero(m_all == m)
-        step = max(1, int(2e7 // (m * m * aa * aa)))
-        off = np.arange(m)
-        for s0 in range(0, sel.size, step):
-            i = sel[s0 : s0 + step]
-            cx, cy, R = c[i, 0], c[i, 1], rad[i]
-            bx = np.floor(cx - R).astype(np.int64)
-            by = np.floor(cy - R).astype(np.int64)
-            px = bx[:, None] + off[None, :]  # (k, m) pixel columns
-            py = by[:, None] + off[None, :]
-            # sample rows: y = py + (a + 0.5)/aa; each cuts the disk in [xl, xr]
-            sy = (py[:, :, None] + sub).reshape(len(i), m * aa)  # (k, m*aa)
-            h2 = (R * R)[:, None] - (sy - cy[:, None]) ** 2
-            h = np.sqrt(np.maximum(h2, 0.0))
-            # sample columns t (x = (t + 0.5)/aa) inside: t in [lo, hi]
-            lo = np.ceil((cx[:, None] - h) * aa - 0.5)
-            hi = np.floor((cx[:, None] + h) * aa - 0.5)
-            hi = np.where(h2 >= 0, hi, lo - 1)
-            t0 = (px * aa).astype(np.float64)[:, None, :]  # (k, 1, m) first column
-            cnt = np.minimum(hi[:, :, None], t0 + (aa - 1)) - np.maximum(lo[:, :, None], t0) + 1
-            cnt = np.maximum(cnt, 0.0).reshape(len(i), m, aa, m).sum(axis=2)
-            cov = cnt / float(aa * aa)  # (k, m_y, m_x)
-            gx = np.broadcast_to(px[:, None, :], cov.shape)
-            gy = np.broadcast_to(py[:, :, None], cov.shape)
-            ok = (cov > 0) & (gx >= 0) & (gx < ow) & (gy >= 0) & (gy < oh)
-            np.add.at(ink, gy[ok] * ow + gx[ok], cov[ok])
-            if progress is not None:
-                progress(len(i))
-    return np.minimum(ink, 1.0).reshape(oh, ow)
 
 
 def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=False, aa=4,
@@ -767,7 +444,7 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         if not pen_px > 0:
             raise ValueError(f"pen_px must be > 0, got {pen_px}")
         rad = np.maximum(rad, 0.5 * pen_px)
-    ink = _coverage(p * scale, rad, ow, oh, aa, progress)
+    ink = ink_coverage(p * scale, rad, ow, oh, aa, progress)
     val = ink if invert else 1.0 - ink
     img = Image.fromarray(np.round(val * 255).astype(np.uint8))
     with atomic_write(path, "wb") as fh:

@@ -31,7 +31,6 @@ import signal
 import tempfile
 import warnings
 import zipfile
-import zlib
 from pathlib import Path
 
 import numpy as np
@@ -231,7 +230,13 @@ def check_writable(path):
 
 
 class OutputIsInputError(ValueError):
-    """An output of a run would replace one of its inputs (the command line's status 2)."""
+    """An output of a run would replace one of its inputs (the command line's status 2).
+
+    Examples
+    --------
+    >>> issubclass(OutputIsInputError, ValueError)
+    True
+    """
 
 
 def _file_identity(path):
@@ -426,7 +431,9 @@ def load_npz(path):
         if "allow_pickle" in detail:
             detail = "holds an array of Python objects, which is not read"
         raise ValueError(f"{path}: unreadable .npz file: {_one_line(detail)}") from None
-    except (OSError, EOFError, zipfile.BadZipFile, zlib.error, KeyError) as exc:
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - zipfile, zlib and numpy's header parser raise any kind
         raise ValueError(f"{path}: unreadable .npz file: truncated or corrupt "
                          f"({_one_line(exc)})") from None
 
@@ -558,7 +565,13 @@ def read_points(path, *, min_points=2, domain=None, columns=None):
             with open(p, "rb") as fh:
                 if fh.read(6) != b"\x93NUMPY":
                     raise ValueError(f"{path}: unreadable .npy file: not a numpy array file")
-            data = np.load(p, allow_pickle=False)
+            try:
+                data = np.load(p, allow_pickle=False)
+            except MemoryError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - numpy's header parser raises any kind
+                raise ValueError(f"{path}: unreadable .npy file: {type(exc).__name__}: "
+                                 f"{_one_line(exc)}") from None
         else:
             data = _read_text(p, suffix, columns)
         if columns is not None and suffix in (".npz", ".npy"):

@@ -392,6 +392,63 @@ def test_npz_readers_take_wrong_arrays_in_every_field(tmp_path, data):
         assert certify_disks(res.points, res.radii, Domain.rect(res.width, res.height)).valid
 
 
+# ------------------------------------------------------------------- names escaped in SVGs
+
+NAMES = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"),
+                min_size=1, max_size=12)
+
+
+def _dot_pens(res):
+    """The pen name of every dot, in any order (an SVG draws them pen by pen)."""
+    return sorted(res.names[i] for i in res.pen)
+
+
+def _pens_of(path):
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()   # well-formed XML, or this raises
+    return [g.get("{http://www.inkscape.org/namespaces/inkscape}label")
+            for g in root.iter("{http://www.w3.org/2000/svg}g")]
+
+
+def test_pens_with_markup_in_their_names_give_well_formed_svg(tmp_path, capsys):
+    from diskpack_cl.color import parse_pens
+
+    res = _color_stippling()
+    res.names, res.colors = parse_pens("a b=#000,c<d>=#f00")
+    for ext in (".svg", ".csv", ".npz"):
+        write_stipple(tmp_path / f"dots{ext}", res, **({"width_mm": 80} if ext == ".svg" else {}))
+        assert _dot_pens(read_stipple(tmp_path / f"dots{ext}")) == _dot_pens(res)
+    assert sorted(_pens_of(tmp_path / "dots.svg")) == ["a b", "c<d>"]
+    rc, _, err = _run(["export", str(tmp_path / "dots.npz"), "-o", str(tmp_path / "again.svg")],
+                      capsys)
+    assert rc == 0, err
+    assert sorted(_pens_of(tmp_path / "again.svg")) == ["a b", "c<d>"]
+
+
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(names=st.lists(NAMES, min_size=2, max_size=2, unique=True), layer=NAMES)
+def test_every_name_that_can_be_written_reads_back(tmp_path, names, layer):
+    res = _color_stippling()
+    res.names = tuple(names)
+    for ext in (".svg", ".csv", ".npz"):
+        path = tmp_path / f"dots{ext}"
+        try:
+            write_stipple(path, res, **({"width_mm": 80} if ext == ".svg" else {}))
+        except ValueError as exc:   # a name XML cannot carry is refused before writing
+            assert ext == ".svg" and "cannot carry" in str(exc)
+            continue
+        assert _dot_pens(read_stipple(path)) == _dot_pens(res)
+    mono = tmp_path / "mono.svg"
+    try:
+        write_stipple(mono, _stippling(), width_mm=80, layer=layer)
+    except ValueError as exc:
+        assert "cannot carry" in str(exc)
+        return
+    assert _pens_of(mono) == [layer]
+    assert read_stipple(mono).points.shape == (16, 2)
+
+
 # ------------------------------------------------------------------------ tests that end
 
 def test_every_test_has_a_time_limit(request):

@@ -210,7 +210,7 @@ def test_failure_mid_write_leaves_nothing(tmp_path, result, monkeypatch):
         calls.append(1)
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(export, "_svg_dots", boom)
+    monkeypatch.setattr(export, "svg_dots", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         write_svg(out, result)
     assert calls and list(tmp_path.iterdir()) == []
