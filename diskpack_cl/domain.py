@@ -6,7 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Domain", "box_sizes"]
+from .options import check_fields, option
+
+__all__ = ["Domain", "DomainOptions", "box_sizes"]
 
 
 def box_sizes(box, form):
@@ -152,3 +154,25 @@ class Domain:
                 pos.append(q[keep])
                 site.append(np.nonzero(keep)[0])
         return np.concatenate(pos), np.concatenate(site)
+
+
+@dataclass(frozen=True)
+class DomainOptions:
+    """Where the points lie: the unit torus or a box (``relax``, ``poisson``, ``analyze``).
+
+    The box stays as given (``"2x1"`` or sizes); each job reads it as its
+    dimension needs (:func:`box_sizes`).
+
+    Examples
+    --------
+    >>> DomainOptions(box="2x1").box
+    '2x1'
+    """
+
+    box: object = option(None, "the box [0,W] x [0,H] (3D: WxHxD) whose walls bound the points "
+                         "instead of the unit torus, e.g. 2x1 (analyze: no wrap, a Hann-windowed "
+                         "periodogram; default there: the box a point .npz records)",
+                         metavar="WxH", cli_type=str)
+
+    def __post_init__(self):
+        check_fields(self)

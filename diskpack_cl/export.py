@@ -221,7 +221,8 @@ class WriteOptions:
     pen_order: object = option(None, "SVG layer order of a colour stippling (--colors, "
                                "--pens; first drawn first; default: lightest pen first)",
                                cli_type=_pen_names, metavar="NAME,...", group=_OUTPUT)
-    invert: bool = option(False, "light dots on dark paper", cli=False)
+    invert: bool = option(False, "light dots on dark paper (diskpack export: by default as the "
+                          "stippling was made)", group=_OUTPUT)
 
     def __post_init__(self):
         check_fields(self)

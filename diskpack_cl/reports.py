@@ -8,13 +8,46 @@ width and height) from point sets, checks them and returns the numbers of
 from __future__ import annotations
 
 import importlib.util
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-__all__ = ["PLOT_HINT", "have_matplotlib", "analyze", "analyze_stippling", "analyze_color_stippling",
-           "analyze_point_sets", "point_file_box"]
+from .domain import DomainOptions, box_sizes
+from .options import check_fields, option
+
+__all__ = ["PLOT_HINT", "have_matplotlib", "AnalyzeOptions", "analyze", "analyze_stippling",
+           "analyze_color_stippling", "analyze_point_sets", "point_file_box"]
 
 PLOT_HINT = 'figures need matplotlib: pip install "diskpack_cl[plot]"'
+
+
+@dataclass(frozen=True)
+class AnalyzeOptions(DomainOptions):
+    """The options of :func:`analyze` (``diskpack analyze``): the box of point sets
+    (:class:`~diskpack_cl.domain.DomainOptions`), the measures and the figure.
+
+    Examples
+    --------
+    >>> AnalyzeOptions(sigma=2, box="2x1").sigma
+    2.0
+    >>> AnalyzeOptions(box="2x1x1")
+    Traceback (most recent call last):
+    ...
+    ValueError: box must be WxH: positive finite sizes, got '2x1x1'
+    """
+
+    invert: bool = option(False, "for a stippling: the image was stippled with --invert "
+                          "(default: as recorded in the .npz)")
+    sigma: float = option(3.0, "for a stippling: Gaussian blur in pixels for tone and spacing "
+                          "(default 3)", unit="px", lo=0, lo_open=True)
+    kmax: int = option(None, "for point sets: periodogram frequency range (default: automatic)",
+                       integer=True, lo=1)
+    title: str = option(None, "figure title")
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.box is not None:
+            box_sizes(self.box, "WxH")
 
 
 def have_matplotlib():
@@ -31,14 +64,28 @@ def have_matplotlib():
         return False
 
 
-def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, sigma=3.0,
-            kmax=None, title=None, box=None):
+def analyze(paths, options=None, *, image=None, output=None, allow_large=False, **overrides):
     """The numbers of one stippling ``.npz`` (with its input `image`) or of point sets.
 
     Draws the report figure to `output` when given and matplotlib is there.
-    Point sets lie on the unit torus, or in a box: `box` ``(W, H)``, or the
-    ``box`` array that ``diskpack poisson --box`` writes into an ``.npz``
-    (see :func:`analyze_point_sets`).
+    Point sets lie on the unit torus, or in a box: the options' `box`
+    (``"WxH"`` or ``(W, H)``), or the ``box`` array that ``diskpack poisson
+    --box`` writes into an ``.npz`` (see :func:`analyze_point_sets`).
+
+    Parameters
+    ----------
+    paths : sequence of str
+        One stippling, or point files (realizations of one process).
+    options : AnalyzeOptions, optional
+        ``invert``, ``sigma``, ``kmax``, ``title`` and ``box``.
+    image : str, Path or array_like, optional
+        The image a stippling was made from.
+    output : str, optional
+        The report figure.
+    allow_large : bool
+        Lift Pillow's decompression-bomb limit for `image`.
+    **overrides
+        Fields of `options` by name (``sigma=2``), checked as the object checks them.
 
     Raises
     ------
@@ -57,6 +104,7 @@ def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, 
     """
     from .export import read_stipple
 
+    o = replace(options or AnalyzeOptions(), **overrides)
     stipplings = [read_stipple(p) if str(p).lower().endswith(".npz") or _pen_csv(p) else None
                   for p in paths]
     if any(s is not None for s in stipplings):
@@ -67,12 +115,12 @@ def analyze(paths, *, image=None, output=None, invert=False, allow_large=False, 
             if output is not None:
                 raise ValueError(f"{paths[0]} is a colour stippling: its numbers print with "
                                  f"--json; the report figure is for one pen")
-            return analyze_color_stippling(paths[0], stipplings[0], image, sigma=sigma)
-        return analyze_stippling(paths[0], stipplings[0], image, output=output, invert=invert,
-                                 allow_large=allow_large, sigma=sigma, title=title)
+            return analyze_color_stippling(paths[0], stipplings[0], image, sigma=o.sigma)
+        return analyze_stippling(paths[0], stipplings[0], image, output=output, invert=o.invert,
+                                 allow_large=allow_large, sigma=o.sigma, title=o.title)
     if image is not None:
         raise ValueError("--image is for a stippling .npz; these are point sets")
-    return analyze_point_sets(paths, output=output, kmax=kmax, title=title, box=box)
+    return analyze_point_sets(paths, output=output, kmax=o.kmax, title=o.title, box=o.box)
 
 
 def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large=False,
@@ -230,7 +278,7 @@ def _sets_box(paths, box):
     """The box of the point files: `box` if given, else the one their .npz record (all
     alike), else None (the unit torus)."""
     if box is not None:
-        return float(box[0]), float(box[1])
+        return tuple(box_sizes(box, "WxH"))
     boxes = {point_file_box(p) for p in paths}
     if len(boxes) > 1:
         raise ValueError(f"the files record different boxes: {sorted(boxes, key=str)}")

@@ -9,6 +9,17 @@ import sys
 
 PROG = "diskpack"
 
+#: The flags about the run, not the job: the inputs and how to read them, the outputs,
+#: what is printed, where and how the job runs, which checks it makes. Every other flag
+#: of a subcommand is generated from a field of an options dataclass
+#: (:func:`diskpack_cl.options.add_arguments`); ``tests/test_flags.py`` holds them to it.
+RUN_FLAGS = frozenset({
+    "images", "inputs", "input", "image", "columns", "recursive", "allow_large",
+    "output", "quiet", "json",
+    "jobs", "manifest", "overwrite", "scheduler", "collect", "count", "device",
+    "verify", "profile", "allow_unreached",
+})
+
 
 def _checked(convert, test, want):
     """An argparse type: convert the text, then require ``test(value)``."""

@@ -7,8 +7,10 @@ import json
 import sys
 
 from diskpack_cl.jobs import json_default
+from diskpack_cl.options import add_arguments, from_namespace
+from diskpack_cl.reports import AnalyzeOptions
 
-from ._common import PROG, _image_path, _positive_float, _positive_int
+from ._common import PROG, _image_path
 
 
 def _add_analyze(subparsers):
@@ -40,26 +42,13 @@ def _add_analyze(subparsers):
                    help="print the numbers as one JSON line on stdout")
     p.add_argument("--image", default=None, metavar="IMAGE",
                    help="for a stippling: the input image ('sample' for the bundled one)")
-    p.add_argument("--invert", action="store_true",
-                   help="for a stippling: the image was stippled with --invert (default: as "
-                        "recorded in the .npz)")
     p.add_argument("--allow-large", action="store_true",
                    help="lift Pillow's decompression-bomb limit for --image")
-    p.add_argument("--sigma", type=_positive_float, default=3.0,
-                   help="for a stippling: Gaussian blur in pixels for tone and spacing "
-                        "(default 3)")
-    p.add_argument("--kmax", type=_positive_int, default=None,
-                   help="for point sets: periodogram frequency range (default: automatic)")
-    p.add_argument("--box", default=None, metavar="WxH",
-                   help="for point sets: they lie in the box [0,W] x [0,H] (no wrap; "
-                        "Hann-windowed periodogram). Default: the box an .npz from 'diskpack "
-                        "poisson --box' records, else the unit torus")
-    p.add_argument("--title", default=None, help="figure title")
+    add_arguments(p, AnalyzeOptions)
     p.set_defaults(run=_run_analyze)
 
 
 def _run_analyze(args):
-    from diskpack_cl.domain import box_sizes
     from diskpack_cl.reports import PLOT_HINT, analyze, have_matplotlib
 
     if args.output is None and not args.json:
@@ -75,10 +64,8 @@ def _run_analyze(args):
         if not have_matplotlib() and not args.json:
             raise ValueError(f"{PLOT_HINT} (the numbers print without it with --json)")
     image = None if args.image is None else _image_path(args.image)
-    box = None if args.box is None else box_sizes(args.box, "WxH")
-    numbers = analyze(args.inputs, image=image, output=args.output, invert=args.invert,
-                      allow_large=args.allow_large, sigma=args.sigma, kmax=args.kmax,
-                      title=args.title, box=box)
+    numbers = analyze(args.inputs, from_namespace(AnalyzeOptions, args), image=image,
+                      output=args.output, allow_large=args.allow_large)
     if args.json:
         print(json.dumps(numbers, default=json_default), flush=True)
     if plot and not have_matplotlib():

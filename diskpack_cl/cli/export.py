@@ -27,8 +27,6 @@ def _add_export(subparsers):
                    help="a stippling written by diskpack stipple (.npz, .csv or .svg)")
     p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
                    help="output file; repeat for several: .svg, .png, .npz, .csv")
-    p.add_argument("--invert", action="store_true",
-                   help="light dots on dark paper (default: as the stippling was made)")
     _drawing_options(p, "n, the input, ")
     p.set_defaults(run=_run_export)
 
@@ -44,7 +42,7 @@ def _run_export(args):
     if res is None:
         raise ValueError(f"{args.input} is a point set, not a stippling (no radii, width and "
                          f"height)")
-    write = write.replace(invert=args.invert or bool(res.params.get("invert", False)))
+    write = write.replace(invert=write.invert or bool(res.params.get("invert", False)))
     summary = {"n": len(res.points), "width": res.width, "height": res.height,
                "input": str(args.input)}
     tail = _write_and_report(args, write, res, None, outputs, summary, t0)

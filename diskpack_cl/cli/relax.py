@@ -10,6 +10,7 @@ from ._common import PROG, _bar, _device_options, _output_options
 
 
 def _relax_options(p):
+    from diskpack_cl.domain import DomainOptions
     from diskpack_cl.options import add_arguments
     from diskpack_cl.relax import RelaxOptions
 
@@ -21,8 +22,7 @@ def _relax_options(p):
     p.add_argument("--allow-unreached", action="store_true",
                    help=f"exit 0 when rho stops short of EPS (default: the set is written and "
                         f"the exit status is {UNREACHED})")
-    p.add_argument("--box", default=None, metavar="WxH",
-                   help="a box [0,W] x [0,H] with walls instead of the unit torus, e.g. 2x1")
+    add_arguments(p, DomainOptions)
     _device_options(p)
 
 

@@ -140,7 +140,7 @@ def _stipple_objects(args):
     from diskpack_cl.schedule import StippleOptions
 
     return (from_namespace(StippleOptions, args), from_namespace(ToneOptions, args),
-            from_namespace(WriteOptions, args, invert=args.invert),
+            from_namespace(WriteOptions, args),
             from_namespace(ColorOptions, args))
 
 
