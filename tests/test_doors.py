@@ -449,6 +449,71 @@ def test_every_name_that_can_be_written_reads_back(tmp_path, names, layer):
     assert read_stipple(mono).points.shape == (16, 2)
 
 
+# ---------------------------------------------------------------------------- messages
+
+@pytest.mark.parametrize("argv, words", [
+    (["stipple", "sample", "-n", "200", "--pen-width", "3", "-o", "a.svg"], ["--pen-mm"]),
+    (["poisson", "-n", "64", "--pens", "a", "-o", "a.npz"], ["unrecognized arguments: --pens"]),
+    (["relax"], ["required"]),
+    (["poisson", "-n", "1", "-o", "a.npz"], ["-n"]),
+])
+def test_usage_errors_are_one_line_without_the_usage(tmp_path, capsys, monkeypatch, argv, words):
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = _run(argv, capsys)
+    assert rc == 2 and len(err.strip().splitlines()) == 1, err
+    assert "usage:" not in err and f"(see 'diskpack {argv[0]} --help')" in err, err
+    assert all(word in err for word in words), err
+    assert "did you mean --pens" not in err and "one of --pens," not in err
+
+
+def test_an_unknown_device_in_the_environment_is_an_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("DISKPACK_DEVICE", "nosuch")
+    rc, _, err = _run(["poisson", "-n", "64", "-o", str(tmp_path / "a.npz"), "-q"], capsys)
+    assert rc == 1 and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "a.npz").exists()
+
+
+def test_ctrl_c_while_the_parser_is_built(monkeypatch, capsys):
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", interrupted)
+    rc, _, err = _run(["devices"], capsys)
+    assert rc == 130 and err == "diskpack: error: interrupted, nothing written\n"
+
+
+def test_ctrl_c_while_the_package_loads(tmp_path):
+    import subprocess
+    import sys
+    import tomllib
+
+    root = Path(__file__).parents[1]
+    scripts = tomllib.loads((root / "pyproject.toml").read_text())["project"]["scripts"]
+    module, func = scripts["diskpack"].split(":")
+    code = (f"import sys\n"
+            f"class Slow:\n"     # Ctrl-C arrives while diskpack_cl.cli is imported
+            f"    def find_spec(self, name, path, target=None):\n"
+            f"        if name == 'diskpack_cl.cli':\n"
+            f"            raise KeyboardInterrupt\n"
+            f"sys.meta_path.insert(0, Slow())\n"
+            f"import {module}\n"
+            f"sys.exit({module}.{func}())\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=root, timeout=300)
+    assert run.returncode == 130, run.stderr
+    assert run.stderr == "diskpack: error: interrupted, nothing written\n"
+
+
+def test_help_paragraphs_are_wrapped(monkeypatch):
+    monkeypatch.setenv("COLUMNS", "80")
+    parser = cli.build_parser()
+    subcommands = next(a for a in parser._actions if a.choices and "stipple" in a.choices)
+    for name, sub in subcommands.choices.items():
+        long = [line for line in sub.format_help().splitlines()
+                if len(line) > 80 and not line.lstrip().startswith("diskpack ")]
+        assert not long, (name, long[0])
+
+
 # ------------------------------------------------------------------------ tests that end
 
 def test_every_test_has_a_time_limit(request):

@@ -27,7 +27,7 @@ import os
 import sys
 
 from ._batches import _raise_terminated, _Terminated
-from ._common import PROG, _Parser, _UsageError
+from ._common import PROG, _HelpFormatter, _Parser, _UsageError
 from .analyze import _add_analyze
 from .devices import _add_devices
 from .export import _add_export
@@ -60,9 +60,12 @@ def build_parser():
         parser.add_argument("--version", action="version", version=f"%(prog)s {version('diskpack_cl')}")
     except Exception:  # pragma: no cover - not installed
         pass
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
+                                       parser_class=_Parser)
     for add in _SUBCOMMANDS:
         add(subparsers)
+    for sub in subparsers.choices.values():   # long paragraphs wrapped, examples kept
+        sub.formatter_class = _HelpFormatter
     return parser
 
 
@@ -103,6 +106,22 @@ def _os_error_text(exc):
 
 
 def main(argv=None):
+    """Run the CLI; return the exit status (see :func:`_main`); Ctrl-C at any moment,
+    also while the parser is built, ends with one line and 130.
+
+    Examples
+    --------
+    >>> main(["poisson", "-n", "1"])
+    2
+    """
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:   # before _main's own handlers, or inside them
+        print(f"{PROG}: error: interrupted, nothing written", file=sys.stderr)
+        return 130
+
+
+def _main(argv):
     """Run the CLI; return the exit status.
 
     0 ok, 1 error, 2 usage error, 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (an
@@ -131,8 +150,10 @@ def main(argv=None):
         return exc.code if isinstance(exc.code, int) else 1
     handlers = _terminate_handlers()
     try:
-        device = getattr(args, "device", None)
-        if device and "," not in device:  # an explicit device must exist, on every command
+        # an explicit device (--device, DISKPACK_DEVICE) must exist, on every command that has one
+        device = getattr(args, "device", None) or (
+            os.environ.get("DISKPACK_DEVICE") if hasattr(args, "device") else None)
+        if device and "," not in device:
             from diskpack_cl import get_context
 
             get_context(device)

@@ -89,15 +89,56 @@ def _output_options(p):
                    help="print one JSON summary line on stdout at the end")
 
 
+class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Paragraphs of a description wrapped to the terminal; indented lines (examples) kept."""
+
+    def _fill_text(self, text, width, indent):
+        import textwrap
+
+        return "\n".join(
+            line if line.startswith(" ") or len(line) <= width else
+            textwrap.fill(line, width, initial_indent=indent, subsequent_indent=indent)
+            for line in text.splitlines())
+
+
 class _Parser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors add "did you mean" for a mistyped choice or option."""
+    """An ArgumentParser whose errors are one line: the error, "did you mean" for a
+    mistyped choice or option, and where the help is (no usage dump)."""
 
     def error(self, message):
-        super().error(message + _did_you_mean(self, message))
+        self.exit(2, f"{self.prog}: error: {message}{_did_you_mean(self, message)} "
+                     f"(see '{self.prog} --help')\n")
+
+    def parse_args(self, args=None, namespace=None):
+        """As argparse's, but an unknown option is the subcommand's error, with its options."""
+        args, extras = self.parse_known_args(args, namespace)
+        if extras:
+            _subcommand_parser(self, args).error(f"unrecognized arguments: {' '.join(extras)}")
+        return args
+
+
+def _subcommand_parser(parser, args):
+    """The parser of the subcommand that `args` ran (`parser` itself without one)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return action.choices.get(getattr(args, action.dest, None), parser)
+    return parser
 
 
 def _did_you_mean(parser, message):
-    """``"; did you mean X?"`` for the closest subcommand/choice or option, else ``""``."""
+    """``"; did you mean X?"``: a near miss, else the options that share the mistyped
+    one's first word (``--pen-width``: ``--pen-mm``, ``--pen-path``, ...), in the
+    parser's order, else the closest subcommand,
+    choice or option; ``""`` when none is close.
+
+    Examples
+    --------
+    >>> p = _Parser(prog="x")
+    >>> for flag in ("--pen-mm", "--pen-path", "--page"):
+    ...     _ = p.add_argument(flag)
+    >>> _did_you_mean(p, "unrecognized arguments: --pen-width 3")
+    '; did you mean one of --pen-mm, --pen-path?'
+    """
     import difflib
     import re
 
@@ -109,8 +150,17 @@ def _did_you_mean(parser, message):
         extra = re.search(r"unrecognized arguments: (.*)", message)
         words = [w.split("=")[0] for w in extra.group(1).split() if w.startswith("-")] if extra else []
         known = _option_strings(parser)
-    close = [m for w in words for m in difflib.get_close_matches(w, known, n=1, cutoff=0.6)]
-    return f"; did you mean {' '.join(close)}?" if close else ""
+    close = []
+    for word in words:
+        others = [k for k in known if k != word]
+        stem = word.split("-")[2] + "-" if word.startswith("--") and word.count("-") > 2 else None
+        family = [k for k in others if stem and k.startswith("--" + stem)]
+        # a near miss (--pen-mn) is a typo; a farther one (--pen-width) lists the family
+        close += (difflib.get_close_matches(word, others, n=1, cutoff=0.8) or family
+                  or difflib.get_close_matches(word, others, n=1, cutoff=0.6))
+    if len(close) > 1:
+        return f"; did you mean one of {', '.join(close)}?"
+    return f"; did you mean {close[0]}?" if close else ""
 
 
 def _option_strings(parser):
