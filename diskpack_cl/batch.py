@@ -98,14 +98,16 @@ def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_pe
                      devices=devices, client=client, collect=collect, progress=progress)
 
 
-def poisson_many(count, n, outputs, relax=None, *, seed=None, init="dart", dart_radius=0.74,
-                 manifest=None, overwrite=False, jobs=1, devices=None, client=None,
+def poisson_many(count, n, outputs, options=None, *, seed=None, manifest=None, overwrite=False,
+                 jobs=1, devices=None, client=None,
                  collect=False, progress=None, **overrides):
     """Make ``count`` independent Poisson disk sets; yield records as they finish.
 
     Seeds come from ``numpy.random.SeedSequence(seed).spawn(count)``; each
     record's ``seed`` recreates its set alone. Without ``seed``, a rerun
-    takes the seed of the run recorded in the manifest (else a fresh one). See :func:`~diskpack_cl.jobs.plan_poisson` and
+    takes the seed of the run recorded in the manifest (else a fresh one). ``options`` (a
+    :class:`~diskpack_cl.poisson.PoissonOptions`) and ``overrides``: see
+    :func:`~diskpack_cl.jobs.plan_poisson`; and
     :func:`~diskpack_cl.executors.run_batch`; the module's example shows a run and its resume.
 
     Examples
@@ -122,8 +124,7 @@ def poisson_many(count, n, outputs, relax=None, *, seed=None, init="dart", dart_
         seed = next((r["params"]["base_seed"] for r in reversed(Manifest(manifest).records())
                      if r.get("kind") == "poisson" and "base_seed" in r.get("params", {})),
                     None)
-    items = plan_poisson(count, n, outputs, relax, seed=seed, init=init,
-                         dart_radius=dart_radius, **overrides)
+    items = plan_poisson(count, n, outputs, options, seed=seed, **overrides)
     return Batch(items, outputs, manifest, overwrite=overwrite, jobs=jobs,
                      devices=devices, client=client, collect=collect, progress=progress)
 

@@ -25,7 +25,6 @@ import json
 import os
 import string
 import time
-import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -40,16 +39,15 @@ from .io import (atomic_writes, box_record, check_not_inputs, check_points_path,
 from .memory import check_stipple_memory
 from .multipen import stipple_colors
 from .options import changed
-from .poisson import as_box
-from .relax import RelaxOptions, relax_poisson
-from .sampling import dart_throwing, random_points
+from .poisson import PoissonOptions, as_box, poisson_job
+from .relax import RelaxOptions, relax_poisson, relax_summary
 from .schedule import StippleOptions
 from .stipple import stipple
 
 __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "Item", "expand_inputs", "render_template",
     "check_outputs", "derive_seeds", "dots_for_image", "json_default",
-    "write_stipple_outputs", "stipple_item", "relax_item", "poisson_start", "run_job",
+    "write_stipple_outputs", "stipple_item", "relax_item", "run_job",
     "plan_stipple", "plan_poisson", "plan_relax",
 ]
 
@@ -536,7 +534,7 @@ def _stipple_item(item, device, progress):
 
 def relax_item(item, points=None, *, device=None, callback=None, verify=False, profile=False):
     """Relax the points of one item and write its outputs: what a single input and every
-    item of a batch run (``relax``, and ``poisson`` after :func:`poisson_start`).
+    item of a batch run (``relax``, and ``poisson --init FILE``).
 
     The relaxation is :func:`diskpack_cl.relax.relax_poisson` with the item's
     options, on the unit torus or in the item's ``box``. Each ``.npz``
@@ -586,84 +584,24 @@ def relax_item(item, points=None, *, device=None, callback=None, verify=False, p
     return res
 
 
-def poisson_start(item, *, warn=None):
-    """The start set of a ``poisson`` item: dart throwing or uniform random with the
-    item's seed, or the points of a file (a single run's ``init``).
-
-    Parameters
-    ----------
-    item : Item
-        A ``poisson`` item (:func:`plan_poisson`).
-    warn : callable, optional
-        ``warn(text)`` for each warning of the dart throwing, as it comes.
-
-    Returns
-    -------
-    points : (n, 2) array
-    info : dict
-        ``dart_rel_radius`` of a dart-throwing start, else empty.
-
-    Raises
-    ------
-    ValueError
-        Fewer than two points, or a file whose count is not the item's ``n``.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> item, = plan_poisson(1, 64, [os.path.join(tempfile.mkdtemp(), "a.npz")], seed=3)
-    >>> points, info = poisson_start(item)
-    >>> points.shape, sorted(info)
-    ((64, 2), ['dart_rel_radius'])
-    """
-    p = item.params
-    info = {}
-    if p["init"] == "dart":
-        with warnings.catch_warnings():
-            warnings.simplefilter("always")
-            warnings.showwarning = lambda message, *_a, **_k: (
-                None if warn is None else warn(str(message)))
-            points, dart = dart_throwing(p["n"], rel_radius=p["dart_radius"], seed=item.seed,
-                                         full_output=True)
-        info["dart_rel_radius"] = dart["rel_radius"]
-    elif p["init"] == "random":
-        points = random_points(p["n"], seed=item.seed)
-    else:
-        points = read_points(p["init"])
-        if p["n"] is not None and p["n"] != len(points):
-            raise ValueError(f"-n {p['n']} does not match the {len(points)} points "
-                             f"of {p['init']}; leave -n out")
-    if len(points) < 2:
-        raise ValueError(f"need at least 2 points, got {len(points)}")
-    return points, info
-
-
-def _relax_summary(res):
-    """A batch record's summary of a relaxation."""
-    return {"n": int(len(res.points)), "iterations": int(res.iterations),
-            "rho_start": float(res.rho[0]), "rho_final": float(res.rho[-1]),
-            "stop_reason": res.stop_reason, "backend": res.backend, "device": res.device,
-            "relax_seconds": float(res.seconds),
-            "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
-
-
 def _rho_progress(progress):
     return None if progress is None else (lambda it, rho: progress(it, f"rho={rho:.4f}"))
 
 
 def _poisson_item(item, device, progress):
-    """A batch's poisson item: :func:`poisson_start`, then :func:`relax_item`; its summary."""
-    caught = []
-    points, info = poisson_start(item, warn=caught.append)
-    if caught:
-        info["warnings"] = caught
-    res = relax_item(item, points, device=device, callback=_rho_progress(progress))
-    return {**_relax_summary(res), **info}
+    """A poisson item: :func:`~diskpack_cl.poisson.poisson_job` with the item's options and
+    seed (what ``diskpack poisson`` and :func:`~diskpack_cl.poisson.poisson_disk` run); its
+    summary."""
+    p = item.params
+    _, summary = poisson_job(p["n"], item.outputs, PoissonOptions(**p["options"]), seed=item.seed,
+                             device=device, callback=_rho_progress(progress))
+    return summary
 
 
 def _relax_item(item, device, progress):
     """A batch's relax item: :func:`relax_item`; its summary."""
-    return _relax_summary(relax_item(item, device=device, callback=_rho_progress(progress)))
+    res = relax_item(item, device=device, callback=_rho_progress(progress))
+    return relax_summary(res, item.params["eps"])
 
 
 _KINDS = {"stipple": _stipple_item, "poisson": _poisson_item, "relax": _relax_item}
@@ -808,44 +746,31 @@ def _relax_params(relax, overrides):
     return replace(relax or RelaxOptions(), **overrides).kwargs()
 
 
-def plan_poisson(count, n, outputs, relax=None, *, seed=None, init="dart", dart_radius=0.74,
-                 derive=True, box=None, make_folders=True, **overrides):
+def plan_poisson(count, n, outputs, options=None, *, seed=None, make_folders=True, **overrides):
     """Items for ``count`` Poisson disk sets with seeds derived from ``seed``.
 
     Set ``i`` has seed ``derive_seeds(seed, count)[i]``; ``seed=None`` takes
-    a fresh one. ``init`` is ``"dart"`` or ``"random"``. ``relax`` (a
-    :class:`~diskpack_cl.relax.RelaxOptions`) with ``overrides`` (its
-    fields: ``eps``, ``max_iter``, ...) relaxes every set. With
-    ``derive=False`` (a single run: ``count`` 1) the set has ``seed``
-    itself, ``init`` may also be a point file (``n`` None: its count), and
-    ``box`` relaxes that file in a box. ``make_folders`` as for
-    :func:`check_outputs`.
+    a fresh one. ``options`` (a :class:`~diskpack_cl.poisson.PoissonOptions`)
+    with ``overrides`` (its fields: ``eps``, ``init``, ``dim``, ...) makes
+    every set; an item carries the fields that differ from their defaults
+    (:func:`~diskpack_cl.options.changed`, JSON for the manifest).
+    ``make_folders`` as for :func:`check_outputs`.
 
     Examples
     --------
     >>> import os, tempfile
-    >>> items = plan_poisson(3, 64, [os.path.join(tempfile.mkdtemp(), "{i}.npz")], seed=7)
-    >>> [it.seed for it in items] == derive_seeds(7, 3)
-    True
-    >>> plan_poisson(1, 64, [os.path.join(tempfile.mkdtemp(), "a.npz")], seed=7,
-    ...              derive=False)[0].seed
-    7
+    >>> items = plan_poisson(3, 64, [os.path.join(tempfile.mkdtemp(), "{i}.npz")], seed=7,
+    ...                      eps=0.75)
+    >>> [it.seed for it in items] == derive_seeds(7, 3), items[0].params["options"]
+    (True, {'eps': 0.75})
     """
-    if derive and init not in ("dart", "random"):
-        raise ValueError(f"init must be 'dart' or 'random' for many sets, got {init!r}")
-    if not derive and count != 1:
-        raise ValueError(f"derive=False makes one set, not {count}")
+    options = (options or PoissonOptions()).replace(**overrides)
     if seed is None:
         seed = int(np.random.SeedSequence().entropy % 2**31)
-    params = {"n": n, "init": init, **_relax_params(relax, overrides)}
-    if init == "dart":
-        params["dart_radius"] = dart_radius
-    if box is not None:
-        params["box"] = box
-    seeds = derive_seeds(seed, count) if derive else [seed]
-    items = [Item("poisson", i, None, s, {**params, "base_seed": seed},
+    params = {"n": n, "options": changed(options), "base_seed": seed}
+    items = [Item("poisson", i, None, s, params,
                   tuple(render_template(t, n=n, seed=s, i=i) for t in outputs))
-             for i, s in enumerate(seeds)]
+             for i, s in enumerate(derive_seeds(seed, count))]
     check_outputs(items, _paths_check("poisson"), make_folders=make_folders)
     return items
 

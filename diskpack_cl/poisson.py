@@ -565,7 +565,7 @@ def _relaxed(n, domain, eps, seed, inside, distance, opt, options):
     start = start_points(n, domain, seed, False if opt.backend == "exact" else options["device"],
                          init=opt.init, dart_radius=opt.dart_radius)
     t_start = time.perf_counter() - t0
-    res = relax_poisson(start, eps, domain=domain, **options)
+    res = relax_poisson(start, eps=eps, domain=domain, **options)
     pts = res.points
     rho = float(res.rho[-1])   # certified by relax_poisson's KD-tree
     d_min = 2.0 * rho * hexagonal_radius(len(pts), domain.area)

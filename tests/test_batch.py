@@ -231,7 +231,7 @@ def test_sigterm_part_way_then_resume(tmp_path, jobs):
 
 def test_one_set_recreated_alone(tmp_path, capsys):
     """A single run is a one-item plan with its seed itself (not derived), run by the
-    batch's code (poisson_start, relax_item): the same seed writes the same bytes."""
+    batch's code (poisson_job): the same seed writes the same bytes."""
     recs = list(poisson_many(3, 200, [str(tmp_path / "{i}.npz")], seed=11, backend="exact",
                              jobs=1))
     rec = next(r for r in recs if r["i"] == 2)
@@ -482,27 +482,6 @@ def test_a_relax_plan_without_box_keeps_the_old_identity(tmp_path):
     src, = _start_sets(tmp_path / "in")[:1]
     item, = jobs.plan_relax([str(src)], [str(tmp_path / "o.npz")])
     assert sorted(item.params) == ["backend", "eps", "grid", "max_iter"]
-
-
-def test_one_poisson_run_prints_the_dart_warning_as_it_comes(tmp_path, capsys, monkeypatch):
-    """The dart throwing's warnings: printed by a single run, recorded by a batch item."""
-    import warnings
-
-    from diskpack_cl import sampling
-    from diskpack_cl.sampling import DartThrowingWarning
-
-    real = sampling.dart_throwing
-
-    def saturated(*a, **k):
-        warnings.warn("saturated", DartThrowingWarning)
-        return real(*a, **k)
-
-    monkeypatch.setattr(jobs, "dart_throwing", saturated)
-    rc, _, err = _cli(["poisson", "-n", 64, "--seed", 1, "--backend", "exact",
-                       "-o", tmp_path / "a.npz"], capsys)
-    assert rc == 0 and "diskpack: warning: saturated" in err
-    rec, = poisson_many(1, 64, [str(tmp_path / "b" / "{i}.npz")], seed=1, backend="exact")
-    assert rec["summary"]["warnings"] == ["saturated"]
 
 
 def test_a_worker_ignores_a_second_sigterm_while_it_cleans_up():

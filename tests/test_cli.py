@@ -15,8 +15,8 @@ from diskpack_cl.io import read_points, write_points
 from diskpack_cl.sampling import dart_throwing
 
 ROOT = Path(__file__).resolve().parents[1]
-JSON_KEYS = {"n", "iterations", "rho_start", "rho_final", "seconds", "seconds_per_iteration",
-             "stage_seconds", "backend", "device", "stop_reason", "output"}
+JSON_KEYS = {"n", "iterations", "rho_start", "rho_final", "seconds", "stage_seconds", "backend",
+             "device", "stop_reason", "output"}
 STAGES = {"exact"}   # the exact engine's one stage
 
 
@@ -32,7 +32,8 @@ def fake_relax(monkeypatch):
     calls = []
 
     def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None,
-                      device=None, callback=None, verify=False, profile=False, domain=None):
+                      device=None, callback=None, verify=False, profile=False, domain=None,
+                      patience=100, local=False):
         calls.append(dict(points=np.array(points), eps=eps, max_iter=max_iter,
                           backend=backend, grid=grid, device=device))
         if callback is not None:
@@ -44,7 +45,8 @@ def fake_relax(monkeypatch):
             timings={"raster_labels": 0.01, "mic_estimate": 0.01, "exact_refine": 0.01},
             backend=backend, device="fake", stats={})
 
-    monkeypatch.setattr(JOBS, "relax_poisson", relax_poisson)
+    monkeypatch.setattr(JOBS, "relax_poisson", relax_poisson)      # relax, poisson --init FILE
+    monkeypatch.setattr(POISSON, "relax_poisson", relax_poisson)   # poisson's sets
     return calls
 
 
@@ -59,14 +61,14 @@ def test_poisson_exact_json(tmp_path, capsys):
     s = _json_line(captured.out)
     assert JSON_KEYS <= set(s) and set(s["stage_seconds"]) == STAGES
     assert s["n"] == 128 and s["backend"] == "exact" and s["output"] == str(out)
-    assert s["rho_start"] >= 0.74 and s["rho_final"] >= s["rho_start"]
+    assert s["rho_start"] >= 0.7 and s["rho_final"] >= s["rho_start"]
     assert s["stop_reason"] in {"eps", "stalled", "max_iter"}
     if s["stop_reason"] == "eps":
         assert s["rho_final"] >= 0.8
     pts = read_points(out)
     assert pts.shape == (128, 2) and ((pts >= 0) & (pts < 1)).all()
     with np.load(out) as z:
-        assert z["rho"].shape == (s["iterations"] + 1,)
+        assert (float(z["rho"]), float(z["eps"])) == (s["rho_final"], 0.8)
     assert "rho" in captured.err and "wrote" in captured.err
     assert sorted(os.listdir(tmp_path)) == ["points.npz"]
 
@@ -124,7 +126,6 @@ def test_poisson_passes_options(fake_relax, tmp_path, capsys, ctx):   # --device
     assert (call["eps"], call["max_iter"], call["backend"], call["grid"], call["device"]) == \
         (0.7, 9, "opencl", 32, "pocl")
     s = _json_line(capsys.readouterr().out)
-    assert s["seconds_per_iteration"] == pytest.approx(0.01)
     assert s["stage_seconds"] == {"raster_labels": 0.01, "mic_estimate": 0.01, "exact_refine": 0.01}
 
 
@@ -163,7 +164,7 @@ def test_keyboard_interrupt(monkeypatch, tmp_path, capsys):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(JOBS, "relax_poisson", interrupted)
+    monkeypatch.setattr(POISSON, "relax_poisson", interrupted)
     rc = cli.main(["poisson", "-n", "10", "-o", str(tmp_path / "o.npz")])
     assert rc == 130
     assert "diskpack: error: interrupted, nothing written" in capsys.readouterr().err
@@ -288,6 +289,7 @@ def test_readme_commands_match_ci():
 
 # the package re-exports the function under the module's name: patch the module
 JOBS = importlib.import_module("diskpack_cl.jobs")  # every run looks stipple up there
+POISSON = importlib.import_module("diskpack_cl.poisson")  # poisson sets look relax_poisson up there
 STIPPLE_ARGS = ["-n", "150", "--beta", "3", "--lloyd", "2", "--rounds", "2"]  # 3+2+2 iterations
 
 
@@ -623,6 +625,7 @@ def test_analyze_bad_inputs(stippled, point_files, tmp_path, capsys, case, messa
 # --------------------------------------------------------- poisson --radius
 
 def test_poisson_radius_passes_options(monkeypatch, tmp_path, capsys):
+    import diskpack_cl.cli.poisson
     import diskpack_cl.relax
 
     calls = []
@@ -633,7 +636,7 @@ def test_poisson_radius_passes_options(monkeypatch, tmp_path, capsys):
         return diskpack_cl.relax.RadiusResult(pts, 30, radius, 0.0801, 0.9,
                                               [{"n": 30, "reached": True}], 0.5)
 
-    monkeypatch.setattr(diskpack_cl.relax, "max_points_for_radius", fake)
+    monkeypatch.setattr(diskpack_cl.cli.poisson, "max_points_for_radius", fake)
     out = tmp_path / "r.npz"
     rc = cli.main(["poisson", "--radius", "0.08", "--init", "random", "--seed", "4", "--backend",
                    "exact", "--max-iter", "50", "-o", str(out), "--json"])

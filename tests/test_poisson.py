@@ -260,11 +260,11 @@ def test_cli_three_columns_need_columns(tmp_path, capsys):
     assert rc == 0, cap.err
 
 
-def test_cli_saturated_darts_are_said_at_once(tmp_path, capsys):
+def test_cli_refuses_a_dart_radius_the_darts_cannot_reach(tmp_path, capsys):
     rc, cap = _cli(["poisson", "-n", "300", "--dart-radius", "0.95", "-o", str(tmp_path / "d.npz"),
                     "--seed", "1", "--backend", "exact"], capsys)
-    lines = cap.err.splitlines()
-    assert rc == 0 and lines[0].startswith("diskpack: warning: relative radius 0.95 is above")
+    assert rc == 2 and "--dart-radius: must be in (0, 0.78), got 0.95" in cap.err
+    assert not (tmp_path / "d.npz").exists()
 
 
 def test_stall_counts_only_real_progress():

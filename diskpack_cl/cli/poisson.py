@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 
-from diskpack_cl.jobs import json_default
+from diskpack_cl.batch import poisson_many
+from diskpack_cl.image import load_gray
+from diskpack_cl.io import check_not_inputs, check_points_path, read_points, write_points
+from diskpack_cl.jobs import json_default, plan_relax
+from diskpack_cl.options import add_arguments, from_namespace
+from diskpack_cl.poisson import STARTS, PoissonOptions, poisson_job
+from diskpack_cl.relax import max_points_for_radius
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import (PROG, _bar, _checked, _image_path, _nonnegative_int,
-                      _output_options, _point_count, _positive_float, _positive_int, _unit_open)
+                      _output_options, _point_count, _positive_float, _positive_int)
 from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 
 
@@ -33,16 +38,9 @@ def _add_poisson(subparsers):
                             "disk radius R (half the minimum distance, 0 < R < 0.25; the paper's "
                             "Fig. 7) and write that set; --eps is not used, --max-iter caps each "
                             "trial (default 300)")
-    p.add_argument("--init", default="dart", metavar="dart|random|FILE",
-                   help="start set: dart throwing (default), uniform random, or a point file")
-    p.add_argument("--dart-radius", type=_unit_open, default=0.74, metavar="R",
-                   help="relative radius of the dart-throwing start (default 0.74)")
-    p.add_argument("--seed", type=_nonnegative_int, default=None, help="random seed (default: a fresh one, printed in the --json summary)")
-    p.add_argument("--dim", type=int, choices=(2, 3), default=2,
-                   help="3: points in the unit 3-torus or a box WxHxD, relaxed to the centres of "
-                        "the largest spheres in their 3D Voronoi cells (rho against FCC)")
-    p.add_argument("--rho-max", type=_unit_open, default=0.8, metavar="RHO",
-                   help="with --min-distance: the largest rho D may ask for (default 0.8)")
+    add_arguments(p, PoissonOptions)
+    p.add_argument("--seed", type=_nonnegative_int, default=None,
+                   help="random seed (default: a fresh one, printed in the --json summary)")
     p.add_argument("--mask", default=None, metavar="IMAGE",
                    help="points only where the image is light (> 0.5 gray; the image spans "
                         "--box, default: the image's aspect, longer side 1)")
@@ -64,9 +62,6 @@ _radius = _checked(float, lambda v: 0.0 < v < 0.25, "in (0, 0.25)")
 
 def _run_poisson_radius(args):
     """``poisson --radius R``: the most points that relaxation brings to radius R."""
-    from diskpack_cl.io import write_points
-    from diskpack_cl.relax import max_points_for_radius
-
     if args.init not in ("dart", "random"):
         raise ValueError("--radius chooses n itself: use --init dart or random, not a file")
     bar = _bar(args, "radius search", "trial")
@@ -112,46 +107,36 @@ def _report(args, line, summary):
 
 
 def _run_poisson(args):
-    from diskpack_cl.io import check_not_inputs, check_points_path
-
     if _batch_mode(args, [], [args.output]):
         return _run_poisson_batch(args)
     check_points_path(args.output, for_writing=True)
-    check_not_inputs([args.output], [args.mask, args.density, args.init if args.init not in
-                                     ("dart", "random") else None])
+    start_file = args.init not in STARTS
+    check_not_inputs([args.output], [args.mask, args.density, args.init if start_file else None])
     if args.radius is not None:
         return _run_poisson_radius(args)
-    if args.min_distance is not None or args.mask or args.density or args.dim == 3 or (
-            args.box is not None and args.init in ("dart", "random")):
-        return _run_poisson_set(args)
-    return _run_poisson_one(args)
+    if start_file:
+        return _run_poisson_file(args)
+    return _run_poisson_set(args)
 
 
-def _run_poisson_one(args):
-    """A start set relaxed on the torus (or a file's in a --box): a one-item plan without a
-    manifest, run here (:func:`~diskpack_cl.jobs.poisson_start`, then ``relax_item``)."""
-    from diskpack_cl.jobs import plan_poisson, poisson_start
-
-    drawn = args.init in ("dart", "random")
-    (item,) = plan_poisson(1, 1024 if args.n is None and drawn else args.n, [args.output],
-                           _relax(args), seed=args.seed, init=args.init,
-                           dart_radius=args.dart_radius, derive=False,
-                           box=None if drawn else args.box, make_folders=False)
-    t0 = time.perf_counter()
-    # printed as they come: a saturated radius is said at once
-    points, start = poisson_start(item, warn=None if args.quiet else lambda text: print(
-        f"{PROG}: warning: {text}", file=sys.stderr, flush=True))
-    # the seed (a fresh one without --seed) in the summary, so that the run can be repeated
-    info = {"init": args.init, "seed": item.seed, **start,
-            "init_seconds": time.perf_counter() - t0}
-    return _relax_and_write(item, args, points, extra_summary=info)
+def _run_poisson_file(args):
+    """``--init FILE``: the file's points relaxed, as ``diskpack relax`` relaxes them."""
+    if args.min_distance is not None or args.mask or args.density or args.dim == 3:
+        raise ValueError("--min-distance, --mask, --density and --dim 3 make their own start "
+                         "set: leave --init out")
+    if args.n is not None:
+        count = len(read_points(args.init))
+        if count != args.n:
+            raise ValueError(f"-n {args.n} does not match the {count} points of {args.init}; "
+                             f"leave -n out")
+    (item,) = plan_relax([args.init], [args.output], _relax(args), box=args.box,
+                         make_folders=False)
+    return _relax_and_write(item, args, extra_summary={"init": args.init, "seed": args.seed})
 
 
 def _field_image(args, path):
     """``(array, box)`` of a --mask or --density image: light 1, dark 0; the box by default
     has the image's aspect, longer side 1."""
-    from diskpack_cl.image import load_gray
-
     gray = load_gray(_image_path(path))
     if args.box is not None:
         return gray, args.box
@@ -159,39 +144,36 @@ def _field_image(args, path):
     return gray, (w / max(w, h), h / max(w, h))
 
 
-def _run_poisson_set(args):
-    """``poisson`` with a box, a minimum distance, a mask or a density (:func:`poisson_disk`)."""
-    from diskpack_cl.io import box_record, write_points
-    from diskpack_cl.poisson import poisson_disk
-
-    if args.init not in ("dart", "random"):
-        raise ValueError("--box, --min-distance, --mask and --density make their own start set: "
-                         "leave --init out")
-    box, mask, density = args.box, None, None
+def _where(args):
+    """The keyword arguments of :func:`~diskpack_cl.poisson.poisson_job` that say where the
+    points go: a box, a minimum distance, a mask or a density."""
+    where = {"box": args.box, "min_distance": args.min_distance}
     if args.mask:
-        mask, box = _field_image(args, args.mask)
+        where["mask"], where["box"] = _field_image(args, args.mask)
     if args.density:
-        density, box = _field_image(args, args.density)
-        density = 1.0 - density
+        density, where["box"] = _field_image(args, args.density)
+        where["density"] = 1.0 - density
+    return where
+
+
+def _run_poisson_set(args):
+    """One set (:func:`~diskpack_cl.poisson.poisson_job`, the route of a batch item and of
+    :func:`~diskpack_cl.poisson.poisson_disk`)."""
+    options = from_namespace(PoissonOptions, args)
     n = 1024 if args.n is None and args.min_distance is None else args.n
-    relax = _relax(args).kwargs()
     callback, close = _progress(args, "relax")
     try:
-        res = poisson_disk(n, min_distance=args.min_distance, box=box, mask=mask, density=density,
-                           seed=args.seed, eps=relax["eps"], rho_max=args.rho_max,
-                           backend=relax["backend"], device=args.device,
-                           max_iter=relax["max_iter"], callback=callback, dim=args.dim)
+        res, summary = poisson_job(n, [args.output], options, seed=args.seed, device=args.device,
+                                   callback=callback, verify=args.verify, profile=args.profile,
+                                   **_where(args))
     finally:
         close()
-    write_points(args.output, res.points, **box_record(args.output, res.domain))
-    summary = {"n": int(len(res.points)), "box": res.domain.size.tolist(), "dim": args.dim,
-               "torus": res.domain.periodic, "rho": res.rho, "min_distance": res.min_distance,
-               "reached": res.reached, "stop_reason": res.stop_reason, "iterations": res.iterations,
-               "seconds": res.seconds, "init_seconds": res.start_seconds, "seed": args.seed,
-               "output": str(args.output)}
-    _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, rho "
-                  f"{res.rho:.4f} in {res.iterations} iterations ({res.seconds:.3g} s, stop: "
-                  f"{res.stop_reason}); wrote {args.output}", summary)
+    summary["output"] = str(args.output)
+    rho = ("variable spacing" if summary["rho_final"] is None
+           else f"rho {res.rho_start:.4f} -> {res.rho:.4f}")
+    _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, {rho} in "
+                  f"{res.iterations} iterations ({res.seconds:.3g} s, stop: {res.stop_reason}); "
+                  f"wrote {args.output}", summary)
     if not res.reached:
         goal = (f"--min-distance {args.min_distance:g}" if args.min_distance is not None
                 else f"--eps {args.eps:g}")
@@ -207,13 +189,10 @@ def _single_only(args, *names):
 
 
 def _run_poisson_batch(args):
-    from diskpack_cl.batch import poisson_many
-
     if args.radius is not None or args.min_distance is not None:
         raise ValueError("--radius and --min-distance make one set; they do not combine with "
                          "--count or a batch")
     _single_only(args, "box", "mask", "density")
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
-                         _relax(args), seed=args.seed, init=args.init,
-                         dart_radius=args.dart_radius, **_batch_run(args))
+                         from_namespace(PoissonOptions, args), seed=args.seed, **_batch_run(args))
     return _report_batch(args, batch)

@@ -64,6 +64,7 @@ def _relax_and_write(item, args, points=None, *, extra_summary=None):
     """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
     return the exit status."""
     from diskpack_cl.jobs import relax_item
+    from diskpack_cl.relax import relax_summary
 
     callback, close = _progress(args, "relax")
     try:
@@ -71,19 +72,9 @@ def _relax_and_write(item, args, points=None, *, extra_summary=None):
                          verify=args.verify, profile=args.profile)
     finally:
         close()
-    stages = {k: float(v) for k, v in res.timings.items()}
     summary = {
-        "n": int(len(res.points)),
-        "iterations": int(res.iterations),
-        "rho_start": float(res.rho[0]),
-        "rho_final": float(res.rho[-1]),
-        "eps": args.eps,
-        "seconds": float(res.seconds),
+        **relax_summary(res, args.eps),
         "seconds_per_iteration": float(res.seconds / res.iterations) if res.iterations else None,
-        "stage_seconds": stages,
-        "backend": res.backend,
-        "device": res.device,
-        "stop_reason": res.stop_reason,
         "output": str(args.output),
         # raster estimate error and how often the exact stage widened its set
         "refinement": {k: (v if isinstance(v, (int, list, str)) else float(v))
