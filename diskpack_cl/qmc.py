@@ -14,6 +14,7 @@ from __future__ import annotations
 import inspect
 
 import numpy as np
+import scipy
 from scipy.stats import qmc
 
 from .poisson import count_for_distance, poisson_disk
@@ -29,8 +30,9 @@ PACKED_DIMS = (2, 3)
 #: scipy's engine (Bridson's algorithm), named here once: tests swap ``qmc.PoissonDisk``.
 _Bridson = qmc.PoissonDisk
 
-# scipy 1.15 renamed QMCEngine's `seed` to `rng` (SPEC 7); 1.13 and 1.14 take `seed` only
+# scipy 1.15 renamed QMCEngine's `seed` to `rng` (SPEC 7); scipy 1.13's PoissonDisk takes no bounds
 _RNG_KEYWORD = "rng" if "rng" in inspect.signature(qmc.QMCEngine.__init__).parameters else "seed"
+_BRIDSON_BOUNDS = "l_bounds" in inspect.signature(_Bridson.__init__).parameters
 
 
 class PoissonDisk(qmc.QMCEngine):
@@ -40,7 +42,9 @@ class PoissonDisk(qmc.QMCEngine):
     scipy's at the same radius, more evenly spread), made once per reset
     for the whole box and handed out in a random order; the points reach the
     walls.  In any other dimension (0, 1, 4, ...), and where the box holds
-    fewer than two packed points, scipy's own engine draws them.
+    fewer than two packed points, scipy's own engine draws them.  The 3D
+    packing wants an OpenCL device: the host alone solves every cell and
+    is much slower than scipy's engine.
 
     Parameters
     ----------
@@ -91,6 +95,14 @@ class PoissonDisk(qmc.QMCEngine):
     (True, 0)
     >>> bool(np.array_equal(eng.reset().random(10), first))
     True
+
+    Side by side with scipy's engine, at the same radius and seed:
+
+    >>> from scipy.stats import qmc
+    >>> ours = PoissonDisk(2, radius=0.05, seed=7).fill_space()
+    >>> theirs = qmc.PoissonDisk(2, radius=0.05, seed=7).fill_space()
+    >>> len(ours) > len(theirs), bool(min(pdist(ours).min(), pdist(theirs).min()) >= 0.05)
+    (True, True)
     """
 
     def __init__(self, d, *, radius=0.05, hypersphere="volume", ncandidates=30, optimization=None,
@@ -100,7 +112,7 @@ class PoissonDisk(qmc.QMCEngine):
                        l_bounds=l_bounds, u_bounds=u_bounds, **seeding)
         # scipy's engine before the base class, so that it spawns from a Generator what a
         # scipy engine made from it would (and checks the arguments as scipy does)
-        self._bridson = None if d in PACKED_DIMS else _Bridson(d, **bridson)
+        self._bridson = None if d in PACKED_DIMS else _scipy_engine(d, bridson)
         super().__init__(d=d, optimization=optimization, **seeding)
         # what scipy.integrate.qmc_quad passes to make more engines like this one
         self._init_quad = {"d": d, "radius": radius, "hypersphere": hypersphere,
@@ -117,7 +129,7 @@ class PoissonDisk(qmc.QMCEngine):
         # the disks of radius/2 lie in the box grown by radius/2 on every side
         grown = float(np.prod(self.u_bounds - self.l_bounds + radius))
         if self._bridson is None and count_for_distance(radius, grown, dim=d) < 2:
-            self._bridson = _Bridson(d, **bridson)
+            self._bridson = _scipy_engine(d, bridson)
         self.packed = self._bridson is None
         self._points, self._handed = None, 0
 
@@ -193,8 +205,17 @@ def _seeding(rng, seed):
             raise TypeError("PoissonDisk() got multiple values for argument now known as "
                             "`rng`. Specify one of `rng` or `seed`.")
         return {"seed": seed}
-    # the installed scipy's QMCEngine takes only `seed`, whose int meant a RandomState
+    # an older QMCEngine takes only `seed`: the Generator that `rng` would make
     return {_RNG_KEYWORD: rng if _RNG_KEYWORD == "rng" else np.random.default_rng(rng)}
+
+
+def _scipy_engine(d, kwargs):
+    """scipy's engine with `kwargs`, the bounds only where given (scipy 1.13's takes none)."""
+    kwargs = {k: v for k, v in kwargs.items() if not (k.endswith("_bounds") and v is None)}
+    if not _BRIDSON_BOUNDS and kwargs.keys() & {"l_bounds", "u_bounds"}:
+        raise TypeError(f"scipy {scipy.__version__}'s PoissonDisk, which draws the points in "
+                        f"d = {d} or in a box too small for two packed points, takes no bounds")
+    return _Bridson(d, **kwargs)
 
 
 def _generator(rng):

@@ -216,6 +216,7 @@ PERF_TABLES = {
     "relax": ("bench_relax", "relax.jsonl", "summary", {}),
     "peers-2d": ("bench_peers", "peers.jsonl", "summary", {"dim": 2}),
     "peers-3d": ("bench_peers", "peers_3d.jsonl", "summary", {"dim": 3}),
+    "qmc": ("bench_qmc", "qmc.jsonl", "summary", {}),
     "paper": ("bench_paper", "paper.jsonl", "summary", {}),
     "million": ("bench_million", "million.jsonl", "summary", {}),
     "stipple": ("bench_stipple", "stipple.jsonl", "summary", {}),
