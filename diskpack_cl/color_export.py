@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from .color import linear_to_srgb, srgb_to_linear
-from .drawing import (PLOT_SPEED_MM_S, ink_coverage, inside_page, plot_time, svg_dots, svg_head,
-                      svg_layout, svg_meta, svg_size, xml_attr)
+from .drawing import (PLOT_SPEED_MM_S, check_fit, ink_coverage, inside_page, plot_time, svg_dots,
+                      svg_head, svg_layout, svg_meta, svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
 from .overlap import cap_radii, ink_figures
@@ -103,6 +103,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _radii(result, lay["scale"], dots, dot_mm, radius_scale)
+    check_fit(rad, lay["picture"], pen_mm)
     packing = np.asarray(result.radii) * lay["scale"]
     pm, drawn, moved = inside_page(np.asarray(result.points) * lay["scale"],
                                     cap_radii(rad, packing) if no_overlap else rad,
@@ -175,6 +176,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
         rad = cap_radii(rad, np.asarray(result.radii) * scale)
     if pen_px is not None:   # what the pen draws: at least a touch a pen wide
         rad = np.maximum(rad, 0.5 * pen_px)
+    check_fit(rad, (ow, oh), pen_px, unit="px")
     lin = np.ones((oh, ow, 3))
     absorb = 1.0 - srgb_to_linear(result.colors)
     for q in range(len(result.names)):

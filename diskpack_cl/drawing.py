@@ -20,7 +20,7 @@ from diskpack_cl.options import OptionConflict
 
 __all__ = [
     "DEFAULT_MARGIN_MM", "EDGE_MM", "MM_PER_INCH", "PAPERS", "PEN_LIFT_S", "PLOT_SPEED_MM_S",
-    "TOUCH_MM", "check_size", "ink_coverage", "inside_page", "mm_per_px", "paper_size",
+    "LONG_PLOT_S", "TOUCH_MM", "check_fit", "check_size", "long_plot", "ink_coverage", "inside_page", "mm_per_px", "paper_size",
     "pen_rings", "plot_time", "svg_dots", "svg_head", "svg_layout", "svg_meta", "svg_size",
     "xml_attr", "xml_text",
 ]
@@ -440,3 +440,66 @@ def ink_coverage(c, rad, ow, oh, aa, progress=None):
             if progress is not None:
                 progress(len(i))
     return np.minimum(ink, 1.0).reshape(oh, ow)
+
+
+def check_fit(rad, picture, pen=None, *, unit="mm"):
+    """Refuse drawn dots, or a pen, that do not fit the picture: before any ink is laid.
+
+    A dot wider than the picture's smaller side, or a pen at least that
+    wide, would put its ink off the picture (and off the page); the message
+    gives the figures and the options that set them.
+
+    Parameters
+    ----------
+    rad : array_like
+        Drawn dot radii, in `unit`.
+    picture : (float, float)
+        The picture's width and height, in `unit`.
+    pen : float, optional
+        The pen's width, in `unit`.
+
+    Raises
+    ------
+    ValueError
+        A dot or the pen does not fit.
+
+    Examples
+    --------
+    >>> check_fit(np.array([1.0, 2.0]), (40.0, 30.0), 0.5)
+    >>> check_fit(np.array([20.0]), (40.0, 30.0))
+    Traceback (most recent call last):
+    ...
+    ValueError: dots 40 mm wide do not fit the 40 x 30 mm picture: give smaller dots (--dot-mm, --radius-scale) or a larger picture
+    """
+    w, h = picture
+    side = min(w, h)
+    if pen is not None and pen >= side:
+        raise ValueError(f"the pen ({pen:.4g} {unit}) is as wide as the {w:.4g} x {h:.4g} {unit} "
+                         f"picture: its ink would leave the picture (--pen-mm)")
+    widest = 2 * float(np.max(rad, initial=0.0))
+    if widest > side:
+        raise ValueError(f"dots {widest:.4g} {unit} wide do not fit the {w:.4g} x {h:.4g} {unit} "
+                         f"picture: give smaller dots (--dot-mm, --radius-scale) or a larger "
+                         f"picture")
+
+
+#: A plan whose pen lifts alone take longer than this (seconds) is warned of before the work.
+LONG_PLOT_S = 10 * 3600.0
+
+
+def long_plot(n, *, pen_lift_s=PEN_LIFT_S, limit_s=LONG_PLOT_S):
+    """The warning for `n` dots whose pen lifts alone take longer than `limit_s`, else None.
+
+    Examples
+    --------
+    >>> long_plot(1000) is None
+    True
+    >>> long_plot(1_000_000)
+    '1000000 dots take at least 83 h to plot (0.3 s to lower and raise the pen per dot)'
+    """
+    least = n * pen_lift_s
+    if least <= limit_s:
+        return None
+    return (f"{n} dots take at least {least / 3600:.0f} h to plot ({pen_lift_s:g} s to lower "
+            f"and raise the pen per dot)")
+

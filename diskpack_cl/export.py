@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S,
-                                  check_size, ink_coverage, inside_page, mm_per_px, paper_size,
+                                  check_fit, check_size, ink_coverage, inside_page, mm_per_px, paper_size,
                                   plot_time, svg_dots, svg_head, svg_layout, svg_meta, svg_size)
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.options import OptionConflict, check_fields, option
@@ -124,7 +124,8 @@ def preview_scale(width, height, scale=None):
 def tone_dot_count(darkness, scale, dot_mm):
     """The number of dots ``dot_mm`` wide whose ink equals the image's on paper.
 
-    ``darkness`` is per pixel in [0, 1]; ``scale`` mm per pixel.
+    ``darkness`` is per pixel in [0, 1]; ``scale`` mm per pixel. Fewer
+    than 2 dots is a ``ValueError`` (the dots are too large for the ink).
 
     Examples
     --------
@@ -132,7 +133,11 @@ def tone_dot_count(darkness, scale, dot_mm):
     1592
     """
     ink_mm2 = float(np.mean(darkness)) * np.size(darkness) * scale * scale
-    return max(2, int(round(ink_mm2 / (0.25 * np.pi * dot_mm * dot_mm))))
+    count = ink_mm2 / (0.25 * np.pi * dot_mm * dot_mm)
+    if count < 2:
+        raise ValueError(f"the image's ink holds {count:.2g} dots {dot_mm:g} mm wide, fewer than "
+                         f"2: give a smaller --dot-mm or -n N")
+    return int(round(count))
 
 
 def _pen_names(text):
@@ -323,6 +328,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
+    check_fit(rad, lay["picture"], pen_mm)
     pm, drawn, moved = inside_page(p * lay["scale"],
                                     cap_radii(rad, r * lay["scale"]) if no_overlap else rad,
                                     *lay["picture"])
@@ -445,6 +451,7 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         if not pen_px > 0:
             raise ValueError(f"pen_px must be > 0, got {pen_px}")
         rad = np.maximum(rad, 0.5 * pen_px)
+    check_fit(rad, (ow, oh), pen_px, unit="px")
     ink = ink_coverage(p * scale, rad, ow, oh, aa, progress)
     val = ink if invert else 1.0 - ink
     img = Image.fromarray(np.round(val * 255).astype(np.uint8))

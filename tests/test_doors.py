@@ -514,6 +514,38 @@ def test_help_paragraphs_are_wrapped(monkeypatch):
         assert not long, (name, long[0])
 
 
+# ---------------------------------------------------------------------- sizes bounded
+
+@pytest.mark.parametrize("flags, words", [
+    (["--pen-mm", "1000"], ["pen", "1000 mm"]),
+    (["--pen-mm", "300", "--width-mm", "200"], ["pen", "300 mm"]),
+    (["--dot-mm", "500"], ["dots 500 mm wide"]),
+    (["--dots", "packing", "--radius-scale", "1e6"], ["do not fit"]),
+    (["--dots", "packing", "--radius-scale", "1e6"], ["do not fit", "px"]),
+])
+def test_drawn_sizes_that_leave_the_picture_are_refused(tmp_path, capsys, monkeypatch, flags,
+                                                        words):
+    monkeypatch.chdir(tmp_path)
+    write_stipple("dots.npz", _stippling())
+    out = "b.png" if "px" in words else "a.svg"
+    rc, _, err = _run(["export", "dots.npz", "-o", out, *flags], capsys)
+    assert rc == 1 and all(word in err for word in words), err
+    assert sorted(os.listdir(tmp_path)) == ["dots.npz"]
+
+
+def test_tone_dots_too_large_for_the_ink_are_refused_before_the_work(tmp_path, capsys,
+                                                                      no_work):
+    rc, _, err = _run(["stipple", "sample", "-n", "tone", "--dot-mm", "500", "-o",
+                       str(tmp_path / "a.svg")], capsys)
+    assert rc == 1 and "fewer than 2" in err, err
+
+
+def test_a_plot_of_many_hours_is_announced_before_the_work(tmp_path, capsys, no_work):
+    with pytest.raises(AssertionError, match="the work started"):
+        cli.main(["stipple", "sample", "-n", "1000000", "-o", str(tmp_path / "a.svg")])
+    assert "warning: 1000000 dots take at least 83 h to plot" in capsys.readouterr().err
+
+
 # ------------------------------------------------------------------------ tests that end
 
 def test_every_test_has_a_time_limit(request):

@@ -166,11 +166,21 @@ def _run_stipple(args):
     _refuse_mixed(args, options, tone, write, separation)
     if isinstance(args.n, int):   # with --density each image has its own n, checked there
         color.check_pen_dots(args.n)
+        _warn_long_plot(args)
     if _batch_mode(args, args.images, args.output):
         if args.n == "tone":
             raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
         return _run_stipple_batch(args, options, tone, write, separation)
     return _run_stipple_one(args, options, tone, write, separation)
+
+
+def _warn_long_plot(args):
+    """Before the work: say so when the SVG of -n dots takes more than a working day to plot."""
+    from diskpack_cl.drawing import long_plot
+
+    slow = long_plot(args.n)
+    if slow and not args.quiet and any(str(o).lower().endswith(".svg") for o in args.output):
+        print(f"{PROG}: warning: {slow}", file=sys.stderr)
 
 
 def _run_stipple_one(args, options, tone, write, separation):
