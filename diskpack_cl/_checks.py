@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 
 
@@ -22,6 +24,75 @@ def check_count(n, minimum=1, name="n"):
     if n < minimum:
         raise ValueError(f"{name} must be at least {minimum}, got {n}")
     return int(n)
+
+
+def check_point_count(n):
+    """A count of points given as an option (``-n``): an integer of at least 2.
+
+    Examples
+    --------
+    >>> check_point_count(1)
+    Traceback (most recent call last):
+    ...
+    ValueError: need at least 2 points, got 1
+    """
+    if check_count(n) < 2:
+        raise ValueError(f"need at least 2 points, got {n}")
+
+
+def count_text(text, *words):
+    """The command line's count of points: an integer of at least 2, or one of `words`.
+
+    Raises ``argparse.ArgumentTypeError``, which argparse reports with the flag.
+
+    Examples
+    --------
+    >>> count_text("12"), count_text("tone", "tone")
+    (12, 'tone')
+    """
+    if text in words:
+        return text
+    value = _integer_text(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"need at least 2 points, got {value}")
+    return value
+
+
+def check_seed(seed):
+    """A seed as an option: an integer seed must be at least 0 (a Generator passes).
+
+    Examples
+    --------
+    >>> check_seed(-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: seed must be at least 0, got -1
+    """
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed < 0:
+        raise ValueError(f"seed must be at least 0, got {seed}")
+
+
+def seed_text(text):
+    """The command line's seed: an integer >= 0 (``argparse.ArgumentTypeError`` else).
+
+    Examples
+    --------
+    >>> seed_text("7")
+    7
+    """
+    value = _integer_text(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be at least 0, got {text}")
+    return value
+
+
+def _integer_text(text):
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
 
 
 def check_points(points, name="points"):

@@ -78,7 +78,7 @@ def flag_name(name):
 
 def option(default, help, *, unit=None, lo=None, hi=None, lo_open=False, hi_open=False,
            integer=False, choices=None, check=None, metavar=None, cli=True, group=None,
-           cli_choices=None, cli_type=None):
+           cli_choices=None, cli_type=None, flag=None):
     """A dataclass field with what the checks, ``--help`` and the docs need to know.
 
     Parameters
@@ -106,6 +106,8 @@ def option(default, help, *, unit=None, lo=None, hi=None, lo_open=False, hi_open
     cli_choices, cli_type : optional
         What the command line takes where the library takes more (a
         schedule name, not a list of phases; a seed, not a generator).
+    flag : str, optional
+        The command line's flag where it is not :func:`flag_name`'s (``-n``).
 
     Examples
     --------
@@ -119,7 +121,7 @@ def option(default, help, *, unit=None, lo=None, hi=None, lo_open=False, hi_open
     """
     meta = dict(help=help, unit=unit, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open,
                 integer=integer, choices=choices, check=check, metavar=metavar, cli=cli,
-                group=group, cli_choices=cli_choices, cli_type=cli_type)
+                group=group, cli_choices=cli_choices, cli_type=cli_type, flag=flag)
     return dataclasses.field(default=default, metadata=meta)
 
 
@@ -246,8 +248,10 @@ def add_arguments(parser, cls, *, groups=None, skip=()):
     """Add an argparse option for every command-line field of ``cls`` not in ``skip``.
 
     ``groups`` maps a field's ``group`` title to an argument group (created
-    on ``parser`` when missing). A field already on the parser (``invert``
-    of two dataclasses) is added once. Every default is the field's.
+    on ``parser`` when missing; a mutually exclusive group the caller made
+    takes fields that exclude each other, ``-n`` and ``--density``). A field
+    already on the parser (``invert`` of two dataclasses) is added once.
+    Every default is the field's.
 
     Examples
     --------
@@ -266,14 +270,15 @@ def add_arguments(parser, cls, *, groups=None, skip=()):
         title = m["group"]
         target = parser if title is None else groups.setdefault(
             title, parser.add_argument_group(title))
+        flag = m["flag"] or flag_name(f.name)
         if isinstance(f.default, bool):
-            target.add_argument(flag_name(f.name), action="store_true", help=m["help"])
+            target.add_argument(flag, dest=f.name, action="store_true", help=m["help"])
             continue
-        kw = dict(default=f.default, help=m["help"], metavar=m["metavar"], type=parse)
+        kw = dict(dest=f.name, default=f.default, help=m["help"], metavar=m["metavar"], type=parse)
         if choices is not None:
             kw.update(choices=choices)
             kw.pop("metavar")
-        target.add_argument(flag_name(f.name), **kw)
+        target.add_argument(flag, **kw)
     return groups
 
 

@@ -27,12 +27,13 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from ._checks import check_point_count, check_seed, count_text, seed_text
 from .domain import Domain, box_sizes
 from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
 from .options import check_fields, option
 from .relax import RelaxOptions, relax_poisson
 
-__all__ = ["PoissonDiskResult", "PoissonOptions", "as_box", "count_for_distance",
+__all__ = ["PoissonDiskResult", "PoissonOptions", "PoissonSetOptions", "as_box", "count_for_distance",
            "poisson_disk", "poisson_job", "poisson_summary", "start_points"]
 
 #: Grid cells per side on which a callable mask or density is sampled.
@@ -97,6 +98,49 @@ class PoissonOptions(RelaxOptions):
 
 
 _OPTION_NAMES = {f.name for f in fields(PoissonOptions)}
+
+#: Title of the fields that say how large a set is (the command line takes one of them).
+SIZE = "size"
+
+
+@dataclass(frozen=True)
+class PoissonSetOptions:
+    """The set ``diskpack poisson`` makes (:func:`poisson_job`, :func:`poisson_disk`): its
+    size (``n``, ``min_distance``, or the Poisson disk ``radius`` to search the largest n
+    for, :func:`diskpack_cl.max_points_for_radius`), its seed and where its points go (the
+    ``mask`` and ``density`` images).
+
+    Examples
+    --------
+    >>> PoissonSetOptions(min_distance=0.1).min_distance
+    0.1
+    >>> PoissonSetOptions(radius=0.3)
+    Traceback (most recent call last):
+    ...
+    ValueError: radius must be in (0, 0.25), got 0.3
+    """
+
+    n: int = option(None, "number of points (default 1024; with --init FILE: the file's count)",
+                    check=check_point_count, cli_type=count_text, metavar="N", flag="-n",
+                    group=SIZE)
+    min_distance: float = option(None, "instead of -n: the smallest distance between points "
+                                 "(scipy's radius; twice the paper's radius R): as many points "
+                                 "as D allows at rho <= --rho-max, relaxed once until they "
+                                 "reach it", lo=0, lo_open=True, metavar="D", group=SIZE)
+    radius: float = option(None, "instead of -n: find the largest n whose relaxation reaches "
+                           "Poisson disk radius R (half the minimum distance, 0 < R < 0.25; the "
+                           "paper's Fig. 7) and write that set; --eps is not used, --max-iter "
+                           "caps each trial (default 300)", lo=0, hi=0.25, lo_open=True,
+                           hi_open=True, metavar="R", group=SIZE)
+    seed: int = option(None, "random seed (default: a fresh one, printed in the --json summary)",
+                       check=check_seed, cli_type=seed_text)
+    mask: str = option(None, "points only where the image is light (> 0.5 gray; the image spans "
+                       "--box, default: the image's aspect, longer side 1)", metavar="IMAGE")
+    density: str = option(None, "variable spacing: more points where the image is dark (unequal "
+                          "disk packing; needs -n)", metavar="IMAGE")
+
+    def __post_init__(self):
+        check_fields(self)
 
 
 @dataclass

@@ -14,13 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import check_count
+from ._checks import check_count, check_point_count, check_seed, count_text, seed_text
 from .options import OptionConflict, check_fields, option
 
 GAMMA_DEFAULT = 3.0   # exponent of the gray radius mapping (the paper's)
 
 __all__ = ["SCHEDULES", "SCHEDULE_NAMES", "SCHEDULE_OPTIONS", "SPACING_BANDS", "default_band",
-           "make_schedule", "StippleOptions", "StipplePlan"]
+           "make_schedule", "StippleCount", "StippleOptions", "StipplePlan"]
 
 #: Named schedules: lists of (kind, iterations) or ("mix", iterations, blend),
 #: kind "pack", "lloyd" or "mix".
@@ -242,22 +242,51 @@ def _check_schedule(schedule):
         make_schedule(schedule)  # an explicit list of phases: checked now
 
 
-def _check_seed(seed):
-    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed < 0:
-        raise ValueError(f"seed must be at least 0, got {seed}")
+def _check_dots(n):
+    if n != "tone":
+        check_point_count(n)
 
 
-def _seed_text(text):
-    """The command line's seed: an integer >= 0."""
-    import argparse
+def _dots_text(text):
+    """The command line's dot count: an integer >= 2 or ``tone``."""
+    return count_text(text, "tone")
 
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be at least 0, got {text}")
-    return value
+
+#: Title of the fields that say how many dots (the command line takes one of them).
+COUNT = "count"
+
+
+@dataclass(frozen=True)
+class StippleCount:
+    """How many dots a stippling has (:func:`diskpack_cl.jobs.plan_stipple`,
+    :func:`diskpack_cl.stipple_many`, ``diskpack stipple``): ``n``, or a density
+    per megapixel of each image or per cm^2 of the print.
+
+    Examples
+    --------
+    >>> StippleCount(n="tone").n
+    'tone'
+    >>> StippleCount(n=1)
+    Traceback (most recent call last):
+    ...
+    ValueError: need at least 2 points, got 1
+    """
+
+    n: object = option(None, "number of dots (at least 2), or 'tone' with --dot-mm or --pen-mm: "
+                       "as many dots as give the image's ink on the paper", check=_check_dots,
+                       cli_type=_dots_text, metavar="N", flag="-n", group=COUNT)
+    density: float = option(None, "instead of -n: D dots per megapixel of each image", lo=0,
+                            lo_open=True, metavar="D", group=COUNT)
+    dots_per_cm2: float = option(None, "instead of -n: D dots per cm^2 of the print (needs "
+                                 "--width-mm, --height-mm or --dpi)", lo=0, lo_open=True,
+                                 metavar="D", group=COUNT)
+
+    def __post_init__(self):
+        check_fields(self)
+
+    def kwargs(self):
+        """The keyword arguments of :func:`diskpack_cl.jobs.plan_stipple`."""
+        return {"n": self.n, "density": self.density, "dots_per_cm2": self.dots_per_cm2}
 
 
 @dataclass(frozen=True)
@@ -353,7 +382,7 @@ class StippleOptions:
         group=_STIPPLING, metavar="R")
     seed: object = option(
         0, "seed of the error-diffusion start (default 0; same seed, same result)",
-        check=_check_seed, cli_type=_seed_text, group=_STIPPLING, metavar="SEED")
+        check=check_seed, cli_type=seed_text, group=_STIPPLING, metavar="SEED")
     invert: bool = option(
         False, "stipple the light parts (light dots on a dark ground)", group=_STIPPLING)
     k0: float = option(1e-6, "initial scale factor k (the paper: 1e-6, so that no disks "

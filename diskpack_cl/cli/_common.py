@@ -40,26 +40,6 @@ def _checked(convert, test, want):
 _positive_int = _checked(int, lambda v: v >= 1, "at least 1")
 
 
-_nonnegative_int = _checked(int, lambda v: v >= 0, "at least 0")
-
-
-_unit_open = _checked(float, lambda v: 0.0 < v < 1.0, "in (0, 1)")
-
-
-_positive_float = _checked(float, lambda v: 0.0 < v < float("inf"), "a finite number > 0")
-
-
-def _point_count(text):
-    value = _positive_int(text)
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"need at least 2 points, got {value}")
-    return value
-
-
-def _dot_count(text):
-    return text if text == "tone" else _point_count(text)
-
-
 def _device_options(p):
     p.add_argument("--device", metavar="D", default=None,
                    help="OpenCL device: 'P' or 'P:D' indices (as in PYOPENCL_CTX) or a name "

@@ -10,12 +10,11 @@ from diskpack_cl.image import load_gray
 from diskpack_cl.io import check_not_inputs, check_points_path, read_points, write_points
 from diskpack_cl.jobs import json_default, plan_relax
 from diskpack_cl.options import add_arguments, from_namespace
-from diskpack_cl.poisson import STARTS, PoissonOptions, poisson_job
+from diskpack_cl.poisson import SIZE, STARTS, PoissonOptions, PoissonSetOptions, poisson_job
 from diskpack_cl.relax import max_points_for_radius
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import (PROG, _bar, _checked, _image_path, _nonnegative_int,
-                      _output_options, _point_count, _positive_float, _positive_int)
+from ._common import PROG, _bar, _image_path, _output_options, _positive_int
 from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 
 
@@ -26,27 +25,8 @@ def _add_poisson(subparsers):
                     "torus (or in a --box, or in 3D with --dim 3) and relax it by disk packing "
                     "until rho >= EPS (paper Algorithm 1). Exit status 3 when rho stops short "
                     "of EPS (the set is written; --allow-unreached: 0).")
-    count = p.add_mutually_exclusive_group()
-    count.add_argument("-n", type=_point_count, default=None, metavar="N",
-                       help="number of points (default 1024; with --init FILE: the file's count)")
-    count.add_argument("--min-distance", type=_positive_float, default=None, metavar="D",
-                       help="instead of -n: the smallest distance between points (scipy's "
-                            "radius; twice the paper's radius R): as many points as D allows at "
-                            "rho <= --rho-max, relaxed once until they reach it")
-    count.add_argument("--radius", type=_radius, default=None, metavar="R",
-                       help="instead of -n: find the largest n whose relaxation reaches Poisson "
-                            "disk radius R (half the minimum distance, 0 < R < 0.25; the paper's "
-                            "Fig. 7) and write that set; --eps is not used, --max-iter caps each "
-                            "trial (default 300)")
+    add_arguments(p, PoissonSetOptions, groups={SIZE: p.add_mutually_exclusive_group()})
     add_arguments(p, PoissonOptions)
-    p.add_argument("--seed", type=_nonnegative_int, default=None,
-                   help="random seed (default: a fresh one, printed in the --json summary)")
-    p.add_argument("--mask", default=None, metavar="IMAGE",
-                   help="points only where the image is light (> 0.5 gray; the image spans "
-                        "--box, default: the image's aspect, longer side 1)")
-    p.add_argument("--density", default=None, metavar="IMAGE",
-                   help="variable spacing: more points where the image is dark (unequal disk "
-                        "packing; needs -n)")
     _output_options(p)
     _relax_options(p)
     g = _batch_options(p)
@@ -55,9 +35,6 @@ def _add_poisson(subparsers):
                         "(numpy SeedSequence.spawn; each set's seed is in the manifest and "
                         "recreates it alone), e.g. -o sets/{i:04d}.npz")
     p.set_defaults(run=_run_poisson)
-
-
-_radius = _checked(float, lambda v: 0.0 < v < 0.25, "in (0, 0.25)")
 
 
 def _run_poisson_radius(args):

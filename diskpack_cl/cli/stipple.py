@@ -7,7 +7,7 @@ import sys
 import time
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import PROG, _UsageError, _bar, _device_options, _dot_count, _image_path, _positive_float
+from ._common import PROG, _UsageError, _bar, _device_options, _image_path
 from ._drawing import _drawing_options, _write_and_report
 
 
@@ -43,7 +43,7 @@ def _add_stipple(subparsers):
     from diskpack_cl.color import ColorOptions
     from diskpack_cl.image import ToneOptions
     from diskpack_cl.options import add_arguments
-    from diskpack_cl.schedule import _STIPPLING, StippleOptions
+    from diskpack_cl.schedule import _STIPPLING, COUNT, StippleCount, StippleOptions
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -69,15 +69,7 @@ def _add_stipple(subparsers):
                         "luminance), or the word 'sample' for the bundled 512x512 sample "
                         "photograph (use ./sample for a file of that name); several files or "
                         "folders make a batch")
-    count = p.add_mutually_exclusive_group(required=True)
-    count.add_argument("-n", type=_dot_count, default=None, metavar="N",
-                       help="number of dots (at least 2), or 'tone' with --dot-mm or --pen-mm: "
-                            "as many dots as give the image's ink on the paper")
-    count.add_argument("--density", type=_positive_float, default=None, metavar="D",
-                       help="instead of -n: D dots per megapixel of each image")
-    count.add_argument("--dots-per-cm2", type=_positive_float, default=None, metavar="D",
-                       help="instead of -n: D dots per cm^2 of the print (needs --width-mm, "
-                            "--height-mm or --dpi)")
+    add_arguments(p, StippleCount, groups={COUNT: p.add_mutually_exclusive_group(required=True)})
     p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
                    help="output file; repeat for several: .svg (pen plotters, Inkscape), .png "
                         "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
@@ -144,6 +136,14 @@ def _stipple_objects(args):
             from_namespace(ColorOptions, args))
 
 
+def _count(args):
+    """The dot count's keyword arguments (:class:`~diskpack_cl.schedule.StippleCount`)."""
+    from diskpack_cl.options import from_namespace
+    from diskpack_cl.schedule import StippleCount
+
+    return from_namespace(StippleCount, args).kwargs()
+
+
 def _refuse_mixed(args, options, tone, write, separation):
     """Usage errors of options that do not go together: one pen's with several, a pen
     order without pens, -n tone without a dot size."""
@@ -190,8 +190,7 @@ def _run_stipple_one(args, options, tone, write, separation):
 
     t0 = time.perf_counter()
     (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
-                           options, n=args.n, density=args.density,
-                           dots_per_cm2=args.dots_per_cm2, allow_large=args.allow_large,
+                           options, **_count(args), allow_large=args.allow_large,
                            write=write, tone=tone, color=separation, make_folders=False)
     callback, close = _stipple_progress(args)
     try:
@@ -229,8 +228,7 @@ def _run_stipple_batch(args, options, tone, write, color=None):
     from diskpack_cl.batch import stipple_many
 
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
-                         options, n=args.n, density=args.density,
-                         dots_per_cm2=args.dots_per_cm2, recursive=args.recursive,
+                         options, **_count(args), recursive=args.recursive,
                          allow_large=args.allow_large, write=write, tone=tone, color=color,
                          **_batch_run(args))
     return _report_batch(args, batch)
