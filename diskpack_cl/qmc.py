@@ -117,13 +117,7 @@ class PoissonDisk(qmc.QMCEngine):
         # what scipy.integrate.qmc_quad passes to make more engines like this one
         self._init_quad = {"d": d, "radius": radius, "hypersphere": hypersphere,
                            "ncandidates": ncandidates, "optimization": optimization}
-        if hypersphere not in HYPERSPHERES:
-            raise ValueError(f"{hypersphere!r} is not a valid hypersphere sampling method. "
-                             f"It must be one of {set(HYPERSPHERES)!r}")
-        if not (np.issubdtype(type(ncandidates), np.integer) and ncandidates >= 0):
-            raise ValueError(f"ncandidates must be a non-negative integer, got {ncandidates!r}")
-        if not (np.isfinite(radius) and radius > 0):
-            raise ValueError(f"radius must be positive and finite, got {radius!r}")
+        _check(radius, hypersphere, ncandidates)
         self.radius, self.hypersphere, self.ncandidates = radius, hypersphere, ncandidates
         self.l_bounds, self.u_bounds = _bounds(l_bounds, u_bounds, int(d))
         # the disks of radius/2 lie in the box grown by radius/2 on every side
@@ -193,9 +187,34 @@ class PoissonDisk(qmc.QMCEngine):
             side = float(span.max())
             res = poisson_disk(min_distance=self.radius / side, box=tuple(span / side),
                                walls="points", dim=self.d, seed=rng)
-            points = self.l_bounds + side * res.points
+            points = self.l_bounds + side * _apart(res.points, res.min_distance, self.radius / side)
             self._points = points[rng.permutation(len(points))]
         return self._points
+
+
+def _check(radius, hypersphere, ncandidates):
+    """scipy's message for a bad `hypersphere`; the other two fail only later in scipy."""
+    if hypersphere not in HYPERSPHERES:
+        raise ValueError(f"{hypersphere!r} is not a valid hypersphere sampling method. "
+                         f"It must be one of {set(HYPERSPHERES)!r}")
+    if not (np.issubdtype(type(ncandidates), np.integer) and ncandidates >= 0):
+        raise ValueError(f"ncandidates must be a non-negative integer, got {ncandidates!r}")
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"radius must be positive and finite, got {radius!r}")
+
+
+def _apart(points, d_min, distance):
+    """`points` less one of each pair closer than `distance` (a relaxation that stopped
+    short of the distance; none when it reached it)."""
+    if d_min >= distance:
+        return points
+    from scipy.spatial import cKDTree
+
+    keep = np.ones(len(points), dtype=bool)
+    for i, j in cKDTree(points).query_pairs(distance, output_type="ndarray"):
+        if keep[i]:
+            keep[j] = False
+    return points[keep]
 
 
 def _seeding(rng, seed):

@@ -1,5 +1,7 @@
 """PoissonDisk as scipy.stats.qmc's engine: scipy's own tests, and the radius across draws."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import scipy
@@ -113,3 +115,15 @@ def test_other_dimensions_are_scipys():
 def test_bad_arguments_raise_at_construction(kwargs, error, match):
     with pytest.raises(error, match=match):
         PoissonDisk(**kwargs)
+
+
+def test_a_packing_that_stops_short_still_keeps_the_radius(monkeypatch):
+    import diskpack_cl.qmc
+
+    def stopped_short(*, box, **kwargs):   # uniform points: no relaxation at all
+        pts = np.random.default_rng(0).random((400, 2)) * box
+        return SimpleNamespace(points=pts, min_distance=pdist(pts).min())
+
+    monkeypatch.setattr(diskpack_cl.qmc, "poisson_disk", stopped_short)
+    pts = PoissonDisk(2, radius=0.05, rng=0).fill_space()
+    assert len(pts) > 50 and pdist(pts).min() >= 0.05
