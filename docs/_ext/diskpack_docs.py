@@ -89,7 +89,7 @@ def option_rows(cls):
     rows = []
     for name, d in describe(cls).items():
         meta = fields[name].metadata
-        flag = flag_name(name) if meta.get("cli") else "(library only)"
+        flag = (meta.get("flag") or flag_name(name)) if meta.get("cli") else "(library only)"
         allowed = d["range"] or (" | ".join(map(str, d["choices"])) if d["choices"] else "")
         rows.append((f"`{name}`", f"`{flag}`" if meta.get("cli") else flag,
                      _shown(d["default"]), allowed, d["unit"] or "", d["help"]))
