@@ -466,6 +466,12 @@ def test_usage_errors_are_one_line_without_the_usage(tmp_path, capsys, monkeypat
     assert "did you mean --pens" not in err and "one of --pens," not in err
 
 
+def test_an_option_of_another_command_gets_no_wrong_neighbour(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = _run(["stipple", "sample", "-n", "200", "--max-iter", "3", "-o", "a.svg"], capsys)
+    assert rc == 2 and "did you mean" not in err, err
+
+
 def test_an_unknown_device_in_the_environment_is_an_error(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("DISKPACK_DEVICE", "nosuch")
     rc, _, err = _run(["poisson", "-n", "64", "-o", str(tmp_path / "a.npz"), "-q"], capsys)

@@ -135,9 +135,10 @@ def _did_you_mean(parser, message):
         others = [k for k in known if k != word]
         stem = word.split("-")[2] + "-" if word.startswith("--") and word.count("-") > 2 else None
         family = [k for k in others if stem and k.startswith("--" + stem)]
-        # a near miss (--pen-mn) is a typo; a farther one (--pen-width) lists the family
+        # a near miss (--pen-mn) is a typo; a farther one (--pen-width) lists the family;
+        # a loose match (--max-iter: --clean-white at 0.6) names a wrong neighbour
         close += (difflib.get_close_matches(word, others, n=1, cutoff=0.8) or family
-                  or difflib.get_close_matches(word, others, n=1, cutoff=0.6))
+                  or difflib.get_close_matches(word, others, n=1, cutoff=0.75))
     if len(close) > 1:
         return f"; did you mean one of {', '.join(close)}?"
     return f"; did you mean {close[0]}?" if close else ""
