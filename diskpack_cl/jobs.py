@@ -187,7 +187,7 @@ def render_template(template, *, input=None, n=None, seed=None, i=0):
     """
     p = Path(input) if input is not None else None
     values = {"stem": p.stem if p else None, "name": p.name if p else None,
-              "parent": (p.resolve().parent.name if p else None), "n": n, "seed": seed, "i": i}
+              "parent": (_parent_name(p) if p else None), "n": n, "seed": seed, "i": i}
     fields = {}
     for _, name, _, _ in string.Formatter().parse(template):
         if name is None:
@@ -259,6 +259,13 @@ def _item_inputs(item):
     return [item.input] + ([init] if init not in (None, "dart", "random") else [])
 
 
+def _parent_name(path):
+    """The name of the folder `path` lies in, symlinks resolved; a symlink loop (which
+    ``Path.resolve`` refuses with a RuntimeError) is resolved as far as it goes, and the
+    item fails later on reading it, with the batch going on."""
+    return Path(os.path.realpath(path)).parent.name
+
+
 def _telling_apart(a, b):
     """The template fields that differ between two items' inputs, e.g. ``{name} or {i}``.
 
@@ -273,7 +280,7 @@ def _telling_apart(a, b):
         pa, pb = Path(a.input), Path(b.input)
         if pa.name != pb.name:
             fields.append("{name}")
-        if pa.resolve().parent.name != pb.resolve().parent.name:
+        if _parent_name(pa) != _parent_name(pb):
             fields.append("{parent}")
     return " or ".join(fields + ["{i}"])
 

@@ -449,6 +449,16 @@ def test_every_name_that_can_be_written_reads_back(tmp_path, names, layer):
     assert read_stipple(mono).points.shape == (16, 2)
 
 
+@pytest.mark.parametrize("argv", [["relax", "loop.npz", "-o", "r.npz"],
+                                  ["stipple", "loop.png", "-n", "100", "-o", "s.svg"],
+                                  ["export", "loop.npz", "-o", "e.svg"]])
+def test_a_symlink_loop_as_input_is_one_line(tmp_path, capsys, monkeypatch, argv):
+    monkeypatch.chdir(tmp_path)
+    os.symlink(argv[1], tmp_path / argv[1])
+    rc, _, err = _run(argv, capsys)
+    assert rc == 1 and len(err.strip().splitlines()) == 1 and argv[1] in err, err
+
+
 # ---------------------------------------------------------------------------- messages
 
 @pytest.mark.parametrize("argv, words", [
