@@ -5,33 +5,45 @@ cell's maximal inscribed circle; numpy/scipy refine every circle exactly in
 float64, so returned points and radii are certified.
 """
 
+import importlib
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
-from .domain import Domain
-from .geometry import CertificateError, certify_disks, exact_mic
-from .measures import normalized_radius
-from .relax import RadiusResult, RelaxOptions, RelaxResult, max_points_for_radius, relax_poisson
-from .poisson import PoissonDiskResult, poisson_disk
-from .qmc import PoissonDisk
-from .sampling import dart_throwing, random_points
-from ._device import NoOpenCLError, describe, get_context, list_devices
-from .dithering import error_diffusion
-from .schedule import StippleOptions
-from .stipple import StippleResult, stipple
-from .export import WriteOptions, read_stipple, write_stipple
-from .image import ToneOptions, load_gray, sample_image_path
-from .multipen import ColorStippleResult, stipple_colors
+#: The public names of each module.  The package loads a module when one of its names is
+#: first asked for (PEP 562): ``diskpack poisson`` then never loads the stippling stack
+#: or scipy.stats (PoissonDisk's base class), which take seconds to import.
+_PUBLIC = {
+    "domain": ["Domain"],
+    "geometry": ["CertificateError", "certify_disks", "exact_mic"],
+    "measures": ["normalized_radius"],
+    "_device": ["NoOpenCLError", "describe", "get_context", "list_devices"],
+    "relax": ["RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult",
+              "max_points_for_radius"],
+    "sampling": ["dart_throwing", "random_points"],
+    "poisson": ["PoissonOptions", "PoissonDiskResult", "poisson_disk"],
+    "qmc": ["PoissonDisk"],
+    "schedule": ["StippleOptions"],
+    "stipple": ["StippleResult", "stipple"],
+    "dithering": ["error_diffusion"],
+    "export": ["WriteOptions", "read_stipple", "write_stipple"],
+    "image": ["ToneOptions", "load_gray", "sample_image_path"],
+    "multipen": ["ColorStippleResult", "stipple_colors"],
+}
+_HOMES = {name: module for module, names in _PUBLIC.items() for name in names}
+__all__ = list(_HOMES)
 
-__all__ = [
-    "Domain", "CertificateError", "certify_disks", "exact_mic", "normalized_radius",
-    "NoOpenCLError", "describe", "get_context", "list_devices",
-    "RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult", "max_points_for_radius", "dart_throwing", "random_points",
-    "PoissonDisk", "PoissonDiskResult", "poisson_disk",
-    "StippleOptions", "StippleResult", "error_diffusion", "stipple", "read_stipple",
-    "write_stipple", "WriteOptions", "ToneOptions", "load_gray", "sample_image_path",
-    "ColorStippleResult", "stipple_colors",
-]
+
+def __getattr__(name):
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    globals()[name] = value   # loaded once
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
+
 
 try:  # the installed distribution's version (pyproject.toml), read once
     __version__ = _version("diskpack_cl")

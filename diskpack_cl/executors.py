@@ -26,7 +26,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from .io import atomic_write, atomic_writes
-from .jobs import json_default, run_job
+from .io import json_default
+from .jobs import run_job
 
 __all__ = [
     "POCL_THREAD_VARS", "DASK_HINT", "MANIFEST_NAME", "Manifest", "default_manifest",

@@ -43,6 +43,7 @@ __all__ = [
     "check_not_inputs",
     "check_points_path",
     "check_writable",
+    "json_default",
     "load_npz",
     "read_points",
     "validate_points",
@@ -669,3 +670,19 @@ def write_points(path, points, /, **extra):
         np.savetxt(buf, table, fmt="%.17g", delimiter=" ")
     with atomic_write(path, "wb") as fh:
         fh.write(buf.getvalue().encode("utf-8"))
+
+
+def json_default(obj):
+    """``json.dumps(..., default=json_default)``: numpy scalars and arrays as numbers and lists.
+
+    Examples
+    --------
+    >>> import json
+    >>> json.dumps({"k": np.float32(0.5), "a": np.arange(2)}, default=json_default)
+    '{"k": 0.5, "a": [0, 1]}'
+    """
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)

@@ -7,7 +7,7 @@ import os
 import sys
 import time
 
-from diskpack_cl.jobs import json_default
+from diskpack_cl.io import json_default
 
 from ._common import PROG, _UsageError, _bar, _positive_int
 

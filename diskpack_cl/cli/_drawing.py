@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import time
 
-from diskpack_cl.jobs import json_default
+from diskpack_cl.io import json_default
 
 from ._common import _bar
 

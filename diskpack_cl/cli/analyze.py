@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from diskpack_cl.jobs import json_default
+from diskpack_cl.io import json_default
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.reports import AnalyzeOptions
 

@@ -5,10 +5,9 @@ from __future__ import annotations
 import json
 import sys
 
-from diskpack_cl.batch import poisson_many
 from diskpack_cl.image import load_gray
-from diskpack_cl.io import check_not_inputs, check_points_path, read_points, write_points
-from diskpack_cl.jobs import json_default, plan_relax
+from diskpack_cl.io import (check_not_inputs, check_points_path, json_default, read_points,
+                            write_points)
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.poisson import SIZE, STARTS, PoissonOptions, PoissonSetOptions, poisson_job
 from diskpack_cl.relax import max_points_for_radius
@@ -106,6 +105,8 @@ def _run_poisson_file(args):
         if count != args.n:
             raise ValueError(f"-n {args.n} does not match the {count} points of {args.init}; "
                              f"leave -n out")
+    from diskpack_cl.jobs import plan_relax   # the jobs load the stippling stack: not at start-up
+
     (item,) = plan_relax([args.init], [args.output], _relax(args), box=args.box,
                          make_folders=False)
     return _relax_and_write(item, args, extra_summary={"init": args.init, "seed": args.seed})
@@ -170,6 +171,8 @@ def _run_poisson_batch(args):
         raise ValueError("--radius and --min-distance make one set; they do not combine with "
                          "--count or a batch")
     _single_only(args, "box", "mask", "density")
+    from diskpack_cl.batch import poisson_many   # loads the stippling stack: not at start-up
+
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
                          from_namespace(PoissonOptions, args), seed=args.seed, **_batch_run(args))
     return _report_batch(args, batch)
