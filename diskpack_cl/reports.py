@@ -263,13 +263,15 @@ def point_file_box(path):
     >>> point_file_box(p)
     (2.0, 1.0)
     """
+    from .io import load_npz
+
     if not str(path).lower().endswith(".npz"):
         return None
-    with np.load(path) as z:
-        if "box" not in z.files:
-            return None
-        box = np.asarray(z["box"], dtype=np.float64).ravel()
-    if box.shape != (2,) or not np.all(np.isfinite(box) & (box > 0)):
+    box = load_npz(path).get("box")
+    if box is None:
+        return None
+    box = np.asarray(box).ravel()
+    if box.dtype.kind not in "biuf" or box.shape != (2,) or not np.all(np.isfinite(box) & (box > 0)):
         raise ValueError(f"{path}: 'box' must be two positive sizes, got {box.tolist()}")
     return float(box[0]), float(box[1])
 

@@ -278,6 +278,14 @@ def test_export_refuses_overlapping_dots_in_one_line(tmp_path, capsys):
     assert not (tmp_path / "a.svg").exists()
 
 
+def test_analyze_refuses_a_point_archive_that_is_no_zip(tmp_path, capsys):
+    path = tmp_path / "points.npz"
+    path.write_bytes(b"\x93NUMPY not a zip")
+    rc, _, err = _run(["analyze", str(path), "--json"], capsys)
+    assert rc == 1 and "points.npz" in err and "allow_pickle" not in err, err
+    assert len(err.strip().splitlines()) == 1, err
+
+
 def test_relax_init_file_is_checked(tmp_path, capsys):
     path = tmp_path / "start.csv"
     path.write_text("x,y\n0.1,0.2\nnan,0.4\n0.5,0.5\n")
