@@ -27,7 +27,8 @@ import vpype_cli
 
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions
-from diskpack_cl.image import ToneOptions
+from diskpack_cl.image import ToneOptions, sample_image_path
+from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs
 from diskpack_cl.options import NamedOptionError, cli_fields, flag_name
 from diskpack_cl.schedule import StippleOptions
 
@@ -151,9 +152,6 @@ def _of(cls, kw):
 
 def _stippling_document(image, n, kw):
     """Stipple ``image`` as ``diskpack stipple`` does; the SVG it writes, read by vpype."""
-    from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs
-    from diskpack_cl.image import sample_image_path
-
     write, color = _of(WriteOptions, kw), _of(ColorOptions, kw)
     separation = color.separation()
     if isinstance(n, int):
@@ -165,7 +163,8 @@ def _stippling_document(image, n, kw):
                                tone=_of(ToneOptions, kw), color=separation, make_folders=False)
         result, gray, summary = stipple_item(item, note=logging.warning)
         _, (info,) = write_stipple_outputs(result, gray, [svg], write)
-        logging.info(f"diskpack: {result.n} dots, plot about {info['plot_seconds'] / 60:.0f} min")
+        logging.info(f"diskpack: {result.n} dots, plot about {info['plot_seconds'] / 60:.0f} min, "
+                     f"{info['touching_share']:.1%} of the drawn dots touch")
         doc = vpype.read_multilayer_svg(svg, vpype.convert_length(f"{QUANTIZATION_MM}mm"))
     # the page in vpype's exact pixels (the SVG reader rounds its mm), which vpype's HPGL
     # writer matches with its papers
