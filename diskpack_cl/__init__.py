@@ -6,6 +6,8 @@ float64, so returned points and radii are certified.
 """
 
 import importlib
+import sys
+import types
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
@@ -31,6 +33,18 @@ _PUBLIC = {
 }
 _HOMES = {name: module for module, names in _PUBLIC.items() for name in names}
 __all__ = list(_HOMES)
+
+
+class _Package(types.ModuleType):
+    """The package's module: a submodule never shadows the public name it shares
+    (importing ``diskpack_cl.stipple`` leaves ``diskpack_cl.stipple`` the function)."""
+
+    def __setattr__(self, name, value):
+        if not (name in _HOMES and isinstance(value, types.ModuleType)):
+            super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name):

@@ -1,0 +1,34 @@
+"""The package's public names load on demand, and the command line starts without the
+stippling stack."""
+
+import subprocess
+import sys
+import types
+
+import diskpack_cl
+
+
+def _loaded_after(statement):
+    code = f"import sys; {statement}; print(' '.join(sorted(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return set(out.stdout.split())
+
+
+def test_the_command_line_starts_without_the_stippling_stack():
+    loaded = _loaded_after("import diskpack_cl.cli")
+    assert not loaded & {"scipy.stats", "scipy.ndimage", "diskpack_cl.stipple",
+                         "diskpack_cl.qmc", "diskpack_cl.jobs", "matplotlib"}
+
+
+def test_every_public_name_resolves_to_its_module_object():
+    for name in diskpack_cl.__all__:
+        value = getattr(diskpack_cl, name)
+        assert not isinstance(value, types.ModuleType) and value.__name__ == name, name
+    assert set(diskpack_cl.__all__) <= set(dir(diskpack_cl))
+
+
+def test_a_submodule_does_not_shadow_the_function_it_is_named_after():
+    loaded = _loaded_after("import diskpack_cl.jobs, diskpack_cl; "
+                           "assert callable(diskpack_cl.stipple) and "
+                           "diskpack_cl.stipple.__module__ == 'diskpack_cl.stipple'")
+    assert "diskpack_cl.stipple" in loaded
