@@ -230,19 +230,22 @@ def pen_rings(rad, pen):
 
     A ring of radius rho inks [rho - pen/2, rho + pen/2]: the outermost is
     at ``rad - pen/2``, each next one a pen width further in, the innermost
-    at least ``pen/2`` (it inks the centre). Returns an (n, m) array, nan
-    where a dot has fewer rings; a dot not wider than the pen has none (it
-    is one pen touch).
+    at least ``pen/2`` (it inks the centre; an outermost ring below ``pen/2``
+    inks it already, and stays where it is: raised, it would ink past
+    ``rad``). Returns an (n, m) array, nan where a dot has fewer rings; a dot
+    not wider than the pen has none (it is one pen touch).
 
     Examples
     --------
-    >>> pen_rings(np.array([0.2, 1.0]), 0.5).tolist()   # a pen touch, then two rings
-    [[nan, nan], [0.75, 0.25]]
+    >>> pen_rings(np.array([0.2, 0.4, 1.0]), 0.5).tolist()   # a touch, one ring, two rings
+    [[nan, nan], [0.15, nan], [0.75, 0.25]]
     """
     m = np.where(2 * rad <= pen, 0, np.ceil(rad / pen - 1e-9)).astype(np.int64)
     j = np.arange(max(int(m.max(initial=0)), 1))
     outer = np.round(rad - 0.5 * pen, 4)  # as written: the rings follow from it when read back
-    rho = np.maximum(outer[:, None] - j[None, :] * pen, 0.5 * pen)
+    # the inner rings at least pen/2; the outermost at least what 4 decimals write
+    least = np.where(j == 0, 1e-4, 0.5 * pen)
+    rho = np.maximum(outer[:, None] - j[None, :] * pen, least[None, :])
     return np.where(j[None, :] < m[:, None], rho, np.nan)
 
 

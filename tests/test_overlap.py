@@ -22,7 +22,7 @@ def stippling(tmp_path_factory):
 
 def _export(path, capsys, *extra):
     out = path.with_name(f"out{len(extra)}.svg")
-    assert main(["export", str(path), "-o", str(out), "--page", "a4", "--pen-mm", str(PEN_MM),
+    assert main(["export", str(path), "-o", str(out), "--width-mm", "70", "--pen-mm", str(PEN_MM),
                  "--json", *extra]) == 0
     return out, json.loads(capsys.readouterr().out.splitlines()[-1])["plot"]
 
