@@ -14,7 +14,8 @@ import os
 from .options import NamedOptionError
 
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
-           "MemoryLimit", "available_memory", "check_stipple_memory"]
+           "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_poisson_memory",
+           "check_stipple_memory"]
 
 # Peak bytes per unit of a stippling run (default schedule; PNG writer)
 HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
@@ -125,3 +126,33 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
                           f"{_gib(pw * ph * HOST_BYTES_PER_PNG_PIXEL)}, more than the memory "
                           f"available ({_gib(free)}): lower {{}} (at most "
                           f"{math.floor(fit * 10) / 10:g} here)", "png_scale", "png_scale")
+
+
+#: Peak host bytes per point of a 2D Poisson disk set (start set, relaxation, KD-tree
+#: measure, writing), with room: 400 000 points peaked at 324 MB resident
+HOST_BYTES_PER_POINT = 1000
+
+
+def check_poisson_memory(n, *, free=None):
+    """Refuse, before the work, a Poisson disk set of `n` points that memory cannot hold.
+
+    Raises
+    ------
+    MemoryLimit
+        Naming the count (``n``, or a ``min_distance`` that asks for it) and the most
+        points that fit.
+
+    Examples
+    --------
+    >>> check_poisson_memory(10**6, free=8 * 2**30)
+    >>> check_poisson_memory(10**9, free=8 * 2**30)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.memory.MemoryLimit: 1000000000 points need about 931 GiB, more than the memory available (8 GiB): ask for at most 8589934 points (a smaller n or a larger min_distance)
+    """
+    free = available_memory() if free is None else free
+    if free is not None and n * HOST_BYTES_PER_POINT > free:
+        raise MemoryLimit(f"{n} points need about {_gib(n * HOST_BYTES_PER_POINT)}, more than "
+                          f"the memory available ({_gib(free)}): ask for at most "
+                          f"{free // HOST_BYTES_PER_POINT} points (a smaller {{}} or a larger "
+                          f"{{}})", "n", "min_distance")

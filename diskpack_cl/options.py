@@ -70,10 +70,10 @@ def flag_name(name):
 
     Examples
     --------
-    >>> flag_name("k_quantile")
-    '--k-quantile'
+    >>> flag_name("k_quantile"), flag_name("n")
+    ('--k-quantile', '-n')
     """
-    return "--" + name.replace("_", "-")
+    return ("-" if len(name) == 1 else "--") + name.replace("_", "-")
 
 
 def option(default, help, *, unit=None, lo=None, hi=None, lo_open=False, hi_open=False,

@@ -29,6 +29,7 @@ import numpy as np
 
 from ._checks import check_point_count, check_seed, count_text, seed_text
 from .domain import Domain, box_sizes
+from .memory import check_poisson_memory
 from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
 from .options import check_fields, option
 from .relax import RelaxOptions, relax_poisson
@@ -45,6 +46,10 @@ FIELD_SAMPLES = 512
 #: about 0.2 s more of throwing (8 rounds instead of 4); at 0.74 the throwing
 #: needs 19 rounds and a shrink, and saves no further iteration.
 START_RADIUS = 0.72
+
+#: A box longer than this many times its width throws its start darts folded into a
+#: near-square (:func:`start_points`).
+FOLD_ASPECT = 2.0
 
 #: The start sets :func:`poisson_disk` draws.
 STARTS = ("dart", "random")
@@ -252,8 +257,12 @@ def start_points(n, domain, seed=None, device=None, *, init="dart", dart_radius=
     inset by a disk radius (where relaxed points end up: the walls push
     them that far in, so the relaxation saves most of its iterations); the
     box keeps those and drops its surplus at random (so its spacing is at
-    least the torus set's).  `device`: where the darts' distance tests run
-    (see :func:`~diskpack_cl.parallel_darts.parallel_darts`; the same set).
+    least the torus set's).  A box longer than :data:`FOLD_ASPECT` times
+    its width is cut into bands along its length that are stacked into a
+    near-square, thrown there at once and laid end to end again; of each
+    pair across a seam closer than the darts' spacing one point goes: the
+    darts cost in proportion to `n`, not to the aspect.  `device`: where
+    the darts' distance tests run (see :func:`~diskpack_cl.parallel_darts.parallel_darts`; the same set).
 
     Examples
     --------
@@ -270,14 +279,49 @@ def start_points(n, domain, seed=None, device=None, *, init="dart", dart_radius=
         return parallel_darts(n, rel_radius=dart_radius, seed=rng, device=device)
     inset = min(0.74 * hexagonal_radius(n, domain.area), 0.25 * min(domain.width, domain.height))
     inner = domain.size - 2.0 * inset
-    side = max(inner)
-    m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(inner)))
+    folded = max(inner) > FOLD_ASPECT * min(inner)
+    pts = (_darts_folded if folded else _darts_in_rect)(n, inner, rng, device, dart_radius)
+    return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
+
+
+def _darts_in_rect(n, size, rng, device, dart_radius):
+    """At least `n` darts in the rectangle ``[0, size]``: those of a square torus of side
+    ``max(size)`` that fall inside, with enough thrown that n do."""
+    from .parallel_darts import parallel_darts
+
+    side = max(size)
+    m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(size)))
     while True:
         pts = parallel_darts(m, rel_radius=dart_radius, seed=rng, device=device) * side
-        pts = pts[np.all(pts <= inner, axis=1)]
+        pts = pts[np.all(pts <= size, axis=1)]
         if len(pts) >= n:
-            return pts[np.sort(rng.choice(len(pts), n, replace=False))] + inset
+            return pts
         m = int(m * 1.1) + 1  # pragma: no cover - 4 sigma short
+
+
+def _darts_folded(n, size, rng, device, dart_radius):
+    """At least `n` darts in a long rectangle, thrown folded: its length cut into k bands
+    stacked into a near-square (k about the root of the aspect), thrown there at once
+    (darts cost in proportion to the points, not to the box's aspect), then laid end to
+    end; of each pair across a seam closer than the darts' spacing, one point goes."""
+    from scipy.spatial import cKDTree
+
+    long = int(np.argmax(size))
+    length, width = size[long], size[1 - long]
+    k = max(1, int(round(np.sqrt(length / width))))
+    want = int(np.ceil(n * 1.02)) + 8
+    while True:
+        folded = _darts_in_rect(want, np.array([length / k, k * width]), rng, device, dart_radius)
+        spacing = cKDTree(folded).query(folded, k=2)[0][:, 1].min()
+        band = np.minimum((folded[:, 1] // width).astype(np.int64), k - 1)
+        along = folded[:, 0] + band * (length / k)
+        across = folded[:, 1] - band * width
+        pts = np.column_stack([along, across] if long == 0 else [across, along])
+        close = cKDTree(pts).query_pairs(spacing, output_type="ndarray")
+        pts = np.delete(pts, np.unique(close[:, 1]), axis=0)
+        if len(pts) >= n:
+            return pts
+        want = int(want * 1.05) + 1  # pragma: no cover - seams took more than 2 %
 
 
 def _field(field, domain, name):
@@ -443,6 +487,7 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
             raise ValueError("a mask or polygon needs a box (box='WxH')")
         inside, share = _region(mask, polygon, domain)
     n_all, eps = _count_and_eps(n, min_distance, domain.area, share, opt.eps, opt.rho_max)
+    _check_size(n_all, domain)
     relax.update(local=opt.local, grid=opt.grid, verify=verify, profile=profile)
     return _relaxed(n_all, domain, eps, seed, inside, min_distance, opt, relax)
 
@@ -578,6 +623,17 @@ def _count_and_eps(n, distance, area, share, eps, rho_max):
         raise ValueError(f"min_distance {distance:g} leaves {n_all} point(s) in the box "
                          f"at rho <= {rho_max:g}")
     return n_all, min(0.5 * distance / hexagonal_radius(n_all, area) * (1 + 1e-9), rho_max)
+
+
+def _check_size(n, domain):
+    """Refuse, before the work, a set that memory cannot hold or a box narrower than the
+    set's spacing (its points would lie on a line)."""
+    check_poisson_memory(n)
+    spacing = 2.0 * hexagonal_radius(n, domain.area)
+    if not domain.periodic and min(domain.size) < spacing:
+        raise ValueError(f"a {domain.width:g} x {domain.height:g} box is narrower than the "
+                         f"spacing of {n} points in it ({spacing:.3g}): make it wider or "
+                         f"ask for more points")
 
 
 def _relaxed3(n, distance, box, seed, opt, options):
