@@ -472,20 +472,56 @@ class StippleOptions:
         d.setdefault("features", "none")
         d.setdefault("capacity", 0.0)
         d.setdefault("support", 0.0)
-        picked = {k: d[k] if getattr(self, k) is None else getattr(self, k)
-                  for k in ("floor", "radii", "radius_sigma", "blend", "k_quantile",
-                            "density_sigma", "features", "capacity", "support")}
-        return StipplePlan(
-            n=n, gamma=GAMMA_DEFAULT if self.gamma is None else self.gamma, supersample=s,
-            seed=self.seed, method=self.method, invert=self.invert, phases=tuple(phases),
-            refine_every=self.refine_every, blend_cell=self.blend_cell, k0=self.k0,
-            paper_tone=self.paper_tone, **{k: v if isinstance(v, str) else float(v)
-                                           for k, v in picked.items()})
+        kept = {k: getattr(self, k) for k in PLAN_FIELDS if k in _OPTION_FIELDS}
+        for k in d:   # the schedule's options, where these options leave them to it
+            v = d[k] if kept[k] is None else kept[k]
+            kept[k] = v if isinstance(v, str) else float(v)
+        kept.update(gamma=GAMMA_DEFAULT if self.gamma is None else self.gamma, supersample=s)
+        return StipplePlan(n=n, phases=tuple(phases), **kept)
 
 
-@dataclass(frozen=True)
-class StipplePlan:
-    """The options of one stippling run, resolved for its image (:meth:`StippleOptions.plan`).
+#: What a :class:`StipplePlan` holds, in the order of its ``params()``: the count ``n``,
+#: ``phases`` (the schedule, beta, lloyd and rounds made into phases) and the fields of
+#: :class:`StippleOptions` resolved for the image (``k0`` is not in ``params()``).
+PLAN_FIELDS = ("n", "gamma", "floor", "supersample", "seed", "method", "invert", "phases",
+               "refine_every", "radii", "radius_sigma", "blend", "blend_cell", "k_quantile",
+               "density_sigma", "k0", "features", "capacity", "support", "paper_tone")
+
+
+class _Plan:
+    """The methods of :class:`StipplePlan`."""
+
+    def grid_shape(self, width, height):
+        """Raster shape ``(ny, nx)`` for a `width` x `height` image."""
+        return self.supersample * height, self.supersample * width
+
+    def params(self):
+        """The options as a JSON-ready dict (``StippleResult.params``)."""
+        out = {}
+        for name in PLAN_FIELDS:
+            if name == "phases":
+                out["schedule"] = [list(p) for p in self.phases]
+            elif name != "k0":
+                out[name] = getattr(self, name)
+        return out
+
+
+def _plan_field(name):
+    """A field of :class:`StipplePlan`: the option's own (type, help), or ``n``, ``phases``."""
+    if name in ("n", "phases"):
+        return name, {"n": int, "phases": tuple}[name]
+    f = _OPTION_FIELDS[name]
+    return name, f.type, dataclasses.field(metadata=f.metadata)
+
+
+_OPTION_FIELDS = {f.name: f for f in dataclasses.fields(StippleOptions)}
+
+StipplePlan = dataclasses.make_dataclass(
+    "StipplePlan", [_plan_field(name) for name in PLAN_FIELDS], bases=(_Plan,), frozen=True,
+    namespace={"__module__": __name__, "__doc__": """The options of one stippling run, resolved for its image (:meth:`StippleOptions.plan`).
+
+    The fields of :data:`PLAN_FIELDS`: those of :class:`StippleOptions`, each
+    with its value for this image, and ``n`` and ``phases``.
 
     Examples
     --------
@@ -494,42 +530,4 @@ class StipplePlan:
     ('density', 0.01, 1, (('mix', 20, 0.6), ('mix', 6, 0.4), ('mix', 1, 0.75)), 'detail')
     >>> StippleOptions(schedule="paper").plan(2000, 512, 512).radii
     'gray'
-    """
-
-    n: int
-    gamma: float
-    floor: float
-    supersample: int
-    seed: object
-    method: str
-    invert: bool
-    phases: tuple
-    refine_every: int
-    radii: str
-    radius_sigma: float
-    blend: float
-    blend_cell: str
-    k_quantile: float
-    density_sigma: float
-    k0: float
-    features: str = "none"
-    capacity: float = 0.0
-    support: float = 0.0
-    paper_tone: float = 0.0
-
-    def grid_shape(self, width, height):
-        """Raster shape ``(ny, nx)`` for a `width` x `height` image."""
-        return self.supersample * height, self.supersample * width
-
-    def params(self):
-        """The options as a JSON-ready dict (``StippleResult.params``)."""
-        return {
-            "n": self.n, "gamma": self.gamma, "floor": self.floor, "supersample": self.supersample,
-            "seed": self.seed, "method": self.method, "invert": self.invert,
-            "schedule": [list(p) for p in self.phases], "refine_every": int(self.refine_every),
-            "radii": self.radii, "radius_sigma": self.radius_sigma, "blend": self.blend,
-            "blend_cell": self.blend_cell, "k_quantile": self.k_quantile,
-            "density_sigma": self.density_sigma, "features": self.features,
-            "capacity": self.capacity, "support": self.support,
-            "paper_tone": self.paper_tone,
-        }
+    """})
