@@ -130,7 +130,7 @@ def read_stipple(path):
     except _Refused as exc:
         raise ValueError(_one_line(f"{path}: {exc}")) from None
     except (OSError, ValueError, KeyError, IndexError, EOFError, SyntaxError, TypeError,
-            AttributeError, OverflowError) as exc:
+            AttributeError, OverflowError, LookupError) as exc:   # LookupError: an XML encoding
         text = str(exc)
         if not text.startswith(str(path)):   # load_npz's own message names the file
             text = f"{path}: unreadable {ext} file ({type(exc).__name__}: {text})"

@@ -270,6 +270,12 @@ def test_svg_reader_checks_its_metadata_and_dots(tmp_path, edit, words):
     _refuses(path, *words)
 
 
+def test_svg_with_an_unknown_encoding_is_refused(tmp_path):
+    path, text = _svg_text(tmp_path)
+    path.write_text(text.replace('encoding="UTF-8"', 'encoding="UTFnan"'))
+    _refuses(path, "unreadable .svg file")
+
+
 def test_export_refuses_overlapping_dots_in_one_line(tmp_path, capsys):
     path = tmp_path / "dots.csv"
     path.write_text(CSV_HEAD + "x,y,r\n5,5,1\n6,5,1\n")
