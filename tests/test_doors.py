@@ -490,6 +490,12 @@ def test_usage_errors_are_one_line_without_the_usage(tmp_path, capsys, monkeypat
     assert "did you mean --pens" not in err and "one of --pens," not in err
 
 
+def test_a_report_given_twice_is_a_usage_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = _run(["analyze", "a.npz", "-o", "a.pdf", "-o", "b.png"], capsys)
+    assert rc == 2 and "-o given twice (a.pdf and b.png)" in err, err
+
+
 def test_an_option_of_another_command_gets_no_wrong_neighbour(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     rc, _, err = _run(["stipple", "sample", "-n", "200", "--max-iter", "3", "-o", "a.svg"], capsys)

@@ -47,16 +47,24 @@ def _device_options(p):
                         "then PYOPENCL_CTX, then a GPU, else the first CPU device")
 
 
-class _Once(argparse.Action):
-    """An option that may be given once: a second one is a usage error."""
+class _GivenOnce(argparse.Action):
+    """An option that may be given once: a second one is a usage error (argparse would
+    keep the last silently)."""
+
+    hint = "; give it once"
 
     def __call__(self, parser, namespace, values, option_string=None):
         first = getattr(namespace, self.dest, None)
         if first is not None:
-            parser.error(f"{option_string} given twice ({first} and {values}): this command "
-                         f"writes one point file (several sets: --count K with a template "
-                         f"such as -o sets/{{i:04d}}.npz)")
+            parser.error(f"{option_string} given twice ({first} and {values}){self.hint}")
         setattr(namespace, self.dest, values)
+
+
+class _Once(_GivenOnce):
+    """The one point file of ``poisson`` and ``relax``: a second ``-o`` is a usage error."""
+
+    hint = (": this command writes one point file (several sets: --count K with a template "
+            "such as -o sets/{i:04d}.npz)")
 
 
 def _output_options(p):

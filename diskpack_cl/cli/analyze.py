@@ -10,7 +10,7 @@ from diskpack_cl.io import json_default
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.reports import AnalyzeOptions
 
-from ._common import PROG, _image_path
+from ._common import PROG, _GivenOnce, _image_path
 
 
 def _add_analyze(subparsers):
@@ -36,7 +36,7 @@ def _add_analyze(subparsers):
     p.add_argument("inputs", nargs="+", metavar="POINTS",
                    help="point files (realizations of one process), or one stippling .npz "
                         "(or a colour stippling's .csv)")
-    p.add_argument("-o", "--output", default=None, metavar="REPORT",
+    p.add_argument("-o", "--output", default=None, metavar="REPORT", action=_GivenOnce,
                    help="figure file (.png, .pdf or .svg); written atomically")
     p.add_argument("--json", action="store_true",
                    help="print the numbers as one JSON line on stdout")
