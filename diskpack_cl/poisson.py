@@ -181,6 +181,9 @@ class PoissonDiskResult:
     backend, device : str
         Where the relaxation ran (:attr:`RelaxResult.backend`; empty for a
         density).
+    stats : dict
+        The relaxation's :attr:`RelaxResult.stats` (``fallback``: why
+        ``backend="auto"`` took the exact backend).
 
     Examples
     --------
@@ -203,6 +206,7 @@ class PoissonDiskResult:
     rho_start: float = float("nan")
     backend: str = ""
     device: str = ""
+    stats: dict = field(default_factory=dict)
 
 
 def as_box(box):
@@ -675,7 +679,7 @@ def _relaxed(n, domain, eps, seed, inside, distance, opt, options):
         d_min = _min_distance(pts, domain) if len(pts) >= 2 else float("inf")
     return PoissonDiskResult(pts, domain, rho, float(d_min), reached, res.stop_reason,
                              res.iterations, res.seconds, t_start, float(eps), res.timings,
-                             float(res.rho[0]), res.backend, res.device)
+                             float(res.rho[0]), res.backend, res.device, res.stats)
 
 
 def _with_density(n, density, domain, seed, backend, device):

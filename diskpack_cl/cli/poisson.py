@@ -14,7 +14,8 @@ from diskpack_cl.relax import max_points_for_radius
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import PROG, _bar, _image_path, _output_options, _positive_int
-from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
+from .relax import (_note_fallback, _progress, _relax, _relax_and_write, _relax_options,
+                    _unreached)
 
 
 def _add_poisson(subparsers):
@@ -147,6 +148,7 @@ def _run_poisson_set(args):
     finally:
         close()
     summary["output"] = str(args.output)
+    _note_fallback(args, res.stats)
     rho = ("variable spacing" if summary["rho_final"] is None
            else f"rho {res.rho_start:.4f} -> {res.rho:.4f}")
     _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, {rho} in "

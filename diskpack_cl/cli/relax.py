@@ -60,6 +60,13 @@ def _progress(args, label):
     return callback, bar.close
 
 
+def _note_fallback(args, stats):
+    """Say on stderr why ``--backend auto`` took the exact backend, if it did."""
+    if stats.get("fallback") and not args.quiet:
+        print(f"{PROG}: note: {stats['fallback']}: used the exact backend (--backend auto)",
+              file=sys.stderr)
+
+
 def _relax_and_write(item, args, points=None, *, extra_summary=None):
     """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
     return the exit status."""
@@ -82,9 +89,7 @@ def _relax_and_write(item, args, points=None, *, extra_summary=None):
     }
     if extra_summary:
         summary.update(extra_summary)
-    if res.stats.get("fallback") and not args.quiet:
-        print(f"{PROG}: note: {res.stats['fallback']}: used the exact backend "
-              f"(--backend auto)", file=sys.stderr)
+    _note_fallback(args, res.stats)
     if not args.quiet:
         print(f"{PROG}: {summary['n']} points, rho {summary['rho_start']:.4f} -> "
               f"{summary['rho_final']:.4f} in {summary['iterations']} iterations "
