@@ -41,18 +41,19 @@ def check_point_count(n):
 
 
 def count_text(text, *words):
-    """The command line's count of points: an integer of at least 2, or one of `words`.
+    """The command line's count of points: an integer of at least 2 (``20k`` and ``1.5M``
+    too: a k, M or G suffix), or one of `words`.
 
     Raises ``argparse.ArgumentTypeError``, which argparse reports with the flag.
 
     Examples
     --------
-    >>> count_text("12"), count_text("tone", "tone")
-    (12, 'tone')
+    >>> count_text("12"), count_text("tone", "tone"), count_text("20k"), count_text("1.5M")
+    (12, 'tone', 20000, 1500000)
     """
     if text in words:
         return text
-    value = _integer_text(text)
+    value = _count_text(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
     if value < 2:
@@ -86,6 +87,23 @@ def seed_text(text):
     if value < 0:
         raise argparse.ArgumentTypeError(f"must be at least 0, got {text}")
     return value
+
+
+def _count_text(text):
+    """An integer, also with a k, M or G suffix (``20k``: 20000); exact: ``0.0005k`` is no
+    count."""
+    import decimal
+
+    scale = {"k": 10**3, "m": 10**6, "g": 10**9}.get(text.strip()[-1:].lower())
+    if scale is None:
+        return _integer_text(text)
+    try:
+        value = decimal.Decimal(text.strip()[:-1]) * scale
+    except decimal.InvalidOperation:
+        value = decimal.Decimal("NaN")
+    if not value.is_finite() or value != value.to_integral_value():
+        raise argparse.ArgumentTypeError(f"not a count: {text!r} (e.g. 20000, 20k, 1.5M)")
+    return int(value)
 
 
 def _integer_text(text):

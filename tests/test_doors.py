@@ -502,6 +502,20 @@ def test_an_option_of_another_command_gets_no_wrong_neighbour(tmp_path, capsys, 
     assert rc == 2 and "did you mean" not in err, err
 
 
+@pytest.mark.parametrize("text, n", [("20k", 20000), ("1.5M", 1500000), ("2G", 2 * 10**9),
+                                     ("300", 300)])
+def test_counts_take_k_and_m_suffixes(text, n):
+    parser = cli.build_parser()
+    assert parser.parse_args(["poisson", "-n", text, "-o", "a.npz"]).n == n
+    assert parser.parse_args(["stipple", "x.png", "-n", text, "-o", "a.svg"]).n == n
+
+
+@pytest.mark.parametrize("text", ["1.5x", "0.0005k", "k", "nank", "infM"])
+def test_counts_that_are_no_whole_number_are_usage_errors(capsys, text):
+    rc, _, err = _run(["poisson", "-n", text, "-o", "a.npz"], capsys)
+    assert rc == 2 and "-n" in err and len(err.strip().splitlines()) == 1, err
+
+
 def test_an_unknown_device_in_the_environment_is_an_error(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("DISKPACK_DEVICE", "nosuch")
     rc, _, err = _run(["poisson", "-n", "64", "-o", str(tmp_path / "a.npz"), "-q"], capsys)
