@@ -16,6 +16,7 @@ platform name or platform vendor (``"pocl"``, ``"nvidia"``), or ``"cpu"``/``"gpu
 from __future__ import annotations
 
 import os
+import threading
 
 __all__ = ["NoOpenCLError", "get_context", "list_devices", "describe", "wait_for", "device_kind",
            "kernel_group_limit", "group_size", "preferred_multiple", "padded"]
@@ -61,7 +62,7 @@ def _platforms():
 
 def _kinds(device):
     """The kinds among GPU, CPU and ACCELERATOR whose bits `device` reports."""
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     return [k for k in _KINDS if device.type & getattr(cl.device_type, k)]
 
@@ -75,7 +76,7 @@ def device_kind(device):
     ``" | "`` (Oclgrind: ``"GPU | CPU | ACCELERATOR"``); one with none, by
     pyopencl's name of its bits.
     """
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     kinds = _kinds(device)
     return " | ".join(kinds) if kinds else cl.device_type.to_string(device.type)
@@ -102,7 +103,7 @@ def list_devices():
     >>> all(len(row) == 4 and row[3] for row in rows)
     True
     """
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     rows = []
     for ip, p in enumerate(_platforms()):
@@ -150,7 +151,7 @@ def _pick(spec):
     alone wins over one that reports several kinds), or a substring of a
     device or platform name.
     """
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     pairs = []
     for ip, p in enumerate(_platforms()):
@@ -192,7 +193,7 @@ def get_context(device=None):
     >>> ctx is get_context()          # one context per device string
     True
     """
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     if isinstance(device, cl.Context):
         return device
@@ -221,8 +222,6 @@ def wait_for(event):
     pyopencl.Error
         What ``event.wait()`` raised in the helper thread.
     """
-    import threading
-
     done = threading.Event()
     failed = []
 
@@ -261,7 +260,7 @@ def kernel_group_limit(kernel, device):
     registers and local memory allow) and the device's maximum.  Tests
     replace this function to force a small GPU's limits on any device.
     """
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     info = cl.kernel_work_group_info.WORK_GROUP_SIZE
     return min(kernel.get_work_group_info(info, device), device.max_work_group_size)
@@ -289,7 +288,7 @@ def group_size(kernel, device, want):
 
 def preferred_multiple(kernel, device):
     """The kernel's preferred work-group size multiple on `device` (a GPU's warp)."""
-    import pyopencl as cl
+    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
 
     info = cl.kernel_work_group_info.PREFERRED_WORK_GROUP_SIZE_MULTIPLE
     return kernel.get_work_group_info(info, device)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import importlib.resources
 from pathlib import Path
 
+import pyopencl as cl
+
 __all__ = ["kernel_dir", "build_program", "inline_math"]
 
 _PROGRAMS: dict = {}
@@ -21,8 +23,6 @@ def kernel_dir() -> Path:
 def inline_math(ctx) -> int:
     """1 where the kernels should use clang's builtins for their scalar math: PoCL's
     CPU device, whose own builtins stay calls (``kernels/common.h``); else 0."""
-    import pyopencl as cl
-
     dev = ctx.devices[0]
     return int("Portable Computing Language" in dev.platform.name and bool(dev.type & cl.device_type.CPU))
 
@@ -35,8 +35,6 @@ def build_program(ctx, stem: str, defines: dict | None = None):
     Built programs and their kernel objects are memoized by
     (context, stem, defines), so each combination compiles once per process.
     """
-    import pyopencl as cl
-
     defines = dict(sorted({"INLINE_MATH": inline_math(ctx), **(defines or {})}.items()))
     key = (ctx.int_ptr, stem, tuple(defines.items()))
     if key not in _PROGRAMS:

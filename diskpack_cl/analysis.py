@@ -27,6 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import Delaunay, QhullError
+from scipy import fft, sparse
 
 from . import measures
 from ._checks import check_points
@@ -197,8 +198,6 @@ def _nufft_power(pts, kmax, spread=None, weights=None):
     nonuniform fast Fourier transform", SIAM Review 46(3), 2004; tau as
     there for oversampling R = M / (2 kmax + 1)).
     """
-    from scipy import fft
-
     msp = _NUFFT_SPREAD if spread is None else spread
     modes = 2 * kmax + 1
     M = fft.next_fast_len(2 * modes, real=True)
@@ -221,8 +220,6 @@ def _spread(pts, M, msp, tau, weights=None):
     Separable: the grid is ``Wy^T Wx`` with the sparse (n, M) tables of each
     point's 2 msp weights per axis, multiplied by scipy.sparse in row bands.
     """
-    from scipy import sparse
-
     n, width = len(pts), 2 * msp
     ptr = np.arange(0, n * width + 1, width)
     off = np.arange(width) - msp + 1

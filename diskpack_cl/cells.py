@@ -22,7 +22,13 @@ tells, and the engines fall back to the raster estimate refined by
 
 from __future__ import annotations
 
+import ctypes.util
+import sys
+
 import numpy as np
+from scipy.ndimage import maximum_filter
+from scipy.spatial import cKDTree
+import pyopencl as cl
 
 from ._checks import check_sites
 from ._device import describe, get_context, group_size, padded, preferred_multiple
@@ -63,10 +69,6 @@ def _keep_freed_memory():
     the arithmetic (1M sites: 1.3-1.7 s a call, 0.9 s with this).  Peak
     memory is unchanged; freed memory stays with the process for reuse.
     """
-    import ctypes
-    import ctypes.util
-    import sys
-
     if not sys.platform.startswith("linux"):
         return
     try:
@@ -130,8 +132,6 @@ class CellMIC:
 
     def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=2.0,
                  timings=None):
-        import pyopencl as cl
-
         self.domain = domain
         self.timings = Stopwatch() if timings is None else timings
         self.ctx = get_context(device)
@@ -166,8 +166,6 @@ class CellMIC:
 
     # -- buffers -----------------------------------------------------------
     def _buffer(self, name, nbytes):
-        import pyopencl as cl
-
         buf = self._bufs.get(name)
         if buf is None or buf.size < max(nbytes, 8):
             buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 8))
@@ -175,8 +173,6 @@ class CellMIC:
         return buf
 
     def _upload(self, name, host):
-        import pyopencl as cl
-
         buf = self._buffer(name, host.nbytes)
         cl.enqueue_copy(self.queue, buf, host, is_blocking=False)
         return buf
@@ -223,7 +219,6 @@ class CellMIC:
         nbx, nby, bw, bh = grid
         if wmax == 0.0:
             return bwmax, 0
-        from scipy.ndimage import maximum_filter
 
         win = min(_MAX_WINDOW, int(np.ceil(np.sqrt(wmax) / min(bw, bh))) + 2)
         mode = "wrap" if self.domain.periodic else "constant"
@@ -313,8 +308,6 @@ class CellMIC:
         >>> bool(np.allclose(nn, nearest_neighbor_distances(pts), rtol=0, atol=1e-15))
         True
         """
-        import pyopencl as cl
-
         X, w = check_sites(points, None, self.domain, minimum=2)
         # built on the first call: the stippling's cells never need it
         kernel = build_program(self.ctx, "nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
@@ -341,8 +334,6 @@ class CellMIC:
         ``nn`` by result row (`rows`: ``mic_rows`` puts them there), ``flags`` in the order
         of `pos`, and with `codes`, cell_mic's ``mic`` and ``codes`` in that order too (for
         the host's re-solve; 48 of the 80 bytes a cell)."""
-        import pyopencl as cl
-
         n, dom = len(pos), self.domain
         bwloc, win = self._local_wmax(bwmax, grid, ws.max())
         up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
@@ -548,8 +539,6 @@ def refine_active(X, w, domain, active, near, cells=None):
 
 def _nearest(X, domain, at):
     """Distance from the points `at` (indices) to their nearest other point (cKDTree)."""
-    from scipy.spatial import cKDTree
-
     box = (domain.width, domain.height) if domain.periodic else None
     d, _ = cKDTree(X, boxsize=box).query(X[at], k=2)
     return d[:, 1]

@@ -22,6 +22,9 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import linprog
+from scipy.spatial import cKDTree
+import pyopencl as cl
 
 from ._device import describe, get_context, group_size, padded
 from ._kernels import build_program
@@ -152,8 +155,6 @@ def inscribed_sphere_linprog(normals, beta):
     >>> bool(np.allclose(q, 0)), float(round(R, 12))
     (True, 1.0)
     """
-    from scipy.optimize import linprog
-
     A = np.column_stack([normals, np.ones(len(beta))])
     res = linprog([0, 0, 0, -1], A_ub=A, b_ub=beta, bounds=[(None, None)] * 4, method="highs")
     if res.status != 0:
@@ -208,8 +209,6 @@ def certify_mis(points, centers, radii, domain, *, cells=None, k=48, tol=1e-10):
     >>> certify_mis(X, X, np.array([0.25, 0.25]), Domain3.torus()).tolist()
     [True, True]
     """
-    from scipy.spatial import cKDTree
-
     S = domain.check(points)
     X = S if cells is None else S[cells]
     q = domain.shortest(np.asarray(centers) - X)
@@ -279,8 +278,6 @@ def _exact_mis_near(X, domain, cells, k):
     one farther than ``rho >= 2 (|q| + R)`` from the cell's site cannot: the
     sphere of the fewer sites is then feasible among all, and as its cell
     holds the true one, it is the true one."""
-    from scipy.spatial import cKDTree
-
     rho = _NEAR_SPACINGS * (domain.volume / len(X)) ** (1 / 3)
     if domain.periodic and 2.0 * rho >= domain.size.min():
         return None
@@ -296,8 +293,6 @@ def _exact_mis_near(X, domain, cells, k):
 
 def _exact_mis(X, domain, cells, k):
     """:func:`exact_mis` of `cells` among all the sites X."""
-    from scipy.spatial import cKDTree
-
     margin = _margin(domain, len(X))
     pos, _ = domain.images(X, margin)
     tree = cKDTree(pos)
@@ -394,8 +389,6 @@ class CellMIC3:
     """
 
     def __init__(self, domain, device=None, *, sites_per_bucket=1.0):
-        import pyopencl as cl
-
         self.domain = domain
         self.ctx = get_context(device)
         if not has_fp64(self.ctx):
@@ -474,8 +467,6 @@ class CellMIC3:
         return MIS(out_c, out_r, stats, timings)
 
     def _run(self, Xs, start, nb):
-        import pyopencl as cl
-
         n = len(Xs)
         mf = cl.mem_flags
         b_site = cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=Xs)

@@ -49,10 +49,16 @@ spacing P01 per pen and of all dots (:func:`diskpack_cl.picture_measures.spacing
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import combinations
+import os
 
 import numpy as np
+from PIL import Image, ImageColor, ImageOps
+from scipy import ndimage
 
 from .options import OptionConflict, check_fields, option
+from .image import load_gray
+from .picture_measures import render_dots, spacing, tone_radius, tone_ssim
 
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
@@ -126,8 +132,6 @@ def delta_e(rgb_a, rgb_b):
 
 
 def _color(text):
-    from PIL import ImageColor
-
     try:
         return np.array(ImageColor.getrgb(text)[:3], dtype=np.float64) / 255.0
     except ValueError:
@@ -266,8 +270,6 @@ def _unmix(targets, pens):
     """Coverages (m, P) of pens (P, 3) mixing the linear colours `targets` (m, 3) side by
     side on white paper: the nearest mix in the convex hull of paper and pens, the one
     with the least ink where several are as near (see the module docstring)."""
-    from itertools import combinations
-
     V = np.vstack([np.ones(3), pens])                                   # paper, then the pens
     out = np.zeros((len(targets), len(pens)))
     rest = np.arange(len(targets))
@@ -403,13 +405,7 @@ def load_rgb(image):
     >>> load_rgb(np.array([[[255, 0, 0, 0]]], dtype=np.uint8)).tolist()
     [[[1.0, 1.0, 1.0]]]
     """
-    import os
-
-    from PIL import Image, ImageOps
-
     if isinstance(image, (str, os.PathLike)):
-        from .image import load_gray
-
         load_gray(image)   # the same checks and messages as for gray input
         with Image.open(image) as im:
             image = ImageOps.exif_transpose(im).convert("RGBA")
@@ -451,8 +447,6 @@ def render_pens(points, pen, radii, colors, shape, *, scale=3):
     >>> round(float(img[..., 0].mean()), 3)   # 1 - pi / 16
     0.804
     """
-    from .picture_measures import render_dots
-
     p = np.asarray(points, dtype=np.float64)
     pen = np.asarray(pen)
     H, W = shape
@@ -477,8 +471,6 @@ def pen_tone_radii(layers, counts):
     >>> pen_tone_radii(np.full((2, 10, 10), 0.5), [50, 0]).round(4).tolist()
     [0.5642, 1.0]
     """
-    from .picture_measures import tone_radius
-
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
 
 
@@ -486,8 +478,6 @@ def _own_density(points, shape):
     """The density of `points` themselves on the pixel grid, blurred over two of their
     spacings and scaled to a maximum of 1 (the reference of :func:`pen_spacing`
     without layers)."""
-    from scipy import ndimage
-
     H, W = shape
     hist = np.histogram2d(points[:, 1], points[:, 0], bins=(H, W), range=((0, H), (0, W)))[0]
     blurred = ndimage.gaussian_filter(hist, 2.0 * np.sqrt(W * H / len(points)), mode="constant")
@@ -531,8 +521,6 @@ def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
     >>> out["p01"][0] > 0.5, round(out["p01_joint"], 2) > 0.5
     (True, True)
     """
-    from .picture_measures import spacing
-
     p, pen = np.asarray(points, float), np.asarray(pen)
     P = pens or (int(pen.max()) + 1 if layers is None else len(layers))
     mine = [pen == q for q in range(P)]
@@ -588,10 +576,6 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
     >>> sorted(m), len(m["p01"]) == len(res.names)
     (['delta_e', 'p01', 'p01_joint', 'sigma', 'ssim'], True)
     """
-    from scipy import ndimage
-
-    from .picture_measures import tone_ssim
-
     p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
     P, H, W = layers.shape
     counts = np.bincount(pen, minlength=P)

@@ -216,8 +216,8 @@ class OpenCLEngine(_Engine):
 
     def __init__(self, domain, ctx, route, *, grid=None, n=None, profile=False, verify=False,
                  timings=None):
-        from ._device import describe
-        from .cells import CellMIC
+        from ._device import describe  # not loaded at start-up
+        from .cells import CellMIC  # not loaded at start-up
 
         super().__init__(domain, verify=verify, timings=timings)
         self.ctx, self.name, self.profile = ctx, route, profile
@@ -233,7 +233,7 @@ class OpenCLEngine(_Engine):
             self._build_raster()
 
     def _build_raster(self):
-        from .raster import PowerRaster
+        from .raster import PowerRaster  # not loaded at start-up
 
         if self._grid is None:
             raise ValueError("this engine has no grid: make it with grid=(ny, nx) or n")
@@ -275,7 +275,7 @@ class OpenCLEngine(_Engine):
 
 
 def _auto_grid(n, domain):
-    from .raster import auto_grid
+    from .raster import auto_grid  # not loaded at start-up
 
     return auto_grid(n, domain)
 
@@ -318,7 +318,7 @@ def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route
     >>> make_engine(Domain.torus(), 100, "exact").name
     'exact'
     """
-    from ._device import NoOpenCLError, get_context
+    from ._device import NoOpenCLError, get_context  # not loaded at start-up
 
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
@@ -343,9 +343,9 @@ def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route
 def _route(ctx, backend, route):
     """The route for `ctx`: the per-cell kernel where the device has float64; else the
     raster route on GPUs (and whenever OpenCL was asked for), the exact engine on CPUs."""
-    import pyopencl as cl
+    import pyopencl as cl  # not loaded at start-up
 
-    from .cells import has_fp64
+    from .cells import has_fp64  # not loaded at start-up
 
     if route == "cells" or (route == "auto" and has_fp64(ctx)):
         return "cells"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import combinations
 
 import numpy as np
 
@@ -20,7 +21,7 @@ def _sites_tree(points, domain, margin, lift=None):
     points themselves, so entry i is "site i, unshifted".  With `lift` (one
     height per point) the tree is over (x, y, lift): see :func:`_cutter_radius`.
     """
-    from scipy.spatial import cKDTree
+    from scipy.spatial import cKDTree  # not loaded at start-up
 
     pos, gid = domain.images(points, margin)
     pts = pos if lift is None else np.column_stack([pos, lift[gid]])
@@ -28,8 +29,6 @@ def _sites_tree(points, domain, margin, lift=None):
 
 
 def _triples(m):
-    from itertools import combinations
-
     return np.array(list(combinations(range(m), 3)), dtype=np.intp).reshape(-1, 3)
 
 
@@ -775,7 +774,7 @@ def chebyshev_center_linprog(normals, beta):
     >>> centre.tolist(), float(radius)
     ([0.5, 0.5], 0.5)
     """
-    from scipy.optimize import linprog
+    from scipy.optimize import linprog  # not loaded at start-up
 
     A = np.column_stack([normals, np.ones(len(beta))])
     res = linprog([0, 0, -1], A_ub=A, b_ub=beta, bounds=[(None, None)] * 3, method="highs")

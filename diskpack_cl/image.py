@@ -21,6 +21,9 @@ import os
 import warnings
 from importlib import resources
 from pathlib import Path
+import io
+import stat
+import sys
 
 import numpy as np
 
@@ -52,7 +55,7 @@ def sample_image_path():
 @contextlib.contextmanager
 def _bomb_limit(allow_large):
     """Keep Pillow's decompression-bomb check, or lift it for this block."""
-    from PIL import Image
+    from PIL import Image  # not loaded at start-up
 
     if not allow_large:
         with warnings.catch_warnings():
@@ -72,10 +75,6 @@ def _image_source(path):
     """``(name, source)`` for Pillow: a regular file's path, or the bytes of
     standard input (``"-"``) or of a pipe (``/dev/stdin``, a FIFO) in memory
     (Pillow needs to seek, and a pipe reports size 0)."""
-    import io
-    import stat
-    import sys
-
     if os.fspath(path) == "-":
         name, data = "standard input", sys.stdin.buffer.read()
     else:
@@ -129,7 +128,7 @@ def load_gray(path, *, invert=False, allow_large=False):
     >>> g.dtype, float(g.min()) >= 0.0, float(g.max()) <= 1.0
     (dtype('float64'), True, True)
     """
-    from PIL import Image, ImageOps, UnidentifiedImageError
+    from PIL import Image, ImageOps, UnidentifiedImageError  # not loaded at start-up
 
     name, source = _image_source(path)
     try:
@@ -259,7 +258,7 @@ def to_gray(image, *, invert=False, allow_large=False):
     if isinstance(image, (str, os.PathLike)):
         return load_gray(image, invert=invert, allow_large=allow_large)
     try:
-        from PIL import Image, ImageOps
+        from PIL import Image, ImageOps  # not loaded at start-up
 
         if isinstance(image, Image.Image):
             return _pil_to_gray(ImageOps.exif_transpose(image), invert=invert)

@@ -56,7 +56,7 @@ def grid_power_labels(points, weights, domain, shape):
     >>> grid_power_labels([[0.5, 0.5], [3.5, 0.5]], [0.0, 4.0], Domain.rect(4, 1), (1, 4)).tolist()
     [[0, 1, 1, 1]]
     """
-    from scipy.spatial import cKDTree
+    from scipy.spatial import cKDTree  # not loaded at start-up
 
     X = np.asarray(points, np.float64)
     if domain.periodic:

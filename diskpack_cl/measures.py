@@ -50,7 +50,7 @@ def kdtree(points, domain):
     >>> round(float(tree.query(X[0], k=2)[0][1]), 12)
     0.1
     """
-    from scipy.spatial import cKDTree
+    from scipy.spatial import cKDTree  # not loaded at start-up
 
     X = np.asarray(points, np.float64)
     if domain.periodic:

@@ -62,7 +62,7 @@ def _gib(b):
 
 def _raster_limits(free, device):
     """``(bytes per raster cell, bytes available, what)`` of the machine and the device."""
-    from ._device import NoOpenCLError, get_context
+    from ._device import NoOpenCLError, get_context  # not loaded at start-up
 
     limits = []
     if free is not None:
@@ -103,7 +103,7 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
     ...
     diskpack_cl.memory.MemoryLimit: supersample 2 makes a 1024x1024 raster ...
     """
-    from .schedule import auto_supersample
+    from .schedule import auto_supersample  # not loaded at start-up
 
     free = available_memory() if free is None else free
     s = supersample or auto_supersample(n, width, height, ink)

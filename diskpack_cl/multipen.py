@@ -38,6 +38,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
@@ -49,6 +51,7 @@ from .schedule import StippleOptions
 from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
                       dot_radii, result_summary)
 from .engine import make_engine
+from .pen_path import pen_path_order
 
 __all__ = ["ColorStippleResult", "assign_pens", "dots_per_pen", "pen_counts", "stipple_colors"]
 
@@ -236,10 +239,6 @@ def assign_pens(points, share, counts):
     >>> np.bincount(pen).tolist()
     [50, 150]
     """
-    from scipy.spatial import cKDTree
-
-    from .pen_path import pen_path_order
-
     x = np.asarray(points, dtype=np.float64)
     q = np.asarray(share, dtype=np.float64)
     left = np.array(counts, dtype=np.int64)
@@ -305,8 +304,6 @@ def _phases(stage, phases):
 
 def _pen_share(layers, points, sigma):
     """Each pen's share of the (blurred) ink at each point, (n, P)."""
-    from scipy import ndimage
-
     blurred = np.stack([ndimage.gaussian_filter(a, sigma, mode="reflect") for a in layers])
     ink = np.stack([field_at(b, points) for b in blurred], axis=1) + 1e-9
     return ink / ink.sum(axis=1, keepdims=True)

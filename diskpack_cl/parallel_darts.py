@@ -31,9 +31,12 @@ offset in a flat array and the torus needs no modulo in the inner loop.
 from __future__ import annotations
 
 import numpy as np
+import pyopencl as cl
 
 from ._checks import check_count
 from .measures import hexagonal_radius
+from ._device import NoOpenCLError, get_context, group_size, padded
+from ._kernels import build_program
 
 __all__ = ["parallel_darts"]
 
@@ -194,11 +197,6 @@ class _DeviceGrid:
     """
 
     def __init__(self, d, ctx):
-        import pyopencl as cl
-
-        from ._device import group_size
-        from ._kernels import build_program
-
         self.d, self.d2 = d, d * d
         self.g = g = max(1, int(np.ceil(np.sqrt(2.0) / d)))
         self.c = 1.0 / g
@@ -217,24 +215,18 @@ class _DeviceGrid:
 
     def _filled(self, m, value):
         """A device buffer of `m` float64, each `value` (filled on the device)."""
-        import pyopencl as cl
-
         buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, 8 * m)
         cl.enqueue_fill_buffer(self.queue, buf, np.float64(value), 0, 8 * m)
         return buf
 
     def _up(self, a):
         """A read-only device copy of the non-empty host array `a`."""
-        import pyopencl as cl
-
         mf = cl.mem_flags
         return cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))
 
     def _test(self, name, m, *args):
         """Kernel `name` over `m` cells, its other arguments `args` (host arrays are
         uploaded): its 0/1 answers as bools."""
-        import pyopencl as cl
-
         out = np.zeros(m, dtype=bool)
         if m:
             b_out = cl.Buffer(self.ctx, cl.mem_flags.WRITE_ONLY, m)
@@ -249,8 +241,6 @@ class _DeviceGrid:
 
     def _launch(self, name, m, *args):
         """Kernel `name` over `m` work items (the kernels skip the padding past `m`)."""
-        from ._device import padded
-
         group = self.group[name]
         self.k[name](self.queue, (padded(m, group),), (group,), *args)
 
@@ -354,8 +344,6 @@ def _grid_for(d, device):
     """The device grid where `device` (a context or name; None: the default) has float64
     and the grid is large enough to gain, else the numpy grid."""
     if device is not False and np.sqrt(2.0) / d >= 64:
-        from ._device import NoOpenCLError, get_context
-
         try:
             ctx = get_context(None if device is True else device)
         except NoOpenCLError:

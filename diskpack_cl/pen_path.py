@@ -12,6 +12,7 @@ number of dots only, so that the order is the same on every machine.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 __all__ = ["GREEDY_MAX", "PEN_PATHS", "TWO_OPT_WORK", "path_travel", "pen_path_order", "two_opt",
            "two_opt_rounds"]
@@ -75,8 +76,6 @@ def _greedy_order(p, start):
     The tree is rebuilt whenever half of its points have been visited, so a
     query for the 16 nearest almost always finds an unvisited one.
     """
-    from scipy.spatial import cKDTree
-
     n = len(p)
     visited = np.zeros(n, dtype=bool)
     order = np.empty(n, dtype=np.int64)
@@ -206,8 +205,6 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
     >>> two_opt(p, np.arange(4), rounds=0).tolist()
     [0, 1, 2, 3]
     """
-    from scipy.spatial import cKDTree
-
     p = np.asarray(points, dtype=np.float64)
     idx = np.concatenate([[-1], np.asarray(order, dtype=np.int64)])
     q = np.vstack([np.asarray(start, dtype=np.float64)[None, :], p[idx[1:]]])

@@ -17,9 +17,11 @@ from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
+from PIL import Image
 
 from . import analysis, picture_measures
 from .io import atomic_write
+from .box_analysis import box_measures
 
 __all__ = ["figure_format", "point_set_numbers", "point_set_report", "stipple_numbers",
            "stipple_report"]
@@ -31,7 +33,7 @@ _DPI = 100
 
 def _figure(figsize):
     try:
-        from matplotlib.figure import Figure
+        from matplotlib.figure import Figure  # the optional plot extra, for a figure only
     except ImportError as exc:
         raise ImportError(_MISSING) from exc
     return Figure(figsize=figsize, dpi=_DPI, layout="constrained")
@@ -64,8 +66,6 @@ def _save(fig, path, fmt):
     fig.savefig(buf, format=fmt, dpi=_DPI)
     data = buf.getvalue()
     if fmt == "png":
-        from PIL import Image
-
         with Image.open(io.BytesIO(data)) as im:
             small = im.convert("RGB").quantize(colors=64, dither=Image.Dither.NONE)
         out = io.BytesIO()
@@ -98,8 +98,6 @@ def _point_set_measures(sets, kmax, box=None):
     """(numbers, (freqs, P, centres, power, aniso)) of the realizations `sets`
     (on the unit torus, or in the box ``(W, H)``: :mod:`diskpack_cl.box_analysis`)."""
     if box is not None:
-        from .box_analysis import box_measures
-
         numbers, curves = box_measures(sets, box, kmax=kmax)
         return {k: (_nums(v) if isinstance(v, list) else v if isinstance(v, str) else _num(v))
                 for k, v in numbers.items()}, curves
@@ -168,8 +166,8 @@ def _points_panel(ax_pts, first, K):
 
 
 def _periodogram_panel(ax_per, P, k, K):
-    import matplotlib
-    from matplotlib.colors import LogNorm
+    import matplotlib  # the optional plot extra, for a figure only
+    from matplotlib.colors import LogNorm  # the optional plot extra, for a figure only
 
     positive = P[P > 0]
     vmax = max(float(positive.max()) if positive.size else 1.0, 4.0)

@@ -34,7 +34,7 @@ def plotter_config(name):
     6
     """
     try:
-        import vpype
+        import vpype  # the optional vpype extra
     except ImportError:
         raise ValueError("--plotter reads vpype's device profiles: pip install "
                          "\"diskpack_cl[vpype]\"") from None

@@ -17,10 +17,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .cells3 import CellMIC3, Domain3, exact_mis
 from .domain import box_sizes
 from .relax import STALL_GAIN, RelaxResult
+from ._device import NoOpenCLError
+from .sampling import _first_come, _rng
 
 __all__ = ["FCC_DENSITY", "fcc_radius", "normalized_radius3", "relax_poisson3", "as_box3",
            "dart_throwing3"]
@@ -52,8 +55,6 @@ def normalized_radius3(points, domain=Domain3.torus()):
     >>> round(normalized_radius3(g), 4)    # (pi / 6 / FCC_DENSITY)^(1/3)
     0.8909
     """
-    from scipy.spatial import cKDTree
-
     X = domain.check(points)
     tree = cKDTree(X, boxsize=domain.size if domain.periodic else None)
     d, _ = tree.query(X, k=2, workers=-1)   # every core: half the time at 100k points
@@ -92,8 +93,6 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     >>> p.shape, bool(normalized_radius3(p) >= 0.65)
     ((500, 3), True)
     """
-    from .sampling import _first_come, _rng
-
     rng = _rng(seed)
     d = 2.0 * rel_radius * fcc_radius(n, domain.volume)
     box = domain.size if domain.periodic else None
@@ -121,8 +120,6 @@ class _KeptDarts:
     def free(self, pts, cand):
         """A mask of the darts `cand` at least d from every point of `pts` (the points so
         far: those of the last call and more after them)."""
-        from scipy.spatial import cKDTree
-
         if not len(pts):
             return np.ones(len(cand), dtype=bool)
         if self.big is None or len(pts) - self.size > 0.25 * self.size:
@@ -200,8 +197,6 @@ def _solver(domain, backend, device, certify=True):
     if backend not in ("auto", "opencl", "exact"):
         raise ValueError(f"backend must be 'auto', 'opencl' or 'exact', got {backend!r}")
     if backend != "exact":
-        from ._device import NoOpenCLError
-
         try:
             engine = CellMIC3(domain, device)
             return (lambda X: engine.solve(X, certify)), "opencl"

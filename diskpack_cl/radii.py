@@ -9,6 +9,10 @@ all disks lie inside the image and are pairwise disjoint, and
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from .geometry import CertificateError, certify_disks, radius_octaves
 
 __all__ = ["base_radii", "radius_field", "detail_fields", "field_at", "largest_valid_k", "certified_k"]
 
@@ -78,8 +82,6 @@ def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
     if radii == "density":
         d = 1.0 - g
         if sigma and sigma > 0:
-            from scipy import ndimage
-
             d = ndimage.gaussian_filter(d, float(sigma), mode="reflect")
         return np.sqrt(floor / np.maximum(d, floor))
     raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
@@ -134,8 +136,6 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5):
     >>> bool(w[31, 31] > 0.9 and w[5, 5] < 0.01)
     True
     """
-    from scipy import ndimage
-
     d = 1.0 - np.asarray(gray, dtype=np.float64)
     dark = d[d > 0.05]
     dmed = float(np.median(dark)) if dark.size else float(d.mean())
@@ -194,8 +194,6 @@ def largest_valid_k(points, r, width, height):
     >>> largest_valid_k(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([1.0, 1.0]), 4, 2)
     1.0
     """
-    from scipy.spatial import cKDTree
-
     p = np.asarray(points, dtype=np.float64)
     r = np.asarray(r, dtype=np.float64)
     edge = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
@@ -207,7 +205,6 @@ def largest_valid_k(points, r, width, height):
     k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
     if k <= 0:
         return 0.0
-    from .geometry import radius_octaves
 
     classes = radius_octaves(r)
     trees = [cKDTree(p[c]) for c in classes]
@@ -251,8 +248,6 @@ def certified_k(points, r, width, height, domain):
     >>> round(float(k), 9), cert.valid
     (1.0, True)
     """
-    from .geometry import CertificateError, certify_disks
-
     k = largest_valid_k(points, r, width, height)
     if not k > 0:
         raise ValueError("two stipples coincide or lie on the image border: no valid radius")

@@ -14,6 +14,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import pyopencl as cl
 
 from . import _device
 from ._checks import check_sites
@@ -95,8 +96,6 @@ class RasterResult:
 
     def _fetch(self, name):
         """Copy one of this result's device maps to the host (once)."""
-        import pyopencl as cl
-
         entry = self._maps[name]
         if isinstance(entry, tuple):
             self._fetch_check(name)
@@ -207,8 +206,6 @@ class PowerRaster:
 
     def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None,
                  profile=False, timings=None):
-        import pyopencl as cl
-
         self.domain = domain
         self.timings = Stopwatch() if timings is None else timings
         self.shape = (int(shape[0]), int(shape[1]))
@@ -285,8 +282,6 @@ class PowerRaster:
 
     # -- buffers -----------------------------------------------------------
     def _site_buffer(self, name, host):
-        import pyopencl as cl
-
         nbytes = max(host.nbytes, 4)
         buf = self._site_bufs.get(name)
         if buf is None or buf.size < nbytes:
@@ -303,8 +298,6 @@ class PowerRaster:
             self.timings.kernel(name, (event.profile.end - event.profile.start) * 1e-9)
 
     def _map_buffer(self, name, nbytes):
-        import pyopencl as cl
-
         buf = self._maps.get(name)
         if buf is None or buf.size != nbytes:
             buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, nbytes)
@@ -479,8 +472,6 @@ class PowerRaster:
 
     def _cell_maxima(self, maps, n):
         """Per cell: the largest distance (float bits, -1: no pixel) and its first pixel."""
-        import pyopencl as cl
-
         npix = self.shape[0] * self.shape[1]
         rbits = np.full(n, -1, np.int32)
         argpix = np.full(n, INT_MAX, np.int32)
@@ -499,8 +490,6 @@ class PowerRaster:
     def _label(self, distance, bufs, grid, wmax, maps):
         """Run the labelling kernel in bands (see `max_groups`) into `maps`,
         and refuse the result if the kernel set a status bit."""
-        import pyopencl as cl
-
         ny, nx = self.shape
         dom = self.domain
         b_status = self._site_buffer("status", np.zeros(1, np.int32))
@@ -524,8 +513,6 @@ class PowerRaster:
 
     def _check_status(self, b_status):
         """Refuse a labelling whose kernel set a status bit (:data:`STATUS`)."""
-        import pyopencl as cl
-
         status = np.zeros(1, np.int32)
         cl.enqueue_copy(self.queue, status, b_status)
         if status[0]:
@@ -568,8 +555,6 @@ class PowerRaster:
 
     def _sums_to_centroids(self, acc, b_acc, sites):
         """``(centroids, mass)`` from the device's fixed-point sums."""
-        import pyopencl as cl
-
         ny, nx = self.shape
         dom = self.domain
         hx, hy = dom.width / nx, dom.height / ny

@@ -25,10 +25,15 @@ import re
 from pathlib import Path
 from types import SimpleNamespace
 from urllib.parse import quote, unquote
+import xml.etree.ElementTree as ET
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from diskpack_cl.io import load_npz
+from diskpack_cl.color import parse_pens
+from diskpack_cl.domain import Domain
+from diskpack_cl.geometry import certify_disks
 
 __all__ = ["CSV_TAG", "csv_name", "read_stipple"]
 
@@ -223,9 +228,6 @@ def _check_pens(res):
 
 def _certify(p, r, width, height):
     """The exact certificate again: every disk inside the picture, no two overlapping."""
-    from diskpack_cl.domain import Domain
-    from diskpack_cl.geometry import certify_disks
-
     cert = certify_disks(p, r, Domain.rect(width, height))
     if not cert.inside:
         edge = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]]) - r
@@ -239,8 +241,6 @@ def _certify(p, r, width, height):
 
 def _overlap(p, r):
     """``(i, j, gap)`` of the pair of dots with the smallest gap (< 0: they overlap)."""
-    from scipy.spatial import cKDTree
-
     pairs = cKDTree(p).query_pairs(2 * float(r.max()), output_type="ndarray")
     gaps = np.hypot(*(p[pairs[:, 0]] - p[pairs[:, 1]]).T) - r[pairs[:, 0]] - r[pairs[:, 1]]
     k = int(np.argmin(gaps))
@@ -345,8 +345,6 @@ def _csv_table(rows, columns, header):
 
 def _read_pen_csv(lines, pens, meta):
     """A colour stippling's CSV: dots, pens (percent-encoded names), their colours."""
-    from diskpack_cl.color import parse_pens
-
     coded, colors = parse_pens(pens.replace(":", "=").replace(";", ","))
     names = tuple(unquote(name) for name in coded)
     if not lines or lines[0].replace(" ", "").lower() != "x,y,r,pen":
@@ -373,8 +371,6 @@ _HEX = re.compile(r"#[0-9a-fA-F]{6}")
 
 
 def _read_svg(path):
-    import xml.etree.ElementTree as ET
-
     root = ET.parse(path).getroot()
     meta = _svg_metadata(root)
     layers = {g.get("{http://www.inkscape.org/namespaces/inkscape}label"): g

@@ -19,8 +19,9 @@ import numpy as np
 from .domain import Domain
 from .engine import BACKENDS, make_engine
 from .options import check_fields, option
-from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius, min_distance,
-                       normalized_radius)
+from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
+                       min_distance, min_distance_at_most, min_distance_since,
+                       nearest_neighbor_distances, normalized_radius)
 
 __all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
            "RadiusResult", "STALL_GAIN", "OVER_RELAX", "relax_summary"]
@@ -349,8 +350,7 @@ def _local_state(X, nn, eps, dom):
     """``(nn, ready, soon)``: the nearest-neighbour distances of X (a KD-tree's where `nn`
     is None), whether few enough points are bad to go local now, and whether few enough
     are that the next iterate probably will (:data:`~diskpack_cl.relax_local.LOCAL_SOON`)."""
-    from .measures import nearest_neighbor_distances
-    from .relax_local import LOCAL_SHARE, LOCAL_SOON, bad_points
+    from .relax_local import LOCAL_SHARE, LOCAL_SOON, bad_points  # not loaded at start-up
 
     nn = nearest_neighbor_distances(X, dom) if nn is None else nn
     share = len(bad_points(nn, eps, dom.area)) / len(X)
@@ -372,7 +372,7 @@ def _after_move(engine, X, stats, certify, soon):
 def _local_solver(engine, dom):
     """The per-cell kernel for the local steps' cells (its own, so that its seconds stay
     out of the global iterations' stages) where the engine has one, else None (exact_mic)."""
-    from .cells import CellMIC
+    from .cells import CellMIC  # not loaded at start-up
 
     cells = getattr(engine, "cells", None)
     return None if cells is None else CellMIC(dom, device=cells.ctx)
@@ -384,7 +384,7 @@ def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, sol
     :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured on the
     host, from `before` where given: X then, and a future of its
     :func:`~diskpack_cl.measures.close_pairs` within :data:`FINAL_REACH`."""
-    from .relax_local import relax_local
+    from .relax_local import relax_local  # not loaded at start-up
 
     X, more, reason = relax_local(X, nn, eps, dom, max_iter=max_iter - it, patience=patience,
                                   callback=callback, first=it + 1, stall_gain=STALL_GAIN,
@@ -401,8 +401,6 @@ def _final_distance(X, reach, dom, before):
     """The exact smallest distance of X: from the pairs within `reach` of the earlier X
     of `before` (:func:`_go_local`), where they serve, searching again only the points
     moved since; else by a search of all of X."""
-    from .measures import min_distance_at_most, min_distance_since
-
     pairs = None if before is None else before[1].result()
     d = np.inf if pairs is None else min_distance_since(X, before[0], pairs, dom)
     # every pair within the reach is found, so a minimum at most the reach is exact
@@ -430,8 +428,6 @@ def _rho(X, nn, verify, domain):
 def _certify_rho(X, rho, domain):
     """The independent check of rho: the host's pairs within the distance rho claims
     (:func:`~diskpack_cl.measures.min_distance_at_most`; all points' neighbours if none is)."""
-    from .measures import min_distance_at_most
-
     r_max = hexagonal_radius(len(X), domain.area)
     d = min_distance_at_most(X, 2 * rho * r_max * (1 + 1e-9), domain)
     exact = 0.5 * d / r_max if np.isfinite(d) else normalized_radius(X, domain)
@@ -556,7 +552,7 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
 
 def _start_sets(start):
     """``make(n, rng) -> (n, 2)`` start points of :func:`max_points_for_radius`."""
-    from .sampling import dart_throwing, random_points
+    from .sampling import dart_throwing, random_points  # not loaded at start-up
 
     if callable(start):
         return start

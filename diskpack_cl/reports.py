@@ -14,6 +14,10 @@ import numpy as np
 
 from .domain import DomainOptions, box_sizes
 from .options import check_fields, option
+from .geometry import Domain, certify_disks
+from .image import load_gray
+from .io import load_npz, read_points
+from .measures import nearest_neighbor_distances
 
 __all__ = ["PLOT_HINT", "have_matplotlib", "AnalyzeOptions", "analyze", "analyze_stippling",
            "analyze_color_stippling", "analyze_point_sets", "point_file_box"]
@@ -102,7 +106,7 @@ def analyze(paths, options=None, *, image=None, output=None, allow_large=False, 
     >>> analyze([path], kmax=8)["n"]
     50
     """
-    from .export import read_stipple
+    from .export import read_stipple  # not loaded at start-up
 
     o = replace(options or AnalyzeOptions(), **overrides)
     stipplings = [read_stipple(p) if str(p).lower().endswith(".npz") or _pen_csv(p) else None
@@ -141,9 +145,6 @@ def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large
     >>> numbers["n"], numbers["certificate"]["valid"]
     (60, True)
     """
-    from .geometry import Domain, certify_disks
-    from .image import load_gray
-
     points, radii, width, height = st.points, st.radii, st.width, st.height
     if image is None:
         raise ValueError(f"{path} is a stippling: give its input image with --image IMAGE "
@@ -158,18 +159,18 @@ def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large
     darkness = 1.0 - gray
     cert = certify_disks(points, radii, Domain.rect(width, height))
     if output is not None and have_matplotlib():
-        from .plots import stipple_report
+        from .plots import stipple_report  # not loaded at start-up
 
         return stipple_report(points, radii, darkness, output, certificate=cert, sigma=sigma,
                               title=title)
-    from .plots import stipple_numbers
+    from .plots import stipple_numbers  # not loaded at start-up
 
     return stipple_numbers(points, radii, darkness, cert, sigma=sigma)
 
 
 def _pen_csv(path):
     """Whether `path` is a colour stippling's CSV (its first line names the pens)."""
-    from .readers import CSV_TAG
+    from .readers import CSV_TAG  # not loaded at start-up
 
     if not str(path).lower().endswith(".csv"):
         return False
@@ -217,10 +218,9 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
     >>> [p["n"] for p in out["pens"]], out["reference"], out["certificate"]["valid"]
     ([128, 128], 'dots', True)
     """
-    from .color import color_measures, load_rgb, palette_of, pen_spacing, separate
-    from .geometry import Domain, certify_disks
-    from .multipen import hex_color
-    from .plots import _certificate_items, _num
+    from .color import color_measures, load_rgb, palette_of, pen_spacing, separate  # not loaded at start-up
+    from .multipen import hex_color  # not loaded at start-up
+    from .plots import _certificate_items, _num  # not loaded at start-up
 
     points, pen, names = np.asarray(st.points, np.float64), np.asarray(st.pen), tuple(st.names)
     W, H = int(st.width), int(st.height)
@@ -263,8 +263,6 @@ def point_file_box(path):
     >>> point_file_box(p)
     (2.0, 1.0)
     """
-    from .io import load_npz
-
     if not str(path).lower().endswith(".npz"):
         return None
     box = load_npz(path).get("box")
@@ -303,10 +301,6 @@ def analyze_point_sets(paths, *, output=None, kmax=None, title=None, box=None):
     >>> numbers["n"], numbers["realizations"]
     (100, 1)
     """
-    from .domain import Domain
-    from .io import read_points
-    from .measures import nearest_neighbor_distances
-
     box = _sets_box(paths, box)
     dom = Domain.torus() if box is None else Domain.rect(*box)
     sets = []
@@ -324,9 +318,9 @@ def analyze_point_sets(paths, *, output=None, kmax=None, title=None, box=None):
                              f"and the hexatic order need distinct points")
         sets.append(pts)
     if output is not None and have_matplotlib():
-        from .plots import point_set_report
+        from .plots import point_set_report  # not loaded at start-up
 
         return point_set_report(sets, output, title=title, kmax=kmax, box=box)
-    from .plots import point_set_numbers
+    from .plots import point_set_numbers  # not loaded at start-up
 
     return point_set_numbers(sets, kmax=kmax, box=box)

@@ -79,6 +79,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
@@ -87,6 +88,7 @@ from .domain import Domain
 from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
 from .engine import make_engine
+from .image import to_gray
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
            "equal_ink", "off_support"]
@@ -457,8 +459,6 @@ def _start_points(gray, opt, start):
 
 def _blurred(darkness, sigma):
     if sigma > 0:
-        from scipy import ndimage
-
         return ndimage.gaussian_filter(darkness, float(sigma), mode="reflect")
     return darkness
 
@@ -567,8 +567,6 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     >>> res.n, res.certificate.valid, res.engine
     (60, True, 'exact')
     """
-    from .image import to_gray
-
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its own stages and the engine's
     with watch("load"):

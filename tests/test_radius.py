@@ -46,13 +46,13 @@ def test_bad_arguments():
 
 def test_an_invalid_certificate_raises(monkeypatch):
     """certified_k never hands back disks that failed their certificate."""
-    from diskpack_cl import geometry
+    from diskpack_cl import radii
     from diskpack_cl.domain import Domain
     from diskpack_cl.geometry import Certificate, CertificateError
     from diskpack_cl.radii import certified_k
 
     bad = Certificate(valid=False, min_gap=-1.0, pairs_checked=1, inside=True, disjoint=False)
-    monkeypatch.setattr(geometry, "certify_disks", lambda *a, **k: bad)
+    monkeypatch.setattr(radii, "certify_disks", lambda *a, **k: bad)
     with pytest.raises(CertificateError, match="failed their certificate") as info:
         certified_k([[1.0, 1.0], [3.0, 1.0]], np.ones(2), 4, 2, Domain.rect(4, 2))
     assert info.value.certificate is bad

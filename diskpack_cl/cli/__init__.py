@@ -25,6 +25,9 @@ from __future__ import annotations
 
 import os
 import sys
+from importlib.metadata import version
+import signal
+import threading
 
 from ._batches import _raise_terminated, _Terminated
 from ._common import PROG, _HelpFormatter, _Parser, _UsageError
@@ -34,6 +37,8 @@ from .export import _add_export
 from .poisson import _add_poisson
 from .relax import _add_relax
 from .stipple import _add_stipple
+from diskpack_cl.io import OutputIsInputError
+from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
 
 __all__ = ["main", "build_parser"]
 
@@ -55,8 +60,6 @@ def build_parser():
     parser = _Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
-        from importlib.metadata import version
-
         parser.add_argument("--version", action="version", version=f"%(prog)s {version('diskpack_cl')}")
     except Exception:  # pragma: no cover - not installed
         pass
@@ -73,9 +76,6 @@ def _terminate_handlers():
     """Make SIGTERM and SIGHUP raise :class:`_Terminated`, as Ctrl-C raises
     KeyboardInterrupt, so that a killed run cleans up like an interrupted
     one; return the handlers to restore (none off the main thread)."""
-    import signal
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         return {}
     handlers = {}
@@ -137,11 +137,7 @@ def _main(argv):
     >>> main(["poisson", "-n", "64", "--eps", "2", "-o", path, "--quiet"])
     2
     """
-    import signal
-
-    from diskpack_cl import NoOpenCLError
-    from diskpack_cl.io import OutputIsInputError
-    from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
+    from diskpack_cl import NoOpenCLError  # not loaded at start-up
 
     parser = build_parser()
     try:
@@ -154,7 +150,7 @@ def _main(argv):
         device = getattr(args, "device", None) or (
             os.environ.get("DISKPACK_DEVICE") if hasattr(args, "device") else None)
         if device and "," not in device:
-            from diskpack_cl import get_context
+            from diskpack_cl import get_context  # not loaded at start-up
 
             get_context(device)
         return int(args.run(args) or 0)

@@ -5,6 +5,11 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import re
+import textwrap
+
+from diskpack_cl.image import sample_image_path
+from diskpack_cl.io import check_not_inputs
 
 
 PROG = "diskpack"
@@ -81,8 +86,6 @@ class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """Paragraphs of a description wrapped to the terminal; indented lines (examples) kept."""
 
     def _fill_text(self, text, width, indent):
-        import textwrap
-
         return "\n".join(
             line if line.startswith(" ") or len(line) <= width else
             textwrap.fill(line, width, initial_indent=indent, subsequent_indent=indent)
@@ -127,8 +130,7 @@ def _did_you_mean(parser, message):
     >>> _did_you_mean(p, "unrecognized arguments: --pen-width 3")
     '; did you mean one of --pen-mm, --pen-path?'
     """
-    import difflib
-    import re
+    import difflib  # not loaded at start-up
 
     choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
     if choice:
@@ -167,7 +169,7 @@ def _bar(args, desc, unit, total=None, *, leave=False):
     """A tqdm bar on stderr when it is a terminal and not ``--quiet``, else None."""
     if args.quiet or not sys.stderr.isatty():
         return None
-    from tqdm import tqdm
+    from tqdm import tqdm  # not loaded at start-up
 
     return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, dynamic_ncols=True,
                 leave=leave)
@@ -179,8 +181,6 @@ SAMPLE = "sample"
 def _image_path(text):
     """The word ``sample`` names the bundled sample photograph; anything else is a path."""
     if text == SAMPLE:
-        from diskpack_cl.image import sample_image_path
-
         return sample_image_path()
     return text
 
@@ -192,8 +192,7 @@ class _UsageError(ValueError):
 def _checked_outputs(args, inputs):
     """The ``-o`` paths, each checked (extension, folder), given once and none of the
     `inputs`, before any work."""
-    from diskpack_cl.export import check_output_path
-    from diskpack_cl.io import check_not_inputs
+    from diskpack_cl.export import check_output_path  # not loaded at start-up
 
     outputs = [str(o) for o in args.output]
     seen = set()

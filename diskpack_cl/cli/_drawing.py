@@ -8,12 +8,12 @@ import time
 from diskpack_cl.io import json_default
 
 from ._common import _bar
+from diskpack_cl.options import add_arguments
 
 
 def _drawing_options(p, summary):
     """The options of how the dots are drawn (SVG, PNG), of ``stipple`` and ``export``."""
-    from diskpack_cl.export import WriteOptions
-    from diskpack_cl.options import add_arguments
+    from diskpack_cl.export import WriteOptions  # not loaded at start-up
 
     o = add_arguments(p, WriteOptions)["output"]
     o.add_argument("--quiet", "-q", action="store_true",
@@ -70,7 +70,7 @@ def _touching_text(plot, no_overlap):
 def _write_and_report(args, write, res, gray, outputs, summary, t0):
     """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
     print it with --json; return the tail of the summary line."""
-    from diskpack_cl.jobs import write_stipple_outputs
+    from diskpack_cl.jobs import write_stipple_outputs  # not loaded at start-up
 
     t_write = time.perf_counter()
     progress, close = _write_bar(args, len(res.points), outputs)

@@ -6,9 +6,9 @@ import argparse
 import json
 import sys
 
-from diskpack_cl.io import json_default
+from diskpack_cl.io import check_not_inputs, check_writable, json_default
 from diskpack_cl.options import add_arguments, from_namespace
-from diskpack_cl.reports import AnalyzeOptions
+from diskpack_cl.reports import AnalyzeOptions, PLOT_HINT, analyze, have_matplotlib
 
 from ._common import PROG, _GivenOnce, _image_path
 
@@ -49,14 +49,11 @@ def _add_analyze(subparsers):
 
 
 def _run_analyze(args):
-    from diskpack_cl.reports import PLOT_HINT, analyze, have_matplotlib
-
     if args.output is None and not args.json:
         raise ValueError("nothing to do: give -o REPORT.png for a figure and/or --json")
     plot = args.output is not None
     if plot:
-        from diskpack_cl.io import check_not_inputs, check_writable
-        from diskpack_cl.plots import figure_format
+        from diskpack_cl.plots import figure_format  # not loaded at start-up
 
         figure_format(args.output)
         check_not_inputs([args.output], [*args.inputs, args.image])

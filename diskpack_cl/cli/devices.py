@@ -15,7 +15,7 @@ def _add_devices(subparsers):
 
 
 def _run_devices(args):
-    from diskpack_cl import describe, get_context, list_devices
+    from diskpack_cl import describe, get_context, list_devices  # not loaded at start-up
 
     rows = list_devices()
     for index, platform, device, kind in rows:

@@ -8,6 +8,7 @@ import time
 
 from ._common import PROG, _checked_outputs
 from ._drawing import _drawing_options, _write_and_report
+from diskpack_cl.options import from_namespace
 
 
 def _add_export(subparsers):
@@ -32,8 +33,7 @@ def _add_export(subparsers):
 
 
 def _run_export(args):
-    from diskpack_cl.export import WriteOptions, read_stipple
-    from diskpack_cl.options import from_namespace
+    from diskpack_cl.export import WriteOptions, read_stipple  # not loaded at start-up
 
     write = from_namespace(WriteOptions, args)
     t0 = time.perf_counter()

@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import json
 import sys
+import argparse
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import PROG, _bar, _device_options, _output_options
+from diskpack_cl.domain import DomainOptions
+from diskpack_cl.options import add_arguments, from_namespace
+from diskpack_cl.relax import RelaxOptions, relax_summary
 
 
 def _relax_options(p):
-    from diskpack_cl.domain import DomainOptions
-    from diskpack_cl.options import add_arguments
-    from diskpack_cl.relax import RelaxOptions
-
     add_arguments(p, RelaxOptions)
     p.add_argument("--verify", action="store_true",
                    help="check every iteration against scipy (exact MICs, KD-tree rho); slow")
@@ -41,9 +41,6 @@ def _unreached(args, what):
 
 def _relax(args):
     """The :class:`~diskpack_cl.relax.RelaxOptions` of the arguments."""
-    from diskpack_cl.options import from_namespace
-    from diskpack_cl.relax import RelaxOptions
-
     return from_namespace(RelaxOptions, args)
 
 
@@ -70,8 +67,7 @@ def _note_fallback(args, stats):
 def _relax_and_write(item, args, points=None, *, extra_summary=None):
     """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
     return the exit status."""
-    from diskpack_cl.jobs import relax_item
-    from diskpack_cl.relax import relax_summary
+    from diskpack_cl.jobs import relax_item  # not loaded at start-up
 
     callback, close = _progress(args, "relax")
     try:
@@ -121,8 +117,6 @@ def _add_relax(subparsers):
 
 
 def _columns(text):
-    import argparse
-
     parts = [t.strip() for t in text.split(",")]
     if len(parts) != 2 or not all(parts):
         raise argparse.ArgumentTypeError(f"need two columns A,B, got {text!r}")
@@ -131,8 +125,8 @@ def _columns(text):
 
 def _run_relax(args):
     """One input: a one-item plan without a manifest, run here; else a batch."""
-    from diskpack_cl.batch import relax_many
-    from diskpack_cl.jobs import plan_relax
+    from diskpack_cl.batch import relax_many  # not loaded at start-up
+    from diskpack_cl.jobs import plan_relax  # not loaded at start-up
 
     where = dict(box=args.box, columns=args.columns)
     if _batch_mode(args, args.inputs, [args.output]):

@@ -9,6 +9,8 @@ import time
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import PROG, _UsageError, _bar, _device_options, _image_path
 from ._drawing import _drawing_options, _write_and_report
+from diskpack_cl.image import ToneOptions
+from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
 
 
 def _phase_text(phase):
@@ -18,7 +20,7 @@ def _phase_text(phase):
 
 def _default_schedule_text():
     """The default schedule's bands, for --help."""
-    from diskpack_cl.schedule import SPACING_BANDS
+    from diskpack_cl.schedule import SPACING_BANDS  # not loaded at start-up
 
     parts, lo = [], 0.0
     for bound, phases, options in SPACING_BANDS:
@@ -32,7 +34,7 @@ def _default_schedule_text():
 
 def _schedules_text():
     """Each schedule's phases, for --help."""
-    from diskpack_cl.schedule import SCHEDULES
+    from diskpack_cl.schedule import SCHEDULES  # not loaded at start-up
 
     return (_default_schedule_text() + "; "
             + "; ".join(f"{name} = " + ", ".join(_phase_text(ph) for ph in phases)
@@ -40,10 +42,8 @@ def _schedules_text():
 
 
 def _add_stipple(subparsers):
-    from diskpack_cl.color import ColorOptions
-    from diskpack_cl.image import ToneOptions
-    from diskpack_cl.options import add_arguments
-    from diskpack_cl.schedule import _STIPPLING, COUNT, StippleCount, StippleOptions
+    from diskpack_cl.color import ColorOptions  # not loaded at start-up
+    from diskpack_cl.schedule import _STIPPLING, COUNT, StippleCount, StippleOptions  # not loaded at start-up
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -125,11 +125,9 @@ def _stipple_objects(args):
     Raises :class:`~diskpack_cl.options.OptionConflict` (status 2) for options
     that contradict each other.
     """
-    from diskpack_cl.color import ColorOptions
-    from diskpack_cl.export import WriteOptions
-    from diskpack_cl.image import ToneOptions
-    from diskpack_cl.options import from_namespace
-    from diskpack_cl.schedule import StippleOptions
+    from diskpack_cl.color import ColorOptions  # not loaded at start-up
+    from diskpack_cl.export import WriteOptions  # not loaded at start-up
+    from diskpack_cl.schedule import StippleOptions  # not loaded at start-up
 
     return (from_namespace(StippleOptions, args), from_namespace(ToneOptions, args),
             from_namespace(WriteOptions, args),
@@ -138,8 +136,7 @@ def _stipple_objects(args):
 
 def _count(args):
     """The dot count's keyword arguments (:class:`~diskpack_cl.schedule.StippleCount`)."""
-    from diskpack_cl.options import from_namespace
-    from diskpack_cl.schedule import StippleCount
+    from diskpack_cl.schedule import StippleCount  # not loaded at start-up
 
     return from_namespace(StippleCount, args).kwargs()
 
@@ -147,8 +144,6 @@ def _count(args):
 def _refuse_mixed(args, options, tone, write, separation):
     """Usage errors of options that do not go together: one pen's with several, a pen
     order without pens, -n tone without a dot size."""
-    from diskpack_cl.options import changed, flag_name
-
     if separation is not None:
         mono = [flag_name(k) for k in ("invert", "paper_tone") if getattr(options, k)]
         mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
@@ -176,7 +171,7 @@ def _run_stipple(args):
 
 def _warn_long_plot(args):
     """Before the work: say so when the SVG of -n dots takes more than a working day to plot."""
-    from diskpack_cl.drawing import long_plot
+    from diskpack_cl.drawing import long_plot  # not loaded at start-up
 
     slow = long_plot(args.n)
     if slow and not args.quiet and any(str(o).lower().endswith(".svg") for o in args.output):
@@ -186,7 +181,7 @@ def _warn_long_plot(args):
 def _run_stipple_one(args, options, tone, write, separation):
     """One input: a one-item plan, run here (:func:`diskpack_cl.jobs.stipple_item`)
     without a manifest; every refusal comes before the computation."""
-    from diskpack_cl.jobs import plan_stipple, stipple_item
+    from diskpack_cl.jobs import plan_stipple, stipple_item  # not loaded at start-up
 
     t0 = time.perf_counter()
     (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
@@ -225,7 +220,7 @@ def _result_text(res, summary):
 
 
 def _run_stipple_batch(args, options, tone, write, color=None):
-    from diskpack_cl.batch import stipple_many
+    from diskpack_cl.batch import stipple_many  # not loaded at start-up
 
     batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
                          options, **_count(args), recursive=args.recursive,

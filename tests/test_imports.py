@@ -1,0 +1,122 @@
+"""Every module of the package imports in a fresh interpreter, in any order, and no two
+modules import each other (directly or round a longer circle)."""
+
+import ast
+import random
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import diskpack_cl
+
+PACKAGE = Path(diskpack_cl.__file__).parent
+
+
+def _modules():
+    """``{module name: path}`` of every module of the package, subpackages included."""
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+MODULES = _modules()
+#: What an import may run: not ``__main__`` (the ``python -m`` script runs the command).
+IMPORTABLE = sorted(m for m in MODULES if not m.endswith(".__main__"))
+ORDERS = {"sorted": IMPORTABLE, "reversed": IMPORTABLE[::-1],
+          **{f"shuffled {seed}": random.Random(seed).sample(IMPORTABLE, len(IMPORTABLE))
+             for seed in (1, 2, 3)}}
+
+
+@pytest.mark.parametrize("order", ORDERS)
+def test_every_module_imports_in_a_fresh_interpreter(order):
+    names = ORDERS[order]
+    code = "import importlib, sys\nfor name in sys.argv[1:]:\n    importlib.import_module(name)"
+    proc = subprocess.run([sys.executable, "-c", code, *names], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+def _targets(module, path, node):
+    """The package's modules an import statement of `module` names."""
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    if isinstance(node, ast.Import):
+        found = [alias.name for alias in node.names]
+    else:
+        base = node.module or ""
+        if node.level:
+            parts = package.split(".")[: len(package.split(".")) - node.level + 1]
+            base = ".".join(parts + ([node.module] if node.module else []))
+        # `from pkg import mod` names the module, `from mod import name` the module itself
+        found = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in MODULES else base
+                 for alias in node.names]
+    out = set()
+    for name in found:
+        while name and name not in MODULES:
+            name = name.rpartition(".")[0]
+        if name and name != module:
+            out.add(name)
+    return out
+
+
+def import_graph():
+    """``{module: {imported module: [line, ...]}}``, counting the imports inside functions:
+    they close a circle as well, only later."""
+    graph = {}
+    for module, path in MODULES.items():
+        edges = graph.setdefault(module, {})
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                for target in _targets(module, path, node):
+                    edges.setdefault(target, []).append(node.lineno)
+    return graph
+
+
+def circles(graph):
+    """The strongly connected components of more than one module (Tarjan), sorted."""
+    index, low, stack, on_stack, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(found)
+
+
+def test_circles_finds_a_circle_round_three_modules():
+    graph = {"a": {"b": [1]}, "b": {"c": [1]}, "c": {"a": [1]}, "d": {"a": [1]}}
+    assert circles(graph) == [["a", "b", "c"]]
+
+
+def test_the_package_has_no_import_circle():
+    graph = import_graph()
+    found = circles(graph)
+    described = [" <-> ".join(c) + ": " + "; ".join(
+        f"{a} imports {b} (line {', '.join(map(str, graph[a][b]))})"
+        for a in c for b in sorted(graph[a]) if b in c) for c in found]
+    assert not found, "\n".join(described)
