@@ -48,7 +48,7 @@ class NoOpenCLError(RuntimeError):
 
 def _platforms():
     try:
-        import pyopencl as cl
+        import pyopencl as cl  # not loaded at start-up
     except ImportError as exc:  # pragma: no cover - pyopencl is a dependency
         raise NoOpenCLError(f"pyopencl is not importable ({exc}); {_FIX}") from exc
     try:
@@ -62,7 +62,7 @@ def _platforms():
 
 def _kinds(device):
     """The kinds among GPU, CPU and ACCELERATOR whose bits `device` reports."""
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     return [k for k in _KINDS if device.type & getattr(cl.device_type, k)]
 
@@ -76,7 +76,7 @@ def device_kind(device):
     ``" | "`` (Oclgrind: ``"GPU | CPU | ACCELERATOR"``); one with none, by
     pyopencl's name of its bits.
     """
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     kinds = _kinds(device)
     return " | ".join(kinds) if kinds else cl.device_type.to_string(device.type)
@@ -103,7 +103,7 @@ def list_devices():
     >>> all(len(row) == 4 and row[3] for row in rows)
     True
     """
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     rows = []
     for ip, p in enumerate(_platforms()):
@@ -151,7 +151,7 @@ def _pick(spec):
     alone wins over one that reports several kinds), or a substring of a
     device or platform name.
     """
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     pairs = []
     for ip, p in enumerate(_platforms()):
@@ -193,7 +193,7 @@ def get_context(device=None):
     >>> ctx is get_context()          # one context per device string
     True
     """
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     if isinstance(device, cl.Context):
         return device
@@ -260,7 +260,7 @@ def kernel_group_limit(kernel, device):
     registers and local memory allow) and the device's maximum.  Tests
     replace this function to force a small GPU's limits on any device.
     """
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     info = cl.kernel_work_group_info.WORK_GROUP_SIZE
     return min(kernel.get_work_group_info(info, device), device.max_work_group_size)
@@ -288,7 +288,7 @@ def group_size(kernel, device, want):
 
 def preferred_multiple(kernel, device):
     """The kernel's preferred work-group size multiple on `device` (a GPU's warp)."""
-    import pyopencl as cl  # on first use: _platforms makes its absence a NoOpenCLError
+    import pyopencl as cl  # not loaded at start-up
 
     info = cl.kernel_work_group_info.PREFERRED_WORK_GROUP_SIZE_MULTIPLE
     return kernel.get_work_group_info(info, device)

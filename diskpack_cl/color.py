@@ -53,12 +53,9 @@ from itertools import combinations
 import os
 
 import numpy as np
-from PIL import Image, ImageColor, ImageOps
-from scipy import ndimage
 
 from .options import OptionConflict, check_fields, option
 from .image import load_gray
-from .picture_measures import render_dots, spacing, tone_radius, tone_ssim
 
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
@@ -132,6 +129,8 @@ def delta_e(rgb_a, rgb_b):
 
 
 def _color(text):
+    from PIL import ImageColor  # not loaded at start-up
+
     try:
         return np.array(ImageColor.getrgb(text)[:3], dtype=np.float64) / 255.0
     except ValueError:
@@ -405,6 +404,8 @@ def load_rgb(image):
     >>> load_rgb(np.array([[[255, 0, 0, 0]]], dtype=np.uint8)).tolist()
     [[[1.0, 1.0, 1.0]]]
     """
+    from PIL import Image, ImageOps  # not loaded at start-up
+
     if isinstance(image, (str, os.PathLike)):
         load_gray(image)   # the same checks and messages as for gray input
         with Image.open(image) as im:
@@ -447,6 +448,8 @@ def render_pens(points, pen, radii, colors, shape, *, scale=3):
     >>> round(float(img[..., 0].mean()), 3)   # 1 - pi / 16
     0.804
     """
+    from .picture_measures import render_dots  # not loaded at start-up
+
     p = np.asarray(points, dtype=np.float64)
     pen = np.asarray(pen)
     H, W = shape
@@ -471,6 +474,8 @@ def pen_tone_radii(layers, counts):
     >>> pen_tone_radii(np.full((2, 10, 10), 0.5), [50, 0]).round(4).tolist()
     [0.5642, 1.0]
     """
+    from .picture_measures import tone_radius  # not loaded at start-up
+
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
 
 
@@ -478,6 +483,8 @@ def _own_density(points, shape):
     """The density of `points` themselves on the pixel grid, blurred over two of their
     spacings and scaled to a maximum of 1 (the reference of :func:`pen_spacing`
     without layers)."""
+    from scipy import ndimage  # not loaded at start-up
+
     H, W = shape
     hist = np.histogram2d(points[:, 1], points[:, 0], bins=(H, W), range=((0, H), (0, W)))[0]
     blurred = ndimage.gaussian_filter(hist, 2.0 * np.sqrt(W * H / len(points)), mode="constant")
@@ -521,6 +528,8 @@ def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
     >>> out["p01"][0] > 0.5, round(out["p01_joint"], 2) > 0.5
     (True, True)
     """
+    from .picture_measures import spacing  # not loaded at start-up
+
     p, pen = np.asarray(points, float), np.asarray(pen)
     P = pens or (int(pen.max()) + 1 if layers is None else len(layers))
     mine = [pen == q for q in range(P)]
@@ -576,6 +585,10 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
     >>> sorted(m), len(m["p01"]) == len(res.names)
     (['delta_e', 'p01', 'p01_joint', 'sigma', 'ssim'], True)
     """
+    from scipy import ndimage  # not loaded at start-up
+
+    from .picture_measures import tone_ssim  # not loaded at start-up
+
     p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
     P, H, W = layers.shape
     counts = np.bincount(pen, minlength=P)

@@ -25,7 +25,6 @@ import re
 from pathlib import Path
 from types import SimpleNamespace
 from urllib.parse import quote, unquote
-import xml.etree.ElementTree as ET
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -371,6 +370,8 @@ _HEX = re.compile(r"#[0-9a-fA-F]{6}")
 
 
 def _read_svg(path):
+    import xml.etree.ElementTree as ET  # not loaded at start-up
+
     root = ET.parse(path).getroot()
     meta = _svg_metadata(root)
     layers = {g.get("{http://www.inkscape.org/namespaces/inkscape}label"): g
