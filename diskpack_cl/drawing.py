@@ -12,7 +12,7 @@ this module, and neither imports the other's private names.
 from __future__ import annotations
 
 import json
-from xml.sax.saxutils import escape, quoteattr
+from xml.sax.saxutils import escape
 
 import numpy as np
 

@@ -46,7 +46,7 @@ from .stipple import stipple
 
 __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "Item", "expand_inputs", "render_template",
-    "check_outputs", "derive_seeds", "dots_for_image", "json_default",
+    "check_outputs", "derive_seeds", "dots_for_image",
     "write_stipple_outputs", "stipple_item", "relax_item", "run_job",
     "plan_stipple", "plan_poisson", "plan_relax",
 ]
@@ -327,22 +327,6 @@ def dots_for_image(width, height, *, n=None, density=None, dots_per_cm2=None, **
         cm = svg_layout(width, height, **layout)["scale"] / 10.0
         count = dots_per_cm2 * (width * cm) * (height * cm)
     return max(1, int(round(count)))
-
-
-def json_default(obj):
-    """``json.dumps(..., default=json_default)``: numpy scalars and arrays as numbers and lists.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> json.dumps({"k": np.float32(0.5), "a": np.arange(2)}, default=json_default)
-    '{"k": 0.5, "a": [0, 1]}'
-    """
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    return str(obj)
 
 
 # ------------------------------------------------------------- one item
