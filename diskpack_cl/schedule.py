@@ -507,11 +507,11 @@ class _Plan:
 
 
 def _plan_field(name):
-    """A field of :class:`StipplePlan`: the option's own (type, help), or ``n``, ``phases``."""
-    if name in ("n", "phases"):
-        return name, {"n": int, "phases": tuple}[name]
-    f = _OPTION_FIELDS[name]
-    return name, f.type, dataclasses.field(metadata=f.metadata)
+    """A field of :class:`StipplePlan` and its type: the option's, or ``n``'s, ``phases``'.
+
+    Not the option's help, range and default: a plan holds values, it is no options
+    object (:mod:`diskpack_cl.options` does not see it)."""
+    return name, {"n": int, "phases": tuple}.get(name) or _OPTION_FIELDS[name].type
 
 
 _OPTION_FIELDS = {f.name: f for f in dataclasses.fields(StippleOptions)}
