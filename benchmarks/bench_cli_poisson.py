@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import Delaunay
 
-from perf_rows import append
+from perf_rows import append, count, medians, num
 
 DISKPACK = [sys.executable, "-m", "diskpack_cl.cli"]
 
@@ -54,6 +54,18 @@ def same_as_library(n, out):
     return subprocess.run([sys.executable, "-c", code]).returncode == 0
 
 
+def summary(rows):
+    """``(header, rows)`` of the docs' table: per n, medians over the rounds (the ratio: median of
+    each round's) and whether the file held the library's points."""
+    same = {r["n"]: r["same"] for r in rows if r["kind"] == "cli_poisson_same"}
+    runs = [r for r in rows if r["kind"] == "cli_poisson"]
+    header = ["n", "rounds", "diskpack poisson (whole process)", "scipy Delaunay",
+              "process / Delaunay", "points of poisson_disk(n, seed=1)"]
+    return header, [[count(r["n"]), str(r["repeats"]), num(r["cli"], " s"), num(r["delaunay"], " s"),
+                     num(r["ratio"]), {True: "yes", False: "no"}.get(same.get(r["n"]), "")]
+                    for r in medians(runs, ("n",), ["cli", "delaunay", "ratio"])]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -75,7 +87,9 @@ def main():
     med = {k: statistics.median(row[k] for row in rows) for k in rows[0]}
     print(f"median: diskpack poisson {med['cli']:.2f} s, Delaunay {med['delaunay']:.2f} s, "
           f"ratio {med['ratio']:.3f}")
-    print("same points as poisson_disk(n, seed=1):", same_as_library(args.n, out))
+    same = same_as_library(args.n, out)
+    append(args.json, {"kind": "cli_poisson_same", "n": args.n, "same": same})
+    print("same points as poisson_disk(n, seed=1):", same)
 
 
 if __name__ == "__main__":

@@ -840,7 +840,8 @@ def radius_octaves(r):
     pos = r > 0
     lr = np.full(len(r), -1, np.int64)
     if pos.any():
-        lr[pos] = np.floor(np.log2(r[pos] / r[pos].min())).astype(np.int64)
+        # a difference of logarithms: the ratio overflows where the smallest radius is subnormal
+        lr[pos] = np.floor(np.log2(r[pos]) - np.log2(r[pos].min())).astype(np.int64)
     return [np.flatnonzero(lr == c) for c in np.unique(lr)]
 
 

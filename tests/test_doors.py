@@ -524,7 +524,7 @@ def test_an_unknown_device_in_the_environment_is_an_error(tmp_path, capsys, monk
 
 
 def test_ctrl_c_while_the_parser_is_built(monkeypatch, capsys):
-    def interrupted():
+    def interrupted(*_):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(cli, "build_parser", interrupted)

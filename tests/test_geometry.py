@@ -352,3 +352,13 @@ def test_query_pairs_finds_every_point_inside_each_radius(n, m, seed, spread, k)
     d = np.hypot(*(centers[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
     want = set(zip(*np.nonzero(d <= radius[:, None] * (1 + 1e-12))))
     assert len(rows) == len(want) and set(zip(rows.tolist(), idx.tolist())) == want
+
+
+def test_certify_disks_with_a_subnormal_radius():
+    """The octaves of radii are a difference of logarithms: the ratio to a subnormal radius
+    overflowed (a RuntimeWarning, and every disk in one wrong octave)."""
+    from diskpack_cl.geometry import radius_octaves
+
+    r = np.array([4.5e-320, 1.5, 1.5, 3.0])
+    assert [c.tolist() for c in radius_octaves(r)] == [[0], [1, 2], [3]]
+    assert certify_disks([[4, 4], [14, 4], [24, 4], [34, 9]], r, Domain.rect(40, 30)).valid

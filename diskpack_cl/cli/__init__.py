@@ -48,8 +48,12 @@ _SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_expor
                 _add_analyze)
 
 
-def build_parser():
-    """The argument parser, with the subcommands of :data:`_SUBCOMMANDS`.
+def build_parser(only=None):
+    """The argument parser, with the subcommands of :data:`_SUBCOMMANDS` (`only`: that one).
+
+    A run builds only the subcommand it names: the options of the others load
+    the modules that define them (the stippling's options cost a third of a
+    second), which a ``diskpack poisson`` never uses.
 
     Examples
     --------
@@ -66,7 +70,8 @@ def build_parser():
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
                                        parser_class=_Parser)
     for add in _SUBCOMMANDS:
-        add(subparsers)
+        if only is None or add.__name__ == f"_add_{only}":
+            add(subparsers)
     for sub in subparsers.choices.values():   # long paragraphs wrapped, examples kept
         sub.formatter_class = _HelpFormatter
     return parser
@@ -139,7 +144,9 @@ def _main(argv):
     """
     from diskpack_cl import NoOpenCLError  # not loaded at start-up
 
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    named = argv[0] if argv and f"_add_{argv[0]}" in {a.__name__ for a in _SUBCOMMANDS} else None
+    parser = build_parser(named)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors

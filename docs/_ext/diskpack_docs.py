@@ -219,6 +219,7 @@ PERF_TABLES = {
     "qmc": ("bench_qmc", "qmc.jsonl", "summary", {}),
     "paper": ("bench_paper", "paper.jsonl", "summary", {}),
     "million": ("bench_million", "million.jsonl", "summary", {}),
+    "cli-poisson": ("bench_cli_poisson", "cli_poisson.jsonl", "summary", {}),
     "stipple": ("bench_stipple", "stipple.jsonl", "summary", {}),
     "stipple-end-to-end": ("bench_stipple", "stipple.jsonl", "summary_end_to_end", {}),
     "stipple-large": ("stipple_large", "stipple_large.jsonl", "summary", {}),
