@@ -600,3 +600,17 @@ def test_a_plot_of_many_hours_is_announced_before_the_work(tmp_path, capsys, no_
 
 def test_every_test_has_a_time_limit(request):
     assert float(request.config.getini("timeout")) > 0
+
+
+def test_an_interrupted_batch_with_nothing_done_names_no_manifest(tmp_path, capsys, monkeypatch):
+    """Interrupted before any item finished, a batch does not point to a manifest that does
+    not exist."""
+    import diskpack_cl.batch
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(diskpack_cl.batch.Batch, "__iter__", interrupted)
+    rc, _, err = _run(["poisson", "--count", "2", "-n", "50", "-o",
+                       str(tmp_path / "sets" / "{i}.npz")], capsys)
+    assert rc == 130 and "none had finished" in err and "manifest.jsonl" not in err

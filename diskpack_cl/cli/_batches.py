@@ -136,8 +136,10 @@ def _report_batch(args, batch):
         if bar is not None:
             bar.close()
         done = sum(counts.values())
-        print(f"{PROG}: error: interrupted after {done} of {total} items; the finished ones "
-              f"are in {batch.manifest}: rerun the same command to resume", file=sys.stderr)
+        kept = (f"the finished ones are in {batch.manifest}" if batch.manifest
+                and os.path.exists(batch.manifest) else "none had finished")
+        print(f"{PROG}: error: interrupted after {done} of {total} items; {kept}: rerun the "
+              f"same command to resume", file=sys.stderr)
         return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
     if bar is not None:
         bar.close()
