@@ -23,6 +23,13 @@ total n on the joint density (and that run's P01) (both after a mono run of that
 neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality.jsonl``; crops
 (photograph, naive overlays, multi-class) to ``docs/figures/color_crop_*.png``;
 ``--table FILE`` prints the markdown table of ``docs/color.md``.
+
+``--black-generation G [G ...]`` measures CMYK's black generation instead:
+each photograph and a dark, saturated version of it (:func:`dark_saturated`)
+stippled at every setting G; per-channel correlation (sRGB) and mean
+CIEDE2000 of the blurred drawing and, as ``separation``, of the perfect area
+mix of the layers against the photograph (:func:`preview_measures`); rows to
+``--out`` if given, the markdown table of ``docs/color.md`` to stdout.
 """
 
 from __future__ import annotations
@@ -38,7 +45,8 @@ import numpy as np
 
 from diskpack_cl import stipple
 from diskpack_cl.picture_measures import spacing
-from diskpack_cl.color import PALETTES, color_measures, load_rgb, pen_tone_radii, separate
+from diskpack_cl.color import (PALETTES, color_measures, linear_to_srgb, load_rgb, pen_tone_radii,
+                               render_pens, separate, srgb_to_linear)
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.multipen import stipple_colors
 
@@ -117,6 +125,54 @@ def run(name, palette, n, figures, seed=0, overlays=True):
     return rows
 
 
+def dark_saturated(rgb):
+    """A dark, saturated version of a photograph: Pillow's colour enhancement x2, then brightness x0.4."""
+    from PIL import Image, ImageEnhance
+
+    im = Image.fromarray(np.round(rgb * 255).astype(np.uint8))
+    im = ImageEnhance.Brightness(ImageEnhance.Color(im).enhance(2.0)).enhance(0.4)
+    return np.asarray(im, dtype=np.float64) / 255.0
+
+
+def preview_measures(drawn, rgb, sigma):
+    """Per-channel correlation (sRGB R, G, B) and mean CIEDE2000 of a drawing (linear light)
+    against the photograph (sRGB), both blurred by `sigma` px in linear light."""
+    from scipy import ndimage
+    from skimage.color import deltaE_ciede2000, rgb2lab
+
+    a, b = (linear_to_srgb(ndimage.gaussian_filter(x, (sigma, sigma, 0), mode="reflect"))
+            for x in (drawn, srgb_to_linear(rgb)))
+    corr = [float(np.corrcoef(a[..., c].ravel(), b[..., c].ravel())[0, 1]) for c in range(3)]
+    return {"corr_rgb": corr, "ciede2000": float(deltaE_ciede2000(rgb2lab(a), rgb2lab(b)).mean())}
+
+
+def black_generation_rows(name, n, settings, seed=0):
+    """Rows of CMYK stipplings of `name` and its :func:`dark_saturated` version at each black generation."""
+    photo = load_rgb(ROOT / "tests/data/color" / f"{name}.png")
+    for variant, rgb in (("bright", photo), ("dark", dark_saturated(photo))):
+        sigma = float(np.sqrt(rgb.shape[0] * rgb.shape[1] / n))
+        for g in settings:
+            res = stipple_colors(rgb, n, "cmyk", black_generation=g, seed=seed)
+            drawn = render_pens(res.points, res.pen, pen_tone_radii(res.layers, res.counts),
+                                res.colors, rgb.shape[:2])
+            ideal = srgb_to_linear(separate(rgb, "cmyk", black_generation=g).render())
+            yield {"image": name, "variant": variant, "n": n, "seed": seed, "black_generation": g,
+                   "pens": list(res.names), "counts": np.asarray(res.counts).tolist(),
+                   **preview_measures(drawn, rgb, sigma), "separation": preview_measures(ideal, rgb, sigma)}
+
+
+def black_generation_table(rows):
+    """Markdown rows of :func:`black_generation_rows`."""
+    out = ["| image | G | dots Y/C/M/K | correlation R / G / B | CIEDE2000 | separation alone: "
+           "correlation, CIEDE2000 |", "| --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        sep = r["separation"]
+        out.append(f"| {r['image']} ({r['variant']}) | {r['black_generation']:g} | "
+                   f"{'/'.join(map(str, r['counts']))} | {_cells(r['corr_rgb'])} | {r['ciede2000']:.1f} | "
+                   f"{_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |")
+    return "\n".join(out)
+
+
 def _cells(values):
     return " / ".join("-" if v is None else f"{v:.2f}" for v in values)
 
@@ -140,7 +196,10 @@ def main(argv=None):
     ap.add_argument("--table", metavar="JSONL", help="print the markdown table of a results file and stop")
     ap.add_argument("--n", type=int, nargs="+", default=[5000, 15000])
     ap.add_argument("--images", nargs="+", default=list(IMAGES))
-    ap.add_argument("--out", default=str(ROOT / "docs/color_quality.jsonl"))
+    ap.add_argument("--out", help="results file (default docs/color_quality.jsonl; none with "
+                    "--black-generation)")
+    ap.add_argument("--black-generation", type=float, nargs="+", metavar="G",
+                    help="measure CMYK at these black generations on bright and dark photographs")
     ap.add_argument("--no-figures", action="store_true")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0],
                     help="stipple each pair with these seeds (the spread over seeds is the noise)")
@@ -150,9 +209,16 @@ def main(argv=None):
     if args.table:
         print(table(args.table))
         return
+    if args.black_generation:
+        rows = [row for name in args.images for n in args.n for seed in args.seeds
+                for row in black_generation_rows(name, n, args.black_generation, seed)]
+        if args.out:
+            Path(args.out).write_text("".join(json.dumps(r) + "\n" for r in rows))
+        print(black_generation_table(rows))
+        return
     jobs = [(name, "cmyk", n) for name in args.images for n in args.n]
     jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in args.images]
-    with open(args.out, "w") as fh:
+    with open(args.out or ROOT / "docs/color_quality.jsonl", "w") as fh:
         for (name, palette, n), seed in itertools.product(jobs, args.seeds):
             figures = not args.no_figures and palette == "cmyk" and n == max(args.n) and seed == args.seeds[0]
             for row in run(name, palette, n, figures, seed, not args.multi_only):
