@@ -17,13 +17,14 @@ from __future__ import annotations
 import numpy as np
 
 from .color import linear_to_srgb, srgb_to_linear
-from .drawing import (PLOT_SPEED_MM_S, check_fit, ink_coverage, inside_page, plot_time, svg_dots,
-                      svg_head, svg_layout, svg_meta, svg_size, xml_attr)
+from .drawing import (FRAME_INK, MM_PER_INCH, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
+                      place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
+                      svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
 from .overlap import cap_radii, ink_figures
 
-__all__ = ["layer_order", "write_color_svg", "write_color_png"]
+__all__ = ["layer_order", "write_color_svg", "write_color_png", "write_color_page_png"]
 
 
 def layer_order(names, colors, pen_order=None):
@@ -66,6 +67,22 @@ def _paint(color, pen_mm):
             f'stroke-linejoin="round"')
 
 
+def _drawn_dots(result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
+                radius_scale=1.0, dots="tone", page=None, landscape=False, margin_mm=None,
+                plotter=None, pen_mm=None, no_overlap=False):
+    """The page and the dots of :func:`write_color_svg`: ``(layout, centres, radii, drawn
+    radii, moved)``, in mm (``radii`` before ``no_overlap`` and the move inward)."""
+    lay = svg_layout(float(result.width), float(result.height), width_mm=width_mm,
+                     height_mm=height_mm, dpi=dpi, page=page, landscape=landscape,
+                     margin_mm=margin_mm, plotter=plotter)
+    rad = _radii(result, lay["scale"], dots, dot_mm, radius_scale)
+    check_fit(rad, lay["picture"], pen_mm)
+    pm, drawn, moved = place_dots(np.asarray(result.points), rad,
+                                  np.asarray(result.radii) * lay["scale"], lay,
+                                  no_overlap=no_overlap)
+    return lay, pm, rad, drawn, moved
+
+
 def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
                     radius_scale=1.0, pen_path="auto", pen_mm=None, dots="tone", pen_order=None,
                     invert=False, page=None, landscape=False, margin_mm=None, plotter=None,
@@ -100,17 +117,13 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     if invert:
         raise ValueError("invert has no meaning for colour stippling")
     W, H = float(result.width), float(result.height)
-    lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
-                     landscape=landscape, margin_mm=margin_mm, plotter=plotter)
-    rad = _radii(result, lay["scale"], dots, dot_mm, radius_scale)
-    check_fit(rad, lay["picture"], pen_mm)
-    packing = np.asarray(result.radii) * lay["scale"]
-    pm, drawn, moved = inside_page(np.asarray(result.points) * lay["scale"],
-                                    cap_radii(rad, packing) if no_overlap else rad,
-                                    *lay["picture"])
-    ink = ink_figures(pm, rad, packing, pen=pen_mm, no_overlap=no_overlap)
+    lay, pm, rad, drawn, moved = _drawn_dots(
+        result, width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
+        radius_scale=radius_scale, dots=dots, page=page, landscape=landscape,
+        margin_mm=margin_mm, plotter=plotter, pen_mm=pen_mm, no_overlap=no_overlap)
+    ink = ink_figures(pm, rad, np.asarray(result.radii) * lay["scale"], pen=pen_mm,
+                      no_overlap=no_overlap)
     rad = drawn
-    pm += lay["offset"]
     order = layer_order(result.names, result.colors, pen_order)
     meta = dict(svg_meta(result, lay, rad, pen_mm, False, result.names[order[0]]),
                 pens=[result.names[p] for p in order])
@@ -164,8 +177,6 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     ...     im.mode, im.size
     ('RGB', (64, 48))
     """
-    from PIL import Image
-
     if invert:
         raise ValueError("invert has no meaning for colour stippling")
     ow, oh = max(1, round(result.width * scale)), max(1, round(result.height * scale))
@@ -177,17 +188,56 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     if pen_px is not None:   # what the pen draws: at least a touch a pen wide
         rad = np.maximum(rad, 0.5 * pen_px)
     check_fit(rad, (ow, oh), pen_px, unit="px")
-    lin = np.ones((oh, ow, 3))
+    save_png(path, linear_to_srgb(_composite(result, p, rad, np.ones((oh, ow, 3)), aa, progress)))
+    return {"width": ow, "height": oh, "n": int(len(p))}
+
+
+def _composite(result, centres, rad, lin, aa, progress):
+    """``lin`` (linear light) under every pen's dots (centres and radii in its pixels)."""
+    oh, ow = lin.shape[:2]
     absorb = 1.0 - srgb_to_linear(result.colors)
     for q in range(len(result.names)):
         mine = result.pen == q
         if np.any(mine):
-            cover = ink_coverage(p[mine], rad[mine], ow, oh, int(aa), progress)
+            cover = ink_coverage(centres[mine], rad[mine], ow, oh, int(aa), progress)
             lin *= 1.0 - cover[..., None] * absorb[q]
-    img = Image.fromarray(np.round(linear_to_srgb(lin) * 255).astype(np.uint8), "RGB")
-    with atomic_write(path, "wb") as fh:
-        img.save(fh, format="PNG")
-    return {"width": ow, "height": oh, "n": int(len(p))}
+    return lin
+
+
+def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert=False,
+                         **drawing):
+    """Write a colour PNG of the whole page as :func:`write_color_svg` lays it out (8-bit sRGB).
+
+    What :func:`diskpack_cl.export.write_page_png` writes for a colour
+    stippling: the paper, a light line at the margins, each pen's dots where
+    the SVG draws them, as far as their ink reaches, inks composited as in
+    :func:`write_color_png`. `drawing` are the options of
+    :func:`write_color_svg` that lay out the page and size the dots;
+    `invert` is refused.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from types import SimpleNamespace
+    >>> res = SimpleNamespace(points=np.array([[2.0, 2.0], [6.0, 2.0]]), radii=np.array([1.0, 1.0]),
+    ...                       width=8, height=4, pen=np.array([0, 1]), names=("red", "blue"),
+    ...                       colors=np.array([[1, 0, 0], [0, 0, 1.0]]))
+    >>> info = write_color_page_png(os.path.join(tempfile.mkdtemp(), "page.png"), res,
+    ...                             px_per_mm=2.0, page="a5", dots="packing")
+    >>> info["width"], info["height"], round(info["dpi"], 1)
+    (296, 420, 50.8)
+    """
+    if invert:
+        raise ValueError("invert has no meaning for colour stippling")
+    lay, pm, _, rad, _ = _drawn_dots(result, **drawing)
+    line = page_frame(lay, px_per_mm)
+    pen = drawing.get("pen_mm")
+    ink_rad = rad if pen is None else np.maximum(rad, 0.5 * pen)
+    paper = np.repeat(1.0 - FRAME_INK * line[..., None], 3, axis=2)
+    lin = _composite(result, pm * px_per_mm, ink_rad * px_per_mm, paper, aa, progress)
+    save_png(path, linear_to_srgb(lin), dpi=px_per_mm * MM_PER_INCH)
+    return {"width": line.shape[1], "height": line.shape[0], "n": int(len(pm)),
+            "dpi": px_per_mm * MM_PER_INCH}
 
 
 COLOR_WRITERS = {".svg": write_color_svg, ".png": write_color_png}

@@ -19,9 +19,9 @@ import numpy as np
 from diskpack_cl.options import OptionConflict
 
 __all__ = [
-    "DEFAULT_MARGIN_MM", "EDGE_MM", "MM_PER_INCH", "PAPERS", "PEN_LIFT_S", "PLOT_SPEED_MM_S",
+    "DEFAULT_MARGIN_MM", "EDGE_MM", "FRAME_INK", "MM_PER_INCH", "PAPERS", "PEN_LIFT_S", "PLOT_SPEED_MM_S",
     "LONG_PLOT_S", "TOUCH_MM", "check_fit", "check_size", "long_plot", "ink_coverage", "inside_page", "mm_per_px", "paper_size",
-    "pen_rings", "plot_time", "svg_dots", "svg_head", "svg_layout", "svg_meta", "svg_size",
+    "page_frame", "pen_rings", "place_dots", "plot_time", "save_png", "svg_dots", "svg_head", "svg_layout", "svg_meta", "svg_size",
     "xml_attr", "xml_text",
 ]
 
@@ -165,7 +165,9 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     -------
     dict
         ``scale`` (mm per px), ``picture`` and ``page`` ((w, h) mm),
-        ``offset`` ((x, y) mm of the picture's corner on the page).
+        ``offset`` ((x, y) mm of the picture's corner on the page),
+        ``area`` ((x0, y0, x1, y1) mm: the usable part of the page, inside
+        the margins and the plotter's reach).
 
     Examples
     --------
@@ -178,7 +180,8 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
             raise ValueError("a margin or a plotter needs a page: give page (e.g. 'a4') too")
         s = mm_per_px(width, height, width_mm, height_mm, dpi)
         return {"scale": s, "picture": (width * s, height * s),
-                "page": (width * s, height * s), "offset": (0.0, 0.0)}
+                "page": (width * s, height * s), "offset": (0.0, 0.0),
+                "area": (0.0, 0.0, width * s, height * s)}
     pw, ph = paper_size(page, landscape=landscape)
     margin = DEFAULT_MARGIN_MM if margin_mm is None else float(margin_mm)
     if not 0 <= margin < 0.5 * min(pw, ph):
@@ -200,7 +203,7 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
                          f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page"
                          + ("" if plotter is None else f" and the plotting area of {plotter}"))
     return {"scale": s, "picture": (w, h), "page": (pw, ph),
-            "offset": (0.5 * (x0 + x1 - w), 0.5 * (y0 + y1 - h))}
+            "offset": (0.5 * (x0 + x1 - w), 0.5 * (y0 + y1 - h)), "area": (x0, y0, x1, y1)}
 
 
 #: Plot-time model of :func:`plot_time`: pen-down and pen-up speed (mm/s)
@@ -394,6 +397,93 @@ def inside_page(c, rad, wmm, hmm):
     inside = np.column_stack([np.clip(c[:, 0], ext, wmm - ext), np.clip(c[:, 1], ext, hmm - ext)])
     moved = int(np.count_nonzero(np.any(inside != c, axis=1)))
     return inside, rad, moved
+
+
+def place_dots(points, rad, packing, lay, *, no_overlap=False):
+    """Where the SVG draws the dots: centres on the page and drawn radii (mm).
+
+    ``points`` are in image pixels, ``rad`` and ``packing`` (the drawn and
+    the packing radii) in mm, ``lay`` is :func:`svg_layout`'s; with
+    ``no_overlap`` each drawn radius is at most its packing radius
+    (:func:`diskpack_cl.overlap.cap_radii`). Dots that would stick out of
+    the picture move inward (:func:`inside_page`).
+
+    Returns
+    -------
+    centres : (n, 2) array
+        On the page, mm.
+    radii : (n,) array
+    moved : int
+        How many dots moved inward.
+
+    Examples
+    --------
+    >>> lay = svg_layout(4, 2, width_mm=40, page="a5", margin_mm=10)
+    >>> centres, radii, moved = place_dots(np.array([[2.0, 1.0]]), np.array([1.0]), np.array([2.0]), lay)
+    >>> centres.tolist(), moved
+    ([[74.0, 105.0]], 0)
+    """
+    from .overlap import cap_radii  # its KD-tree is not loaded at start-up
+
+    pm, drawn, moved = inside_page(points * lay["scale"],
+                                   cap_radii(rad, packing) if no_overlap else rad,
+                                   *lay["picture"])
+    return pm + lay["offset"], drawn, moved
+
+
+#: How dark (as ink coverage) the margin line of :func:`page_frame` is.
+FRAME_INK = 0.2
+
+
+def page_frame(lay, px_per_mm):
+    """The whole-page preview's pixels: the page, and a line around its usable area.
+
+    The line runs on the pixels just outside ``lay["area"]`` (the margins'
+    inner edge), so that it never covers a place a dot may ink.
+
+    Returns
+    -------
+    (oh, ow) bool array
+        True on the line; its shape is the page at ``px_per_mm``.
+
+    Examples
+    --------
+    >>> lay = svg_layout(4, 4, page="10x8mm", margin_mm=2)
+    >>> page_frame(lay, 1.0).astype(int)[:3].tolist()
+    [[0, 0, 0, 0, 0, 0, 0, 0, 0, 0], [0, 1, 1, 1, 1, 1, 1, 1, 1, 0], [0, 1, 0, 0, 0, 0, 0, 0, 1, 0]]
+    """
+    ow, oh = (max(1, round(v * px_per_mm)) for v in lay["page"])
+    x0, y0, x1, y1 = lay["area"]
+    i0, j0 = (max(int(np.floor(v * px_per_mm)) - 1, 0) for v in (x0, y0))
+    i1, j1 = min(int(np.ceil(x1 * px_per_mm)), ow - 1), min(int(np.ceil(y1 * px_per_mm)), oh - 1)
+    line = np.zeros((oh, ow), dtype=bool)
+    line[j0 : j1 + 1, [i0, i1]] = True
+    line[[j0, j1], i0 : i1 + 1] = True
+    return line
+
+
+def save_png(path, values, dpi=None):
+    """Write values in [0, 1] as an 8-bit PNG (gray for (h, w), sRGB for (h, w, 3)), atomically.
+
+    ``dpi`` is recorded in the file (its printed size).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from PIL import Image
+    >>> path = os.path.join(tempfile.mkdtemp(), "a.png")
+    >>> save_png(path, np.ones((2, 3)), dpi=150)
+    >>> with Image.open(path) as im:
+    ...     im.mode, im.size, round(im.info["dpi"][0])
+    ('L', (3, 2), 150)
+    """
+    from PIL import Image
+
+    from .io import atomic_write
+
+    img = Image.fromarray(np.round(np.asarray(values) * 255).astype(np.uint8))
+    with atomic_write(path, "wb") as fh:
+        img.save(fh, format="PNG", **({} if dpi is None else {"dpi": (dpi, dpi)}))
 
 
 def ink_coverage(c, rad, ow, oh, aa, progress=None):

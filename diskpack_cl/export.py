@@ -17,9 +17,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S,
-                                  check_fit, check_size, ink_coverage, inside_page, mm_per_px, paper_size,
-                                  plot_time, svg_dots, svg_head, svg_layout, svg_meta, svg_size)
+from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, FRAME_INK, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S,
+                                  MM_PER_INCH, check_fit, check_size, ink_coverage, mm_per_px,
+                                  page_frame, paper_size, place_dots, plot_time, save_png, svg_dots,
+                                  svg_head, svg_layout, svg_meta, svg_size)
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.options import OptionConflict, check_fields, option
 from diskpack_cl.overlap import cap_radii, ink_figures
@@ -39,6 +40,7 @@ __all__ = [
     "write_stipple",
     "write_svg",
     "write_png",
+    "write_page_png",
     "write_npz",
     "write_csv",
 ]
@@ -140,6 +142,14 @@ def tone_dot_count(darkness, scale, dot_mm):
     return int(round(count))
 
 
+#: The keywords of :func:`svg_layout`: where the picture goes on paper.
+LAYOUT = ("width_mm", "height_mm", "dpi", "page", "landscape", "margin_mm", "plotter")
+
+
+#: What a PNG output shows (:attr:`WriteOptions.preview`).
+PREVIEWS = ("picture", "page")
+
+
 def _pen_names(text):
     """The command line's pen order: ``NAME,...``."""
     return [v.strip() for v in text.split(",")]
@@ -214,6 +224,11 @@ class WriteOptions:
     png_scale: float = option(None, f"PNG pixels per image pixel (default 2.0, at most a "
                               f"{PREVIEW_MAX_PX} px long side)", lo=0, lo_open=True,
                               metavar="F", group=_OUTPUT)
+    preview: str = option("picture", "what a .png output shows: picture (default) = the "
+                          "picture alone; page = the whole page as the SVG lays it out: the "
+                          "paper, a light line at the margins, each dot where the SVG draws "
+                          "it and as wide as its ink (the pen's width included)",
+                          choices=PREVIEWS, group=_OUTPUT)
     plot_speed_mm_s: float = option(
         PLOT_SPEED_MM_S, f"plot-time estimate: pen speed V mm/s drawing and travelling, plus "
         f"{PEN_LIFT_S:g} s to lower and raise the pen per dot (default {PLOT_SPEED_MM_S:g})",
@@ -242,12 +257,26 @@ class WriteOptions:
 
     def layout(self):
         """Where the picture goes on paper: the keyword arguments of :func:`svg_layout`."""
-        return {k: getattr(self, k) for k in ("width_mm", "height_mm", "dpi", "page",
-                                               "landscape", "margin_mm", "plotter")}
+        return {k: getattr(self, k) for k in LAYOUT}
 
     def scale(self, width, height):
         """Millimetres per image pixel of a `width` x `height` picture on this paper."""
         return svg_layout(width, height, **self.layout())["scale"]
+
+    def preview_area(self, width, height):
+        """The size, in image pixels, of what a PNG output of a `width` x `height` picture shows.
+
+        Examples
+        --------
+        >>> WriteOptions(page="100x50mm", margin_mm=0).preview_area(20, 10)
+        (20, 10)
+        >>> WriteOptions(page="100x50mm", margin_mm=0, preview="page").preview_area(10, 10)
+        (20.0, 10.0)
+        """
+        if self.preview == "picture":
+            return width, height
+        lay = svg_layout(width, height, **self.layout())
+        return tuple(v / lay["scale"] for v in lay["page"])
 
     def replace(self, **overrides):
         """A copy with ``overrides`` (field names), checked again."""
@@ -323,18 +352,12 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     ['<path', 'd="M', '1.7552,8.0000', 'a', '0.7500,0.7500']
     """
     p, r, W, H = _arrays(result)
-    if pen_mm is not None and not pen_mm > 0:
-        raise ValueError(f"pen_mm must be > 0, got {pen_mm}")
-    lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
-                     landscape=landscape, margin_mm=margin_mm, plotter=plotter)
-    rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
-    check_fit(rad, lay["picture"], pen_mm)
-    pm, drawn, moved = inside_page(p * lay["scale"],
-                                    cap_radii(rad, r * lay["scale"]) if no_overlap else rad,
-                                    *lay["picture"])
+    lay, pm, rad, drawn, moved = _drawn_dots(
+        result, width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
+        radius_scale=radius_scale, dots=dots, page=page, landscape=landscape,
+        margin_mm=margin_mm, plotter=plotter, pen_mm=pen_mm, no_overlap=no_overlap)
     ink = ink_figures(pm, rad, r * lay["scale"], pen=pen_mm, no_overlap=no_overlap)
     rad = drawn
-    pm += lay["offset"]
     order, before, after = pen_path_order(pm, method=pen_path)
     meta = svg_meta(result, lay, rad, pen_mm, invert, layer)
     head = svg_head(lay, svg_size(lay, W, H, width_mm, height_mm, page), meta,
@@ -348,6 +371,25 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info
+
+
+def _drawn_dots(result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
+                radius_scale=1.0, dots="tone", page=None, landscape=False, margin_mm=None,
+                plotter=None, pen_mm=None, no_overlap=False):
+    """The page and the dots of :func:`write_svg`: ``(layout, centres, radii, drawn radii, moved)``.
+
+    Centres on the page and radii in mm; ``radii`` before ``no_overlap``
+    and the move inward, ``drawn radii`` after (what the SVG draws).
+    """
+    p, r, W, H = _arrays(result)
+    if pen_mm is not None and not pen_mm > 0:
+        raise ValueError(f"pen_mm must be > 0, got {pen_mm}")
+    lay = svg_layout(W, H, width_mm=width_mm, height_mm=height_mm, dpi=dpi, page=page,
+                     landscape=landscape, margin_mm=margin_mm, plotter=plotter)
+    rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
+    check_fit(rad, lay["picture"], pen_mm)
+    pm, drawn, moved = place_dots(p, rad, r * lay["scale"], lay, no_overlap=no_overlap)
+    return lay, pm, rad, drawn, moved
 
 
 def _svg_paint(pen_mm, invert):
@@ -430,8 +472,6 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
     ...     im.size
     (16, 8)
     """
-    from PIL import Image
-
     p, r, W, H = _arrays(result)
     if not scale > 0:
         raise ValueError(f"scale must be > 0, got {scale}")
@@ -453,11 +493,73 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         rad = np.maximum(rad, 0.5 * pen_px)
     check_fit(rad, (ow, oh), pen_px, unit="px")
     ink = ink_coverage(p * scale, rad, ow, oh, aa, progress)
-    val = ink if invert else 1.0 - ink
-    img = Image.fromarray(np.round(val * 255).astype(np.uint8))
-    with atomic_write(path, "wb") as fh:
-        img.save(fh, format="PNG")
+    save_png(path, ink if invert else 1.0 - ink)
     return {"width": ow, "height": oh, "n": int(len(p))}
+
+
+def write_page_png(path, result, *, scale=None, aa=4, progress=None, invert=False, **drawing):
+    """Write a PNG of the whole page as :func:`write_svg` lays it out (8-bit gray, or sRGB
+    for a colour stippling).
+
+    The paper, a light line just outside its usable area (inside the
+    margins and the plotter's reach, :func:`~diskpack_cl.drawing.page_frame`),
+    and each dot where the SVG draws it, filled as far as its ink reaches:
+    its drawn radius, and at least half the pen (a pen touch). The file
+    records its dpi, so that it prints at the paper's size.
+
+    Parameters
+    ----------
+    scale : float, optional
+        PNG pixels per image pixel, as for :func:`write_png` (the dots are as
+        many pixels wide); default 2.0, at most a :data:`PREVIEW_MAX_PX` px
+        long side of the page.
+    aa, progress :
+        As for :func:`write_png`.
+    invert : bool
+        Light dots on dark paper, as :func:`write_svg` draws them.
+    **drawing
+        The options of :func:`write_svg` that lay out the page and size the
+        dots (``page``, ``margin_mm``, ``pen_mm``, ``dot_mm``, ...); a colour
+        stippling takes those of :func:`diskpack_cl.color_export.write_color_svg`.
+
+    Returns
+    -------
+    dict
+        ``width``, ``height`` (output pixels), ``n``, ``dpi``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from types import SimpleNamespace
+    >>> res = SimpleNamespace(points=np.array([[1.0, 1.0]]), radii=np.array([0.5]), width=4, height=2)
+    >>> info = write_page_png(os.path.join(tempfile.mkdtemp(), "page.png"), res, page="20x10mm",
+    ...                       margin_mm=2, dpi=25.4, dots="packing", scale=4.0)  # a 4 x 2 mm picture
+    >>> info["width"], info["height"], round(info["dpi"], 1)
+    (80, 40, 101.6)
+    """
+    lay = svg_layout(float(result.width), float(result.height),
+                     **{k: v for k, v in drawing.items() if k in LAYOUT})
+    ppm = _page_px_per_mm(lay, scale)
+    if getattr(result, "pen", None) is not None:
+        from diskpack_cl.color_export import write_color_page_png
+
+        return write_color_page_png(path, result, px_per_mm=ppm, aa=aa, progress=progress,
+                                    invert=invert, **drawing)
+    lay, pm, _, rad, _ = _drawn_dots(result, **drawing)
+    line = page_frame(lay, ppm)
+    pen = drawing.get("pen_mm")
+    ink_rad = rad if pen is None else np.maximum(rad, 0.5 * pen)
+    ink = ink_coverage(pm * ppm, ink_rad * ppm, line.shape[1], line.shape[0], int(aa), progress)
+    ink = np.maximum(ink, FRAME_INK * line)
+    save_png(path, ink if invert else 1.0 - ink, dpi=ppm * MM_PER_INCH)
+    return {"width": line.shape[1], "height": line.shape[0], "n": int(len(pm)),
+            "dpi": ppm * MM_PER_INCH}
+
+
+def _page_px_per_mm(lay, scale):
+    """PNG pixels per mm of the whole-page preview (``scale``: per image pixel)."""
+    pw, ph = (v / lay["scale"] for v in lay["page"])
+    return preview_scale(pw, ph, scale) / lay["scale"]
 
 
 def _certificate_fields(result):

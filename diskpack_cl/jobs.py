@@ -32,7 +32,7 @@ import numpy as np
 
 from .color import load_rgb
 from .export import (WriteOptions, check_output_path, preview_scale, svg_layout, tone_dot_count,
-                     tone_dot_size, write_stipple)
+                     tone_dot_size, write_page_png, write_stipple)
 from .image import ToneOptions, load_gray
 from .io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
@@ -384,9 +384,9 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     color = getattr(result, "pen", None) is not None   # one tone dot size per pen
     if dot_mm is None and dots == "tone" and not color:
         dot_mm = tone_dot_size(result, scale, o.radius_scale, gray=gray, invert=o.invert)
-    svg_opts = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, pen_path=o.pen_path,
-                    invert=o.invert, pen_mm=o.pen_mm, dots=dots, no_overlap=o.no_overlap,
-                    plot_speed_mm_s=o.plot_speed_mm_s, **o.layout(),
+    drawing = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, invert=o.invert, pen_mm=o.pen_mm,
+                   dots=dots, no_overlap=o.no_overlap, **o.layout())
+    svg_opts = dict(drawing, pen_path=o.pen_path, plot_speed_mm_s=o.plot_speed_mm_s,
                     **({"pen_order": o.pen_order} if color else {}))
     png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
                     no_overlap=o.no_overlap, progress=progress)
@@ -398,8 +398,12 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     with atomic_writes():
         for out in outputs:
             ext = check_output_path(out)
-            opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
-            info = write_stipple(out, result, **opts)
+            if ext == ".png" and o.preview == "page":
+                info = write_page_png(out, result, scale=o.png_scale, progress=progress,
+                                      **drawing)
+            else:
+                opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
+                info = write_stipple(out, result, **opts)
             written.append({"path": out, "format": ext[1:], **info})
     return dot_mm, written
 
@@ -489,9 +493,10 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     n, tone_n = _item_dots(params, write, gray, W, H, note)
     # the ink without the paper tone: no more than the stippling's, so no smaller a raster
     ink = None if gray is None else float((gray if options.invert else 1.0 - gray).sum())
+    area = write.preview_area(W, H)
     check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
-                         png_scale=preview_scale(W, H, write.png_scale), device=device,
-                         outputs=item.outputs)
+                         png_scale=preview_scale(*area, write.png_scale), png_area=area,
+                         device=device, outputs=item.outputs)
     each = None
     if callback is not None:
         total = sum(ph[1] for ph in options.plan(n, W, H).phases)

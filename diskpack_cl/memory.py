@@ -78,7 +78,7 @@ def _raster_limits(free, device):
 
 
 def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, device=None,
-                         outputs=(), free=None, ink=None):
+                         outputs=(), free=None, ink=None, png_area=None):
     """Refuse, before the work, a raster or a PNG preview that memory cannot hold.
 
     The raster (``supersample``, default automatic: see
@@ -86,7 +86,9 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
     `ink` where it is given) is checked against the machine's available
     memory (`free`, default :func:`available_memory`) and the OpenCL
     device's largest buffer and global memory; a PNG among `outputs`
-    (``png_scale``) against the machine's memory.
+    (``png_scale`` PNG pixels per image pixel, over `png_area`: the width and
+    height in image pixels of what it shows, default the image's: a
+    whole-page preview shows more) against the machine's memory.
 
     Raises
     ------
@@ -119,9 +121,10 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
     if free is None or png_scale is None or not any(
             str(o).lower().endswith(".png") for o in outputs):
         return
-    pw, ph = max(1, round(width * png_scale)), max(1, round(height * png_scale))
+    aw, ah = (width, height) if png_area is None else png_area
+    pw, ph = max(1, round(aw * png_scale)), max(1, round(ah * png_scale))
     if pw * ph * HOST_BYTES_PER_PNG_PIXEL > free:
-        fit = math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (width * height))
+        fit = math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (aw * ah))
         raise MemoryLimit(f"{{}} {png_scale:g} makes a {pw}x{ph} PNG needing "
                           f"{_gib(pw * ph * HOST_BYTES_PER_PNG_PIXEL)}, more than the memory "
                           f"available ({_gib(free)}): lower {{}} (at most "

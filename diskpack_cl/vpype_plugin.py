@@ -37,8 +37,8 @@ __all__ = ["click_options", "diskpack", "QUANTIZATION_MM"]
 #: Longest segment (mm) of the polylines vpype makes of the dots' circles.
 QUANTIZATION_MM = 0.1
 
-# the PNG preview's scale has nothing to draw in vpype
-_NOT_IN_VPYPE = ("png_scale",)
+# the PNG preview's scale and extent have nothing to draw in vpype
+_NOT_IN_VPYPE = ("png_scale", "preview")
 
 
 class _Parsed(click.ParamType):

@@ -92,7 +92,8 @@ def _argparse_options(*classes):
 def test_the_options_are_those_of_diskpack_stipple():
     classes = (StippleOptions, ToneOptions, WriteOptions, ColorOptions)
     mine = {o for p in diskpack.params for o in p.opts if o.startswith("--")}
-    assert mine == _argparse_options(*classes) - {"--help", flag_name("png_scale")}
+    assert mine == _argparse_options(*classes) - {"--help", flag_name("png_scale"),
+                                                  flag_name("preview")}
 
 
 def test_a_bad_value_is_refused_as_diskpack_stipple_refuses_it():
