@@ -439,7 +439,8 @@ def page_frame(lay, px_per_mm):
     """The whole-page preview's pixels: the page, and a line around its usable area.
 
     The line runs on the pixels just outside ``lay["area"]`` (the margins'
-    inner edge), so that it never covers a place a dot may ink.
+    inner edge), so that it never covers a place a dot may ink; a side
+    without a margin has none.
 
     Returns
     -------
@@ -451,15 +452,18 @@ def page_frame(lay, px_per_mm):
     >>> lay = svg_layout(4, 4, page="10x8mm", margin_mm=2)
     >>> page_frame(lay, 1.0).astype(int)[:3].tolist()
     [[0, 0, 0, 0, 0, 0, 0, 0, 0, 0], [0, 1, 1, 1, 1, 1, 1, 1, 1, 0], [0, 1, 0, 0, 0, 0, 0, 0, 1, 0]]
+    >>> bool(page_frame(svg_layout(4, 4, dpi=25.4), 1.0).any())   # the page is the picture
+    False
     """
     ow, oh = (max(1, round(v * px_per_mm)) for v in lay["page"])
     x0, y0, x1, y1 = lay["area"]
-    i0, j0 = (max(int(np.floor(v * px_per_mm)) - 1, 0) for v in (x0, y0))
-    i1, j1 = min(int(np.ceil(x1 * px_per_mm)), ow - 1), min(int(np.ceil(y1 * px_per_mm)), oh - 1)
-    line = np.zeros((oh, ow), dtype=bool)
+    # on a page padded by 2 pixels, where the line of a side without a margin falls
+    i0, j0 = (int(np.floor(v * px_per_mm)) + 1 for v in (x0, y0))
+    i1, j1 = (int(np.ceil(v * px_per_mm)) + 2 for v in (x1, y1))
+    line = np.zeros((oh + 4, ow + 4), dtype=bool)
     line[j0 : j1 + 1, [i0, i1]] = True
     line[[j0, j1], i0 : i1 + 1] = True
-    return line
+    return line[2:-2, 2:-2]
 
 
 def save_png(path, values, dpi=None):

@@ -114,6 +114,19 @@ def test_the_picture_preview_is_still_the_default(tmp_path):
         assert im.size == (120, 80)
 
 
+def test_without_a_paper_the_page_is_the_picture(tmp_path):
+    """No margins to show: the page preview is the picture preview, with no line at its edges."""
+    npz = tmp_path / "a.npz"
+    write_npz(npz, _dots())
+    for preview in ("picture", "page"):
+        assert cli.main(["export", str(npz), "-o", str(tmp_path / f"{preview}.png"), "--dots",
+                         "packing", "--png-scale", "4", "--preview", preview, "-q"]) == 0
+    with Image.open(tmp_path / "picture.png") as a, Image.open(tmp_path / "page.png") as b:
+        assert a.size == b.size == (240, 160)
+        diff = np.abs(np.asarray(a, dtype=int) - np.asarray(b, dtype=int))
+    assert diff.max() <= 1
+
+
 def test_the_pen_inks_at_least_its_own_width(tmp_path):
     """With a pen, a dot narrower than the pen is a pen touch: half the pen's width around it."""
     res = _dots(1)
