@@ -20,7 +20,8 @@ from diskpack_cl.options import OptionConflict
 
 __all__ = [
     "DEFAULT_MARGIN_MM", "EDGE_MM", "FRAME_INK", "MM_PER_INCH", "PAPERS", "PEN_LIFT_S", "PLOT_SPEED_MM_S",
-    "LONG_PLOT_S", "TOUCH_MM", "check_fit", "check_size", "long_plot", "ink_coverage", "inside_page", "mm_per_px", "paper_size",
+    "LONG_PLOT_S", "TOUCH_MM", "CROWDED_RATIO", "check_fit", "check_size", "crowded_dots",
+    "long_plot", "ink_coverage", "inside_page", "mm_per_px", "paper_size",
     "page_frame", "pen_rings", "place_dots", "plot_time", "save_png", "svg_dots", "svg_head", "svg_layout", "svg_meta", "svg_size",
     "xml_attr", "xml_text",
 ]
@@ -600,3 +601,30 @@ def long_plot(n, *, pen_lift_s=PEN_LIFT_S, limit_s=LONG_PLOT_S):
     return (f"{n} dots take at least {least / 3600:.0f} h to plot ({pen_lift_s:g} s to lower "
             f"and raise the pen per dot)")
 
+
+
+#: Drawn dots whose ink is more than this many times as wide as the median
+#: spacing of their centres are warned of: each covers its neighbours' centres.
+CROWDED_RATIO = 2.0
+
+
+def crowded_dots(ink_mm, spacing_mm, *, ratio=CROWDED_RATIO):
+    """The warning for dots whose ink, `ink_mm` wide (median), is more than `ratio`
+    times the median spacing `spacing_mm` of their centres, else None.
+
+    The packing keeps the dots' disks apart, but a fixed dot size, a radius
+    scale or a pen can draw them far wider; up to `ratio` (2) neighbouring
+    dots' ink may overlap without covering each other's centres, as the
+    tone dots do where the image is dark.
+
+    Examples
+    --------
+    >>> crowded_dots(1.5, 1.2) is None
+    True
+    >>> crowded_dots(50.0, 1.2)
+    'dots of 50 mm overlap their neighbours: median spacing of their centres on paper 1.2 mm (warned above 2 x); see --no-overlap'
+    """
+    if ink_mm is None or spacing_mm is None or not ink_mm > ratio * spacing_mm:
+        return None
+    return (f"dots of {ink_mm:.3g} mm overlap their neighbours: median spacing of their "
+            f"centres on paper {spacing_mm:.3g} mm (warned above {ratio:g} x); see --no-overlap")

@@ -206,8 +206,9 @@ class WriteOptions:
                        "is light: it shows the packing, not the tone)",
                        choices=("tone", "packing"), group=_OUTPUT)
     dot_mm: float = option(None, "fixed dot diameter in mm instead of --dots; the PNG preview "
-                           "shows the same dots", unit="mm", lo=0, lo_open=True, metavar="MM",
-                           group=_OUTPUT)
+                           "shows the same dots (a warning when the dots drawn are more than "
+                           "2 x as wide as the median spacing of their centres)", unit="mm",
+                           lo=0, lo_open=True, metavar="MM", group=_OUTPUT)
     pen_mm: float = option(None, "plotter pen width in mm: the SVG draws each dot as the pen "
                            "draws it, one path per dot: a dot not wider than the pen is one "
                            "pen touch, a wider one is filled by concentric rings W apart (the "

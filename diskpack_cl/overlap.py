@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["touching", "cap_radii", "ink_figures"]
+__all__ = ["touching", "cap_radii", "ink_figures", "median_spacing"]
 
 # the SVG's coordinates have 4 decimals (mm): a capped dot keeps this far inside its disk
 _ROUNDING_MM = 2e-4
@@ -47,6 +47,20 @@ def touching(centres, ink):
     gap = np.linalg.norm(c[pairs[:, 0]] - c[pairs[:, 1]], axis=1) - ink[pairs].sum(axis=1)
     out[pairs[gap <= 0].ravel()] = True
     return out
+
+
+def median_spacing(centres):
+    """The median distance from a dot's centre to its nearest neighbour's (nan for fewer than 2).
+
+    Examples
+    --------
+    >>> float(median_spacing(np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])))
+    1.0
+    """
+    c = np.asarray(centres, np.float64).reshape(-1, 2)
+    if len(c) < 2:
+        return float("nan")
+    return float(np.median(cKDTree(c).query(c, k=2)[0][:, 1]))
 
 
 def cap_radii(radii, packing):
@@ -92,7 +106,9 @@ def ink_figures(centres, radii, packing, *, pen=None, no_overlap=False):
         dot's), ``touching_share_uncapped`` (the same without the cap) and
         ``no_overlap_ink`` (the ink of the capped dots over that of the
         uncapped ones: what ``no_overlap`` keeps of the tone, whether or not
-        it is on).
+        it is on), ``median_spacing_mm`` (:func:`median_spacing`) and
+        ``median_ink_mm`` (the median width of the dots' ink as drawn);
+        None for fewer than 2 and no dots.
 
     Examples
     --------
@@ -107,5 +123,9 @@ def ink_figures(centres, radii, packing, *, pen=None, no_overlap=False):
     uncapped = float(touching(centres, ink).mean()) if len(ink) else 0.0
     share = float(touching(centres, ink_capped).mean()) if no_overlap and len(ink) else uncapped
     area = float(np.sum(ink * ink))
+    drawn = ink_capped if no_overlap else ink
+    spacing = median_spacing(centres)
     return {"touching_share": share, "touching_share_uncapped": uncapped,
-            "no_overlap_ink": float(np.sum(ink_capped * ink_capped)) / area if area > 0 else 1.0}
+            "no_overlap_ink": float(np.sum(ink_capped * ink_capped)) / area if area > 0 else 1.0,
+            "median_spacing_mm": None if np.isnan(spacing) else spacing,
+            "median_ink_mm": 2 * float(np.median(drawn)) if len(drawn) else None}

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 
 from diskpack_cl.io import json_default
 
-from ._common import _bar
+from ._common import PROG, _bar
 from diskpack_cl.options import add_arguments
 
 
@@ -39,7 +40,7 @@ def _plot_summary(written, write):
         return None, ""
     plot = {k: svg[k] for k in ("pen_downs", "draw_mm", "travel_before_mm", "travel_after_mm",
                                 "plot_seconds", "touching_share", "touching_share_uncapped",
-                                "no_overlap_ink")}
+                                "no_overlap_ink", "median_spacing_mm", "median_ink_mm")}
     speed = plot["plot_speed_mm_s"] = write.plot_speed_mm_s
     pens = ""
     if "layers" in svg:   # a colour stippling: each pen's plot time too
@@ -67,6 +68,15 @@ def _touching_text(plot, no_overlap):
     return f"{share:.1f} % of the drawn dots touch (--no-overlap keeps {ink:.0f} % of the ink)"
 
 
+def _warn_crowded(args, plot):
+    """Say so when the SVG's dots are drawn far wider than the spacing of their centres."""
+    from diskpack_cl.drawing import crowded_dots  # not loaded at start-up
+
+    crowded = plot and crowded_dots(plot["median_ink_mm"], plot["median_spacing_mm"])
+    if crowded and not args.quiet:
+        print(f"{PROG}: warning: {crowded}", file=sys.stderr)
+
+
 def _write_and_report(args, write, res, gray, outputs, summary, t0):
     """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
     print it with --json; return the tail of the summary line."""
@@ -79,6 +89,7 @@ def _write_and_report(args, write, res, gray, outputs, summary, t0):
     finally:
         close()
     plot, text = _plot_summary(written, write)
+    _warn_crowded(args, plot)
     summary.update(dot_mm=dot_mm, outputs=written, plot=plot,
                    write_seconds=time.perf_counter() - t_write,
                    seconds=time.perf_counter() - t0)
