@@ -79,7 +79,7 @@ def _drawn_dots(result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
     check_fit(rad, lay["picture"], pen_mm)
     pm, drawn, moved = place_dots(np.asarray(result.points), rad,
                                   np.asarray(result.radii) * lay["scale"], lay,
-                                  no_overlap=no_overlap)
+                                  no_overlap=no_overlap, pen=pen_mm)
     return lay, pm, rad, drawn, moved
 
 

@@ -384,30 +384,40 @@ EDGE_MM = 2e-4
 TOUCH_MM = 0.01
 
 
-def inside_page(c, rad, wmm, hmm):
-    """Move dots that stick out of the page inward; return (centres, radii, moved).
+def inside_page(c, rad, wmm, hmm, pen=None):
+    """Move dots whose ink sticks out of the page inward; return (centres, radii, moved).
+
+    A dot's ink reaches its radius, or with a `pen` wider than the dot
+    (one pen touch) half the pen: such a dot keeps half the pen from the
+    edge, so that no ink crosses it.
 
     Examples
     --------
     >>> centres, radii, moved = inside_page(np.array([[0.0, 1.0]]), np.array([0.5]), 4.0, 2.0)
     >>> centres.tolist(), moved
     ([[0.5052, 1.0]], 1)
+    >>> inside_page(np.array([[0.2, 1.0]]), np.array([0.1]), 4.0, 2.0, pen=1.0)[0].tolist()
+    [[0.5052, 1.0]]
     """
-    rad = np.minimum(rad, 0.5 * min(wmm, hmm) - 2 * EDGE_MM - TOUCH_MM)
-    ext = rad + EDGE_MM + 0.5 * TOUCH_MM
+    most = 0.5 * min(wmm, hmm) - 2 * EDGE_MM - TOUCH_MM
+    rad = np.minimum(rad, most)
+    ink = rad if pen is None else np.minimum(np.maximum(rad, 0.5 * pen), most)
+    ext = ink + EDGE_MM + 0.5 * TOUCH_MM
     inside = np.column_stack([np.clip(c[:, 0], ext, wmm - ext), np.clip(c[:, 1], ext, hmm - ext)])
     moved = int(np.count_nonzero(np.any(inside != c, axis=1)))
     return inside, rad, moved
 
 
-def place_dots(points, rad, packing, lay, *, no_overlap=False):
+def place_dots(points, rad, packing, lay, *, no_overlap=False, pen=None):
     """Where the SVG draws the dots: centres on the page and drawn radii (mm).
 
     ``points`` are in image pixels, ``rad`` and ``packing`` (the drawn and
     the packing radii) in mm, ``lay`` is :func:`svg_layout`'s; with
     ``no_overlap`` each drawn radius is at most its packing radius
-    (:func:`diskpack_cl.overlap.cap_radii`). Dots that would stick out of
-    the picture move inward (:func:`inside_page`).
+    (:func:`diskpack_cl.overlap.cap_radii`). Dots whose ink (with a `pen`
+    wider than the dot, half the pen's width around its centre) would stick
+    out of the picture move inward (:func:`inside_page`): the ink stays in
+    the picture, and so inside the margins and the plotter's area.
 
     Returns
     -------
@@ -428,7 +438,7 @@ def place_dots(points, rad, packing, lay, *, no_overlap=False):
 
     pm, drawn, moved = inside_page(points * lay["scale"],
                                    cap_radii(rad, packing) if no_overlap else rad,
-                                   *lay["picture"])
+                                   *lay["picture"], pen)
     return pm + lay["offset"], drawn, moved
 
 

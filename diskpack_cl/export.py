@@ -389,7 +389,8 @@ def _drawn_dots(result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
                      landscape=landscape, margin_mm=margin_mm, plotter=plotter)
     rad = _svg_radii(result, r, lay["scale"], dot_mm, dots, radius_scale)
     check_fit(rad, lay["picture"], pen_mm)
-    pm, drawn, moved = place_dots(p, rad, r * lay["scale"], lay, no_overlap=no_overlap)
+    pm, drawn, moved = place_dots(p, rad, r * lay["scale"], lay, no_overlap=no_overlap,
+                                  pen=pen_mm)
     return lay, pm, rad, drawn, moved
 
 

@@ -1,15 +1,18 @@
-"""Drawn sizes: a warning when the dots are drawn far wider than their spacing."""
+"""Drawn sizes: a warning when the dots are drawn far wider than their spacing, and a pen
+wider than a dot keeps its ink inside the usable part of the page."""
 
 from __future__ import annotations
 
 import re
+import xml.etree.ElementTree as ET
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from diskpack_cl import cli
-from diskpack_cl.drawing import CROWDED_RATIO
+from diskpack_cl.color_export import write_color_svg
+from diskpack_cl.drawing import CROWDED_RATIO, svg_layout
 from diskpack_cl.export import write_stipple, write_svg
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -60,3 +63,64 @@ def test_the_svg_reports_the_spacing_and_the_ink_width(tmp_path):
     assert info["median_spacing_mm"] == pytest.approx(8.0)
     assert info["median_ink_mm"] == pytest.approx(3.0)
     assert CROWDED_RATIO == 2
+
+
+# ------------------------------------------------------------ the pen's ink stays on the usable area
+
+def _ink_boxes(path):
+    """Each dot's ink as drawn, ``(x0, y0, x1, y1)`` mm: a circle's stroke reaches half the
+    pen beyond its radius, a pen touch (``M x,y h 0.01``) half the pen around its line, a
+    path of rings half the pen beyond its outer ring."""
+    root = ET.parse(path).getroot()
+    boxes = []
+    for g in root.iter(f"{SVG}g"):
+        pen = float(g.get("stroke-width") or 0)
+        for e in g.findall(f"{SVG}circle"):
+            x, y, r = (float(e.get(k)) for k in ("cx", "cy", "r"))
+            boxes.append((x - r, y - r, x + r, y + r, pen))
+        for e in g.findall(f"{SVG}path"):
+            d = e.get("d")
+            touch = re.fullmatch(r"M ([-0-9.]+),([-0-9.]+) h ([0-9.]+)", d)
+            if touch:
+                x, y, dx = map(float, touch.groups())
+                boxes.append((x, y, x + dx, y, pen))
+                continue
+            x, y, r = map(float, re.match(r"M ([-0-9.]+),([-0-9.]+) a ([0-9.]+),", d).groups())
+            boxes.append((x - 2 * r, y - r, x, y + r, pen))
+    b = np.array(boxes)
+    half = 0.5 * b[:, 4:5]
+    return np.hstack([b[:, :2] - half, b[:, 2:4] + half])
+
+
+def _inside(boxes, area):
+    x0, y0, x1, y1 = area
+    return bool(np.all((boxes[:, 0] >= x0) & (boxes[:, 1] >= y0) & (boxes[:, 2] <= x1)
+                       & (boxes[:, 3] <= y1)))
+
+
+@pytest.mark.parametrize("writer", [write_svg, write_color_svg])
+@pytest.mark.parametrize("drawing", [
+    {"dot_mm": 0.2, "pen_mm": 1.5},                 # pen touches, ink 0.65 mm beyond the dots
+    {"dot_mm": 2.0, "pen_mm": 1.5},                 # one ring: the ink is the dot
+    {"dot_mm": 5.0, "pen_mm": 1.5},                 # rings
+    {"dots": "packing", "pen_mm": 2.0},
+])
+@pytest.mark.parametrize("page", [
+    {"page": "a5", "margin_mm": 10},                # the picture fills the margins' width
+    {"page": "a5", "landscape": True, "margin_mm": 12},
+    {"page": "a4", "plotter": "hp7475a"},
+    {"width_mm": 60},                               # the page is the picture
+])
+def test_no_ink_leaves_the_usable_area(tmp_path, writer, drawing, page):
+    res = _grid(r=0.1)                              # centres 0.1 px from the edges
+    if writer is write_color_svg:
+        res.pen = np.arange(len(res.points)) % 2
+        res.names = ("red", "blue")
+        res.colors = np.array([[0.9, 0.1, 0.1], [0.1, 0.2, 0.9]])
+        res.pen_radius = np.full(2, 0.1)
+    if "plotter" in page:
+        pytest.importorskip("vpype")
+    path = tmp_path / "a.svg"
+    writer(path, res, **drawing, **page)
+    area = svg_layout(60, 40, **page)["area"]
+    assert _inside(_ink_boxes(path), area)
