@@ -20,7 +20,7 @@ import signal
 import sys
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, as_completed, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import replace
 from pathlib import Path
@@ -31,7 +31,7 @@ from .jobs import run_job
 
 __all__ = [
     "POCL_THREAD_VARS", "DASK_HINT", "MANIFEST_NAME", "Manifest", "default_manifest",
-    "default_jobs", "run_item", "run_batch",
+    "default_jobs", "run_item", "run_batch", "map_tasks",
 ]
 
 
@@ -265,15 +265,21 @@ def _failed(item, error):
             "finished": time.time()}
 
 
-def _local_pool(todo, jobs, devices, collect):
-    """Yield records from ``jobs`` spawned worker processes (spawn: OpenCL does not survive fork)."""
+def _spawn_pool(jobs, devices):
+    """``jobs`` spawned worker processes (spawn: OpenCL does not survive fork), PoCL threads
+    capped to ``cores // jobs``, one device of `devices` each."""
     ctx = multiprocessing.get_context("spawn")
     slots = ctx.Queue()
     for k in range(jobs):
         slots.put(k)
     threads = max(1, default_jobs() // jobs)
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
                                initargs=(slots, devices, threads))
+
+
+def _local_pool(todo, jobs, devices, collect):
+    """Yield records from ``jobs`` spawned worker processes."""
+    pool = _spawn_pool(jobs, devices)
     try:
         futures = {pool.submit(_run_in_worker, item, collect): item for item in todo}
         for fut in as_completed(futures):
@@ -323,6 +329,101 @@ def _dask(todo, client, device, collect):
                 yield fut.result()
             except Exception as exc:  # the worker died or the cluster lost the task
                 yield _failed(futures[fut], f"Dask task failed: {type(exc).__name__}: {exc}")
+    finally:
+        client.cancel(list(futures))
+        if own:
+            client.close()
+
+
+# ------------------------------------------------- tasks of one large job
+
+
+def map_tasks(fn, tasks, *, jobs=1, devices=None, client=None, retries=2):
+    """Yield ``(index, fn(task))`` for each task as it finishes: here, in workers or on Dask.
+
+    The parts of one job (the tiles of :func:`diskpack_cl.tiles.stipple_tiled`)
+    run where the items of a batch run (:func:`run_batch`). A task that
+    raises, or whose worker process dies, runs again, up to `retries` more
+    times; then its last error is raised.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (it is sent to the workers).
+    tasks : list
+        Its arguments, one per call.
+    jobs, devices, client
+        As for :func:`run_batch`.
+    retries : int
+        Further tries of a failed task.
+
+    Examples
+    --------
+    >>> sorted(map_tasks(abs, [-2, 3]))
+    [(0, 2), (1, 3)]
+    """
+    if client is not None:
+        yield from _dask_map(fn, tasks, client, retries)
+    elif jobs > 1 and len(tasks) > 1:
+        yield from _pool_map(fn, tasks, min(jobs, len(tasks)), devices, retries)
+    else:
+        for i, task in enumerate(tasks):
+            for attempt in range(retries + 1):
+                try:
+                    result = fn(task)
+                    break
+                except Exception:
+                    if attempt == retries:
+                        raise
+            yield i, result
+
+
+def _call_in_worker(fn, task):
+    try:
+        return fn(task)
+    except SystemExit:  # SIGTERM
+        os._exit(143)
+
+
+def _pool_map(fn, tasks, jobs, devices, retries):
+    """:func:`map_tasks` on spawned workers; a pool whose worker died is replaced."""
+    failures = [0] * len(tasks)
+    left = set(range(len(tasks)))
+    while left:
+        pool = _spawn_pool(jobs, devices)
+        try:
+            pending = {pool.submit(_call_in_worker, fn, tasks[i]): i for i in sorted(left)}
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    i = pending.pop(fut)
+                    try:
+                        result = fut.result()
+                    except Exception as exc:
+                        failures[i] += 1
+                        if failures[i] > retries:
+                            raise
+                        if not isinstance(exc, BrokenProcessPool):   # else: a new pool
+                            pending[pool.submit(_call_in_worker, fn, tasks[i])] = i
+                        continue
+                    left.discard(i)
+                    yield i, result
+        finally:
+            _stop_workers(pool)
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _dask_map(fn, tasks, client, retries):
+    """:func:`map_tasks` on a ``dask.distributed`` cluster (its own retries)."""
+    from distributed import as_completed  # the optional dask extra, loaded only for a cluster
+
+    client, own = _dask_client(client)
+    stamp = f"{os.getpid()}-{time.time_ns()}"
+    futures = {client.submit(fn, task, retries=retries, pure=False,
+                             key=f"diskpack-task-{i}-{stamp}"): i for i, task in enumerate(tasks)}
+    try:
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
     finally:
         client.cancel(list(futures))
         if own:

@@ -29,7 +29,7 @@ import numpy as np
 
 from .options import OptionConflict, check_fields, option
 
-__all__ = ["adjust_tone", "ToneOptions", "load_gray", "to_gray", "sample_image_path", "LUMA_601"]
+__all__ = ["adjust_tone", "ToneOptions", "load_gray", "to_gray", "gray_strips", "sample_image_path", "LUMA_601"]
 
 #: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
 LUMA_601 = (0.299, 0.587, 0.114)
@@ -128,6 +128,39 @@ def load_gray(path, *, invert=False, allow_large=False):
     >>> g.dtype, float(g.min()) >= 0.0, float(g.max()) <= 1.0
     (dtype('float64'), True, True)
     """
+    im, name = _open_image(path, allow_large)
+    return _pil_to_gray(im, invert=invert, name=name)
+
+
+def gray_strips(image, *, rows=256, allow_large=False):
+    """The gray image of `image` (as :func:`to_gray` makes it), a strip of rows at a time.
+
+    Returns ``(shape, strips)``: the gray image's ``(H, W)`` and an iterator
+    of ``(y0, strip)``, float64 rows ``y0 ..`` of it. A file is decoded
+    once and converted strip by strip, so that no float copy of the whole
+    picture is made (a tiled stippling, :func:`diskpack_cl.tiles.stipple_tiled`).
+
+    Examples
+    --------
+    >>> shape, strips = gray_strips(np.zeros((5, 3)), rows=2)
+    >>> shape, [(y0, s.shape) for y0, s in strips]
+    ((5, 3), [(0, (2, 3)), (2, (2, 3)), (4, (1, 3))])
+    """
+    if isinstance(image, (str, os.PathLike)):
+        im, name = _open_image(image, allow_large)
+        if im.mode != "I":   # 32-bit integer images are scaled by their maximum: whole
+            def strips():
+                for y0 in range(0, im.height, rows):
+                    box = (0, y0, im.width, min(y0 + rows, im.height))
+                    yield y0, _pil_to_gray(im.crop(box), name=name)
+            return (im.height, im.width), strips()
+        image = _pil_to_gray(im, name=name)
+    g = to_gray(image)
+    return g.shape, ((y0, g[y0:y0 + rows]) for y0 in range(0, g.shape[0], rows))
+
+
+def _open_image(path, allow_large):
+    """``(image, name)``: the Pillow image of a file, decoded and turned upright (EXIF)."""
     from PIL import Image, ImageOps, UnidentifiedImageError  # not loaded at start-up
 
     name, source = _image_source(path)
@@ -146,7 +179,7 @@ def load_gray(path, *, invert=False, allow_large=False):
         raise ValueError(f"not an image Pillow can read: {name}") from exc
     except (OSError, SyntaxError, EOFError) as exc:
         raise ValueError(f"image file is truncated or corrupt: {name} ({exc})") from exc
-    return _pil_to_gray(im, invert=invert, name=name)
+    return im, name
 
 
 def _pil_to_gray(im, *, invert=False, name="image"):

@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 from .geometry import CertificateError, certify_disks, radius_octaves
 
-__all__ = ["base_radii", "radius_field", "detail_fields", "field_at", "largest_valid_k", "certified_k"]
+__all__ = ["base_radii", "radius_field", "detail_scale", "detail_fields", "field_at", "largest_valid_k", "certified_k"]
 
 
 def _pixel_of(points, W, H):
@@ -87,7 +87,21 @@ def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
     raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
 
 
-def detail_fields(gray, n, field, *, gain=1.5, fine=0.5):
+def detail_scale(ink, n, dmed):
+    """The scale ``ell`` of :func:`detail_fields`: the dot spacing (px) at the median darkness.
+
+    ``sqrt(ink / (n dmed))``, `ink` the picture's summed darkness and `dmed`
+    the median darkness of its pixels darker than 0.05.
+
+    Examples
+    --------
+    >>> detail_scale(400.0, 100, 0.25)
+    4.0
+    """
+    return float(np.sqrt(ink / (max(int(n), 1) * max(dmed, 1e-3))))
+
+
+def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
     """The radius field and the blend weight of ``features="detail"``.
 
     Structure finer than the dot spacing (small bright galaxies on a dark
@@ -120,6 +134,9 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5):
         Factor on the relative detail before clipping to [0, 1].
     fine : float
         Blur (pixels) of the fine darkness.
+    ell : float, optional
+        The scale ``ell`` (:func:`detail_scale`), when `gray` is a window
+        of a larger picture whose scale it is.
 
     Returns
     -------
@@ -137,10 +154,11 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5):
     True
     """
     d = 1.0 - np.asarray(gray, dtype=np.float64)
-    dark = d[d > 0.05]
-    dmed = float(np.median(dark)) if dark.size else float(d.mean())
-    del dark
-    ell = float(np.sqrt(d.sum() / (max(int(n), 1) * max(dmed, 1e-3))))
+    if ell is None:
+        dark = d[d > 0.05]
+        dmed = float(np.median(dark)) if dark.size else float(d.mean())
+        del dark
+        ell = detail_scale(float(d.sum()), n, dmed)
     coarse = ndimage.gaussian_filter(d, ell / 2.0, mode="reflect")
     weight = ndimage.gaussian_filter(d, fine, mode="reflect") if fine > 0 else d.copy()
     del d

@@ -480,15 +480,27 @@ def _toned(gray, paper_tone):
     return gray, darkness
 
 
-def _make_stage(gray, opt, engine):
-    """The :class:`StippleStage` of a gray image: radius field, centroid density, ink."""
+def _make_stage(gray, opt, engine, *, window=None, ell=None):
+    """The :class:`StippleStage` of a gray image: radius field, centroid density, ink.
+
+    With `window` (``(rows, cols)`` slices of `gray`) the fields are those
+    of that part of `gray`, computed with the margin around it, and `ell`
+    is the detail scale of the whole picture (:func:`~diskpack_cl.tiles.stipple_tiled`)."""
     darkness = 1.0 - gray
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
     weight = None
     if opt.features == "detail":
-        rfield, weight = detail_fields(gray, opt.n, rfield)
+        rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell)
     ink = _blurred(darkness, INK_SIGMA) if opt.support > 0 else None   # only off_support reads it
-    return StippleStage(engine, opt, rfield, _centroid_density(darkness, opt), weight, ink)
+    density = _centroid_density(darkness, opt)
+    if window is None:
+        return StippleStage(engine, opt, rfield, density, weight, ink)
+    s = opt.supersample
+    fine = tuple(slice(w.start * s, w.stop * s) for w in window)
+
+    def cut(f, part=window):
+        return None if f is None else np.ascontiguousarray(f[part])
+    return StippleStage(engine, opt, cut(rfield), cut(density, fine), cut(weight), cut(ink))
 
 
 def _certified_result(state, stage, history, t_start, darkness):

@@ -22,6 +22,7 @@ from diskpack_cl.poisson import PoissonOptions, PoissonSetOptions
 from diskpack_cl.relax import RelaxOptions
 from diskpack_cl.reports import AnalyzeOptions
 from diskpack_cl.schedule import StippleCount, StippleOptions
+from diskpack_cl.tiles import TileOptions
 
 #: The options dataclasses each subcommand builds from its arguments.
 CLASSES = {
@@ -30,7 +31,7 @@ CLASSES = {
     "export": (WriteOptions,),
     "relax": (RelaxOptions, DomainOptions),
     "poisson": (PoissonSetOptions, PoissonOptions, DomainOptions),
-    "stipple": (StippleCount, StippleOptions, ToneOptions, WriteOptions, ColorOptions),
+    "stipple": (StippleCount, StippleOptions, ToneOptions, WriteOptions, ColorOptions, TileOptions),
 }
 
 #: Names of two options that are not one: a stippling's seed is 0 unless given (the same

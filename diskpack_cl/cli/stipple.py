@@ -7,7 +7,7 @@ import sys
 import time
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import PROG, _UsageError, _bar, _device_options, _image_path
+from ._common import PROG, _UsageError, _bar, _checked_outputs, _device_options, _image_path
 from ._drawing import _drawing_options, _write_and_report
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
@@ -44,6 +44,7 @@ def _schedules_text():
 def _add_stipple(subparsers):
     from diskpack_cl.color import ColorOptions  # not loaded at start-up
     from diskpack_cl.schedule import _STIPPLING, COUNT, StippleCount, StippleOptions  # not loaded at start-up
+    from diskpack_cl.tiles import TileOptions  # not loaded at start-up
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -89,6 +90,7 @@ def _add_stipple(subparsers):
     _device_options(g)
     _drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
     add_arguments(p, ColorOptions)
+    add_arguments(p, TileOptions)
     _batch_options(p).add_argument("--recursive", "-r", action="store_true",
                                    help="a folder given as IMAGE contributes the images of "
                                         "its subfolders too")
@@ -162,6 +164,8 @@ def _run_stipple(args):
     if isinstance(args.n, int):   # with --density each image has its own n, checked there
         color.check_pen_dots(args.n)
         _warn_long_plot(args)
+    if args.tiles is not None:
+        return _run_stipple_tiled(args, options, tone, write, separation)
     if _batch_mode(args, args.images, args.output):
         if args.n == "tone":
             raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
@@ -201,6 +205,52 @@ def _run_stipple_one(args, options, tone, write, separation):
         print(f"{PROG}: {_result_text(res, summary)}, {summary['iterations']} iterations in "
               f"{summary['seconds']:.3g} s{tail}", file=sys.stderr)
     return 0
+
+
+def _run_stipple_tiled(args, options, tone, write, separation):
+    """One large input in tiles (:func:`diskpack_cl.tiles.stipple_tiled`), on --jobs workers
+    or a Dask cluster; the outputs as for one input."""
+    from diskpack_cl.tiles import TileOptions, stipple_tiled  # not loaded at start-up
+
+    if separation is not None or len(args.images) > 1 or not isinstance(args.n, int) \
+            or any(getattr(args, k) for k in ("verify", "profile", "manifest", "collect")):
+        raise _UsageError("--tiles stipples one image with one pen and -n N (no --colors/--pens, "
+                          "-n tone, --density, --verify, --profile, --manifest or --collect)")
+    t0 = time.perf_counter()
+    image = _image_path(args.images[0])
+    outputs = _checked_outputs(args, [image])
+    tiling = from_namespace(TileOptions, args)
+    if tiling.work_dir is None:
+        tiling = tiling.replace(work_dir=outputs[0] + ".tiles")
+    run = _batch_run(args)
+    bar = _bar(args, "tiles", "part", None)
+    try:
+        res = stipple_tiled(image, args.n, options, tiling, tone=tone, jobs=run["jobs"],
+                            client=run["client"], devices=run["devices"],
+                            allow_large=args.allow_large, progress=_tile_progress(bar))
+    finally:
+        if bar is not None:
+            bar.close()
+    summary = dict(res.summary(), image=image, tone_n=None, parts=len(res.history),
+                   iterations=max(h["steps"] for h in res.history),
+                   peak_rss_mib=max(h["peak_rss_mib"] for h in res.history))
+    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
+    if not args.quiet:
+        print(f"{PROG}: {_result_text(res, summary)}, {res.params['tiles']} tiles "
+              f"({len(res.history)} parts, largest worker {summary['peak_rss_mib'] / 1024:.2f} GiB) "
+              f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
+    return 0
+
+
+def _tile_progress(bar):
+    """``progress(phase, done, total)`` on a tqdm bar (None: no bar)."""
+    if bar is None:
+        return None
+
+    def progress(phase, done, total):
+        bar.set_postfix_str(f"{phase} {done}/{total}", refresh=False)
+        bar.update(1)
+    return progress
 
 
 def _note(text):

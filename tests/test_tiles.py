@@ -1,0 +1,194 @@
+"""Tiled stippling (diskpack_cl.tiles): one certified packing across seams, the same bytes
+wherever the parts ran, resumed and retried parts, fields of a window equal to the picture's."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from diskpack_cl import tiles
+from diskpack_cl.domain import Domain
+from diskpack_cl.engine import make_engine
+from diskpack_cl.schedule import StippleOptions
+from diskpack_cl.stipple import _make_stage
+from diskpack_cl.tiles import TileOptions, stipple_tiled, tile_grid
+
+SHORT = dict(schedule=[("mix", 3, 0.6), ("mix", 1, 0.75)])
+
+
+def seam_picture(width=160, height=120):
+    """A gray ramp with black bars along the middle row and column: dense dots on the seams."""
+    g = np.tile(np.linspace(0.3, 1.0, width), (height, 1))
+    g[height // 2 - 3:height // 2 + 3, :] = 0.0
+    g[:, width // 2 - 3:width // 2 + 3] = 0.0
+    return g
+
+
+def independent_check(points, radii, width, height):
+    """Disjoint and inside, by scipy alone: every pair closer than the largest sum of radii."""
+    assert np.all(points[:, 0] - radii >= 0) and np.all(points[:, 0] + radii <= width)
+    assert np.all(points[:, 1] - radii >= 0) and np.all(points[:, 1] + radii <= height)
+    pairs = cKDTree(points).query_pairs(2 * radii.max(), output_type="ndarray")
+    d = np.hypot(*(points[pairs[:, 0]] - points[pairs[:, 1]]).T)
+    assert np.all(d >= radii[pairs[:, 0]] + radii[pairs[:, 1]])
+
+
+def test_union_across_seams_is_one_certified_packing():
+    g = seam_picture()
+    res = stipple_tiled(g, 1500, tiling=TileOptions(tiles="2x2", seam_band=1, halo=2), **SHORT)
+    assert res.n == 1500 and res.certificate.valid
+    on_seam = (np.abs(res.points[:, 0] - 80) < 1.0) | (np.abs(res.points[:, 1] - 60) < 1.0)
+    assert on_seam.sum() > 20   # the bars hold dots right against the seams
+    independent_check(res.points, res.radii, 160, 120)
+    assert sorted({h["kind"] for h in res.history}) == ["seam-x", "seam-y", "tile"]
+
+
+def test_seams_move_only_their_band():
+    """Outside every seam's band the dots are the tiles' own: a held dot never moves."""
+    g = seam_picture()
+    calls = []
+    real = tiles.run_part
+
+    def spy(part):
+        out = real(part)
+        if part.points is not None:
+            calls.append((part.points[~part.moving], part))
+        return out
+    tiles.run_part = spy
+    try:
+        res = stipple_tiled(g, 1200, tiling=TileOptions(tiles="2x2", seam_band=1, halo=2), **SHORT)
+    finally:
+        tiles.run_part = real
+    assert len(calls) == 2
+    held, part = calls[-1]   # the last seams: each held dot is a dot of the result, where it was
+    d, _ = cKDTree(res.points).query(held)
+    assert len(held) > 100 and np.all(d == 0)
+
+
+def test_dots_shared_by_ink():
+    ink = np.array([[0.0, 1.0], [2.0, 3.0]])
+    share = tiles._shares(101, ink)
+    assert share.sum() == 101 and share[0, 0] == 0
+    assert np.all(np.abs(share - 101 * ink / ink.sum()) < 1)
+
+
+def test_fields_of_a_window_are_the_pictures():
+    rng = np.random.default_rng(3)
+    g = np.clip(rng.random((90, 110)) * 0.3 + np.linspace(0, 0.7, 110), 0, 1)
+    n = 900
+    plan = StippleOptions().plan(n, 110, 90, ink=float((1 - g).sum()))
+    from diskpack_cl.radii import detail_scale
+    d = 1 - g
+    ell = detail_scale(float(d.sum()), n, float(np.median(d[d > 0.05])))
+    whole = _make_stage(g, plan, make_engine(Domain.rect(110, 90), n, "exact"), ell=ell)
+    m = tiles._field_margin(plan, ell)
+    x0, y0, x1, y1 = 40, 30, 75, 60
+    win = g[y0 - m:y1 + m, x0 - m:x1 + m]
+    part = _make_stage(win, plan, make_engine(Domain.rect(35, 30), n, "exact"),
+                       window=(slice(m, m + 30), slice(m, m + 35)), ell=ell)
+    s = plan.supersample
+    np.testing.assert_allclose(part.radius_field, whole.radius_field[y0:y1, x0:x1], rtol=1e-12)
+    np.testing.assert_allclose(part.density, whole.density[s * y0:s * y1, s * x0:s * x1], rtol=1e-12)
+    if whole.blend_weight is not None:
+        np.testing.assert_allclose(part.blend_weight, whole.blend_weight[y0:y1, x0:x1], atol=1e-12)
+
+
+def test_same_bytes_in_process_and_in_two_workers(tmp_path):
+    g = seam_picture()
+    one = stipple_tiled(g, 1000, tiling=TileOptions(tiles="2x2", seam_band=1, halo=2), **SHORT)
+    two = stipple_tiled(g, 1000, tiling=TileOptions(tiles="2x2", seam_band=1, halo=2), jobs=2,
+                        **SHORT)
+    assert one.points.tobytes() == two.points.tobytes()
+    assert one.radii.tobytes() == two.radii.tobytes()
+
+
+def test_same_bytes_on_dask():
+    distributed = pytest.importorskip("distributed")
+    g = seam_picture()
+    here = stipple_tiled(g, 800, tiling=TileOptions(tiles="1x2", seam_band=1, halo=2), **SHORT)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as lc, distributed.Client(lc) as client:
+        there = stipple_tiled(g, 800, tiling=TileOptions(tiles="1x2", seam_band=1, halo=2),
+                              client=client, **SHORT)
+    assert here.points.tobytes() == there.points.tobytes()
+
+
+def test_interrupted_run_resumes_from_finished_parts(tmp_path):
+    g = seam_picture()
+    tiling = TileOptions(tiles="2x2", seam_band=1, halo=2, work_dir=str(tmp_path / "work"))
+    full = stipple_tiled(g, 1000, tiling=tiling, **SHORT)
+    assert not os.path.exists(tmp_path / "work")     # removed when done
+
+    def stop(phase, done, total):
+        if phase == "tile" and done == 3:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        stipple_tiled(g, 1000, tiling=tiling, progress=stop, **SHORT)
+    assert len([f for f in os.listdir(tmp_path / "work") if f.startswith("tile-")]) == 3
+    ran = []
+    real = tiles.run_part
+    tiles.run_part = lambda part: ran.append(part) or real(part)
+    try:
+        again = stipple_tiled(g, 1000, tiling=tiling, **SHORT)
+    finally:
+        tiles.run_part = real
+    assert sum(p.points is None for p in ran) == 1   # only the fourth tile ran again
+    assert again.points.tobytes() == full.points.tobytes()
+
+
+def test_work_folder_of_another_job_is_not_reused(tmp_path):
+    g = seam_picture()
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "work"))
+
+    def stop(phase, done, total):
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        stipple_tiled(g, 700, tiling=tiling, progress=stop, **SHORT)
+    other = stipple_tiled(g, 700, tiling=tiling, seed=5, **SHORT)
+    fresh = stipple_tiled(g, 700, tiling=tiling.replace(work_dir=None), seed=5, **SHORT)
+    assert other.points.tobytes() == fresh.points.tobytes()
+
+
+def test_failed_part_is_retried():
+    g = seam_picture()
+    real, failed = tiles.run_part, []
+
+    def flaky(part):
+        if not failed:
+            failed.append(part)
+            raise RuntimeError("lost worker")
+        return real(part)
+    tiles.run_part = flaky
+    try:
+        res = stipple_tiled(g, 600, tiling=TileOptions(tiles="1x2", seam_band=1, halo=2), **SHORT)
+    finally:
+        tiles.run_part = real
+    assert failed and res.n == 600 and res.certificate.valid
+
+
+@pytest.mark.parametrize("text,message", [("2by2", "ROWSxCOLUMNS"), ("0x2", "room for"),
+                                          ("500x1", "room for")])
+def test_bad_tiles_are_refused(text, message):
+    with pytest.raises(ValueError, match=message):
+        tile_grid(text, 100, 80)
+
+
+def test_tiles_too_small_for_the_seams():
+    with pytest.raises(ValueError, match="too small"):
+        stipple_tiled(seam_picture(), 300, tiling=TileOptions(tiles="4x4"), **SHORT)
+
+
+def test_command_line_tiles(tmp_path):
+    out = tmp_path / "a.npz"
+    cmd = [sys.executable, "-m", "diskpack_cl.cli", "stipple", "sample", "-n", "3000", "--tiles",
+           "2x2", "-o", str(out), "-o", str(tmp_path / "a.svg"), "--schedule", "classic"]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "2x2 tiles" in done.stderr and not os.path.exists(str(out) + ".tiles")
+    with np.load(out) as z:
+        independent_check(z["points"], z["radii"], 512, 512)
+    bad = subprocess.run(cmd[:-2] + ["--colors", "cmyk"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--tiles" in bad.stderr
