@@ -192,3 +192,21 @@ def test_command_line_tiles(tmp_path):
         independent_check(z["points"], z["radii"], 512, 512)
     bad = subprocess.run(cmd[:-2] + ["--colors", "cmyk"], capture_output=True, text=True)
     assert bad.returncode == 2 and "--tiles" in bad.stderr
+
+
+@pytest.mark.parametrize("mode", ["RGB", "P", "I;16", "LA", "I"])
+def test_strips_of_a_file_are_its_gray_image(tmp_path, mode):
+    from PIL import Image
+
+    from diskpack_cl.image import gray_strips, load_gray
+
+    rng = np.random.default_rng(1)
+    rgb = Image.fromarray(rng.integers(0, 256, (37, 29, 3), dtype=np.uint8))
+    im = {"RGB": rgb, "P": rgb.convert("P"), "LA": rgb.convert("LA"),
+          "I;16": Image.fromarray(rng.integers(0, 65536, (37, 29)).astype(np.uint16)),
+          "I": Image.fromarray(rng.integers(0, 40000, (37, 29)).astype(np.int32))}[mode]
+    path = str(tmp_path / ("a.tif" if mode == "I" else "a.png"))
+    im.save(path)
+    shape, strips = gray_strips(path, rows=8)
+    whole = np.concatenate([s for _, s in strips])
+    assert shape == whole.shape and np.array_equal(whole, load_gray(path))
