@@ -42,7 +42,6 @@ import json
 import math
 import os
 import re
-import shutil
 import tempfile
 import time
 from dataclasses import dataclass
@@ -52,7 +51,7 @@ import numpy as np
 from ._timing import Stopwatch
 from .domain import Domain
 from .engine import make_engine
-from .executors import map_tasks
+from .executors import _peak_rss_mib, map_tasks
 from .image import ToneOptions, gray_strips
 from .io import atomic_write
 from .jobs import derive_seeds
@@ -318,12 +317,6 @@ def _holding(held, start):
             return StippleState(points, s.k, s.packs, ink)
         return after
     return before
-
-
-def _peak_rss_mib():
-    import resource  # POSIX only; the workers report their peak
-
-    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
 
 
 def _field_margin(plan, ell):

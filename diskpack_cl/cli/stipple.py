@@ -233,7 +233,7 @@ def _run_stipple_tiled(args, options, tone, write, separation):
             bar.close()
     summary = dict(res.summary(), image=image, tone_n=None, parts=len(res.history),
                    iterations=max(h["steps"] for h in res.history),
-                   peak_rss_mib=max(h["peak_rss_mib"] for h in res.history))
+                   peak_rss_mib=max(h["peak_rss_mib"] or 0 for h in res.history))
     tail = _write_and_report(args, write, res, None, outputs, summary, t0)
     if not args.quiet:
         print(f"{PROG}: {_result_text(res, summary)}, {res.params['tiles']} tiles "
