@@ -57,11 +57,25 @@ from ._timing import Stopwatch
 from .geometry import MIC, exact_mic
 from .labels import cell_centroids, grid_power_labels
 
-__all__ = ["BACKENDS", "ROUTES", "make_engine", "check_against_exact", "ExactEngine",
-           "OpenCLEngine"]
+__all__ = ["BACKENDS", "ROUTES", "check_backend", "make_engine", "check_against_exact",
+           "ExactEngine", "OpenCLEngine"]
 
 BACKENDS = ("opencl", "exact", "auto")
 ROUTES = ("auto", "cells", "raster")
+
+
+def check_backend(backend):
+    """Refuse a backend that is not one of :data:`BACKENDS`.
+
+    Examples
+    --------
+    >>> check_backend("gpu")
+    Traceback (most recent call last):
+    ...
+    ValueError: backend must be one of ('opencl', 'exact', 'auto'), got 'gpu'
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
 
 #: The solver counts an engine's answers carry (``MIC.stats``), per solver.
 _COUNTS = {"exact": ("widened", "grown", "linprog"),
@@ -320,8 +334,7 @@ def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route
     """
     from ._device import NoOpenCLError, get_context  # not loaded at start-up
 
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    check_backend(backend)
     if route not in ROUTES:
         raise ValueError(f"route must be one of {ROUTES}, got {route!r}")
     common = dict(verify=verify, timings=timings)

@@ -40,7 +40,7 @@ from .memory import check_stipple_memory
 from .multipen import stipple_colors
 from .options import changed
 from .poisson import PoissonOptions, as_box, poisson_job
-from .relax import RelaxOptions, relax_poisson, relax_summary
+from .relax import RELAX_FIELDS, RelaxOptions, relax_poisson, relax_summary
 from .schedule import StippleOptions
 from .stipple import stipple
 
@@ -569,8 +569,8 @@ def relax_item(item, points=None, *, device=None, callback=None, verify=False, p
     if points is None:
         points = read_points(item.input, min_points=2, columns=p.get("columns"))
     domain = as_box(p.get("box"))
-    res = relax_poisson(points, eps=p["eps"], max_iter=p["max_iter"], backend=p["backend"],
-                        grid=p["grid"], device=device, callback=callback, verify=verify,
+    relax = RelaxOptions(**{k: v for k, v in p.items() if k in RELAX_FIELDS})
+    res = relax_poisson(points, options=relax, device=device, callback=callback, verify=verify,
                         profile=profile, domain=domain)
     for out in item.outputs:
         extra = {}

@@ -86,8 +86,6 @@ class PoissonOptions(RelaxOptions):
                                 group="start set")
     rho_max: float = option(0.8, "with a minimum distance: the largest rho it may ask for",
                             lo=0, hi=1, lo_open=True, hi_open=True, metavar="RHO")
-    patience: int = option(100, "iterations without progress before the run stops as stalled",
-                           integer=True, lo=1, metavar="N")
     dim: int = option(2, "3: points in the unit 3-torus or a box WxHxD, relaxed to the centres "
                       "of the largest spheres in their 3D Voronoi cells (rho against FCC)",
                       choices=(2, 3), cli_type=int)
@@ -96,10 +94,6 @@ class PoissonOptions(RelaxOptions):
 
     def __post_init__(self):
         check_fields(self)
-
-    def replace(self, **changes):
-        """A copy with `changes` (option names), checked."""
-        return replace(self, **changes)
 
 
 _OPTION_NAMES = {f.name for f in fields(PoissonOptions)}
@@ -474,12 +468,13 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
                            verify=verify, profile=profile)
         return replace(res, points=_onto_walls(res.points - inset, grown.size, res.min_distance),
                        domain=grown)
-    relax = dict(backend=opt.backend, device=device, max_iter=opt.kwargs()["max_iter"],
-                 patience=opt.patience, callback=callback)
     if opt.dim == 3:
         if mask is not None or polygon is not None or density is not None:
             raise ValueError("3D sets take no mask, polygon or density")
-        return _relaxed3(n, min_distance, box, seed, opt, dict(relax, certify=not opt.local))
+        return _relaxed3(n, min_distance, box, seed, opt,
+                         dict(backend=opt.backend, device=device, callback=callback,
+                              max_iter=opt.kwargs()["max_iter"], patience=opt.patience,
+                              certify=not opt.local))
     domain = as_box(box)
     if density is not None:
         if min_distance is not None or mask is not None or polygon is not None:
@@ -492,8 +487,8 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
         inside, share = _region(mask, polygon, domain)
     n_all, eps = _count_and_eps(n, min_distance, domain.area, share, opt.eps, opt.rho_max)
     _check_size(n_all, domain)
-    relax.update(local=opt.local, grid=opt.grid, verify=verify, profile=profile)
-    return _relaxed(n_all, domain, eps, seed, inside, min_distance, opt, relax)
+    run = dict(device=device, callback=callback, local=opt.local, verify=verify, profile=profile)
+    return _relaxed(n_all, domain, eps, seed, inside, min_distance, opt, run)
 
 
 def _finite_or_none(value):
@@ -663,13 +658,14 @@ def _relaxed3(n, distance, box, seed, opt, options):
                              res.timings, float(res.rho[0]), res.backend, res.device)
 
 
-def _relaxed(n, domain, eps, seed, inside, distance, opt, options):
-    """Start set, relaxation, mask: the :class:`PoissonDiskResult` of one run."""
+def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
+    """Start set, relaxation (`opt` to `eps`, the keywords `run` of the run), mask: the
+    :class:`PoissonDiskResult` of one run."""
     t0 = time.perf_counter()
-    start = start_points(n, domain, seed, False if opt.backend == "exact" else options["device"],
+    start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
                          init=opt.init, dart_radius=opt.dart_radius)
     t_start = time.perf_counter() - t0
-    res = relax_poisson(start, eps=eps, domain=domain, **options)
+    res = relax_poisson(start, eps, opt, domain=domain, **run)
     pts = res.points
     rho = float(res.rho[-1])   # certified by relax_poisson's KD-tree
     d_min = 2.0 * rho * hexagonal_radius(len(pts), domain.area)

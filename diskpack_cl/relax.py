@@ -12,19 +12,20 @@ from __future__ import annotations
 
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
 from .domain import Domain
-from .engine import BACKENDS, make_engine
+from .engine import BACKENDS, check_backend, make_engine
 from .options import check_fields, option
 from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
                        min_distance, min_distance_at_most, min_distance_since,
                        nearest_neighbor_distances, normalized_radius)
 
-__all__ = ["relax_poisson", "RelaxOptions", "RelaxResult", "BACKENDS", "max_points_for_radius",
-           "RadiusResult", "STALL_GAIN", "OVER_RELAX", "relax_summary"]
+__all__ = ["relax_poisson", "RelaxOptions", "RELAX_FIELDS", "RelaxResult", "BACKENDS",
+           "max_points_for_radius", "TRIAL_RELAX", "RadiusResult", "STALL_GAIN", "OVER_RELAX",
+           "relax_summary"]
 
 #: Iteration cap of :func:`relax_poisson` when none is given.
 MAX_ITER = 1000
@@ -38,6 +39,10 @@ class RelaxOptions:
     --------
     >>> RelaxOptions(eps=0.85).kwargs()
     {'eps': 0.85, 'max_iter': 1000, 'backend': 'auto', 'grid': None}
+    >>> RelaxOptions().replace(backend="gpu")
+    Traceback (most recent call last):
+    ...
+    ValueError: backend must be one of ('opencl', 'exact', 'auto'), got 'gpu'
     """
 
     eps: float = option(0.8, "stop when the normalized radius rho reaches EPS (default 0.8)",
@@ -46,17 +51,33 @@ class RelaxOptions:
                            metavar="N")
     backend: str = option("auto", "opencl: MICs on the OpenCL device, checked in float64; "
                           "exact: scipy only; auto (default): opencl when a device exists, "
-                          "else exact", choices=BACKENDS)
+                          "else exact", cli_choices=BACKENDS, check=check_backend)
     grid: int = option(None, "raster size G x G of the raster route (devices without "
                        "float64; default: automatic)", integer=True, lo=1, metavar="G")
+    patience: int = option(100, "iterations without progress before the run stops as stalled",
+                           integer=True, lo=1, metavar="N")
 
     def __post_init__(self):
         check_fields(self)
 
+    def replace(self, **changes):
+        """A copy with `changes` (option names), checked."""
+        return replace(self, **changes)
+
     def kwargs(self):
-        """The keyword arguments of :func:`relax_poisson`."""
-        return {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
-                "backend": self.backend, "grid": self.grid}
+        """The relaxation's options, the iteration cap resolved (JSON for a batch item);
+        ``patience`` only where it is not the default, so that a manifest written before
+        it was an option still marks its items done."""
+        out = {"eps": self.eps, "max_iter": MAX_ITER if self.max_iter is None else self.max_iter,
+               "backend": self.backend, "grid": self.grid}
+        if self.patience != RelaxOptions.patience:
+            out["patience"] = self.patience
+        return out
+
+
+#: The names of :class:`RelaxOptions`' fields.
+RELAX_FIELDS = frozenset(f.name for f in fields(RelaxOptions))
+
 
 def relax_summary(res, eps):
     """The summary of a relaxation that every door reports (``--json``, batch records).
@@ -176,9 +197,8 @@ def _check_points(points, domain):
     return X
 
 
-def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, device=None,
-                  callback=None, patience=100, route="auto", verify=False, profile=False,
-                  domain=None, local=False):
+def relax_poisson(points, eps=None, options=None, *, device=None, callback=None, route="auto",
+                  verify=False, profile=False, domain=None, local=False, **overrides):
     """Relax a point set on the unit torus (or in a box) by disk packing until rho >= eps.
 
     Parameters
@@ -186,25 +206,26 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     points : (n, 2) array_like
         Start set; on a torus, coordinates outside it are wrapped; in a box
         every point must lie inside.
-    eps : float
-        Target normalized Poisson disk radius, in (0, 1).  The paper uses 0.8.
-    max_iter : int
-        Iteration cap.
-    backend : {"auto", "opencl", "exact"}
-        ``opencl``: MICs on the OpenCL device, checked in float64 on the
-        host; ``exact``: scipy only; ``auto``: opencl when a device exists,
-        else exact.  All give the same iterates (to rounding): every MIC is
-        a certified LP optimum.  See :mod:`diskpack_cl.engine`.
-    grid : int, optional
-        Raster size (grid x grid) of the raster route; default about 16
-        grid cells per point.
+    eps : float, optional
+        Target normalized Poisson disk radius, in (0, 1) (default: the
+        options', 0.8 as in the paper).
+    options : RelaxOptions, optional
+        The relaxation's options (default: ``RelaxOptions()``), each field
+        described there; with `eps` and `overrides` on top:
+
+        ``max_iter`` (iteration cap); ``backend`` (``opencl``: MICs on the
+        OpenCL device, checked in float64 on the host; ``exact``: scipy
+        only; ``auto``: opencl when a device exists, else exact; all give
+        the same iterates to rounding, every MIC a certified LP optimum, see
+        :mod:`diskpack_cl.engine`); ``grid`` (raster size, grid x grid, of
+        the raster route; default about 16 grid cells per point);
+        ``patience`` (stop as ``"stalled"`` when rho has not grown by
+        :data:`STALL_GAIN` of itself or of its gap to `eps` in this many
+        iterations).
     device : str or pyopencl.Context, optional
         OpenCL device (see :func:`diskpack_cl.get_context`).
     callback : callable, optional
         ``callback(iteration, rho)`` after each iteration.
-    patience : int
-        Stop as ``"stalled"`` when rho has not grown by :data:`STALL_GAIN`
-        of itself or of its gap to `eps` in this many iterations.
     route : {"auto", "cells", "raster"}
         OpenCL route: the float64 per-cell kernel (default where the device
         has float64) or the float32 raster estimate refined on the host.
@@ -233,6 +254,9 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         case.  Their
         first moves are over-relaxed (:data:`OVER_RELAX`), so the set goes
         local an iteration sooner with the same spectrum.
+    **overrides
+        Fields of :class:`RelaxOptions` (``max_iter``, ``backend``,
+        ``grid``, ``patience``), over those of `options`.
 
     Returns
     -------
@@ -245,12 +269,20 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
     >>> res = relax_poisson(pts, eps=0.75, backend="exact")
     >>> bool(res.rho[-1] >= 0.75), res.stop_reason
     (True, 'eps')
+
+    The same with the options object:
+
+    >>> opt = RelaxOptions(eps=0.75, backend="exact")
+    >>> bool(np.array_equal(relax_poisson(pts, options=opt).points, res.points))
+    True
     """
+    opt = (options or RelaxOptions()).replace(**({} if eps is None else {"eps": eps}),
+                                              **overrides)
+    eps, max_iter, patience = opt.eps, opt.kwargs()["max_iter"], opt.patience
     dom = Domain.torus() if domain is None else domain
     X = _check_points(points, dom)
-    _check_run(eps, max_iter)
-    shape = None if grid is None else (int(grid), int(grid))
-    engine = make_engine(dom, len(X), backend, device=device, grid=shape, route=route,
+    shape = None if opt.grid is None else (opt.grid, opt.grid)
+    engine = make_engine(dom, len(X), opt.backend, device=device, grid=shape, route=route,
                          profile=profile, verify=verify)
     stats = {"engine": engine.name, **({"fallback": engine.fallback} if engine.fallback else {})}
     t_start = time.perf_counter()
@@ -272,13 +304,6 @@ def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None, 
         _certify_rho(X, rho[-1], dom)
     return RelaxResult(X, np.array(rho), it, reason, seconds, engine.timings.seconds,
                        engine.backend, engine.device, stats)
-
-
-def _check_run(eps, max_iter):
-    if not (0.0 < eps < 1.0):
-        raise ValueError(f"eps must be in (0, 1), got {eps}")
-    if int(max_iter) < 0:
-        raise ValueError(f"max_iter must be >= 0, got {max_iter}")
 
 
 def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, pairs):
@@ -473,9 +498,13 @@ class RadiusResult:
     seconds: float
 
 
-def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, backend="auto",
-                          max_iter=300, patience=60, rho_start=0.8, rho_limit=0.95, grid=None,
-                          device=None, callback=None):
+#: The relaxation of each trial of :func:`max_points_for_radius` unless told otherwise:
+#: shorter and less patient than one relaxation, as a failing trial runs to its cap.
+TRIAL_RELAX = RelaxOptions(max_iter=300, patience=60)
+
+
+def max_points_for_radius(radius, options=None, *, start="dart", eps_margin=1e-9, seed=0,
+                          rho_start=0.8, rho_limit=0.95, device=None, callback=None, **overrides):
     """The largest n whose relaxation reaches Poisson disk radius `radius` on the unit torus.
 
     For n points the radius asks for the normalized radius
@@ -496,6 +525,10 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
     radius : float
         Poisson disk radius: half the minimum distance between points, in
         (0, 0.25).
+    options : RelaxOptions, optional
+        The relaxation of every trial (default :data:`TRIAL_RELAX`:
+        ``max_iter`` 300, ``patience`` 60; a failing trial costs up to
+        ``max_iter`` iterations); its ``eps`` is each trial's own.
     start : {"dart", "random"} or callable, optional
         Start sets: dart throwing at relative radius 0.74, uniform random
         points, or ``start(n, rng) -> (n, 2) array``.
@@ -505,17 +538,17 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
     seed : int, optional
         The trial at n uses ``numpy.random.default_rng([seed, n])``: the same
         seed gives the same trials and result whatever the search path.
-    backend, grid, device :
-        Passed to :func:`relax_poisson`.
-    max_iter, patience : int, optional
-        Passed to :func:`relax_poisson` for every trial (a failing trial costs
-        up to `max_iter` iterations).
     rho_start : float, optional
         rho of the first trial's n.
     rho_limit : float, optional
         Trials whose target rho reaches this are not run.
+    device : str or pyopencl.Context, optional
+        Passed to :func:`relax_poisson`.
     callback : callable, optional
         ``callback(trial)`` with each trial's dict.
+    **overrides
+        Fields of :class:`RelaxOptions` (``backend``, ``max_iter``,
+        ``patience``, ``grid``), over those of `options`.
 
     Returns
     -------
@@ -533,16 +566,18 @@ def max_points_for_radius(radius, *, start="dart", eps_margin=1e-9, seed=0, back
     >>> res = max_points_for_radius(0.043, backend="exact")
     >>> res.n, bool(res.achieved_radius >= 0.043)
     (129, True)
+    >>> max_points_for_radius(0.043, TRIAL_RELAX.replace(backend="exact")).n
+    129
     """
     radius = float(radius)
     if not (np.isfinite(radius) and 0.0 < radius < 0.25):
         raise ValueError(f"radius must be in (0, 0.25), got {radius}")
     if not (0.0 < rho_start < rho_limit <= 1.0):
         raise ValueError(f"need 0 < rho_start < rho_limit <= 1, got {rho_start}, {rho_limit}")
+    relax = (options or TRIAL_RELAX).replace(**overrides)
     t_start = time.perf_counter()
     trials = _RadiusTrials(radius, _start_sets(start), seed, eps_margin, rho_limit, callback,
-                           dict(max_iter=max_iter, backend=backend, grid=grid, device=device,
-                                patience=patience))
+                           relax, device)
     lo = _largest_success(trials, max(2, trials.n_at(rho_start)), trials.n_at(rho_limit) + 1)
     pts = trials.done[lo][1]
     d = min_distance(pts) / 2.0
@@ -566,10 +601,10 @@ def _start_sets(start):
 class _RadiusTrials:
     """The trials of :func:`max_points_for_radius`, each run once: ``self(n) -> (ok, points)``."""
 
-    def __init__(self, radius, make, seed, eps_margin, rho_limit, callback, relax):
+    def __init__(self, radius, make, seed, eps_margin, rho_limit, callback, relax, device):
         self.radius, self.make, self.seed = radius, make, int(seed)
-        self.eps_margin, self.rho_limit, self.callback, self.relax = (eps_margin, rho_limit,
-                                                                      callback, relax)
+        self.eps_margin, self.rho_limit, self.callback = eps_margin, rho_limit, callback
+        self.relax, self.device = relax, device
         self.records, self.done = [], {}
 
     def target(self, n):
@@ -589,7 +624,8 @@ class _RadiusTrials:
             return False, None
         pts = np.asarray(self.make(n, np.random.default_rng([self.seed, n])), dtype=np.float64)
         t0 = time.perf_counter()
-        res = relax_poisson(pts, min(t * (1.0 + self.eps_margin), 1.0 - 1e-12), **self.relax)
+        res = relax_poisson(pts, min(t * (1.0 + self.eps_margin), 1.0 - 1e-12), self.relax,
+                            device=self.device)
         ok = bool(min_distance(res.points) / 2.0 >= self.radius)
         rec = {"n": int(n), "target_rho": float(t), "reached": ok, "rho": float(res.rho[-1]),
                "iterations": int(res.iterations), "stop_reason": res.stop_reason,

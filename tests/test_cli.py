@@ -12,6 +12,7 @@ import pytest
 
 from diskpack_cl import cli
 from diskpack_cl.io import read_points, write_points
+from diskpack_cl.relax import RelaxOptions
 from diskpack_cl.sampling import dart_throwing
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,11 +32,13 @@ def fake_relax(monkeypatch):
     """Replace relax_poisson with a fast stand-in that records its calls."""
     calls = []
 
-    def relax_poisson(points, eps=0.8, *, max_iter=1000, backend="auto", grid=None,
-                      device=None, callback=None, verify=False, profile=False, domain=None,
-                      patience=100, local=False):
-        calls.append(dict(points=np.array(points), eps=eps, max_iter=max_iter,
-                          backend=backend, grid=grid, device=device))
+    def relax_poisson(points, eps=None, options=None, *, device=None, callback=None,
+                      verify=False, profile=False, domain=None, local=False, **overrides):
+        opt = (options or RelaxOptions()).replace(**({} if eps is None else {"eps": eps}),
+                                                  **overrides)
+        backend = opt.backend
+        calls.append(dict(points=np.array(points), eps=opt.eps, max_iter=opt.kwargs()["max_iter"],
+                          backend=backend, grid=opt.grid, device=device))
         if callback is not None:
             for i in range(1, 4):
                 callback(i, 0.7 + 0.01 * i)
@@ -630,8 +633,8 @@ def test_poisson_radius_passes_options(monkeypatch, tmp_path, capsys):
 
     calls = []
 
-    def fake(radius, **kwargs):
-        calls.append(dict(radius=radius, **kwargs))
+    def fake(radius, options, **kwargs):
+        calls.append(dict(radius=radius, options=options, **kwargs))
         pts = dart_throwing(30, seed=0)
         return diskpack_cl.relax.RadiusResult(pts, 30, radius, 0.0801, 0.9,
                                               [{"n": 30, "reached": True}], 0.5)
@@ -642,8 +645,8 @@ def test_poisson_radius_passes_options(monkeypatch, tmp_path, capsys):
                    "exact", "--max-iter", "50", "-o", str(out), "--json"])
     assert rc == 0
     (call,) = calls
-    assert (call["radius"], call["start"], call["seed"], call["backend"], call["max_iter"]) == \
-        (0.08, "random", 4, "exact", 50)
+    assert (call["radius"], call["start"], call["seed"], call["options"]) == \
+        (0.08, "random", 4, RelaxOptions(backend="exact", max_iter=50, patience=60))
     s = _json_line(capsys.readouterr().out)
     assert s["n"] == 30 and s["radius"] == 0.08 and s["achieved_radius"] == 0.0801
     assert read_points(out).shape == (30, 2)

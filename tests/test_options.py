@@ -11,7 +11,7 @@ from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions, write_npz
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import OptionConflict, describe, flag_name
-from diskpack_cl.relax import RelaxOptions
+from diskpack_cl.relax import RELAX_FIELDS, RelaxOptions
 from diskpack_cl.schedule import StippleOptions
 from diskpack_cl.stipple import stipple
 
@@ -160,8 +160,10 @@ def test_every_relax_option_reaches_relax_poisson(f, command, monkeypatch, tmp_p
     value, argv = _example(f)
     seen = {}
 
-    def fake(points, **kwargs):
-        seen.update(kwargs)
+    def fake(points, eps=None, options=None, **kwargs):
+        seen["options"] = (options or RelaxOptions()).replace(
+            **({} if eps is None else {"eps": eps}),
+            **{k: v for k, v in kwargs.items() if k in RELAX_FIELDS})
         raise Stop
 
     # relax runs it from the jobs, poisson's sets from poisson_disk
@@ -171,7 +173,7 @@ def test_every_relax_option_reaches_relax_poisson(f, command, monkeypatch, tmp_p
     head = ["poisson", "-n", "16", "--init", "random"] if command == "poisson" else \
         ["relax", str(src)]
     _run([*head, "-o", str(tmp_path / "o.npz"), *argv])
-    assert seen[f.name] == value
+    assert getattr(seen["options"], f.name) == value
 
 
 @pytest.mark.parametrize("cls", [StippleOptions, ToneOptions, WriteOptions, RelaxOptions,

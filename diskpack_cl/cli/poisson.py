@@ -8,9 +8,9 @@ import sys
 from diskpack_cl.image import load_gray
 from diskpack_cl.io import (check_not_inputs, check_points_path, json_default, read_points,
                             write_points)
-from diskpack_cl.options import add_arguments, from_namespace
+from diskpack_cl.options import add_arguments, changed, from_namespace
 from diskpack_cl.poisson import SIZE, STARTS, PoissonOptions, PoissonSetOptions, poisson_job
-from diskpack_cl.relax import max_points_for_radius
+from diskpack_cl.relax import TRIAL_RELAX, max_points_for_radius
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import PROG, _bar, _image_path, _output_options, _positive_int
@@ -49,11 +49,10 @@ def _run_poisson_radius(args):
                                 refresh=False)
             bar.update(1)
     try:
-        res = max_points_for_radius(args.radius, start=args.init,
-                                    seed=0 if args.seed is None else args.seed,
-                                    backend=args.backend, grid=args.grid, device=args.device,
-                                    max_iter=300 if args.max_iter is None else args.max_iter,
-                                    callback=callback)
+        # each trial: the search's relaxation, with the relaxation's flags given
+        res = max_points_for_radius(args.radius, TRIAL_RELAX.replace(**changed(_relax(args))),
+                                    start=args.init, seed=0 if args.seed is None else args.seed,
+                                    device=args.device, callback=callback)
     except RuntimeError as exc:
         raise ValueError(str(exc)) from None
     finally:
