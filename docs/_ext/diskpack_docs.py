@@ -223,6 +223,7 @@ PERF_TABLES = {
     "stipple": ("bench_stipple", "stipple.jsonl", "summary", {}),
     "stipple-end-to-end": ("bench_stipple", "stipple.jsonl", "summary_end_to_end", {}),
     "stipple-large": ("stipple_large", "stipple_large.jsonl", "summary", {}),
+    "stipple-tiled": ("stipple_tiled", "stipple_tiled.jsonl", "summary", {}),
     "batch": ("bench_batch", "batch.jsonl", "summary", {}),
     "batch-memory": ("bench_batch", "batch.jsonl", "summary_memory", {}),
 }
