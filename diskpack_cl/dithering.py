@@ -53,37 +53,72 @@ def _fs_wavefront(v):
     return counts, resid
 
 
+def _least(values, k):
+    """Indices of the `k` least `values`, least first, ties to the lower index (the
+    first `k` of a stable argsort, without sorting all of them).
+
+    Examples
+    --------
+    >>> _least(np.array([3.0, 1.0, 2.0, 1.0]), 3).tolist()
+    [1, 3, 2]
+    """
+    if k < values.size:
+        # every value up to the k-th least, in index order: a stable sort of these few
+        values_k = np.partition(values, k - 1)[k - 1]
+        few = np.flatnonzero(values <= values_k)
+        return few[np.argsort(values[few], kind="stable")[:k]]
+    return np.argsort(values, kind="stable")
+
+
 def _fix_count(counts, resid, n):
     """Add or remove points where the residual says they are most owed or least."""
     counts = counts.ravel().copy()
     resid = resid.ravel()
     diff = n - int(counts.sum())
     if diff > 0:
-        # most owed first; stable sort: ties go to the lower pixel index
-        order = np.argsort(-resid, kind="stable")
+        # most owed first; ties go to the lower pixel index
+        order = _least(-resid, diff)
         while diff > 0:
             take = order[: min(diff, order.size)]
             counts[take] += 1
             diff -= take.size
     while diff < 0:
         have = np.flatnonzero(counts > 0)
-        order = have[np.argsort(resid[have], kind="stable")]
-        take = order[: min(-diff, order.size)]
+        take = have[_least(resid[have], min(-diff, have.size))]
         counts[take] -= 1
         diff += take.size
     return counts
 
 
+def _block_sums(blocks, rows=64):
+    """``(Hc, Wc)`` sums of the ``(Hc, b, Wc, b)`` blocks of a density, each over its
+    ``b * b`` pixels in row-major order, made `rows` block rows at a time (a copy of
+    the whole density with each block's pixels contiguous would be another image).
+
+    Examples
+    --------
+    >>> _block_sums(np.arange(16.0).reshape(2, 2, 2, 2)).tolist()
+    [[10.0, 18.0], [42.0, 50.0]]
+    """
+    Hc, b, Wc, _ = blocks.shape
+    out = np.empty((Hc, Wc))
+    for r0 in range(0, Hc, rows):
+        part = blocks[r0:r0 + rows].transpose(0, 2, 1, 3)
+        out[r0:r0 + rows] = part.reshape(-1, b * b).sum(axis=1).reshape(-1, Wc)
+    return out
+
+
 def _pixels_in_blocks(blk, blocks, b, shape, rng):
     """(row, col) of a pixel for each point of block ``blk``, drawn by the block's density.
 
-    A block without density (a point added by the residual fix) or a draw
-    past the image picks a pixel of its block uniformly.
+    ``blocks`` is the ``(Hc, b, Wc, b)`` view of the density padded to whole
+    blocks.  A block without density (a point added by the residual fix) or
+    a draw past the image picks a pixel of its block uniformly.
     """
     H, W = shape
     n = len(blk)
     Wc = -(-W // b)
-    cum = np.cumsum(blocks[blk], axis=1)
+    cum = np.cumsum(blocks[blk // Wc, :, blk % Wc, :].reshape(n, b * b), axis=1)
     tot = cum[:, -1]
     u = rng.random(n) * tot
     sub = np.count_nonzero(cum <= u[:, None], axis=1)
@@ -147,10 +182,13 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     # its block with probability proportional to the density.
     b = max(1, int(np.sqrt(H * W / (4.0 * n))))
     Hc, Wc = -(-H // b), -(-W // b)
-    dp = np.zeros((Hc * b, Wc * b))
-    dp[:H, :W] = d
-    blocks = dp.reshape(Hc, b, Wc, b).transpose(0, 2, 1, 3).reshape(Hc * Wc, b * b)
-    coarse = blocks.sum(axis=1).reshape(Hc, Wc)
+    if (Hc * b, Wc * b) == (H, W):
+        dp = d
+    else:
+        dp = np.zeros((Hc * b, Wc * b))
+        dp[:H, :W] = d
+    blocks = dp.reshape(Hc, b, Wc, b)
+    coarse = _block_sums(blocks)
     scale = n / total
     counts, resid = _fs_wavefront(coarse * scale)
     m = int(counts.sum())
@@ -170,12 +208,13 @@ def _density(gray, density):
     g = np.asarray(gray, dtype=np.float64)
     if g.ndim != 2 or g.size == 0:
         raise ValueError(f"gray must be a non-empty 2-D array, got shape {g.shape}")
-    d = 1.0 - g if density is None else np.asarray(density, dtype=np.float64)
+    # this function's own array, which the clamp below may change in place
+    d = 1.0 - g if density is None else np.array(density, dtype=np.float64)
     if d.shape != g.shape:
         raise ValueError(f"density shape {d.shape} differs from the image shape {g.shape}")
     if not np.all(np.isfinite(d)) or d.min() < 0:
         raise ValueError("density must be finite and non-negative")
-    d = np.maximum(d, 0.0)
+    np.maximum(d, 0.0, out=d)
     if not d.sum() > 0:
         raise ValueError("nothing to stipple: the image is white (zero darkness everywhere)")
     return d

@@ -655,7 +655,7 @@ def _query_pairs(tree, centers, radius, k=16):
         k = min(k, tree.n)
         # scipy keeps only neighbours strictly below the bound
         bound = np.nextafter(float(radius[rows].max()) * (1 + 1e-12), np.inf)
-        d, idx = tree.query(centers[rows], k=k, distance_upper_bound=bound)
+        d, idx = tree.query(centers[rows], k=k, distance_upper_bound=bound, workers=-1)
         d, idx = d.reshape(len(rows), k), idx.reshape(len(rows), k)
         within = (d <= radius[rows, None] * (1 + 1e-12)) & (idx < tree.n)
         full = within[:, -1] if k < tree.n else np.zeros(len(rows), bool)

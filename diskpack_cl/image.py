@@ -230,7 +230,11 @@ def _array_to_gray(a, *, name="array"):
         if bits is None:
             top = float(a.max(initial=0))
             bits = 8 if top <= 255 else 16
-        f = a.astype(np.float64) / (2.0**bits - 1.0)
+        if a.dtype == np.uint8:
+            # a table of the 256 quotients: one pass and one array (the division's values)
+            f = (np.arange(256) / 255.0)[a]
+        else:
+            f = a.astype(np.float64) / (2.0**bits - 1.0)
     elif np.issubdtype(a.dtype, np.floating):
         f = a.astype(np.float64)
         if not np.all(np.isfinite(f)):
@@ -264,7 +268,8 @@ def _array_to_gray(a, *, name="array"):
         raise ValueError(f"image must be (H, W) or (H, W, 1..4), got shape {a.shape}: {name}")
     if g.shape[0] == 0 or g.shape[1] == 0:
         raise ValueError(f"image has zero size ({g.shape[1]}x{g.shape[0]}): {name}")
-    return np.ascontiguousarray(np.clip(g, 0.0, 1.0))
+    # g is this function's own array (every branch above copies): clipped in place
+    return np.ascontiguousarray(np.clip(g, 0.0, 1.0, out=g))
 
 
 def to_gray(image, *, invert=False, allow_large=False):

@@ -83,7 +83,10 @@ def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
         d = 1.0 - g
         if sigma and sigma > 0:
             d = ndimage.gaussian_filter(d, float(sigma), mode="reflect")
-        return np.sqrt(floor / np.maximum(d, floor))
+        # sqrt(floor / max(d, floor)) in place: each temporary would be another whole image
+        np.maximum(d, floor, out=d)
+        np.divide(floor, d, out=d)
+        return np.sqrt(d, out=d)
     raise ValueError(f"radii must be 'gray' or 'density', got {radii!r}")
 
 
@@ -219,7 +222,7 @@ def largest_valid_k(points, r, width, height):
     if len(p) < 2:
         return max(k, 0.0)
     tree = cKDTree(p)
-    d, j = tree.query(p, k=2)
+    d, j = tree.query(p, k=2, workers=-1)
     k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
     if k <= 0:
         return 0.0

@@ -31,7 +31,11 @@ INT_MAX = np.iinfo(np.int32).max
 TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/power_diagram.cl)
 CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/cell_sums.cl
 TILE_W, TILE_H = 8, 16   # grid cells per work item of power_labels_tile (TW, TH there)
-MAX_GROUPS = 4096   # 8 x 8 work-groups per enqueue of power_labels (about 0.26 M grid cells)
+# 8 x 8 work-groups per enqueue of power_labels (about 4 M grid cells): each enqueue is
+# waited for on its own (wait_for's helper thread); bands of 0.26 M grid cells made an
+# 8192 x 8192 raster 256 waits a pass (1M sites, 2 loaded cores: 2.0-2.3 s a labels and
+# sums pass, against 1.4-1.6 s in bands of 4 M)
+MAX_GROUPS = 65536
 # work items per group of cell_max, cell_argmax and cell_sums, at most (the
 # kernel and device limits may give fewer); their atomics make the result
 # independent of the group size

@@ -123,8 +123,9 @@ class StippleResult:
     width, height : int
         Image size in pixels.
     timings : dict
-        Total seconds per stage: ``load``, ``start``, the engine's stages,
-        ``certify`` and ``total``.
+        Total seconds per stage: ``load``, ``start``, ``setup`` (the engine,
+        the radius field and the other fields the steps read), the engine's
+        stages, ``certify`` and ``total``.
     params : dict
         The parameters used (for reports and ``--json``).
     engine : str
@@ -503,8 +504,9 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None):
     return StippleStage(engine, opt, cut(rfield), cut(density, fine), cut(weight), cut(ink))
 
 
-def _certified_result(state, stage, history, t_start, darkness):
-    """The :class:`StippleResult` of the final state: radii at the largest certified k."""
+def _certified_result(state, stage, history, t_start, ink):
+    """The :class:`StippleResult` of the final state: radii at the largest certified k
+    (`ink`: the picture's summed darkness, for the tone radius)."""
     W, H = stage.size
     watch = stage.engine.timings
     with watch("certify"):
@@ -515,7 +517,7 @@ def _certified_result(state, stage, history, t_start, darkness):
         points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
         history=history, width=W, height=H, timings=watch.seconds,
         params=stage.options.params(),
-        engine=stage.engine.backend, tone_radius=tone_radius(len(state.points), darkness),
+        engine=stage.engine.backend, tone_radius=tone_radius(len(state.points), ink),
     )
 
 
@@ -586,12 +588,16 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
         gray = to_gray(image, invert=options.invert)
         H, W = gray.shape
         gray, darkness = _toned(gray, options.paper_tone)
-        opt = options.plan(n, W, H, ink=float(darkness.sum()))
+        ink = float(darkness.sum())
+        del darkness   # a whole image; the stage makes what it needs
+        opt = options.plan(n, W, H, ink=ink)
     with watch("start"):
         x = _start_points(gray, opt, start)
-    engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                         grid=opt.grid_shape(W, H), profile=profile, verify=verify,
-                         timings=watch)
-    stage = _make_stage(gray, opt, engine)
+    with watch("setup"):
+        engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                             grid=opt.grid_shape(W, H), profile=profile, verify=verify,
+                             timings=watch)
+        stage = _make_stage(gray, opt, engine)
+    del gray   # the stage holds every field the steps read
     state, history = _run(StippleState(x, float(opt.k0)), stage, callback)
-    return _certified_result(state, stage, history, t_start, darkness)
+    return _certified_result(state, stage, history, t_start, ink)

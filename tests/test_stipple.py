@@ -539,7 +539,7 @@ def _check_one_collector(res, own):
 def test_one_collector_times_a_stippling():
     res = stipple(gradient(32, 48), 60, schedule=[("mix", 2, 0.5), ("lloyd", 1), ("pack", 1)],
                   backend="exact")
-    _check_one_collector(res, (("load", "start"), ("certify", "total")))
+    _check_one_collector(res, (("load", "start", "setup"), ("certify", "total")))
 
 
 def test_one_collector_times_a_colour_stippling():
