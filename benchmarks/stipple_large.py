@@ -1,22 +1,38 @@
 """A large stippling within the machine's memory: n = 1M dots on an 8192 x 8192 image.
 
 Usage: python benchmarks/stipple_large.py [--size 8192] [--n 1000000] [--mix 3] [--full] [--before]
-                                         [--json rows.jsonl]
+                                         [--command] [--json rows.jsonl]
 
 The image is the bundled sample photograph scaled up (Lanczos).  Runs a few
 iterations of the default schedule's step ("mix", with the default's
 options), or with --full the whole default schedule, and prints seconds per
 iteration by stage, the time to the certified result, and the peak resident
-memory of the process.  ``--json`` appends the run as a row with the
-context of :mod:`perf_rows`; :func:`summary` makes the docs' table of them.
+memory of the process.  ``--command`` times the whole default run as a user
+gets it instead: ``diskpack stipple PICTURE.png -n N -o OUT.npz`` in a child
+process (the picture saved as a PNG in the temporary folder first), from
+the interpreter's start to its exit (loading, the start, every step, the
+certificate, writing the ``.npz``), its peak resident memory (``wait4``'s
+``ru_maxrss`` of the child), where the time goes (the run's stages from its
+``--json`` line; ``write``: writing the ``.npz``; ``outside``: starting the
+interpreter, imports, reading the arguments and exiting), and in the same run
+scipy's ``Voronoi`` of n uniform random points (seed 0) for scale.
+``--json`` appends the run as a row with the context of :mod:`perf_rows`;
+:func:`summary` makes the docs' table of them.
 """
 
 import argparse
+import json
+import os
 import resource
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 from PIL import Image
+from scipy.spatial import Voronoi
 
 from diskpack_cl.image import load_gray, sample_image_path
 from diskpack_cl.schedule import SCHEDULE_OPTIONS
@@ -25,21 +41,81 @@ from perf_rows import append, count, medians, num
 
 #: Names the table gives the stages (``load`` is loading the image, not the load average).
 STAGE_NAMES = {"load": "loading the image", "device": "MIC kernel", "refine": "MIC host check",
-               "raster_labels": "labels"}
+               "raster_labels": "labels", "write": "writing the .npz",
+               "outside": "interpreter, imports and exit", "rest": "the rest of the run"}
 
 
 def summary(rows):
     """``(header, rows)`` of the docs' table: medians per image, n and schedule, with the run's stages."""
     # "total" is the seconds column again
     stages = list(dict.fromkeys(k for r in rows for k in r if k.startswith("stage_") and k != "stage_total"))
-    values = ["seconds", "iterations", "s_per_iter", "peak_rss_gib", *stages]
+    values = ["seconds", "iterations", "s_per_iter", "peak_rss_gib", "voronoi_s", "ratio", *stages]
     runs = medians(rows, ("size", "n", "schedule"), values)
     header = ["image", "n", "schedule", "steps", "seconds to the certified result", "median s/iter",
-              "peak resident memory", "stages (s)"]
+              "Voronoi(n) in the same run (s)", "ratio to Voronoi", "peak resident memory",
+              "stages (s)"]
     return header, [[f"{r['size']} x {r['size']}", count(r["n"]), r["schedule"], num(r["iterations"]),
-                     num(r["seconds"]), num(r["s_per_iter"]), num(r["peak_rss_gib"], " GiB"),
+                     num(r["seconds"]), num(r["s_per_iter"]), num(r["voronoi_s"]), num(r["ratio"]),
+                     num(r["peak_rss_gib"], " GiB"),
                      ", ".join(f"{STAGE_NAMES.get(k[6:], k[6:])} {num(r[k])}"
                                for k in stages if (r[k] or 0) >= 0.05)] for r in runs]
+
+
+def picture(size):
+    """The sample photograph scaled up to `size` x `size` (Lanczos): an 8-bit Pillow image."""
+    gray = load_gray(sample_image_path())
+    return Image.fromarray((gray * 255).astype(np.uint8)).resize((size, size), Image.LANCZOS)
+
+
+def voronoi_seconds(n, seed=0):
+    """Seconds of scipy's ``Voronoi`` of `n` uniform random points in the unit square."""
+    pts = np.random.default_rng(seed).random((n, 2))
+    t = time.perf_counter()
+    Voronoi(pts)
+    return time.perf_counter() - t
+
+
+def run_command(size, n):
+    """``(wall seconds, peak RSS GiB, --json summary)`` of ``diskpack stipple`` on the
+    :func:`picture` saved as a PNG, in a child process timed from its start to its exit."""
+    folder = Path(tempfile.gettempdir())
+    png = folder / f"stipple_large_{size}.png"
+    if not png.exists():
+        picture(size).save(png)
+    out = folder / f"stipple_large_{size}_{n}.npz"
+    cmd = [sys.executable, "-m", "diskpack_cl.cli", "stipple", str(png), "-n", str(n), "-o", str(out),
+           "--json", "-q"]
+    with tempfile.TemporaryFile("w+") as log, tempfile.TemporaryFile("w+") as err:
+        t = time.perf_counter()
+        child = subprocess.Popen(cmd, stdout=log, stderr=err)
+        _, status, usage = os.wait4(child.pid, 0)   # this child's own peak memory
+        wall = time.perf_counter() - t
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode:
+            err.seek(0)
+            raise RuntimeError(f"{' '.join(cmd)} failed: {err.read()}")
+        log.seek(0)
+        line = log.read().splitlines()[-1]
+    return wall, usage.ru_maxrss / 2**20, json.loads(line)
+
+
+def command_row(size, n):
+    """The row of one :func:`run_command` with :func:`voronoi_seconds` of n points before it."""
+    vor = voronoi_seconds(n)
+    wall, peak, res = run_command(size, n)
+    t = res["timings"]
+    stages = {f"stage_{k}": v for k, v in t.items()}
+    steps = t["total"] - sum(t.get(k, 0.0) for k in ("load", "start", "setup", "certify"))
+    # what no stage times: the steps' host work (and the setup, where the run does not time it)
+    stages.update(stage_rest=max(t["total"] - sum(v for k, v in t.items() if k != "total"), 0.0),
+                  stage_write=res["write_seconds"], stage_outside=wall - res["seconds"])
+    print(f"n={n} image={size}x{size}: the whole command {wall:.1f} s, Voronoi({n}) {vor:.1f} s, "
+          f"ratio {wall / vor:.2f}, peak RSS {peak:.2f} GiB, certified valid: "
+          f"{res['certificate']['valid']}\n  stages: { {k[6:]: round(v, 2) for k, v in stages.items()} }")
+    return {"size": size, "n": n, "schedule": "default, the whole command", "seconds": wall,
+            "iterations": res["iterations"], "s_per_iter": steps / res["iterations"],
+            "voronoi_s": vor, "ratio": wall / vor, "peak_rss_gib": peak,
+            "valid": bool(res["certificate"]["valid"]), **stages}
 
 
 def main():
@@ -50,12 +126,14 @@ def main():
     ap.add_argument("--full", action="store_true", help="the whole default schedule")
     ap.add_argument("--before", action="store_true",
                     help="the default without the support rule and capacity")
+    ap.add_argument("--command", action="store_true",
+                    help="the whole default run through the command line, against Voronoi(n)")
     ap.add_argument("--json", default=None, help="append the run as a JSON line to this file")
     args = ap.parse_args()
-    gray = load_gray(sample_image_path())
-    img = Image.fromarray((gray * 255).astype(np.uint8)).resize((args.size, args.size), Image.LANCZOS)
-    gray = np.asarray(img, np.float64) / 255.0
-    del img
+    if args.command:
+        append(args.json, command_row(args.size, args.n))
+        return
+    gray = np.asarray(picture(args.size), np.float64) / 255.0
     t = time.perf_counter()
     kw = {} if args.full else dict(SCHEDULE_OPTIONS["default"], schedule=[("mix", args.mix)])
     if args.before:
