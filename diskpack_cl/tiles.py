@@ -413,6 +413,8 @@ def _seam_parts(points, ink, k, edges, axis, size, band, halo, base):
         c = points[:, axis]
         inside = np.flatnonzero((c > lo) & (c < hi))
         moving = np.abs(c[inside] - e) < band
+        if not moving.any():   # white paper along this seam
+            continue
         rect = (lo, 0, hi, size[1]) if axis == 0 else (0, lo, size[0], hi)
         parts.append(dataclasses.replace(base, rect=rect, plan=dataclasses.replace(base.plan, n=len(inside)),
                                          points=points[inside], ink=ink[inside], moving=moving, k=k))

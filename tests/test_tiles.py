@@ -68,6 +68,13 @@ def test_seams_move_only_their_band():
     assert len(held) > 100 and np.all(d == 0)
 
 
+def test_white_paper_along_a_seam():
+    g = seam_picture(160, 120)
+    g[:, 60:100] = 1.0          # no ink within 20 px of the seam between the columns
+    res = stipple_tiled(g, 800, tiling=TileOptions(tiles="1x2", seam_band=1, halo=2), **SHORT)
+    assert res.certificate.valid and "seam-x" not in {h["kind"] for h in res.history}
+
+
 def test_dots_shared_by_ink():
     ink = np.array([[0.0, 1.0], [2.0, 3.0]])
     share = tiles._shares(101, ink)
