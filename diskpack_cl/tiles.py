@@ -148,8 +148,11 @@ def _edges(size, parts):
 # ------------------------------------------------------------------ raster
 
 
-RASTER = "gray.npy"
-KEY = "job.json"
+#: The files of a work folder: the raster, the job's key and one per finished part; no other
+#: file there is read or removed.
+RASTER = "diskpack-gray.npy"
+KEY = "diskpack-job.json"
+_OURS = re.compile(r"diskpack-(gray\.npy|job\.json|(tile|seam-x|seam-y)-\d+\.npz)")
 
 
 def _write_raster(image, path, tone, invert, paper_tone, allow_large):
@@ -360,9 +363,7 @@ class _WorkFolder:
             except (OSError, ValueError):
                 old = None
         if old != key:
-            for name in os.listdir(path):
-                if name == RASTER or name.endswith(".npz") or name == KEY:
-                    os.remove(os.path.join(path, name))
+            self._clear()
             with atomic_write(key_path, "w") as fh:
                 json.dump(key, fh)
 
@@ -372,19 +373,22 @@ class _WorkFolder:
     def done(self, name):
         """A finished task's result, or None (missing or unreadable: it runs again)."""
         try:
-            with np.load(self.file(name + ".npz")) as z:
+            with np.load(self.file(f"diskpack-{name}.npz")) as z:
                 return {k: (z[k] if z[k].ndim else z[k].item()) for k in z.files}
         except (OSError, ValueError, KeyError):
             return None
 
     def save(self, name, result):
-        with atomic_write(self.file(name + ".npz"), "wb") as fh:
+        with atomic_write(self.file(f"diskpack-{name}.npz"), "wb") as fh:
             np.savez(fh, **result)
 
-    def remove(self):
+    def _clear(self):
         for name in os.listdir(self.path):
-            if name == RASTER or name.endswith(".npz") or name == KEY:
+            if _OURS.fullmatch(name):
                 os.remove(self.file(name))
+
+    def remove(self):
+        self._clear()
         if self.made and not os.listdir(self.path):
             os.rmdir(self.path)
 

@@ -134,7 +134,7 @@ def test_interrupted_run_resumes_from_finished_parts(tmp_path):
             raise KeyboardInterrupt
     with pytest.raises(KeyboardInterrupt):
         stipple_tiled(g, 1000, tiling=tiling, progress=stop, **SHORT)
-    assert len([f for f in os.listdir(tmp_path / "work") if f.startswith("tile-")]) == 3
+    assert len([f for f in os.listdir(tmp_path / "work") if f.startswith("diskpack-tile-")]) == 3
     ran = []
     real = tiles.run_part
     tiles.run_part = lambda part: ran.append(part) or real(part)
@@ -148,7 +148,8 @@ def test_interrupted_run_resumes_from_finished_parts(tmp_path):
 
 def test_work_folder_of_another_job_is_not_reused(tmp_path):
     g = seam_picture()
-    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "work"))
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path))
+    (tmp_path / "mine.npz").write_bytes(b"a user's file")   # never read nor removed
 
     def stop(phase, done, total):
         raise KeyboardInterrupt
@@ -157,6 +158,7 @@ def test_work_folder_of_another_job_is_not_reused(tmp_path):
     other = stipple_tiled(g, 700, tiling=tiling, seed=5, **SHORT)
     fresh = stipple_tiled(g, 700, tiling=tiling.replace(work_dir=None), seed=5, **SHORT)
     assert other.points.tobytes() == fresh.points.tobytes()
+    assert os.listdir(tmp_path) == ["mine.npz"]
 
 
 def test_failed_part_is_retried():
