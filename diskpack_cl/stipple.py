@@ -79,13 +79,12 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
 from .dithering import error_diffusion
 from .domain import Domain
-from .radii import certified_k, detail_fields, field_at, largest_valid_k, radius_field
+from .radii import certified_k, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
 from .engine import make_engine
 from .image import to_gray
@@ -459,9 +458,7 @@ def _start_points(gray, opt, start):
 
 
 def _blurred(darkness, sigma):
-    if sigma > 0:
-        return ndimage.gaussian_filter(darkness, float(sigma), mode="reflect")
-    return darkness
+    return gaussian_blur(darkness, sigma) if sigma > 0 else darkness
 
 
 def _centroid_density(darkness, opt):

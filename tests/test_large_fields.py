@@ -1,0 +1,46 @@
+"""The large picture's shortcuts give the values of the plain computations they replace.
+
+Banded filters (:func:`diskpack_cl.radii.in_bands`), the flat field lookup
+(:func:`diskpack_cl.radii.field_at`) and the partial sort of the error
+diffusion's residual fix (``dithering._least``) are there for speed and
+memory at 8192 x 8192; here each is checked against scipy or numpy on
+pictures with several bands, odd shapes and ties.
+"""
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from diskpack_cl.dithering import _least
+from diskpack_cl.radii import field_at, gaussian_blur, in_bands
+
+
+@pytest.mark.parametrize("sigma", [0.5, 1.0, 2.0, 4.3])
+def test_banded_blur_is_scipys(sigma):
+    img = np.random.default_rng(1).random((2100, 23))
+    blur = gaussian_blur(img, sigma)
+    assert np.array_equal(blur, ndimage.gaussian_filter(img, sigma, mode="reflect"))
+
+
+def test_banded_dilation_is_scipys():
+    img = np.random.default_rng(2).random((2500, 17))
+    disk = np.add.outer(np.arange(-3, 4) ** 2, np.arange(-3, 4) ** 2) <= 9
+    filt = lambda a: ndimage.grey_dilation(a, footprint=disk, mode="reflect")   # noqa: E731
+    assert np.array_equal(in_bands(filt, img, 3, rows=64), filt(img))
+
+
+def test_field_at_is_the_pixel_lookup():
+    rng = np.random.default_rng(3)
+    field = rng.random((40, 70))
+    pts = rng.uniform(-5, 80, (500, 2))
+    row = np.clip(np.floor(pts[:, 1]).astype(int), 0, 39)
+    col = np.clip(np.floor(pts[:, 0]).astype(int), 0, 69)
+    assert np.array_equal(field_at(field, pts), field[row, col])
+    assert np.array_equal(field_at(field[:, ::2], pts), field[:, ::2][row, np.minimum(col, 34)])
+
+
+@pytest.mark.parametrize("k", [1, 5, 17, 99, 100, 150])
+def test_least_is_a_stable_argsort(k):
+    values = np.random.default_rng(4).integers(0, 7, 100).astype(float)   # many ties
+    values[::9] = -0.0
+    assert np.array_equal(_least(values, k)[:k], np.argsort(values, kind="stable")[:k])
