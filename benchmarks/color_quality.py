@@ -26,10 +26,13 @@ neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality
 
 ``--black-generation G [G ...]`` measures CMYK's black generation instead:
 each photograph and a dark, saturated version of it (:func:`dark_saturated`)
-stippled at every setting G; per-channel correlation (sRGB) and mean
-CIEDE2000 of the blurred drawing and, as ``separation``, of the perfect area
-mix of the layers against the photograph (:func:`preview_measures`); rows to
-``--out`` if given, the markdown table of ``docs/color.md`` to stdout.
+stippled at every setting G (and with ``--pen-share-exponent A [A ...]`` at
+every share of dots among pens, :func:`diskpack_cl.multipen.pen_counts`);
+per-channel correlation (sRGB) and mean CIEDE2000 of the blurred drawing
+and, as ``separation``, of the perfect area mix of the layers against the
+photograph (:func:`preview_measures`), and the ink each pen's drawn dots
+keep (:func:`ink_kept`); rows to ``--out`` if given, the markdown table of
+``docs/color.md`` to stdout.
 """
 
 from __future__ import annotations
@@ -45,8 +48,8 @@ import numpy as np
 
 from diskpack_cl import stipple
 from diskpack_cl.picture_measures import spacing
-from diskpack_cl.color import (PALETTES, color_measures, linear_to_srgb, load_rgb, pen_tone_radii,
-                               render_pens, separate, srgb_to_linear)
+from diskpack_cl.color import (PALETTES, PEN_SHARE_EXPONENT, color_measures, linear_to_srgb,
+                               load_rgb, pen_ink_radii, render_pens, separate, srgb_to_linear)
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.multipen import stipple_colors
 
@@ -63,11 +66,10 @@ def naive(image, palette, counts, model, seed=0):
         if c > 1:   # a layer of 0 or 1 dots is left empty
             pts.append(stipple(1.0 - a, int(c), seed=seed + p).points)
             pen.append(np.full(int(c), p))
-    pen = np.concatenate(pen)
-    return SimpleNamespace(points=np.concatenate(pts), pen=pen, names=sep.names, colors=sep.colors,
+    pen, pts = np.concatenate(pen), np.concatenate(pts)
+    return SimpleNamespace(points=pts, pen=pen, names=sep.names, colors=sep.colors,
                            layers=sep.layers, width=sep.layers.shape[2], height=sep.layers.shape[1],
-                           pen_radius=pen_tone_radii(sep.layers, np.bincount(pen, minlength=len(counts))),
-                           radii=np.ones(len(pen)))
+                           pen_radius=pen_ink_radii(pts, pen, sep.layers), radii=np.ones(len(pen)))
 
 
 def _row(name, palette, n, method, res, rgb, seconds):
@@ -146,29 +148,51 @@ def preview_measures(drawn, rgb, sigma):
     return {"corr_rgb": corr, "ciede2000": float(deltaE_ciede2000(rgb2lab(a), rgb2lab(b)).mean())}
 
 
-def black_generation_rows(name, n, settings, seed=0):
-    """Rows of CMYK stipplings of `name` and its :func:`dark_saturated` version at each black generation."""
+def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,)):
+    """Rows of CMYK stipplings of `name` and its :func:`dark_saturated` version at each black
+    generation and pen share exponent (``pen_share_exponent`` of :func:`stipple_colors`)."""
     photo = load_rgb(ROOT / "tests/data/color" / f"{name}.png")
     for variant, rgb in (("bright", photo), ("dark", dark_saturated(photo))):
         sigma = float(np.sqrt(rgb.shape[0] * rgb.shape[1] / n))
-        for g in settings:
-            res = stipple_colors(rgb, n, "cmyk", black_generation=g, seed=seed)
-            drawn = render_pens(res.points, res.pen, pen_tone_radii(res.layers, res.counts),
-                                res.colors, rgb.shape[:2])
+        for g, a in itertools.product(settings, exponents):
+            res = stipple_colors(rgb, n, "cmyk", black_generation=g, pen_share_exponent=a, seed=seed)
+            drawn = render_pens(res.points, res.pen, res.pen_radius, res.colors, rgb.shape[:2])
             ideal = srgb_to_linear(separate(rgb, "cmyk", black_generation=g).render())
             yield {"image": name, "variant": variant, "n": n, "seed": seed, "black_generation": g,
-                   "pens": list(res.names), "counts": np.asarray(res.counts).tolist(),
+                   "pen_share_exponent": a, "pens": list(res.names),
+                   "counts": np.asarray(res.counts).tolist(), "ink_kept": ink_kept(res),
                    **preview_measures(drawn, rgb, sigma), "separation": preview_measures(ideal, rgb, sigma)}
+
+
+def ink_kept(res, scale=3):
+    """Per pen, the ink its dots put on the paper (each pen alone, coverage clipped at 1 as
+    :func:`render_pens` draws it) over its layer's ink: below 1 where its dots overlap;
+    then the paper covered by all pens together over all layers' ink (below 1 where
+    dots of different pens overlap too)."""
+    from diskpack_cl.picture_measures import render_dots
+
+    H, W = res.layers.shape[1:]
+    out, total = [], 0.0
+    for p, layer in enumerate(res.layers):
+        mine = res.pen == p
+        cover = np.minimum(render_dots(res.points[mine] * scale, res.pen_radius[p] * scale,
+                                       (H * scale, W * scale)), 1.0)
+        total = total + cover
+        out.append(float(cover.sum() / scale**2 / max(layer.sum(), 1e-12)) if mine.any() else None)
+    out.append(float(np.minimum(total, 1.0).sum() / scale**2 / res.layers.sum()))
+    return out
 
 
 def black_generation_table(rows):
     """Markdown rows of :func:`black_generation_rows`."""
-    out = ["| image | G | dots Y/C/M/K | correlation R / G / B | CIEDE2000 | separation alone: "
-           "correlation, CIEDE2000 |", "| --- | --- | --- | --- | --- | --- |"]
+    out = ["| image | G | exponent | dots Y/C/M/K | ink kept Y/C/M/K/all | correlation R / G / B | "
+           "CIEDE2000 | separation alone: correlation, CIEDE2000 |", "| --- " * 8 + "|"]
     for r in rows:
         sep = r["separation"]
         out.append(f"| {r['image']} ({r['variant']}) | {r['black_generation']:g} | "
-                   f"{'/'.join(map(str, r['counts']))} | {_cells(r['corr_rgb'])} | {r['ciede2000']:.1f} | "
+                   f"{r.get('pen_share_exponent', 1.0):g} | {'/'.join(map(str, r['counts']))} | "
+                   f"{_cells(r.get('ink_kept', [None] * 5))} | {_cells(r['corr_rgb'])} | "
+                   f"{r['ciede2000']:.1f} | "
                    f"{_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |")
     return "\n".join(out)
 
@@ -200,6 +224,9 @@ def main(argv=None):
                     "--black-generation)")
     ap.add_argument("--black-generation", type=float, nargs="+", metavar="G",
                     help="measure CMYK at these black generations on bright and dark photographs")
+    ap.add_argument("--pen-share-exponent", type=float, nargs="+", default=[PEN_SHARE_EXPONENT],
+                    metavar="A", help="with --black-generation: dots per pen in proportion to "
+                    "ink**A, at each A (default: the library's)")
     ap.add_argument("--no-figures", action="store_true")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0],
                     help="stipple each pair with these seeds (the spread over seeds is the noise)")
@@ -211,7 +238,8 @@ def main(argv=None):
         return
     if args.black_generation:
         rows = [row for name in args.images for n in args.n for seed in args.seeds
-                for row in black_generation_rows(name, n, args.black_generation, seed)]
+                for row in black_generation_rows(name, n, args.black_generation, seed,
+                                                 args.pen_share_exponent)]
         if args.out:
             Path(args.out).write_text("".join(json.dumps(r) + "\n" for r in rows))
         print(black_generation_table(rows))

@@ -59,6 +59,7 @@ from .image import load_gray
 
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
+           "pen_ink_radii",
            "pen_spacing", "color_measures", "palette_of"]
 
 #: Named palettes: (name, sRGB hex) per pen, lightest first.
@@ -428,6 +429,10 @@ def load_rgb(image):
     return np.ascontiguousarray(f)
 
 
+#: Dots per pen in proportion to their layer's ink to this power unless given
+#: (:func:`diskpack_cl.multipen.pen_counts`); measured in docs/color.md.
+PEN_SHARE_EXPONENT = 1.0
+
 #: Pens with fewer dots get no SSIM or P01 in :func:`color_measures` (a percentile of a
 #: handful of distances says nothing).
 MIN_DOTS = 50
@@ -477,6 +482,60 @@ def pen_tone_radii(layers, counts):
     from .picture_measures import tone_radius  # not loaded at start-up
 
     return np.array([tone_radius(int(c), a) if c > 0 else 1.0 for a, c in zip(layers, counts)])
+
+
+def _covered(d, r, m):
+    """Area covered by `m` disks of radius `r` whose centres' pairwise distances under
+    ``2 r`` are `d`: their areas less each pair's lens (exact while no point is under
+    three disks, which on a hexagonal lattice starts above full coverage)."""
+    near = d[d < 2.0 * r]
+    lens = 2.0 * r * r * np.arccos(near / (2.0 * r)) - 0.5 * near * np.sqrt(4.0 * r * r - near * near)
+    return m * np.pi * r * r - lens.sum()
+
+
+def pen_ink_radii(points, pen, layers, *, grow=1.25, steps=40):
+    """Dot radius per pen at which its dots, where they overlap counted once, hold its
+    layer's ink.
+
+    :func:`pen_tone_radii` adds the ink of overlapping dots; on paper (and in
+    :func:`render_pens`) a pen over its own ink adds nothing, so where a
+    layer's coverage nears 1 its dots must be larger. The radius is found by
+    bisection between the tone radius and `grow` times it on the area the
+    dots cover (:func:`_covered`); 1 for a pen without dots. A pen whose dots
+    cannot hold its ink at `grow` times the tone radius (they would cover
+    its light areas) keeps that size.
+
+    Examples
+    --------
+    Dots 2 px apart on 20 x 20 px of coverage 0.9: at the tone radius 1.070
+    neighbours overlap and cover 0.86 of the paper; at 1.106 they cover 0.9.
+
+    >>> x, y = np.meshgrid(np.arange(1.0, 20, 2), np.arange(1.0, 20, 2))
+    >>> pts, layer = np.column_stack([x.ravel(), y.ravel()]), np.full((1, 20, 20), 0.9)
+    >>> pen_tone_radii(layer, [100]).round(3).tolist()
+    [1.07]
+    >>> pen_ink_radii(pts, np.zeros(100, int), layer).round(3).tolist()
+    [1.106]
+    """
+    from scipy.spatial import cKDTree  # not loaded at start-up
+
+    p, pen, layers = np.asarray(points, float), np.asarray(pen), np.asarray(layers, float)
+    counts = np.bincount(pen, minlength=len(layers))
+    radii = pen_tone_radii(layers, counts)
+    for q, (layer, m) in enumerate(zip(layers, counts)):
+        if m < 2:
+            continue
+        ink, lo, hi = float(layer.sum()), radii[q], grow * radii[q]
+        tree = cKDTree(p[pen == q])
+        d = tree.sparse_distance_matrix(tree, 2.0 * hi, output_type="ndarray")
+        d = d["v"][d["i"] < d["j"]]
+        if _covered(d, lo, m) >= ink:
+            continue
+        for _ in range(steps):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _covered(d, mid, m) < ink else (lo, mid)
+        radii[q] = hi
+    return radii
 
 
 def _own_density(points, shape):
@@ -570,7 +629,8 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
     dict
         ``delta_e``: mean CIE 1976 Delta E*ab between the photograph and the
         drawing (:func:`render_pens`, each pen's dots at the radius holding
-        its layer's ink), both blurred by `sigma` in linear light;
+        its layer's ink, :func:`pen_ink_radii`), both blurred by `sigma` in
+        linear light;
         ``ssim``: per pen, :func:`diskpack_cl.picture_measures.tone_ssim` of its
         dots against its layer; ``p01`` and ``p01_joint``: :func:`pen_spacing`
         against the layers (SSIM and P01 None for a pen of fewer than
@@ -593,7 +653,7 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
     P, H, W = layers.shape
     counts = np.bincount(pen, minlength=P)
     sigma = float(np.sqrt(W * H / len(p))) if sigma is None else float(sigma)
-    drawn = render_pens(p, pen, pen_tone_radii(layers, counts), colors, (H, W))
+    drawn = render_pens(p, pen, pen_ink_radii(p, pen, layers), colors, (H, W))
 
     def blur(lin):
         return linear_to_srgb(ndimage.gaussian_filter(lin, (sigma, sigma, 0), mode="reflect"))
@@ -637,6 +697,10 @@ class ColorOptions:
                                 "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
     clean_white: float = option(0.0, "pixels with R, G, B all within T of white get no ink "
                                 "(default 0)", lo=0, hi=1, metavar="T", group=_COLOUR)
+    pen_share_exponent: float = option(
+        PEN_SHARE_EXPONENT, "dots per pen in proportion to its layer's ink to the power A: below 1 "
+        "the pens with little ink get more, smaller dots; every pen's dots hold its ink "
+        f"(default {PEN_SHARE_EXPONENT:g})", lo=0, hi=1, metavar="A", group=_COLOUR)
     pen_dots: str = option(None, "dots of some or all pens, e.g. cyan=12000,black=8000: the pens "
                            "named get that many, the others share the rest of the dots in "
                            "proportion to their ink (default: every pen by its ink)",
@@ -685,4 +749,5 @@ class ColorOptions:
             return None
         counts = None if self.pen_dots is None else parse_pen_dots(self.pen_dots)
         return dict(colors=self.pens or self.colors, black_generation=self.black_generation,
-                    clean_black=self.clean_black, clean_white=self.clean_white, counts=counts)
+                    clean_black=self.clean_black, clean_white=self.clean_white, counts=counts,
+                    pen_share_exponent=self.pen_share_exponent)

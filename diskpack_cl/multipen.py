@@ -6,8 +6,9 @@
 1. **Joint placement.** The mono stippling's steps (:func:`diskpack_cl.stipple`:
    error-diffusion start, the schedule of the dot spacing) run the first
    ``joint`` share (0.3) of the schedule's iterations on the *joint* density,
-   the coverage of all pens together: every dot, whatever its pen, is spaced
-   from every other (one power diagram over all dots).
+   that of the dots of all pens together (:func:`dot_density`): every dot,
+   whatever its pen, is spaced from every other (one power diagram over all
+   dots).
 2. **Pens.** :func:`assign_pens` gives every dot a pen by vector error
    diffusion on the dots (Floyd-Steinberg on a point set): visited along a
    Hilbert path, each dot takes the pen most owed there (its layer's share
@@ -16,8 +17,12 @@
    each pen in its layer's share, spread out as error diffusion spreads
    dots. The path is cut into pieces of :data:`SEGMENT` dots walked side
    by side, so that one numpy step visits a dot of every piece. Dot counts
-   per pen follow the ink of the layers (:func:`pen_counts`) or are given
-   (:func:`dots_per_pen`).
+   per pen follow the ink of the layers to a power (:func:`pen_counts`) or
+   are given (:func:`dots_per_pen`); the dots go where each pen's ink,
+   weighted by its dots per unit of ink, asks for them (:func:`dot_density`,
+   the density of the joint placement), and each pen's dots are drawn at
+   the size that holds its layer's ink
+   (:func:`diskpack_cl.color.pen_ink_radii`).
 3. **Class-aware moves.** The rest of the schedule runs on the power
    diagram over all dots with the joint radii (the packing keeps every pair
    apart); after each step every dot also moves towards the centroid of its
@@ -43,17 +48,19 @@ from scipy.spatial import cKDTree
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
-from .color import pen_tone_radii, separate
+from .color import PEN_SHARE_EXPONENT, pen_ink_radii, separate
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
 from .schedule import StippleOptions
+from ._checks import check_count
 from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
                       dot_radii, result_summary)
 from .engine import make_engine
 from .pen_path import pen_path_order
 
-__all__ = ["ColorStippleResult", "assign_pens", "dots_per_pen", "pen_counts", "stipple_colors"]
+__all__ = ["ColorStippleResult", "assign_pens", "dot_density", "dots_per_pen", "pen_counts",
+           "stipple_colors"]
 
 #: Share of the class-aware phases over which the pull towards the pens' own
 #: centroids falls to 0 (the rest restores the spacing of all dots together).
@@ -96,7 +103,7 @@ class ColorStippleResult(StippleResult):
         The separated layers (:class:`diskpack_cl.color.Separation`).
     pen_radius : (P,) float64
         Drawn dot radius per pen (px): its dots then hold its layer's ink
-        (:func:`diskpack_cl.color.pen_tone_radii`); what the writers draw.
+        (:func:`diskpack_cl.color.pen_ink_radii`); what the writers draw.
 
     Examples
     --------
@@ -138,21 +145,62 @@ def hex_color(rgb):
     return "#" + "".join(f"{int(round(255 * float(v))):02x}" for v in rgb)
 
 
-def pen_counts(layers, n):
-    """Dots per pen in proportion to the ink of each layer (largest remainders), summing to n.
+def pen_counts(layers, n, exponent=1.0):
+    """Dots per pen in proportion to the ink of each layer to the power `exponent` (largest
+    remainders), summing to n.
+
+    With ``exponent`` 1 every pen's dots are the same size; below 1 the pens
+    with less ink get more, smaller dots (each keeps its ink through its own
+    dot size, :func:`diskpack_cl.color.pen_ink_radii`).
 
     Examples
     --------
     >>> pen_counts(np.array([np.full((2, 2), 0.1), np.full((2, 2), 0.3)]), 9).tolist()
     [2, 7]
+    >>> pen_counts(np.array([np.full((2, 2), 0.1), np.full((2, 2), 0.9)]), 8, 0.5).tolist()
+    [2, 6]
     """
+    if not 0.0 <= exponent <= 1.0:
+        raise ValueError(f"the pen share exponent must be in [0, 1], got {exponent}")
     ink = np.asarray(layers, dtype=np.float64).reshape(len(layers), -1).sum(axis=1)
     if not ink.sum() > 0:
         raise ValueError("nothing to stipple: every layer is empty")
-    share = n * ink / ink.sum()
+    weight = np.where(ink > 0, ink ** exponent, 0.0)
+    share = n * weight / weight.sum()
     counts = np.floor(share).astype(np.int64)
     counts[np.argsort(counts - share, kind="stable")[: n - counts.sum()]] += 1
     return counts
+
+
+def dot_density(layers, counts):
+    """Where the dots go: each layer weighted by its pen's dots per unit of ink, summed,
+    scaled to a largest weight of 1 (the joint darkness when dots follow ink).
+
+    A pen with more dots than its share of the ink (:func:`pen_counts` below
+    exponent 1, or counts given) asks for more dots where its ink is, so that
+    its dots, at its own tone size, hold its layer's ink there.
+
+    Returns
+    -------
+    density : (H, W) float64
+        In [0, 1].
+    weight : (P,) float64
+        Dots per unit of ink of each pen, the largest 1 (0 for a pen without ink).
+
+    Examples
+    --------
+    >>> d, w = dot_density(np.array([np.full((1, 2), 0.1), np.full((1, 2), 0.4)]), [2, 2])
+    >>> w.tolist(), d.round(3).tolist()
+    ([1.0, 0.25], [[0.2, 0.2]])
+    """
+    a = np.asarray(layers, dtype=np.float64)
+    ink = a.reshape(len(a), -1).sum(axis=1)
+    weight = np.divide(np.asarray(counts, dtype=np.float64), ink, out=np.zeros(len(a)),
+                       where=ink > 0)
+    if not weight.max() > 0:
+        raise ValueError("every dot goes to a pen without ink: give dots to a pen with ink")
+    weight /= weight.max()
+    return np.clip(np.tensordot(weight, a, axes=1), 0.0, 1.0), weight
 
 
 def _take(e, left):
@@ -302,15 +350,17 @@ def _phases(stage, phases):
     return replace(stage, options=replace(stage.options, phases=tuple(phases)))
 
 
-def _pen_share(layers, points, sigma):
-    """Each pen's share of the (blurred) ink at each point, (n, P)."""
+def _pen_share(layers, weight, points, sigma):
+    """Each pen's share of the dots at each point, (n, P): its (blurred) ink times its
+    dots per unit of ink (`weight`, :func:`dot_density`)."""
     blurred = np.stack([ndimage.gaussian_filter(a, sigma, mode="reflect") for a in layers])
-    ink = np.stack([field_at(b, points) for b in blurred], axis=1) + 1e-9
-    return ink / ink.sum(axis=1, keepdims=True)
+    dots = np.stack([w * field_at(b, points) for w, b in zip(weight, blurred)], axis=1) + 1e-9
+    return dots / dots.sum(axis=1, keepdims=True)
 
 
-def dots_per_pen(names, layers, n, counts=None):
-    """Dots per pen: by the ink of each layer, or as given (all pens, or some by name).
+def dots_per_pen(names, layers, n, counts=None, exponent=1.0):
+    """Dots per pen: by the ink of each layer (to the power `exponent`), or as given (all
+    pens, or some by name).
 
     Parameters
     ----------
@@ -325,6 +375,9 @@ def dots_per_pen(names, layers, n, counts=None):
         dots of every pen, summing to n. A mapping ``{name: dots}``: those
         pens get that many and the others share the rest by their ink; when
         it names every pen it must sum to n.
+    exponent : float in [0, 1]
+        The pens shared by ink get dots in proportion to ink to this power
+        (:func:`pen_counts`).
 
     Returns
     -------
@@ -344,7 +397,7 @@ def dots_per_pen(names, layers, n, counts=None):
     """
     P = len(names)
     if counts is None:
-        return pen_counts(layers, n)
+        return pen_counts(layers, n, exponent)
     if not isinstance(counts, Mapping):
         c = np.asarray(counts)
         if c.shape != (P,) or not np.issubdtype(c.dtype, np.integer) or np.any(c < 0) or c.sum() != n:
@@ -364,12 +417,13 @@ def dots_per_pen(names, layers, n, counts=None):
                          + ("" if given > n else "; name fewer pens or give n = the sum"))
     out = np.array([int(counts.get(name, 0)) for name in names], dtype=np.int64)
     if rest and n > given:
-        out[rest] = pen_counts(np.asarray(layers)[rest], n - given)
+        out[rest] = pen_counts(np.asarray(layers)[rest], n - given, exponent)
     return out
 
 
-def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
-    """Check the arguments of :func:`stipple_colors`; the separation, options and counts."""
+def _separate(image, n, colors, counts, joint, pen_pull, options, separation, exponent):
+    """Check the arguments of :func:`stipple_colors`; the separation, options, counts and
+    :func:`dot_density`."""
     for name in ("invert", "paper_tone"):
         if options.get(name):
             raise ValueError(f"{name} is for one pen: colour stippling draws the pens on white")
@@ -381,15 +435,17 @@ def _separate(image, n, colors, counts, joint, pen_pull, options, separation):
         raise ValueError("nothing to stipple: the image is white")
     if options.get("capacity") is None:   # measured: equal ink per dot costs tone per pen
         options = dict(options, capacity=COLOR_CAPACITY)
-    # the joint darkness is what the first phases stipple: its ink sizes the raster
+    counts = dots_per_pen(sep.names, sep.layers, check_count(n), counts, exponent)
+    density, weight = dot_density(sep.layers, counts)
+    # the dots' density is what the first phases stipple: its ink sizes the raster
     opt = StippleOptions.resolve(n, sep.layers.shape[2], sep.layers.shape[1],
-                                 ink=float(sep.darkness.sum()), **options)
-    return sep, opt, dots_per_pen(sep.names, sep.layers, opt.n, counts)
+                                 ink=float(density.sum()), **options)
+    return sep, opt, counts, density, weight
 
 
 def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0, clean_black=0.0,
-                   clean_white=0.0, joint=0.3, pen_pull=1.0, callback=None, device=None, backend="auto",
-                   **options):
+                   clean_white=0.0, pen_share_exponent=PEN_SHARE_EXPONENT, joint=0.3, pen_pull=1.0,
+                   callback=None, device=None, backend="auto", **options):
     """Stipple a colour image with ``n`` dots of several pens, all certified disjoint.
 
     Parameters
@@ -404,9 +460,15 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     counts : sequence of int or mapping of str to int, optional
         Dots per pen (:func:`dots_per_pen`): all (summing to n), or some by
         name, the others sharing the rest by their ink; default: every pen
-        in proportion to its layer's ink.
+        in proportion to its layer's ink to the power `pen_share_exponent`.
     black_generation, clean_black, clean_white : float
         Separation options (:func:`diskpack_cl.color.separate`).
+    pen_share_exponent : float in [0, 1]
+        Dots per pen in proportion to ink to this power (:func:`pen_counts`;
+        default :data:`diskpack_cl.color.PEN_SHARE_EXPONENT`); below 1 the pens with less ink
+        get more, smaller dots. The dots go where each pen's ink asks for
+        them (:func:`dot_density`), and every pen's dots are drawn at the
+        size that holds its layer's ink.
     joint : float in [0, 1]
         Share of the schedule's iterations run on all dots as one class
         before the pens are assigned (default 0.3).
@@ -437,11 +499,12 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its stages, the main engine's and "pens"
     with watch("separate"):
-        sep, opt, counts = _separate(image, n, colors, counts, joint, pen_pull, options,
-                                     dict(black_generation=black_generation,
-                                          clean_black=clean_black, clean_white=clean_white))
+        sep, opt, counts, density, weight = _separate(
+            image, n, colors, counts, joint, pen_pull, options,
+            dict(black_generation=black_generation, clean_black=clean_black,
+                 clean_white=clean_white), pen_share_exponent)
     P, H, W = sep.layers.shape
-    gray = 1.0 - sep.darkness
+    gray = 1.0 - density
     engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
                          grid=opt.grid_shape(W, H), timings=watch)
     stage = _make_stage(gray, opt, engine)
@@ -450,7 +513,8 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     state, history = _run(start, _phases(stage, head), callback)
     with watch("assign"):
         pen = assign_pens(state.points,
-                          _pen_share(sep.layers, state.points, 0.5 * np.sqrt(W * H / opt.n)), counts)
+                          _pen_share(sep.layers, weight, state.points, 0.5 * np.sqrt(W * H / opt.n)),
+                          counts)
     coarse = replace(opt, supersample=max(1, opt.supersample // PEN_COARSEN))
     pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
                         grid=coarse.grid_shape(W, H), timings=Stopwatch()),
@@ -462,11 +526,13 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     watch.add("total", time.perf_counter() - t_start)
     params = dict(opt.params(), colors=list(sep.names), black_generation=black_generation,
-                  clean_black=clean_black, clean_white=clean_white, joint=joint, pen_pull=pen_pull,
+                  clean_black=clean_black, clean_white=clean_white,
+                  pen_share_exponent=pen_share_exponent, joint=joint, pen_pull=pen_pull,
                   counts=counts.tolist())
     return ColorStippleResult(
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
         base_radii=r, certificate=cert, layers=sep.layers,
-        pen_radius=pen_tone_radii(sep.layers, counts), width=W, height=H, history=history + more,
+        pen_radius=pen_ink_radii(state.points, pen, sep.layers), width=W, height=H,
+        history=history + more,
         timings=watch.seconds, params=params, engine=engine.backend,
         tone_radius=tone_radius(opt.n, sep.darkness))

@@ -65,6 +65,8 @@ def test_given_counts_and_errors():
         stipple_colors(_image(), 200, paper_tone=0.1)
     with pytest.raises(ValueError, match="nothing to stipple"):
         stipple_colors(np.ones((8, 8, 3)), 10)
+    with pytest.raises(ValueError, match="every dot goes to a pen without ink"):
+        stipple_colors(_image(), 200, "cmyk", counts=[200, 0, 0, 0])   # no yellow in it
 
 
 @settings(max_examples=25)
@@ -365,3 +367,64 @@ def test_colour_line_art_keeps_its_dots_on_the_ink(ctx):
     stray = [stray_dots(r.points, 1.0 - g).per_10k for r in (res, page)]
     edge = [edge_fidelity(r.points, 1.0 - g) for r in (res, page)]
     assert stray[0] < 0.1 * stray[1] and edge[0] > edge[1] + 0.01
+
+
+def _largest_remainders(weights, n):
+    """n split in proportion to `weights`, the floors topped up by the largest remainders."""
+    share = [n * w / sum(weights) for w in weights]
+    out = [int(s) for s in share]
+    for p in sorted(range(len(share)), key=lambda p: out[p] - share[p])[: n - sum(out)]:
+        out[p] += 1
+    return out
+
+
+def test_pen_share_exponent_shares_dots_by_ink_to_that_power():
+    img = _image() * 0.5   # dark: black has most of the ink
+    short = dict(schedule=[("mix", 2, 0.5)], seed=1)
+    by_ink = stipple_colors(img, 300, "cmyk", **short)
+    res = stipple_colors(img, 300, "cmyk", pen_share_exponent=0.5, **short)
+    ink = [float(a.sum()) for a in res.layers]
+    assert res.counts.tolist() == _largest_remainders([i ** 0.5 if i > 0 else 0.0 for i in ink], 300)
+    assert by_ink.counts.tolist() == _largest_remainders(ink, 300)
+    assert res.counts[3] < by_ink.counts[3] and res.params["pen_share_exponent"] == 0.5
+    assert res.certificate.valid
+    with pytest.raises(ValueError, match=r"pen share exponent must be in \[0, 1\], got 1.5"):
+        stipple_colors(img, 300, "cmyk", pen_share_exponent=1.5)
+
+
+def test_cli_pen_share_exponent_reaches_the_result(tmp_path):
+    Image.fromarray(np.round(_image() * 128).astype(np.uint8)).save(tmp_path / "in.png")
+    head = ["stipple", str(tmp_path / "in.png"), "--colors", "cmyk", "-n", "200", "-q",
+            "--schedule", "classic", "-o", str(tmp_path / "c.npz")]
+    assert main([*head, "--pen-share-exponent", "0.5"]) == 0
+    back = read_stipple(tmp_path / "c.npz")
+    ink = [float(a.sum()) for a in multipen.separate(tmp_path / "in.png", "cmyk").layers]
+    assert np.bincount(back.pen, minlength=4).tolist() == _largest_remainders(
+        [i ** 0.5 if i > 0 else 0.0 for i in ink], 200)
+    assert back.params["pen_share_exponent"] == 0.5
+    assert main([*head, "--pen-share-exponent", "2"]) == 2
+
+
+def _drawn_ink(points, r, size, pad=8, scale=4):
+    """Paper covered by dots of radius `r` on a `size` px square image, overlaps counted
+    once (drawn at `scale` on a margin of `pad` px, so that no ink is lost off the image)."""
+    from diskpack_cl.picture_measures import render_dots
+
+    side = (size + 2 * pad) * scale
+    return np.minimum(render_dots((points + pad) * scale, r * scale, (side, side)), 1.0).sum() / scale**2
+
+
+def test_each_pens_drawn_ink_is_its_layers_ink():
+    """Dark photographs: black's dots overlap, so drawn at the tone radius they would
+    lose ink where they overlap; at the pen's radius each pen covers its layer's ink."""
+    from diskpack_cl.color import pen_tone_radii
+
+    img = _image(64, 64) * 0.5   # black covers 0.86 of the paper
+    for exponent in (1.0, 0.5):
+        res = stipple_colors(img, 1200, "cmyk", pen_share_exponent=exponent, seed=2)
+        for p, layer in enumerate(res.layers):
+            x = res.points[res.pen == p]
+            if len(x) >= 20:   # within 2 %: the lenses of pairs of dots are exact until three overlap
+                assert _drawn_ink(x, res.pen_radius[p], 64) == pytest.approx(layer.sum(), rel=0.02)
+        tone = pen_tone_radii(res.layers, res.counts)[3]   # black at the tone radius: 6 to 12 % lost
+        assert _drawn_ink(res.points[res.pen == 3], tone, 64) < 0.95 * res.layers[3].sum()
