@@ -31,7 +31,8 @@ One iteration:
    ``x <- m + blend * (c - m)``, ``m`` the MIC centre, ``c`` the centroid.
    ``blend = 0`` is a disk-packing step. With ``support > 0`` the blend of a
    dot whose MIC centre lies off its cell's ink rises towards 1
-   (:func:`off_support`).
+   (:func:`off_support`), and a dot whose power cell holds no ink at all
+   is put beside the dot of the heaviest cell (:func:`reseat_dead`).
    With ``capacity > 0`` every packing or mix step also moves each dot's
    radius factor towards the same ink (darkness) in every power cell
    (:func:`equal_ink`, capacity-constrained weights).
@@ -90,7 +91,7 @@ from .engine import make_engine
 from .image import to_gray
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
-           "equal_ink", "off_support"]
+           "equal_ink", "off_support", "reseat_dead"]
 
 
 @dataclass
@@ -317,6 +318,65 @@ def off_support(ink, mic_centers, centroids, gain=1.0):
     return np.clip(gain * (1.0 - ratio), 0.0, 1.0)
 
 
+#: A power cell holding less than this fraction of the mean ink per cell holds
+#: none: its dot is dead (:func:`reseat_dead`).
+DEAD_INK = 0.01
+
+_GOLDEN_ANGLE = np.pi * (3.0 - np.sqrt(5.0))
+
+
+def reseat_dead(points, mass, disk, ink, size):
+    """Dots whose power cell holds no ink, put beside the dots of the heaviest cells.
+
+    A dot whose cell holds less than :data:`DEAD_INK` of the mean ink per
+    cell lies on white paper with no ink to pull it back: its centroid is
+    the middle of the paper around it (Lloyd's dead points), and a plotter
+    inks it there. Line art with more dots than its thin lines and small
+    dots carry sheds such dots. Each is put half a disk radius (`disk`)
+    from the dot of one of the heaviest cells, in golden-angle directions,
+    with that dot's ink factor: the next step splits that cell between the
+    two (the move of Linde, Buzo and Gray).
+
+    Parameters
+    ----------
+    points : (n, 2) ndarray
+    mass : (n,) ndarray
+        Ink of each dot's power cell (NaN or below 0 for none: not moved).
+    disk : (n,) ndarray
+        Disk radius of each dot.
+    ink : (n,) ndarray or None
+        Ink factors (:func:`equal_ink`).
+    size : (W, H)
+        The image; the moved dots stay inside it.
+
+    Returns
+    -------
+    points, ink, count
+        New arrays where a dot moved (the inputs otherwise) and how many moved.
+
+    Examples
+    --------
+    >>> p = np.array([[1.0, 1.0], [5.0, 5.0], [9.0, 9.0]])
+    >>> q, _, count = reseat_dead(p, np.array([2.0, 5.0, 0.0]), np.ones(3), None, (10, 10))
+    >>> count, q[2].tolist()
+    (1, [5.5, 5.0])
+    """
+    live = mass >= DEAD_INK * np.mean(mass[mass >= 0])
+    dead = np.flatnonzero(~live & (mass >= 0))
+    if not dead.size:
+        return points, ink, 0
+    live = np.flatnonzero(live)
+    heavy = live[np.argsort(-mass[live], kind="stable")][np.arange(dead.size) % live.size]
+    angle = _GOLDEN_ANGLE * np.arange(dead.size)
+    step = 0.5 * disk[heavy, None] * np.column_stack([np.cos(angle), np.sin(angle)])
+    points = points.copy()
+    points[dead] = np.clip(points[heavy] + step, 0.0, np.asarray(size, dtype=np.float64))
+    if ink is not None:
+        ink = ink.copy()
+        ink[dead] = ink[heavy]
+    return points, ink, int(dead.size)
+
+
 def _blend_weights(stage, x, mic_centers, cen, blend):
     """Per-dot move ``a`` of ``m + a (c - m)``: the blend, raised by detail and by leaving the ink."""
     a = np.full(len(x), float(blend))
@@ -327,13 +387,16 @@ def _blend_weights(stage, x, mic_centers, cen, blend):
     return a
 
 
-def pack_step(state, stage, blend=0.0):
+def pack_step(state, stage, blend=0.0, *, reseat=True):
     """One disk-packing step, blended towards the power-cell centroids when ``blend > 0`` (mix).
 
     With ``support > 0`` a dot whose MIC centre leaves its cell's ink moves
-    towards the centroid instead (:func:`off_support`). Returns ``(state,
-    entry)``: the next state and this step's measurements (``moved``,
-    ``empty``); see the module docstring.
+    towards the centroid instead (:func:`off_support`), and, with
+    `reseat`, a dot whose cell holds no ink goes beside the dot of a
+    heavy cell (:func:`reseat_dead`; not in a schedule's last step, which
+    leaves no step to space the two). Returns ``(state, entry)``: the next
+    state and this step's measurements (``moved``, ``empty``, and
+    ``reseated`` with ``support``); see the module docstring.
 
     Examples
     --------
@@ -369,6 +432,11 @@ def pack_step(state, stage, blend=0.0):
         cen = np.where(okc[:, None], cen, newx)   # no move where the cell has no centroid
         a = _blend_weights(stage, x, newx, cen, blend)
         newx += a[:, None] * (cen - newx)
+    if opt.support > 0:
+        entry["reseated"] = 0
+        if reseat:
+            mass = np.where(ok, power[1], -1.0)   # an empty cell is hidden, not dead
+            newx, ink, entry["reseated"] = reseat_dead(newx, mass, state.k * r, ink, stage.size)
     entry["moved"] = _moved(x, newx)
     k = state.k
     if np.any(ok):
@@ -431,7 +499,8 @@ def _run(state, stage, callback, *, first=0, before=None):
                 # only the phase's last step sets k, for the packing after it
                 state, step = lloyd_step(state, stage, new_k=it == iters - 1)
             else:
-                state, step = pack_step(state, stage, blend if kind == "mix" else 0.0)
+                state, step = pack_step(state, stage, blend if kind == "mix" else 0.0,
+                                        reseat=len(history) < total - 1)
             if after is not None:
                 state = after(state)
             entry = {"kind": kind, "iteration": first + len(history), **step,
