@@ -326,8 +326,12 @@ def adjust_tone(gray, *, black=0.0, white=1.0, gamma=1.0):
                          f"{black:g} and white {white:g}")
     if not 0.0 < gamma < float("inf"):
         raise ValueError(f"the tone gamma must be a finite number > 0, got {gamma:g}")
-    g = np.clip((np.asarray(gray, dtype=np.float64) - black) / (white - black), 0.0, 1.0)
-    return g if gamma == 1.0 else g**gamma
+    g = np.asarray(gray, dtype=np.float64) - black   # a new array: the rest in place
+    g /= white - black
+    np.clip(g, 0.0, 1.0, out=g)
+    if gamma != 1.0:
+        g **= gamma   # numpy's operator, as g**gamma (square and square root by their own ufuncs)
+    return g
 
 
 _TONE = "tone (before stippling, on every schedule; in --json params.tone)"

@@ -551,7 +551,14 @@ class PowerRaster:
             d = np.ascontiguousarray(density, self._real)
             if d.shape != self.shape:
                 raise ValueError(f"density must have the raster shape {self.shape}")
-            self._density = (density, self._site_buffer("density", d))
+            if self.ctx.devices[0].type & cl.device_type.CPU:
+                # the device reads the host's array where it is: no second copy of a
+                # whole raster (512 MiB at 8192 x 8192) and no upload; d is kept with it
+                buf = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR,
+                                hostbuf=d)
+            else:
+                buf = self._site_buffer("density", d)
+            self._density = (density, buf, d)
         cell = (self.domain.width / nx, self.domain.height / ny)
         b_pts = self._site_buffer("grid_sites", np.ascontiguousarray(sites / cell, self._real))
         acc = np.zeros((len(sites), 3), np.int64)
