@@ -290,22 +290,27 @@ def largest_valid_k(points, r, width, height):
         return 0.0
 
     classes = radius_octaves(r)
-    trees = [cKDTree(p[c]) for c in classes]
     rmax = [r[c].max() for c in classes]
-    for a in range(len(classes)):
-        for b in range(a, len(classes)):
-            reach = k * (rmax[a] + rmax[b]) * (1 + 1e-9)
-            sdm = trees[a].sparse_distance_matrix(trees[b], reach, output_type="ndarray")
-            if sdm.size == 0:
-                continue
-            i = classes[a][sdm["i"]]
-            jj = classes[b][sdm["j"]]
-            keep = i != jj
-            if not np.any(keep):
-                continue
-            i, jj = i[keep], jj[keep]
-            dij = np.hypot(p[i, 0] - p[jj, 0], p[i, 1] - p[jj, 1])
-            k = min(k, float(np.min(dij / (r[i] + r[jj]))))
+
+    def pair_k(ab):
+        # every pair of octaves (a, b) within the bound k has: a pair it misses has a
+        # larger ratio than the bound, so the least ratio is the same in any order
+        a, b = ab
+        reach = k * (rmax[a] + rmax[b]) * (1 + 1e-9)
+        sdm = trees[a].sparse_distance_matrix(trees[b], reach, output_type="ndarray")
+        i, jj = classes[a][sdm["i"]], classes[b][sdm["j"]]
+        keep = i != jj
+        if not np.any(keep):
+            return np.inf
+        i, jj = i[keep], jj[keep]
+        dij = np.hypot(p[i, 0] - p[jj, 0], p[i, 1] - p[jj, 1])
+        return float(np.min(dij / (r[i] + r[jj])))
+
+    # the trees and the pairs of octaves on every core (cKDTree releases the GIL)
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        trees = list(pool.map(lambda c: cKDTree(p[c]), classes))
+        pairs = [(a, b) for a in range(len(classes)) for b in range(a, len(classes))]
+        k = min(k, *pool.map(pair_k, pairs))
     return max(k, 0.0)
 
 
