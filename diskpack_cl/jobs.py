@@ -419,7 +419,7 @@ def _item_image(path, params):
         return gray, gray, stipple
 
     def run(image, n, options, **keywords):
-        return stipple_colors(image, n, **color, **keywords, **changed(options))
+        return stipple_colors(image, n, options=options, **color, **keywords)
 
     return None, load_rgb(path), run
 

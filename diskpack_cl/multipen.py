@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from scipy import ndimage
@@ -48,7 +48,7 @@ from scipy.spatial import cKDTree
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
-from .color import PEN_SHARE_EXPONENT, pen_ink_radii, separate
+from .color import PALETTES, ColorOptions, pen_ink_radii, separate
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
@@ -421,31 +421,54 @@ def dots_per_pen(names, layers, n, counts=None, exponent=1.0):
     return out
 
 
-def _separate(image, n, colors, counts, joint, pen_pull, options, separation, exponent):
-    """Check the arguments of :func:`stipple_colors`; the separation, options, counts and
-    :func:`dot_density`."""
+def _objects(colors, options, overrides):
+    """The :class:`~diskpack_cl.color.ColorOptions` and
+    :class:`~diskpack_cl.schedule.StippleOptions` of :func:`stipple_colors`: `colors` (an
+    object, or the pens; cmyk unless it names some) and `options`, each with the
+    `overrides` of its fields on top."""
+    if not isinstance(colors, ColorOptions):
+        pens = "cmyk" if colors is None else colors
+        palette = isinstance(pens, str) and pens.lower() in PALETTES
+        colors = ColorOptions(colors=pens.lower()) if palette else ColorOptions(pens=pens)
+    mine = {k: overrides.pop(k) for k in [*overrides] if k in _COLOR_FIELDS}
+    color = replace(colors, **mine)
+    if color.separation() is None:
+        color = replace(color, colors="cmyk")
+    return color, (options or StippleOptions()).replace(**overrides)
+
+
+_COLOR_FIELDS = frozenset(f.name for f in fields(ColorOptions))
+
+
+def _separate(image, n, color, counts, joint, pen_pull, options):
+    """Check the arguments of :func:`stipple_colors`; the separation, the options resolved,
+    the counts and :func:`dot_density`."""
     for name in ("invert", "paper_tone"):
-        if options.get(name):
+        if getattr(options, name):
             raise ValueError(f"{name} is for one pen: colour stippling draws the pens on white")
     for name, v in (("joint", joint), ("pen_pull", pen_pull)):
         if not 0.0 <= v <= 1.0:
             raise ValueError(f"{name} must be in [0, 1], got {v}")
-    sep = separate(image, colors, **separation)
+    separation = color.separation()
+    if counts is not None and separation["counts"] is not None:
+        raise ValueError("give the dots per pen once: counts or pen_dots, not both")
+    sep = separate(image, separation["colors"], black_generation=color.black_generation,
+                   clean_black=color.clean_black, clean_white=color.clean_white)
     if not sep.darkness.max() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
-    if options.get("capacity") is None:   # measured: equal ink per dot costs tone per pen
-        options = dict(options, capacity=COLOR_CAPACITY)
-    counts = dots_per_pen(sep.names, sep.layers, check_count(n), counts, exponent)
+    if options.capacity is None:   # measured: equal ink per dot costs tone per pen
+        options = options.replace(capacity=COLOR_CAPACITY)
+    counts = dots_per_pen(sep.names, sep.layers, check_count(n),
+                          separation["counts"] if counts is None else counts,
+                          color.pen_share_exponent)
     density, weight = dot_density(sep.layers, counts)
     # the dots' density is what the first phases stipple: its ink sizes the raster
-    opt = StippleOptions.resolve(n, sep.layers.shape[2], sep.layers.shape[1],
-                                 ink=float(density.sum()), **options)
+    opt = options.plan(n, sep.layers.shape[2], sep.layers.shape[1], ink=float(density.sum()))
     return sep, opt, counts, density, weight
 
 
-def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0, clean_black=0.0,
-                   clean_white=0.0, pen_share_exponent=PEN_SHARE_EXPONENT, joint=0.3, pen_pull=1.0,
-                   callback=None, device=None, backend="auto", **options):
+def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.3, pen_pull=1.0,
+                   callback=None, device=None, backend="auto", **overrides):
     """Stipple a colour image with ``n`` dots of several pens, all certified disjoint.
 
     Parameters
@@ -454,21 +477,27 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         A colour image (:func:`diskpack_cl.color.load_rgb`).
     n : int
         Number of dots of all pens together.
-    colors : str or sequence of (name, colour)
-        ``"cmyk"``, ``"cmy"`` or pens ``"NAME=COLOR,..."``
-        (:func:`diskpack_cl.color.separate`).
+    colors : ColorOptions, str or sequence of (name, colour), optional
+        The separation (:class:`diskpack_cl.color.ColorOptions`: the pens,
+        black generation, cleaning, dots per pen), or the pens alone:
+        ``"cmyk"``, ``"cmy"`` or ``"NAME=COLOR,..."``
+        (:func:`diskpack_cl.color.separate`); cmyk where none are named.
+        Its ``pen_share_exponent`` sets the dots per pen unless given
+        (:func:`pen_counts`): in proportion to each layer's ink to that
+        power; below 1 the pens with less ink get more, smaller dots. The
+        dots go where each pen's ink asks for them (:func:`dot_density`),
+        and every pen's dots are drawn at the size that holds its layer's
+        ink.
+    options : StippleOptions, optional
+        The stippling options, as for :func:`diskpack_cl.stipple`, applied
+        to the joint density; ``capacity`` defaults to
+        :data:`COLOR_CAPACITY` (off). ``invert`` and ``paper_tone`` are
+        refused.
     counts : sequence of int or mapping of str to int, optional
         Dots per pen (:func:`dots_per_pen`): all (summing to n), or some by
-        name, the others sharing the rest by their ink; default: every pen
-        in proportion to its layer's ink to the power `pen_share_exponent`.
-    black_generation, clean_black, clean_white : float
-        Separation options (:func:`diskpack_cl.color.separate`).
-    pen_share_exponent : float in [0, 1]
-        Dots per pen in proportion to ink to this power (:func:`pen_counts`;
-        default :data:`diskpack_cl.color.PEN_SHARE_EXPONENT`); below 1 the pens with less ink
-        get more, smaller dots. The dots go where each pen's ink asks for
-        them (:func:`dot_density`), and every pen's dots are drawn at the
-        size that holds its layer's ink.
+        name, the others sharing the rest by their ink; the
+        :class:`~diskpack_cl.color.ColorOptions`' ``pen_dots`` as numbers
+        (give one of the two).
     joint : float in [0, 1]
         Share of the schedule's iterations run on all dots as one class
         before the pens are assigned (default 0.3).
@@ -479,11 +508,12 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         (default 1).
     callback, device, backend
         As for :func:`diskpack_cl.stipple`.
-    **options
-        The stippling options of :func:`diskpack_cl.stipple` (schedule,
-        seed, ...), applied to the joint density; ``capacity`` defaults to
-        :data:`COLOR_CAPACITY` (off). ``invert`` and ``paper_tone`` are
-        refused.
+    **overrides
+        Fields of :class:`~diskpack_cl.color.ColorOptions`
+        (``black_generation``, ``clean_black``, ``clean_white``,
+        ``pen_share_exponent``, ``pen_dots``) over those of `colors`, and of
+        :class:`~diskpack_cl.schedule.StippleOptions` (``schedule``,
+        ``seed``, ...) over those of `options`.
 
     Returns
     -------
@@ -495,14 +525,22 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
     >>> res = stipple_colors(img, 120, "cmy", schedule=[("mix", 4, 0.5)], backend="exact")
     >>> res.names, int(res.counts.sum()), res.certificate.valid
     (('yellow', 'cyan', 'magenta'), 120, True)
+
+    The same with the options objects:
+
+    >>> from diskpack_cl.color import ColorOptions
+    >>> from diskpack_cl.schedule import StippleOptions
+    >>> again = stipple_colors(img, 120, ColorOptions(colors="cmy"),
+    ...                        StippleOptions(schedule=[("mix", 4, 0.5)]), backend="exact")
+    >>> bool(np.array_equal(again.points, res.points))
+    True
     """
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its stages, the main engine's and "pens"
     with watch("separate"):
-        sep, opt, counts, density, weight = _separate(
-            image, n, colors, counts, joint, pen_pull, options,
-            dict(black_generation=black_generation, clean_black=clean_black,
-                 clean_white=clean_white), pen_share_exponent)
+        color, options = _objects(colors, options, overrides)
+        sep, opt, counts, density, weight = _separate(image, n, color, counts, joint, pen_pull,
+                                                      options)
     P, H, W = sep.layers.shape
     gray = 1.0 - density
     engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
@@ -525,9 +563,9 @@ def stipple_colors(image, n, colors="cmyk", *, counts=None, black_generation=1.0
         r = dot_radii(state, stage, state.points)
         k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     watch.add("total", time.perf_counter() - t_start)
-    params = dict(opt.params(), colors=list(sep.names), black_generation=black_generation,
-                  clean_black=clean_black, clean_white=clean_white,
-                  pen_share_exponent=pen_share_exponent, joint=joint, pen_pull=pen_pull,
+    params = dict(opt.params(), colors=list(sep.names), black_generation=color.black_generation,
+                  clean_black=color.clean_black, clean_white=color.clean_white,
+                  pen_share_exponent=color.pen_share_exponent, joint=joint, pen_pull=pen_pull,
                   counts=counts.tolist())
     return ColorStippleResult(
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),

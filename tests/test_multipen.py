@@ -388,7 +388,7 @@ def test_pen_share_exponent_shares_dots_by_ink_to_that_power():
     assert by_ink.counts.tolist() == _largest_remainders(ink, 300)
     assert res.counts[3] < by_ink.counts[3] and res.params["pen_share_exponent"] == 0.5
     assert res.certificate.valid
-    with pytest.raises(ValueError, match=r"pen share exponent must be in \[0, 1\], got 1.5"):
+    with pytest.raises(ValueError, match=r"pen_share_exponent must be in \[0, 1\], got 1.5"):
         stipple_colors(img, 300, "cmyk", pen_share_exponent=1.5)
 
 
