@@ -553,11 +553,11 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None):
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
     of that part of `gray`, computed with the margin around it, and `ell`
     is the detail scale of the whole picture (:func:`~diskpack_cl.tiles.stipple_tiled`)."""
-    darkness = 1.0 - gray
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell)
+    darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
     ink = _blurred(darkness, INK_SIGMA) if opt.support > 0 else None   # only off_support reads it
     density = _centroid_density(darkness, opt)
     if window is None:
