@@ -184,16 +184,23 @@ def ink_kept(res, scale=3):
 
 
 def black_generation_table(rows):
-    """Markdown rows of :func:`black_generation_rows`."""
-    out = ["| image | G | exponent | dots Y/C/M/K | ink kept Y/C/M/K/all | correlation R / G / B | "
+    """Markdown rows of :func:`black_generation_rows`: per image, variant, G and exponent, the
+    mean over seeds (CIEDE2000 ± half its range over seeds; ink kept of black and of all pens)."""
+    out = ["| image | G | A | dots Y/C/M/K | ink kept K, all | correlation R / G / B | "
            "CIEDE2000 | separation alone: correlation, CIEDE2000 |", "| --- " * 8 + "|"]
+    groups = {}
     for r in rows:
-        sep = r["separation"]
-        out.append(f"| {r['image']} ({r['variant']}) | {r['black_generation']:g} | "
-                   f"{r.get('pen_share_exponent', 1.0):g} | {'/'.join(map(str, r['counts']))} | "
-                   f"{_cells(r.get('ink_kept', [None] * 5))} | {_cells(r['corr_rgb'])} | "
-                   f"{r['ciede2000']:.1f} | "
-                   f"{_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |")
+        key = (r["image"], r["variant"], r["black_generation"], r.get("pen_share_exponent", 1.0))
+        groups.setdefault(key, []).append(r)
+    for (image, variant, g, a), rs in groups.items():
+        de = [r["ciede2000"] for r in rs]
+        spread = f" ± {(max(de) - min(de)) / 2:.1f}" if len(rs) > 1 else ""
+        kept = (np.mean([r["ink_kept"][3:] for r in rs], axis=0) if "ink_kept" in rs[0]
+                else [None] * 2)
+        sep = rs[0]["separation"]
+        out.append(f"| {image} ({variant}) | {g:g} | {a:g} | {'/'.join(map(str, rs[0]['counts']))} | "
+                   f"{_cells(kept)} | {_cells(np.mean([r['corr_rgb'] for r in rs], axis=0))} | "
+                   f"{np.mean(de):.1f}{spread} | {_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |")
     return "\n".join(out)
 
 

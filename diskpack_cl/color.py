@@ -431,7 +431,7 @@ def load_rgb(image):
 
 #: Dots per pen in proportion to their layer's ink to this power unless given
 #: (:func:`diskpack_cl.multipen.pen_counts`); measured in docs/color.md.
-PEN_SHARE_EXPONENT = 1.0
+PEN_SHARE_EXPONENT = 0.7
 
 #: Pens with fewer dots get no SSIM or P01 in :func:`color_measures` (a percentile of a
 #: handful of distances says nothing).

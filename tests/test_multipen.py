@@ -12,6 +12,7 @@ from PIL import Image
 from diskpack_cl.cli import main
 from diskpack_cl.export import read_stipple, write_stipple
 from diskpack_cl import multipen
+from diskpack_cl.color import PEN_SHARE_EXPONENT
 from diskpack_cl.multipen import assign_pens, dots_per_pen, pen_counts, stipple_colors
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -43,7 +44,7 @@ def _disjoint(points, radii, W, H):
 def test_all_pens_in_one_certified_packing(result):
     assert result.n == 300 and result.certificate.valid
     assert _disjoint(result.points, result.radii, result.width, result.height)
-    assert result.counts.tolist() == pen_counts(result.layers, 300).tolist()
+    assert result.counts.tolist() == pen_counts(result.layers, 300, PEN_SHARE_EXPONENT).tolist()
     assert result.names == ("yellow", "cyan", "magenta", "black")
 
 
@@ -381,7 +382,7 @@ def _largest_remainders(weights, n):
 def test_pen_share_exponent_shares_dots_by_ink_to_that_power():
     img = _image() * 0.5   # dark: black has most of the ink
     short = dict(schedule=[("mix", 2, 0.5)], seed=1)
-    by_ink = stipple_colors(img, 300, "cmyk", **short)
+    by_ink = stipple_colors(img, 300, "cmyk", pen_share_exponent=1.0, **short)
     res = stipple_colors(img, 300, "cmyk", pen_share_exponent=0.5, **short)
     ink = [float(a.sum()) for a in res.layers]
     assert res.counts.tolist() == _largest_remainders([i ** 0.5 if i > 0 else 0.0 for i in ink], 300)
