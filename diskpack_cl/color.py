@@ -517,7 +517,7 @@ def _ink_radius(x, ink, r0, shape, grow, probes, rng):
     return float(d[order][at]) if at < len(d) else R
 
 
-def pen_ink_radii(points, pen, layers, *, grow=1.25, probes=200_000, seed=0):
+def pen_ink_radii(points, pen, layers, *, grow=1.25, probes=100_000, seed=0):
     """Dot radius per pen at which its dots hold its layer's ink on the image, where they
     overlap counted once.
 
