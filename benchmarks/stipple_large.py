@@ -1,7 +1,7 @@
 """A large stippling within the machine's memory: n = 1M dots on an 8192 x 8192 image.
 
 Usage: python benchmarks/stipple_large.py [--size 8192] [--n 1000000] [--mix 3] [--full] [--before]
-                                         [--command] [--json rows.jsonl]
+                                         [--command [--label TEXT]] [--json rows.jsonl]
 
 The image is the bundled sample photograph scaled up (Lanczos).  Runs a few
 iterations of the default schedule's step ("mix", with the default's
@@ -13,9 +13,12 @@ process (the picture saved as a PNG in the temporary folder first), from
 the interpreter's start to its exit (loading, the start, every step, the
 certificate, writing the ``.npz``), its peak resident memory (``wait4``'s
 ``ru_maxrss`` of the child), where the time goes (the run's stages from its
-``--json`` line; ``write``: writing the ``.npz``; ``outside``: starting the
+``--json`` line; ``read``: the command line reading the picture and
+planning; ``write``: writing the ``.npz``; ``outside``: starting the
 interpreter, imports, reading the arguments and exiting), and in the same run
 scipy's ``Voronoi`` of n uniform random points (seed 0) for scale.
+The row also holds the CPU seconds of both (``cpu_s``, ``voronoi_cpu_s``),
+which a busy machine stretches less than the wall clock.
 ``--json`` appends the run as a row with the context of :mod:`perf_rows`;
 :func:`summary` makes the docs' table of them.
 """
@@ -42,6 +45,7 @@ from perf_rows import append, count, medians, num
 #: Names the table gives the stages (``load`` is loading the image, not the load average).
 STAGE_NAMES = {"load": "loading the image", "device": "MIC kernel", "refine": "MIC host check",
                "raster_labels": "labels", "write": "writing the .npz",
+               "read": "reading the picture (command line)",
                "outside": "interpreter, imports and exit", "rest": "the rest of the run"}
 
 
@@ -49,13 +53,16 @@ def summary(rows):
     """``(header, rows)`` of the docs' table: medians per image, n and schedule, with the run's stages."""
     # "total" is the seconds column again
     stages = list(dict.fromkeys(k for r in rows for k in r if k.startswith("stage_") and k != "stage_total"))
-    values = ["seconds", "iterations", "s_per_iter", "peak_rss_gib", "voronoi_s", "ratio", *stages]
+    values = ["seconds", "iterations", "s_per_iter", "peak_rss_gib", "voronoi_s", "ratio", "cpu_s",
+              "voronoi_cpu_s", *stages]
     runs = medians(rows, ("size", "n", "schedule"), values)
-    header = ["image", "n", "schedule", "steps", "seconds to the certified result", "median s/iter",
-              "Voronoi(n) in the same run (s)", "ratio to Voronoi", "peak resident memory",
-              "stages (s)"]
-    return header, [[f"{r['size']} x {r['size']}", count(r["n"]), r["schedule"], num(r["iterations"]),
-                     num(r["seconds"]), num(r["s_per_iter"]), num(r["voronoi_s"]), num(r["ratio"]),
+    header = ["image", "n", "schedule", "runs", "steps", "seconds (the whole command: start to exit)",
+              "median s/iter", "Voronoi(n) in the same run (s)", "ratio to Voronoi",
+              "CPU seconds, run / Voronoi", "peak resident memory", "stages (s)"]
+    return header, [[f"{r['size']} x {r['size']}", count(r["n"]), r["schedule"], r["repeats"],
+                     num(r["iterations"]), num(r["seconds"]), num(r["s_per_iter"]), num(r["voronoi_s"]),
+                     num(r["ratio"]),
+                     f"{num(r['cpu_s'])} / {num(r['voronoi_cpu_s'])}" if r["cpu_s"] else "",
                      num(r["peak_rss_gib"], " GiB"),
                      ", ".join(f"{STAGE_NAMES.get(k[6:], k[6:])} {num(r[k])}"
                                for k in stages if (r[k] or 0) >= 0.05)] for r in runs]
@@ -68,15 +75,15 @@ def picture(size):
 
 
 def voronoi_seconds(n, seed=0):
-    """Seconds of scipy's ``Voronoi`` of `n` uniform random points in the unit square."""
+    """Wall and CPU seconds of scipy's ``Voronoi`` of `n` uniform random points in the unit square."""
     pts = np.random.default_rng(seed).random((n, 2))
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), time.process_time()
     Voronoi(pts)
-    return time.perf_counter() - t
+    return time.perf_counter() - t, time.process_time() - cpu
 
 
 def run_command(size, n):
-    """``(wall seconds, peak RSS GiB, --json summary)`` of ``diskpack stipple`` on the
+    """``(wall seconds, CPU seconds, peak RSS GiB, --json summary)`` of ``diskpack stipple`` on the
     :func:`picture` saved as a PNG, in a child process timed from its start to its exit."""
     folder = Path(tempfile.gettempdir())
     png = folder / f"stipple_large_{size}.png"
@@ -96,25 +103,30 @@ def run_command(size, n):
             raise RuntimeError(f"{' '.join(cmd)} failed: {err.read()}")
         log.seek(0)
         line = log.read().splitlines()[-1]
-    return wall, usage.ru_maxrss / 2**20, json.loads(line)
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 2**20, json.loads(line)
 
 
-def command_row(size, n):
-    """The row of one :func:`run_command` with :func:`voronoi_seconds` of n points before it."""
-    vor = voronoi_seconds(n)
-    wall, peak, res = run_command(size, n)
+def command_row(size, n, label=None):
+    """The row of one :func:`run_command` with :func:`voronoi_seconds` of n points before it
+    (`label`: a few words the table adds to the schedule, such as the code measured)."""
+    vor, vor_cpu = voronoi_seconds(n)
+    wall, cpu, peak, res = run_command(size, n)
     t = res["timings"]
     stages = {f"stage_{k}": v for k, v in t.items()}
     steps = t["total"] - sum(t.get(k, 0.0) for k in ("load", "start", "setup", "certify"))
     # what no stage times: the steps' host work (and the setup, where the run does not time it)
     stages.update(stage_rest=max(t["total"] - sum(v for k, v in t.items() if k != "total"), 0.0),
+                  stage_read=res["seconds"] - t["total"] - res["write_seconds"],
                   stage_write=res["write_seconds"], stage_outside=wall - res["seconds"])
     print(f"n={n} image={size}x{size}: the whole command {wall:.1f} s, Voronoi({n}) {vor:.1f} s, "
-          f"ratio {wall / vor:.2f}, peak RSS {peak:.2f} GiB, certified valid: "
+          f"ratio {wall / vor:.2f} (CPU time {cpu:.1f} s against {vor_cpu:.1f} s), peak RSS "
+          f"{peak:.2f} GiB, certified valid: "
           f"{res['certificate']['valid']}\n  stages: { {k[6:]: round(v, 2) for k, v in stages.items()} }")
-    return {"size": size, "n": n, "schedule": "default, the whole command", "seconds": wall,
+    schedule = "default, the whole command" + (f", {label}" if label else "")
+    return {"size": size, "n": n, "schedule": schedule, "seconds": wall,
             "iterations": res["iterations"], "s_per_iter": steps / res["iterations"],
-            "voronoi_s": vor, "ratio": wall / vor, "peak_rss_gib": peak,
+            "voronoi_s": vor, "ratio": wall / vor, "cpu_s": cpu, "voronoi_cpu_s": vor_cpu,
+            "peak_rss_gib": peak,
             "valid": bool(res["certificate"]["valid"]), **stages}
 
 
@@ -128,10 +140,12 @@ def main():
                     help="the default without the support rule and capacity")
     ap.add_argument("--command", action="store_true",
                     help="the whole default run through the command line, against Voronoi(n)")
+    ap.add_argument("--label", default=None,
+                    help="with --command: words the table adds to the schedule (the code measured)")
     ap.add_argument("--json", default=None, help="append the run as a JSON line to this file")
     args = ap.parse_args()
     if args.command:
-        append(args.json, command_row(args.size, args.n))
+        append(args.json, command_row(args.size, args.n, args.label))
         return
     gray = np.asarray(picture(args.size), np.float64) / 255.0
     t = time.perf_counter()
