@@ -56,20 +56,21 @@ def picture(size):
 
 
 def timed(args):
-    """Run `args`, return ``(seconds, peak RSS GiB of the largest process, summary)``."""
-    import resource
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    """Run `args`; ``(seconds, peak RSS GiB of its largest process, largest part's GiB, summary)``.
+
+    The command's own peak comes from ``wait4`` (the largest of it and the
+    workers it spawned and waited for); the parts' from the summary."""
     t0 = time.perf_counter()
-    done = subprocess.run(args, capture_output=True, text=True)
-    seconds = time.perf_counter() - t0
-    if done.returncode:
-        raise SystemExit(f"{' '.join(args)} failed:\n{done.stderr}")
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    summary = json.loads(done.stdout.strip().splitlines()[-1])
-    workers = summary.get("peak_rss_mib") or 0
-    # RUSAGE_CHILDREN keeps the largest child so far: a run below an earlier one reads as that
-    own = peak / 2**20 if peak > before else None
-    return seconds, own, workers / 1024, summary
+    with tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=err, text=True)
+        out = proc.stdout.read()
+        _, status, usage = os.wait4(proc.pid, 0)
+        seconds = time.perf_counter() - t0
+        if os.waitstatus_to_exitcode(status):
+            err.seek(0)
+            raise SystemExit(f"{' '.join(args)} failed:\n{err.read()}")
+    summary = json.loads(out.strip().splitlines()[-1])
+    return seconds, usage.ru_maxrss / 2**20, (summary.get("peak_rss_mib") or 0) / 1024, summary
 
 
 def seam_measures(points, edges_x, edges_y, spacing, width=3.0):
@@ -145,10 +146,12 @@ def main():
         workers = max(client.run(_worker_peak_gib).values())
         client.close()
         cluster.close()
-    row.update(tiled=secs, tiled_driver_gib=own, tiled_worker_gib=workers,
+    # a worker's peak so far: after the tiles (which run first), before any seam
+    tile_gib = max(p["peak_rss_mib"] for p in summ["parts"] if p["kind"] == "tile") / 1024
+    row.update(tiled=secs, tiled_driver_gib=own, tiled_worker_gib=workers, tiled_tile_gib=tile_gib,
                tiled_valid=summ["certificate"]["valid"], parts=summ.get("parts"))
     print(f"tiled {args.tiles} on {row['where']} x{args.jobs}: {secs:.1f} s, driver "
-          f"{own if own is None else round(own, 2)} GiB, largest worker {workers:.2f} GiB, "
+          f"{own:.2f} GiB, largest worker {workers:.2f} GiB (after the tiles {tile_gib:.2f}), "
           f"valid {row['tiled_valid']}", flush=True)
     with np.load(os.path.join(out, "tiled.npz")) as z:
         tiled = z["points"], z["radii"]
@@ -159,7 +162,7 @@ def main():
     if not args.no_untiled:
         secs, own, _, summ = timed(cmd + ["-o", os.path.join(out, "untiled.npz")])
         row.update(untiled=secs, untiled_gib=own, untiled_valid=summ["certificate"]["valid"])
-        print(f"untiled: {secs:.1f} s, {own if own is None else round(own, 2)} GiB", flush=True)
+        print(f"untiled: {secs:.1f} s, {own:.2f} GiB", flush=True)
         with np.load(os.path.join(out, "untiled.npz")) as z:
             untiled = z["points"], z["radii"]
         row["seam_untiled"] = seam_measures(untiled[0], xs, ys, spacing)

@@ -231,13 +231,13 @@ def _run_stipple_tiled(args, options, tone, write, separation):
     finally:
         if bar is not None:
             bar.close()
-    summary = dict(res.summary(), image=image, tone_n=None, parts=len(res.history),
+    summary = dict(res.summary(), image=image, tone_n=None, parts=res.history,
                    iterations=max(h["steps"] for h in res.history),
                    peak_rss_mib=max(h["peak_rss_mib"] or 0 for h in res.history))
     tail = _write_and_report(args, write, res, None, outputs, summary, t0)
     if not args.quiet:
         print(f"{PROG}: {_result_text(res, summary)}, {res.params['tiles']} tiles "
-              f"({len(res.history)} parts, largest worker {summary['peak_rss_mib'] / 1024:.2f} GiB) "
+              f"({len(res.history)} parts, largest part {summary['peak_rss_mib'] / 1024:.2f} GiB) "
               f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
     return 0
 
