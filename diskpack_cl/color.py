@@ -721,8 +721,8 @@ class ColorOptions:
         "the pens with little ink get more, smaller dots; every pen's dots hold its ink "
         f"(default {PEN_SHARE_EXPONENT:g})", lo=0, hi=1, metavar="A", group=_COLOUR)
     pen_dots: str = option(None, "dots of some or all pens, e.g. cyan=12000,black=8000: the pens "
-                           "named get that many, the others share the rest of the dots in "
-                           "proportion to their ink (default: every pen by its ink)",
+                           "named get that many, the others share the rest by their ink to "
+                           "the power of the pen share exponent (default: all pens share them so)",
                            metavar="NAME=N,...", check=parse_pen_dots, group=_COLOUR)
 
     def __post_init__(self):

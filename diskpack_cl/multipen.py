@@ -373,8 +373,8 @@ def dots_per_pen(names, layers, n, counts=None, exponent=1.0):
     counts : sequence of int or mapping of str to int, optional
         ``None``: every pen by its ink (:func:`pen_counts`). A sequence: the
         dots of every pen, summing to n. A mapping ``{name: dots}``: those
-        pens get that many and the others share the rest by their ink; when
-        it names every pen it must sum to n.
+        pens get that many and the others share the rest by their ink (to the
+        power `exponent`); when it names every pen it must sum to n.
     exponent : float in [0, 1]
         The pens shared by ink get dots in proportion to ink to this power
         (:func:`pen_counts`).
@@ -495,7 +495,8 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
         refused.
     counts : sequence of int or mapping of str to int, optional
         Dots per pen (:func:`dots_per_pen`): all (summing to n), or some by
-        name, the others sharing the rest by their ink; the
+        name, the others sharing the rest by their ink to the power of the
+        pen share exponent; the
         :class:`~diskpack_cl.color.ColorOptions`' ``pen_dots`` as numbers
         (give one of the two).
     joint : float in [0, 1]
