@@ -26,7 +26,8 @@ _KINDS = ("GPU", "CPU", "ACCELERATOR")
 
 _FIX = (
     "install an OpenCL driver: on Linux x86-64 `pip install pocl-binary-distribution` "
-    "gives a CPU device; elsewhere install PoCL or your GPU vendor's OpenCL runtime. "
+    "gives a CPU device (on CPUs newer than its LLVM, your distribution's PoCL, e.g. "
+    "Debian's pocl-opencl-icd); elsewhere install PoCL or your GPU vendor's OpenCL runtime. "
     "Both algorithms also run without OpenCL on the exact backend"
 )
 
@@ -136,13 +137,37 @@ def _of_kind(pairs, kind, mixed=True):
     return found[0] if found else None
 
 
-def _default(pairs):
-    """The first GPU, else the first CPU, of one kind each; else the first device."""
-    return _of_kind(pairs, "GPU", False) or _of_kind(pairs, "CPU", False) or pairs[0][3]
+def _preferred(pairs):
+    """Every device, the default first: GPUs, then CPUs, of one kind each; then the rest."""
+    order = [d for *_, d in pairs if _kinds(d) == ["GPU"]] + [d for *_, d in pairs if _kinds(d) == ["CPU"]]
+    return order + [d for *_, d in pairs if d not in order]
+
+
+#: A kernel every OpenCL C compiler builds: a device whose compiler refuses it is no device
+#: (the pip build of PoCL 3.0, LLVM 14, refuses every kernel on CPUs newer than its LLVM,
+#: such as AMD's family 26: "unknown target CPU 'generic'").
+_PROBE = "kernel void probe(global float *a) { a[get_global_id(0)] = sqrt(a[0]); }"
+
+
+def _context_that_builds(device):
+    """``(context, None)`` on `device`, or ``(None, why)`` when its compiler refuses :data:`_PROBE`."""
+    import warnings
+
+    import pyopencl as cl  # not loaded at start-up
+
+    ctx = cl.Context([device])
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            cl.Program(ctx, _PROBE).build()
+    except cl.Error as exc:
+        lines = [ln.strip() for ln in str(exc).splitlines() if "error" in ln.lower()]
+        return None, f"{device.name.strip()} cannot build OpenCL kernels ({(lines or [str(exc)])[-1]})"
+    return ctx, None
 
 
 def _pick(spec):
-    """The device a device string names, or the default one (see :func:`_default`).
+    """The devices a device string names, or every device, the default first (:func:`_preferred`).
 
     ``"P:D"``: platform P (index or name substring) and its device D (index
     or name substring; empty: 0), as pyopencl reads ``PYOPENCL_CTX``
@@ -162,11 +187,11 @@ def _pick(spec):
     if not pairs:
         raise NoOpenCLError(f"OpenCL platforms exist but have no devices; {_FIX}")
     if not spec:
-        return _default(pairs)
+        return _preferred(pairs)
     plat, colon, dev = spec.partition(":")
     kind = spec.strip().upper()
     if not colon and kind in ("GPU", "CPU") and (found := _of_kind(pairs, kind)) is not None:
-        return found
+        return [found]
     for ip, idev, p, d in pairs:
         if colon:
             hit = _matches(plat, ip, p.name, p.vendor) and _matches(dev or "0", idev, d.name)
@@ -175,7 +200,7 @@ def _pick(spec):
         else:
             hit = _matches(spec, -1, d.name, p.name, p.vendor)
         if hit:
-            return d
+            return [d]
     raise NoOpenCLError(f"no OpenCL device matches {spec!r}; available: {_available(pairs)}")
 
 
@@ -199,7 +224,15 @@ def get_context(device=None):
         return device
     spec = device or os.environ.get("DISKPACK_DEVICE") or os.environ.get("PYOPENCL_CTX") or ""
     if spec not in _CONTEXTS:
-        _CONTEXTS[spec] = cl.Context([_pick(spec)])
+        refused = []
+        for d in _pick(spec):
+            ctx, why = _context_that_builds(d)
+            if ctx is not None:
+                _CONTEXTS[spec] = ctx
+                break
+            refused.append(why)
+        else:
+            raise NoOpenCLError(f"{'; '.join(refused)}; {_FIX}")
     return _CONTEXTS[spec]
 
 

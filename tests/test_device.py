@@ -41,7 +41,7 @@ def fake(monkeypatch):
     ("cpu", CPU), ("gpu", GPU0), ("a100", GPU1), ("Portable", CPU),
 ])
 def test_device_strings(fake, spec, want):
-    assert _device._pick(spec) is want
+    assert _device._pick(spec)[0] is want
 
 
 @pytest.mark.parametrize("spec", ["2", "0:1", "portable:1", "amd:0", "opencl-nowhere", "1:h100"])
@@ -60,13 +60,8 @@ def test_no_platform_message_names_no_command_line_flag(monkeypatch):
 
 def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
     made = []
-
-    class Context:
-        def __init__(self, devices):
-            made.append(devices)
-
     monkeypatch.setattr(_device, "_CONTEXTS", {})
-    monkeypatch.setattr(cl, "Context", Context)
+    monkeypatch.setattr(_device, "_context_that_builds", lambda d: (made.append([d]) or object(), None))
     monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
     monkeypatch.setenv("PYOPENCL_CTX", "portable:0")
     ctx = _device.get_context()
@@ -74,6 +69,37 @@ def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
     monkeypatch.setenv("DISKPACK_DEVICE", "1:1")      # ours first
     _device.get_context()
     assert made[-1] == [GPU1]
+
+
+# -- devices whose compiler refuses kernels -----------------------------------
+
+
+def test_a_device_that_builds_no_kernel_is_passed_over(fake, monkeypatch):
+    monkeypatch.setattr(_device, "_CONTEXTS", {})
+    monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
+    monkeypatch.delenv("PYOPENCL_CTX", raising=False)
+
+    def builds(d):
+        if d is GPU0:
+            return None, "NVIDIA H200 cannot build OpenCL kernels (error: unknown target CPU 'generic')"
+        return f"context on {d.name}", None
+    monkeypatch.setattr(_device, "_context_that_builds", builds)
+    assert _device.get_context() == "context on NVIDIA A100"     # the next GPU
+    with pytest.raises(NoOpenCLError, match="NVIDIA H200 cannot build OpenCL kernels .*unknown target"):
+        _device.get_context("1:0")                                 # asked for by name: refused
+
+
+def test_no_device_that_builds_is_no_opencl(fake, monkeypatch):
+    monkeypatch.setattr(_device, "_CONTEXTS", {})
+    monkeypatch.setattr(_device, "_context_that_builds", lambda d: (None, f"{d.name} cannot build"))
+    with pytest.raises(NoOpenCLError, match="H200 cannot build; NVIDIA A100 cannot build; "
+                                            "pthread-AMD EPYC cannot build; install"):
+        _device.get_context("")
+
+
+def test_the_probe_kernel_builds_on_a_real_device(ctx):
+    built, why = _device._context_that_builds(ctx.devices[0])
+    assert why is None and built.devices[0] == ctx.devices[0]
 
 
 # -- devices that report several kinds ------------------------------------
@@ -95,7 +121,7 @@ SIM = _Plat("Oclgrind", "University of Bristol", [OCLGRIND])
 ])
 def test_devices_of_several_kinds(monkeypatch, platforms, spec, want):
     monkeypatch.setattr(_device, "_platforms", lambda: platforms)
-    assert _device._pick(spec) is want
+    assert _device._pick(spec)[0] is want
 
 
 @pytest.mark.parametrize("dev, kind", [
