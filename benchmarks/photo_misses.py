@@ -27,6 +27,9 @@ hubble_top     ``skimage/data/hubble_deep_field.jpg``: the strip above the valid
                crops, x 0-640, y 0-186; very dark (mean 0.08), small bright galaxies, the
                nearest bundled kin of a fluorescence image (its photograph is that of
                the tuning ``hubble_left``: a weaker test than a new photograph)
+lattice        drawn, not photographed (no licence question): a 256x256 gantry-like
+               lattice of light 2 px lines, gray 0.75, on a dark sky of gray 0.15:
+               the rocket's lit tower struts in kind (thinner than the dot spacing)
 =============  ==========================================================================
 """
 
@@ -70,6 +73,25 @@ def _mri():
     return im.resize((512, 512), Image.LANCZOS)
 
 
+def _lattice(size=256, line=2.0, sky=0.15, ink=0.75):
+    # two verticals 60 px apart braced by diagonals every 40 px, drawn with
+    # antialiased lines (4x supersampling), then a light blur (the camera's)
+    from PIL import ImageDraw, ImageFilter
+
+    k = 4
+    im = Image.new("L", (size * k, size * k), round(255 * sky))
+    d = ImageDraw.Draw(im)
+    w, g = round(line * k), round(255 * ink)
+    for x0 in (40, 150):
+        xs = (x0 * k, (x0 + 60) * k)
+        for x in xs:
+            d.line([(x, 0), (x, size * k)], fill=g, width=w)
+        for y in range(-40, size, 40):
+            d.line([(xs[0], y * k), (xs[1], (y + 40) * k)], fill=g, width=w)
+            d.line([(xs[1], y * k), (xs[0], (y + 40) * k)], fill=g, width=w)
+    return im.resize((size, size), Image.LANCZOS).filter(ImageFilter.GaussianBlur(0.5))
+
+
 #: name -> builder of the 8-bit gray image
 BUILDERS = {
     "rocket": _rocket,
@@ -77,6 +99,7 @@ BUILDERS = {
     "hopper_face": _hopper_face,
     "mri": _mri,
     "hubble_top": lambda: _skimage("hubble_deep_field.jpg").crop((0, 0, 640, 186)),
+    "lattice": _lattice,
 }
 
 

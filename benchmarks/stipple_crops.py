@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
@@ -43,7 +44,7 @@ def panel(image, n, configs, box, scale=4, seed=0, names=None):
     dark = 1.0 - gray
     x0, y0, w, h = box
     crop = Image.fromarray((255 * gray[y0:y0 + h, x0:x0 + w]).astype(np.uint8))
-    tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{image} (input)")]
+    tiles = [(crop.resize((w * scale, h * scale), Image.NEAREST), f"{Path(image).stem} (input)")]
     for spec, shown in zip(configs, names or configs):
         name, extra = sq.parse_config(spec)
         kw = sq.stipple_kwargs(name, extra, (gray.shape[1], gray.shape[0], n))
