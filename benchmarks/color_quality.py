@@ -32,7 +32,10 @@ per-channel correlation (sRGB) and mean CIEDE2000 of the blurred drawing
 and, as ``separation``, of the perfect area mix of the layers against the
 photograph (:func:`preview_measures`), and the ink each pen's drawn dots
 keep (:func:`ink_kept`); rows to ``--out`` if given, the markdown table of
-``docs/color.md`` to stdout.
+``docs/color.md`` to stdout. ``--palettes PENS [PENS ...]`` measures the
+same way other pens against CMYK (``cmyk``, ``auto:N``: black and N - 1 of
+the image's hues, :func:`diskpack_cl.color.auto_palette`, or
+``NAME=COLOR,...``; :func:`palette_table`).
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ from diskpack_cl.picture_measures import spacing
 from diskpack_cl.color import (PALETTES, PEN_SHARE_EXPONENT, color_measures, linear_to_srgb,
                                load_rgb, pen_ink_radii, render_pens, separate, srgb_to_linear)
 from diskpack_cl.color_export import write_color_png
-from diskpack_cl.multipen import stipple_colors
+from diskpack_cl.multipen import hex_color, stipple_colors
 
 ROOT = Path(__file__).resolve().parents[1]
 IMAGES = ("astronaut", "coffee", "chelsea")
@@ -148,20 +151,27 @@ def preview_measures(drawn, rgb, sigma):
     return {"corr_rgb": corr, "ciede2000": float(deltaE_ciede2000(rgb2lab(a), rgb2lab(b)).mean())}
 
 
-def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,)):
-    """Rows of CMYK stipplings of `name` and its :func:`dark_saturated` version at each black
-    generation and pen share exponent (``pen_share_exponent`` of :func:`stipple_colors`)."""
+def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=("cmyk",)):
+    """Rows of stipplings of `name` and its :func:`dark_saturated` version with each palette
+    (``"cmyk"``, ``"auto:N"``, pens), CMYK at each black generation, every palette at each
+    pen share exponent (``pen_share_exponent`` of :func:`stipple_colors`)."""
     photo = load_rgb(ROOT / "tests/data/color" / f"{name}.png")
     for variant, rgb in (("bright", photo), ("dark", dark_saturated(photo))):
         sigma = float(np.sqrt(rgb.shape[0] * rgb.shape[1] / n))
-        for g, a in itertools.product(settings, exponents):
-            res = stipple_colors(rgb, n, "cmyk", black_generation=g, pen_share_exponent=a, seed=seed)
-            drawn = render_pens(res.points, res.pen, res.pen_radius, res.colors, rgb.shape[:2])
-            ideal = srgb_to_linear(separate(rgb, "cmyk", black_generation=g).render())
-            yield {"image": name, "variant": variant, "n": n, "seed": seed, "black_generation": g,
-                   "pen_share_exponent": a, "pens": list(res.names),
-                   "counts": np.asarray(res.counts).tolist(), "ink_kept": ink_kept(res),
-                   **preview_measures(drawn, rgb, sigma), "separation": preview_measures(ideal, rgb, sigma)}
+        for palette, a in itertools.product(palettes, exponents):
+            for g in settings if palette == "cmyk" else (1.0,):   # G is CMYK's alone
+                t = time.perf_counter()
+                res = stipple_colors(rgb, n, palette, black_generation=g, pen_share_exponent=a,
+                                     seed=seed)
+                seconds = time.perf_counter() - t
+                drawn = render_pens(res.points, res.pen, res.pen_radius, res.colors, rgb.shape[:2])
+                ideal = srgb_to_linear(separate(rgb, palette, black_generation=g).render())
+                yield {"image": name, "variant": variant, "n": n, "seed": seed, "palette": palette,
+                       "black_generation": g, "pen_share_exponent": a, "pens": list(res.names),
+                       "colors": [hex_color(c) for c in res.colors], "seconds": seconds,
+                       "counts": np.asarray(res.counts).tolist(), "ink_kept": ink_kept(res),
+                       **preview_measures(drawn, rgb, sigma),
+                       "separation": preview_measures(ideal, rgb, sigma)}
 
 
 def ink_kept(res, scale=3):
@@ -204,6 +214,26 @@ def black_generation_table(rows):
     return "\n".join(out)
 
 
+def palette_table(rows):
+    """Markdown rows of :func:`black_generation_rows` over palettes: per image, variant and
+    palette, the pens, the means over seeds (CIEDE2000 ± half its range over seeds) and the
+    separation alone."""
+    out = ["| image | pens | dots per pen | correlation R / G / B | CIEDE2000 | "
+           "separation alone: correlation, CIEDE2000 |", "| --- " * 6 + "|"]
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["image"], r["variant"], r.get("palette", "cmyk")), []).append(r)
+    for (image, variant, palette), rs in groups.items():
+        de = [r["ciede2000"] for r in rs]
+        spread = f" ± {(max(de) - min(de)) / 2:.1f}" if len(rs) > 1 else ""
+        sep = rs[0]["separation"]
+        pens = palette if palette == "cmyk" else f"{palette}: {' '.join(rs[0]['colors'])}"
+        out.append(f"| {image} ({variant}) | {pens} | {'/'.join(map(str, rs[0]['counts']))} | "
+                   f"{_cells(np.mean([r['corr_rgb'] for r in rs], axis=0))} | "
+                   f"{np.mean(de):.1f}{spread} | {_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |")
+    return "\n".join(out)
+
+
 def _cells(values):
     return " / ".join("-" if v is None else f"{v:.2f}" for v in values)
 
@@ -232,8 +262,12 @@ def main(argv=None):
     ap.add_argument("--black-generation", type=float, nargs="+", metavar="G",
                     help="measure CMYK at these black generations on bright and dark photographs")
     ap.add_argument("--pen-share-exponent", type=float, nargs="+", default=[PEN_SHARE_EXPONENT],
-                    metavar="A", help="with --black-generation: dots per pen in proportion to "
-                    "ink**A, at each A (default: the library's)")
+                    metavar="A", help="with --black-generation or --palettes: dots per pen in "
+                    "proportion to ink**A, at each A (default: the library's)")
+    ap.add_argument("--palettes", nargs="+", metavar="PENS",
+                    help="measure these pens (cmyk, auto:N, NAME=COLOR,...) on bright and dark "
+                    "photographs as --black-generation does, CMYK at the black generations given "
+                    "(default 1); prints the table of pens")
     ap.add_argument("--no-figures", action="store_true")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0],
                     help="stipple each pair with these seeds (the spread over seeds is the noise)")
@@ -243,13 +277,18 @@ def main(argv=None):
     if args.table:
         print(table(args.table))
         return
-    if args.black_generation:
-        rows = [row for name in args.images for n in args.n for seed in args.seeds
-                for row in black_generation_rows(name, n, args.black_generation, seed,
-                                                 args.pen_share_exponent)]
+    if args.black_generation or args.palettes:
+        rows = []
+        for name, n, seed in itertools.product(args.images, args.n, args.seeds):
+            for row in black_generation_rows(name, n, args.black_generation or [1.0], seed,
+                                             args.pen_share_exponent, args.palettes or ["cmyk"]):
+                rows.append(row)
+                print(f"{name} {row['variant']} {row['palette']} seed {seed}: corr "
+                      f"{_cells(row['corr_rgb'])} CIEDE2000 {row['ciede2000']:.2f} "
+                      f"{row['seconds']:.1f} s", flush=True)
         if args.out:
             Path(args.out).write_text("".join(json.dumps(r) + "\n" for r in rows))
-        print(black_generation_table(rows))
+        print((palette_table if args.palettes else black_generation_table)(rows))
         return
     jobs = [(name, "cmyk", n) for name in args.images for n in args.n]
     jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in args.images]

@@ -49,8 +49,9 @@ spacing P01 per pen and of all dots (:func:`diskpack_cl.picture_measures.spacing
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import combinations
+from itertools import combinations, product
 import os
+import re
 
 import numpy as np
 
@@ -60,7 +61,7 @@ from .image import load_gray
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
            "pen_ink_radii",
-           "pen_spacing", "color_measures", "palette_of"]
+           "pen_spacing", "color_measures", "palette_of", "auto_palette", "parse_auto"]
 
 #: Named palettes: (name, sRGB hex) per pen, lightest first.
 PALETTES = {
@@ -188,6 +189,181 @@ def parse_pen_dots(text):
             raise ValueError(f"pen {name} is given twice")
         out[name] = count
     return out
+
+
+#: The most pens ``auto:N`` chooses (a plotter's carousel holds about 8).
+AUTO_MAX_PENS = 8
+
+
+def parse_auto(text):
+    """The number of pens N of an automatic palette ``"auto:N"``; None for other pens.
+
+    Raises
+    ------
+    ValueError
+        ``auto`` with an N that is not a whole number from 2 to :data:`AUTO_MAX_PENS`.
+
+    Examples
+    --------
+    >>> parse_auto("auto:4"), parse_auto("cmyk"), parse_auto("auto=#f00")
+    (4, None, None)
+    >>> parse_auto("auto:1")
+    Traceback (most recent call last):
+    ...
+    ValueError: auto:N takes N = 2 to 8 pens (black and N - 1 colours of the image), got 'auto:1'
+    """
+    if not isinstance(text, str) or not re.fullmatch(r"auto(:.*)?", text.strip(), re.IGNORECASE):
+        return None
+    value = text.strip().partition(":")[2].strip()
+    if not re.fullmatch(r"[0-9]+", value) or not 2 <= int(value) <= AUTO_MAX_PENS:
+        raise ValueError(f"auto:N takes N = 2 to {AUTO_MAX_PENS} pens (black and N - 1 colours of "
+                         f"the image), got {text!r}")
+    return int(value)
+
+
+def check_colors(text):
+    """Refuse a ``colors`` that is not a palette name or ``auto:N`` (one line).
+
+    Examples
+    --------
+    >>> check_colors("auto:3")
+    >>> check_colors("rgb")
+    Traceback (most recent call last):
+    ...
+    ValueError: colors must be 'cmyk', 'cmy' or 'auto:N' (N = 2 to 8), got 'rgb'
+    """
+    if text not in PALETTES and parse_auto(text) is None:
+        raise ValueError(f"colors must be {', '.join(map(repr, PALETTES))} or 'auto:N' "
+                         f"(N = 2 to {AUTO_MAX_PENS}), got {text!r}")
+
+
+def _linear_sample(rgb, side=48):
+    """The image averaged in linear light over blocks of about 1/`side` of its long side:
+    (m, 3) linear colours, what a blurred drawing is compared with."""
+    H, W, _ = rgb.shape
+    f = max(1, int(np.ceil(max(H, W) / side)))
+    lin = srgb_to_linear(rgb[:H // f * f, :W // f * f])
+    return lin.reshape(H // f, f, W // f, f, 3).mean(axis=(1, 3)).reshape(-1, 3)
+
+
+def _full_colours(lin):
+    """Each linear colour's hue at full strength: the grey part removed and the rest scaled
+    to a largest channel of 1 (rows of grey colours are NaN)."""
+    span = lin.max(axis=1) - lin.min(axis=1)
+    return (lin - lin.min(axis=1, keepdims=True)) / np.where(span > 1e-3, span, np.nan)[:, None]
+
+
+def _hue_candidates(rgb, k, seed, m=4000):
+    """Up to `k` candidate pens (linear, (c, 3)): the image's hues at full strength, the
+    sample's full colour nearest to each centre of a k-means in CIELAB of the full colours
+    of `m` pixels drawn by their chroma (grey pixels have no hue to give)."""
+    from scipy.cluster.vq import kmeans2  # not loaded at start-up
+
+    pixels = rgb.reshape(-1, 3)
+    lab = srgb_to_lab(pixels)
+    full = _full_colours(srgb_to_linear(pixels))
+    weight = np.where(np.isnan(full[:, 0]), 0.0, np.hypot(lab[:, 1], lab[:, 2]))
+    if not weight.sum() > 0:
+        return np.zeros((0, 3))
+    rng = np.random.default_rng(seed)
+    pick = rng.choice(len(pixels), size=m, p=weight / weight.sum())
+    hues = np.unique(np.round(linear_to_srgb(full[pick]) * 255), axis=0) / 255.0
+    hue_lab = srgb_to_lab(hues)
+    if len(hues) <= k:
+        return srgb_to_linear(hues)
+    centres, _ = kmeans2(srgb_to_lab(linear_to_srgb(full[pick])), k, seed=seed, minit="++")
+    nearest = np.argmin(((hue_lab[None] - centres[:, None]) ** 2).sum(axis=2), axis=1)
+    return srgb_to_linear(hues[np.unique(nearest)])
+
+
+def _mix_error(target_lin, target_lab, pens_lin):
+    """Mean CIE 1976 Delta E of the area-mix separation of `target_lin` with these pens."""
+    mix = 1.0 - _unmix(target_lin, pens_lin) @ (1.0 - pens_lin)
+    d = srgb_to_lab(linear_to_srgb(mix)) - target_lab
+    return float(np.mean(np.sqrt(np.sum(d * d, axis=1))))
+
+
+def auto_palette(image, n, *, seed=0):
+    """Black and ``n - 1`` pens of the image's own hues (``--colors auto:N``).
+
+    The candidates are the image's hues at full strength (grey part removed,
+    largest channel 1; :func:`_hue_candidates`): dark colours are then drawn
+    by black and a little of a bright pen, so the coloured dots stay few
+    where dots of several pens would otherwise crowd and overlap (measured
+    in ``docs/color.md``: pens of the image's own dark colours drew dark
+    photographs far too light). Black is always a pen; the others are
+    chosen greedily, then improved by swaps, to minimise the mean CIE 1976
+    Delta E of the area-mix separation of the image averaged over blocks of
+    1/48 of its long side. Deterministic for a given `seed` (the pixel draw
+    and the k-means).
+
+    Parameters
+    ----------
+    image : str, os.PathLike, PIL.Image.Image or array_like
+        A colour image (:func:`load_rgb`).
+    n : int
+        Pens, black included: 2 to :data:`AUTO_MAX_PENS`.
+    seed : int
+        Seed of the pixel draw and the k-means.
+
+    Returns
+    -------
+    names : tuple of str
+        ``"black"`` last, the others their own ``#rrggbb`` (lightest first).
+    colors : (n, 3) float64
+        sRGB in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        `n` out of range, or fewer than ``n - 1`` hues in the image.
+
+    Examples
+    --------
+    >>> img = np.zeros((8, 24, 3)); img[:, :8] = [1.0, 0.5, 0.0]; img[:, 8:16] = [0.0, 0.6, 1.0]
+    >>> auto_palette(img, 3)[0]
+    ('#ff8000', '#0099ff', 'black')
+    """
+    from .multipen import hex_color  # not loaded at start-up (multipen imports this module)
+
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= AUTO_MAX_PENS:
+        raise ValueError(f"auto:N takes N = 2 to {AUTO_MAX_PENS} pens, got {n!r}")
+    rgb = load_rgb(image)
+    cand = _hue_candidates(rgb, 2 * n + 2, seed)
+    if len(cand) < n - 1:
+        raise ValueError(f"the image has {len(cand)} hue(s) besides grey, auto:{n} needs {n - 1}: "
+                         f"give auto:{len(cand) + 1} or fewer" if len(cand) else
+                         "the image has no hue besides grey: give the pens or draw it with one pen")
+    lin = _linear_sample(rgb)
+    lab = srgb_to_lab(linear_to_srgb(lin))
+    chosen = [None] * (n - 1)
+    for i in range(n - 1):   # greedy: each pen the one that helps most with those before it
+        free = [c for c in range(len(cand)) if c not in chosen]
+        chosen[i] = min(free, key=lambda c: _mix_error(
+            lin, lab, np.vstack([np.zeros(3), cand[[*chosen[:i], c]]])))
+    best, better = _mix_error(lin, lab, np.vstack([np.zeros(3), cand[chosen]])), True
+    while better:   # swaps: a pen for a candidate not chosen while the error falls
+        better = False
+        for i, c in product(range(n - 1), range(len(cand))):
+            if c not in chosen:
+                trial = [*chosen[:i], c, *chosen[i + 1:]]
+                err = _mix_error(lin, lab, np.vstack([np.zeros(3), cand[trial]]))
+                if err < best - 1e-9:
+                    best, chosen, better = err, trial, True
+    colors = linear_to_srgb(cand[chosen])
+    lum = cand[chosen] @ np.array([0.2126, 0.7152, 0.0722])
+    colors = np.vstack([np.round(colors[np.argsort(-lum, kind="stable")] * 255) / 255, np.zeros(3)])
+    return tuple(hex_color(c) for c in colors[:-1]) + ("black",), colors
+
+
+def _pens_before_image(colors):
+    """The pen names known before the image is read and the number of pens: all of them,
+    except for ``auto:N`` (black only; N pens)."""
+    n = parse_auto(colors)
+    if n is not None:
+        return ("black",), n
+    names = _palette(colors)[0]
+    return names, len(names)
 
 
 def _palette(colors):
@@ -348,7 +524,9 @@ def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, cle
     image : str, os.PathLike, PIL.Image.Image or array_like
         A colour image (:func:`load_rgb`).
     colors : str or sequence of (name, colour)
-        ``"cmyk"``, ``"cmy"``, a ``"NAME=COLOR,..."`` text or pairs.
+        ``"cmyk"``, ``"cmy"``, ``"auto:N"`` (black and N - 1 pens of the
+        image's hues, :func:`auto_palette`), a ``"NAME=COLOR,..."`` text or
+        pairs.
     black_generation : float in [0, 1]
         CMYK only: black covers ``g (1 - max(R, G, B))`` (linear).
     clean_black, clean_white : float in [0, 1)
@@ -369,7 +547,8 @@ def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, cle
     >>> sep.names, sep.layers[:, 0, :].round(3).T.tolist()
     (('yellow', 'cyan', 'magenta', 'black'), [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
     """
-    names, pens = _palette(colors)
+    auto = parse_auto(colors)
+    names, pens = (None, None) if auto is not None else _palette(colors)
     if model not in ("area", "overprint"):
         raise ValueError(f"model must be 'area' or 'overprint', got {model!r}")
     palette = colors.lower() if isinstance(colors, str) and colors.lower() in PALETTES else None
@@ -383,6 +562,8 @@ def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, cle
     rgb = load_rgb(image)
     rgb = np.where((rgb.max(axis=2) <= clean_black)[..., None], 0.0, rgb)
     rgb = np.where((rgb.min(axis=2) >= 1.0 - clean_white)[..., None], 1.0, rgb)
+    if auto is not None:
+        names, pens = auto_palette(rgb, auto)
     q = np.round(rgb * 255).astype(np.int64)
     keys, inverse = np.unique((q[..., 0] << 16) | (q[..., 1] << 8) | q[..., 2], return_inverse=True)
     uniq = np.stack([keys >> 16, (keys >> 8) & 255, keys & 255], axis=1) / 255.0
@@ -705,8 +886,11 @@ class ColorOptions:
 
     colors: str = option(None, "separate the image into pen layers: cmyk (black generation "
                          "K = G (1 - max(R, G, B)) in linear light, the other inks separate "
-                         "the rest side by side) or cmy; one SVG layer per pen",
-                         choices=("cmyk", "cmy"), group=_COLOUR)
+                         "the rest side by side), cmy, or auto:N (N = 2 to 8 pens: black and "
+                         "N - 1 of the image's hues at full strength, chosen to fit its colours; "
+                         "each pen named by its #rrggbb in the summary and the SVG layers); "
+                         "one SVG layer per pen", check=check_colors, metavar="cmyk|cmy|auto:N",
+                         group=_COLOUR)
     pens: str = option(None, "any set of pens, e.g. black=#000,red=#c00,blue=#06c: the nearest "
                        "mix of paper and pens side by side (linear RGB)", metavar="NAME=COLOR,...",
                        group=_COLOUR)
@@ -733,10 +917,12 @@ class ColorOptions:
         if self.pen_dots is not None and self.colors is None and self.pens is None:
             raise OptionConflict("{} needs the pens: give {} or {}", "pen_dots", "colors", "pens")
         if self.pen_dots is not None:
-            names = _palette(self.pens or self.colors)[0]
+            names = _pens_before_image(self.pens or self.colors)[0]
             unknown = [name for name in parse_pen_dots(self.pen_dots) if name not in names]
             if unknown:
-                text = f"{', '.join(unknown)}, not one of the pens ({', '.join(names)})"
+                text = f"{', '.join(unknown)}, not one of the pens ({', '.join(names)}" + \
+                    (", the only pen of auto:N known before the image)" if
+                     parse_auto(self.colors) else ")")
                 raise OptionConflict("{} names " + text.replace("{", "{{").replace("}", "}}"),
                                      "pen_dots")
 
@@ -755,7 +941,7 @@ class ColorOptions:
         if self.pen_dots is None:
             return
         dots = parse_pen_dots(self.pen_dots)
-        given, every = sum(dots.values()), len(dots) == len(_palette(self.pens or self.colors)[0])
+        given, every = sum(dots.values()), len(dots) == _pens_before_image(self.pens or self.colors)[1]
         if given > n or (every and given != n):
             raise OptionConflict(f"{{}} gives {given} dots, {'more than' if given > n else 'not'} "
                                  f"the {n} in all" + ("; leave a pen out to give it the rest"

@@ -48,7 +48,7 @@ from scipy.spatial import cKDTree
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
-from .color import PALETTES, ColorOptions, pen_ink_radii, separate
+from .color import PALETTES, ColorOptions, parse_auto, pen_ink_radii, separate
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
@@ -428,7 +428,7 @@ def _objects(colors, options, overrides):
     `overrides` of its fields on top."""
     if not isinstance(colors, ColorOptions):
         pens = "cmyk" if colors is None else colors
-        palette = isinstance(pens, str) and pens.lower() in PALETTES
+        palette = isinstance(pens, str) and (pens.lower() in PALETTES or parse_auto(pens) is not None)
         colors = ColorOptions(colors=pens.lower()) if palette else ColorOptions(pens=pens)
     mine = {k: overrides.pop(k) for k in [*overrides] if k in _COLOR_FIELDS}
     color = replace(colors, **mine)
@@ -480,7 +480,7 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     colors : ColorOptions, str or sequence of (name, colour), optional
         The separation (:class:`diskpack_cl.color.ColorOptions`: the pens,
         black generation, cleaning, dots per pen), or the pens alone:
-        ``"cmyk"``, ``"cmy"`` or ``"NAME=COLOR,..."``
+        ``"cmyk"``, ``"cmy"``, ``"auto:N"`` or ``"NAME=COLOR,..."``
         (:func:`diskpack_cl.color.separate`); cmyk where none are named.
         Its ``pen_share_exponent`` sets the dots per pen unless given
         (:func:`pen_counts`): in proportion to each layer's ink to that
