@@ -217,7 +217,7 @@ def _pil_to_gray(im, *, invert=False, name="image"):
     return 1.0 - g if invert else np.ascontiguousarray(g)
 
 
-def _array_to_gray(a, *, name="array"):
+def _array_to_gray(a, *, name="array", copy=True):
     """(H,W), (H,W,1..4) array -> float64 gray in [0, 1]; alpha over white."""
     a = np.asarray(a)
     if a.dtype == np.bool_:
@@ -236,7 +236,7 @@ def _array_to_gray(a, *, name="array"):
         else:
             f = a.astype(np.float64) / (2.0**bits - 1.0)
     elif np.issubdtype(a.dtype, np.floating):
-        f = a.astype(np.float64)
+        f = a.astype(np.float64, copy=copy)
         if not np.all(np.isfinite(f)):
             raise ValueError(f"image values must be finite: {name}")
         if f.size and (f.min() < 0.0 or f.max() > 1.0):
@@ -268,12 +268,13 @@ def _array_to_gray(a, *, name="array"):
         raise ValueError(f"image must be (H, W) or (H, W, 1..4), got shape {a.shape}: {name}")
     if g.shape[0] == 0 or g.shape[1] == 0:
         raise ValueError(f"image has zero size ({g.shape[1]}x{g.shape[0]}): {name}")
-    # g is this function's own array (every branch above copies): clipped in place
-    return np.ascontiguousarray(np.clip(g, 0.0, 1.0, out=g))
+    if not np.may_share_memory(g, a):   # a float array kept (copy=False) is in [0, 1] already
+        np.clip(g, 0.0, 1.0, out=g)      # this function's own array: clipped in place
+    return np.ascontiguousarray(g)
 
 
-def to_gray(image, *, invert=False, allow_large=False):
-    """Anything image-like -> float64 gray in [0, 1], 1 = white (a new array).
+def to_gray(image, *, invert=False, allow_large=False, copy=True):
+    """Anything image-like -> float64 gray in [0, 1], 1 = white (a new array, unless `copy` is False).
 
     Parameters
     ----------
@@ -286,12 +287,19 @@ def to_gray(image, *, invert=False, allow_large=False):
         Return ``1 - gray``.
     allow_large : bool, optional
         Passed to :func:`load_gray` for paths.
+    copy : bool, optional
+        False: a C-ordered float64 gray array in [0, 1] comes back as it is,
+        not copied (the caller then must not change it while the result is
+        in use); every other input still makes a new array.
 
     Examples
     --------
     >>> import numpy as np
     >>> to_gray(np.array([[0, 255]], dtype=np.uint8))
     array([[0., 1.]])
+    >>> g = np.array([[0.25, 1.0]])
+    >>> to_gray(g) is g, to_gray(g, copy=False) is g
+    (False, True)
     """
     if isinstance(image, (str, os.PathLike)):
         return load_gray(image, invert=invert, allow_large=allow_large)
@@ -302,7 +310,7 @@ def to_gray(image, *, invert=False, allow_large=False):
             return _pil_to_gray(ImageOps.exif_transpose(image), invert=invert)
     except ImportError:  # pragma: no cover - Pillow is a dependency
         pass
-    g = _array_to_gray(image)
+    g = _array_to_gray(image, copy=copy)
     return 1.0 - g if invert else g
 
 

@@ -651,7 +651,8 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     watch = Stopwatch()   # the run's one collector: its own stages and the engine's
     with watch("load"):
         options = (options or StippleOptions()).replace(**overrides)
-        gray = to_gray(image, invert=options.invert)
+        # the caller's gray array itself where it is one (nothing here changes it): no copy
+        gray = to_gray(image, invert=options.invert, copy=False)
         H, W = gray.shape
         gray, darkness = _toned(gray, options.paper_tone)
         ink = float(darkness.sum())
