@@ -130,6 +130,17 @@ def delta_e(rgb_a, rgb_b):
     return float(np.mean(np.sqrt(np.sum(d * d, axis=-1))))
 
 
+def hex_color(rgb):
+    """``#rrggbb`` of an sRGB colour in [0, 1].
+
+    Examples
+    --------
+    >>> hex_color([1.0, 0.8, 0.0])
+    '#ffcc00'
+    """
+    return "#" + "".join(f"{int(round(255 * float(v))):02x}" for v in rgb)
+
+
 def _color(text):
     from PIL import ImageColor  # not loaded at start-up
 
@@ -324,8 +335,6 @@ def auto_palette(image, n, *, seed=0):
     >>> auto_palette(img, 3)[0]
     ('#ff8000', '#0099ff', 'black')
     """
-    from .multipen import hex_color  # not loaded at start-up (multipen imports this module)
-
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= AUTO_MAX_PENS:
         raise ValueError(f"auto:N takes N = 2 to {AUTO_MAX_PENS} pens, got {n!r}")
     rgb = load_rgb(image)

@@ -48,7 +48,7 @@ from scipy.spatial import cKDTree
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
-from .color import PALETTES, ColorOptions, parse_auto, pen_ink_radii, separate
+from .color import PALETTES, ColorOptions, hex_color, parse_auto, pen_ink_radii, separate
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
@@ -132,17 +132,6 @@ class ColorStippleResult(StippleResult):
         return result_summary(self, pens=[{"name": name, "color": hex_color(c), "n": int(m)}
                                           for name, c, m in zip(self.names, self.colors,
                                                                 self.counts)])
-
-
-def hex_color(rgb):
-    """``#rrggbb`` of an sRGB colour in [0, 1].
-
-    Examples
-    --------
-    >>> hex_color([1.0, 0.8, 0.0])
-    '#ffcc00'
-    """
-    return "#" + "".join(f"{int(round(255 * float(v))):02x}" for v in rgb)
 
 
 def pen_counts(layers, n, exponent=1.0):
