@@ -58,19 +58,43 @@ def in_bands(func, image, reach, *, rows=512):
     return out
 
 
-def gaussian_blur(image, sigma):
+def gaussian_blur(image, sigma, *, cols=64, rows=512):
     """``scipy.ndimage.gaussian_filter(image, sigma, mode="reflect")`` of a float64 image, the
-    same values, on every core (:func:`in_bands`).
+    same values, faster on a large image and on every core.
+
+    scipy's filter blurs along the columns, then along the rows, each pass
+    in place of the last.  Here the column pass runs on copies of bands of
+    `cols` columns, so that it walks a few MiB instead of the whole image
+    (scipy's own column pass strides across it), and both passes run in
+    bands on a thread pool (scipy.ndimage releases the GIL); every value is
+    made from the same pixels in the same order as scipy's.
 
     Examples
     --------
-    >>> a = np.random.default_rng(0).random((3000, 40))
-    >>> bool(np.array_equal(gaussian_blur(a, 2.0), ndimage.gaussian_filter(a, 2.0, mode="reflect")))
+    >>> a = np.random.default_rng(0).random((300, 200))
+    >>> blur = gaussian_blur(a, 2.0, cols=16, rows=32)
+    >>> bool(np.array_equal(blur, ndimage.gaussian_filter(a, 2.0, mode="reflect")))
     True
     """
     image = np.asarray(image, np.float64)
-    return in_bands(lambda x: ndimage.gaussian_filter(x, float(sigma), mode="reflect", truncate=TRUNCATE),
-                    image, int(TRUNCATE * float(sigma) + 0.5))
+    if not float(sigma) > 1e-15:   # as scipy: no blur
+        return image.copy()
+    out = np.empty(image.shape)
+    H, W = image.shape
+    blur = dict(sigma=float(sigma), mode="reflect", truncate=TRUNCATE)
+
+    def column_band(c0):
+        band = np.ascontiguousarray(image[:, c0:c0 + cols])
+        out[:, c0:c0 + cols] = ndimage.gaussian_filter1d(band, axis=0, **blur)
+
+    def row_band(r0):
+        part = out[r0:r0 + rows]
+        ndimage.gaussian_filter1d(part, axis=1, output=part, **blur)
+
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        list(pool.map(column_band, range(0, W, cols)))
+        list(pool.map(row_band, range(0, H, rows)))
+    return out
 
 
 def _pixel_of(points, W, H):

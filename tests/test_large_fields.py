@@ -15,9 +15,10 @@ from diskpack_cl.dithering import _least
 from diskpack_cl.radii import field_at, gaussian_blur, in_bands
 
 
-@pytest.mark.parametrize("sigma", [0.5, 1.0, 2.0, 4.3])
-def test_banded_blur_is_scipys(sigma):
-    img = np.random.default_rng(1).random((2100, 23))
+@pytest.mark.parametrize("sigma", [0.0, 0.5, 1.0, 2.0, 4.3])
+@pytest.mark.parametrize("shape", [(2100, 23), (301, 300), (40, 1000)])
+def test_banded_blur_is_scipys(sigma, shape):
+    img = np.random.default_rng(1).random(shape)
     blur = gaussian_blur(img, sigma)
     assert np.array_equal(blur, ndimage.gaussian_filter(img, sigma, mode="reflect"))
 
