@@ -41,6 +41,8 @@ def _example(f):
         value = "hp7475a"
     elif f.name == "pens":
         value = "black=#000,red=#c00"
+    elif f.name == "colors":
+        value = "auto:3"
     elif f.name == "pen_order":
         return ["cyan", "yellow", "magenta"], ["--pen-order", "cyan,yellow,magenta"]
     elif f.name == "pen_dots":
