@@ -193,8 +193,9 @@ def _worker_peak_gib():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def _ratio(a, b):
-    return None if a is None or b is None else a / b
+def _pair(tiled, untiled, fmt):
+    """``"tiled / untiled"``, or ``"tiled / not run"``."""
+    return f"{fmt(tiled)} / {'not run' if untiled is None else fmt(untiled)}"
 
 
 def summary(rows):
@@ -208,22 +209,25 @@ def summary(rows):
         flat.append(f)
     values = ["voronoi", "tiled", "tiled_worker_gib", "tiled_driver_gib", "untiled", "untiled_gib",
               "untiled_estimate_gib", "seam_tiled_count", "seam_untiled_count", "seam_tiled_median",
-              "seam_untiled_median", "seam_tiled_p01", "seam_untiled_p01", "centre_tiled_p01"]
+              "seam_untiled_median", "seam_tiled_p01", "seam_untiled_p01", "centre_tiled_median",
+              "centre_tiled_p01"]
     runs = medians(flat, ("size", "n", "tiles", "jobs", "where"), values)
     header = ["picture", "n", "tiles", "workers", "tiled", "untiled", "Voronoi(n)",
               "largest process tiled / untiled", "untiled estimate",
-              "seam dots tiled / untiled", "seam NN median", "seam NN 1st percentile"]
+              "seam dots tiled / untiled", "seam NN median tiled / untiled",
+              "seam NN 1st percentile tiled / untiled", "tile centre lines NN median, 1st percentile"]
     out = []
     for r in runs:
         largest = max(x for x in (r["tiled_worker_gib"], r["tiled_driver_gib"]) if x is not None)
         out.append([f"{r['size']} x {r['size']}", count(r["n"]), r["tiles"],
                     f"{r['jobs']} {r['where']}", num(r["tiled"], " s"), num(r["untiled"], " s"),
                     num(r["voronoi"], " s"),
-                    f"{num(largest, ' GiB')} / {num(r['untiled_gib'], ' GiB')}",
+                    _pair(largest, r["untiled_gib"], lambda v: num(v, " GiB")),
                     num(r["untiled_estimate_gib"], " GiB"),
-                    f"{count(r['seam_tiled_count'])} / {count(r['seam_untiled_count'])}",
-                    f"{num(r['seam_tiled_median'])} / {num(r['seam_untiled_median'])}",
-                    f"{num(r['seam_tiled_p01'])} / {num(r['seam_untiled_p01'])}"])
+                    _pair(r["seam_tiled_count"], r["seam_untiled_count"], count),
+                    _pair(r["seam_tiled_median"], r["seam_untiled_median"], num),
+                    _pair(r["seam_tiled_p01"], r["seam_untiled_p01"], num),
+                    f"{num(r['centre_tiled_median'])}, {num(r['centre_tiled_p01'])}"])
     return header, out
 
 

@@ -97,7 +97,7 @@ PERF_COLUMNS = {"relax": "cells (opencl default)", "peers-2d": "low", "peers-3d"
                 "qmc": "share farther than radius diskpack / scipy",
                 "million": "total / Delaunay", "cli-poisson": "process / Delaunay", "stipple": "default mix s/iter (MIC / labels and centroids)",
                 "stipple-end-to-end": "seconds to the certified result", "stipple-large": "peak resident memory",
-                "stipple-tiled": "seam NN 1st percentile",
+                "stipple-tiled": "seam NN 1st percentile tiled / untiled",
                 "batch": "images per minute", "batch-memory": "peak resident memory"}
 
 
