@@ -488,7 +488,7 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
         ell = detail_scale(ink.total, n, ink.dmed) if plan.features == "detail" else None
     spacing = math.sqrt(W * H / n)
     band, halo = tiling.seam_band * spacing, tiling.halo * spacing
-    _check_room(xs, ys, band + halo, plan)
+    _check_room(xs, ys, band + halo)
     # a margin of at least 4 dot spacings: the tile's error diffusion starts and ends in it
     margin = max(_field_margin(plan, ell), int(math.ceil(4 * spacing)))
     base = Part(raster, (0, 0, W, H), margin, plan, ell, backend,
@@ -537,7 +537,7 @@ def _tile_parts(base, xs, ys, shares, seed):
     return parts
 
 
-def _check_room(xs, ys, reach, plan):
+def _check_room(xs, ys, reach):
     """Seams of one direction must not share dots: tiles wider than twice a seam's reach."""
     for edges, what in ((xs, "wide"), (ys, "tall")):
         size = min(b - a for a, b in zip(edges, edges[1:]))
