@@ -1,9 +1,11 @@
 """Write the colour photographs of the colour benchmark (tests/data/color/) from scikit-image's data.
 
-``python benchmarks/make_color_set.py``: astronaut, coffee and chelsea from
+``python benchmarks/make_color_set.py``: astronaut, coffee and chelsea (the
+crops of the gray versions in ``tests/data``) and two dark, saturated
+photographs, retina and the centre square of hubble_deep_field, from
 ``skimage/data/`` (installed with scikit-image; no download), as 8-bit RGB
-PNGs of at most 256 px on the long side (Lanczos), the crops of the gray
-versions in ``tests/data``. Licences: ``tests/data/color/README.md``.
+PNGs of at most 256 px on the long side (Lanczos). Licences:
+``tests/data/color/README.md``.
 """
 
 from pathlib import Path
@@ -19,9 +21,10 @@ def main():
 
     data = Path(skimage.__file__).parent / "data"
     OUT.mkdir(exist_ok=True)
-    for name in ("astronaut", "coffee", "chelsea"):
-        im = Image.open(data / f"{name}.png").convert("RGB")
-        if name == "coffee":   # the centre square, as tests/data/coffee.png
+    for name, ext in (("astronaut", "png"), ("coffee", "png"), ("chelsea", "png"),
+                      ("retina", "jpg"), ("hubble_deep_field", "jpg")):
+        im = Image.open(data / f"{name}.{ext}").convert("RGB")
+        if name in ("coffee", "hubble_deep_field"):   # the centre square (coffee: as tests/data/coffee.png)
             w, h = im.size
             im = im.crop(((w - h) // 2, 0, (w - h) // 2 + h, h))
         scale = SIZE / max(im.size)
