@@ -32,7 +32,13 @@ per-channel correlation (sRGB) and mean CIEDE2000 of the blurred drawing
 and, as ``separation``, of the perfect area mix of the layers against the
 photograph (:func:`preview_measures`), and the ink each pen's drawn dots
 keep (:func:`ink_kept`); rows to ``--out`` if given, the markdown table of
-``docs/color.md`` to stdout. ``--palettes PENS [PENS ...]`` measures the
+``docs/color.md`` to stdout. The photographs of ``DARK`` (retina,
+hubble_deep_field) are dark already and are measured as they are
+(variant ``dark (photograph)``), without a synthetic dark version; these
+modes stipple all five photographs unless ``--images`` is given. With
+``--floor``, every row also gets the noise floor of its image
+(:func:`channel_floor`): per channel, what that channel stippled alone
+with all n dots reaches, black dots on white paper and white on black. ``--palettes PENS [PENS ...]`` measures the
 same way other pens against CMYK (``cmyk``, ``auto:N``: black and N - 1 of
 the image's hues, :func:`diskpack_cl.color.auto_palette`, or
 ``NAME=COLOR,...``; :func:`palette_table`).
@@ -58,6 +64,7 @@ from diskpack_cl.multipen import hex_color, stipple_colors
 
 ROOT = Path(__file__).resolve().parents[1]
 IMAGES = ("astronaut", "coffee", "chelsea")
+DARK = ("retina", "hubble_deep_field")   # dark, saturated photographs: measured as they are
 PENS = "black=#000,red=#c00,blue=#06c"
 
 
@@ -151,13 +158,52 @@ def preview_measures(drawn, rgb, sigma):
     return {"corr_rgb": corr, "ciede2000": float(deltaE_ciede2000(rgb2lab(a), rgb2lab(b)).mean())}
 
 
-def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=("cmyk",)):
-    """Rows of stipplings of `name` and its :func:`dark_saturated` version with each palette
-    (``"cmyk"``, ``"auto:N"``, pens), CMYK at each black generation, every palette at each
-    pen share exponent (``pen_share_exponent`` of :func:`stipple_colors`)."""
+def channel_floor(rgb, n, seed=0, paper="white"):
+    """Per channel (sRGB R, G, B), the correlation of :func:`preview_measures` that the channel
+    reaches stippled alone with all n dots: the noise of one pen at that n and blur.
+
+    Each channel, in linear light, is stippled as a gray image with the mono default
+    (:func:`diskpack_cl.stipple`, as :func:`naive` stipples a layer) and drawn at its ink
+    radius (:func:`diskpack_cl.color.pen_ink_radii`, :func:`diskpack_cl.color.render_pens`,
+    as the colour rows are drawn): on white paper, black dots where the channel is dark
+    (what the area-mix pens do); on black paper, white dots where it is light.
+
+    Examples
+    --------
+    >>> rgb = load_rgb(ROOT / "tests/data/color/chelsea.png")   # doctest: +SKIP
+    >>> channel_floor(rgb, 5000)   # doctest: +SKIP
+    [0.96..., 0.91..., 0.88...]
+    """
+    if paper not in ("white", "black"):
+        raise ValueError(f"paper must be 'white' or 'black', got {paper!r}")
+    sigma = float(np.sqrt(rgb.shape[0] * rgb.shape[1] / n))
+    out = []
+    for c in range(3):
+        light = srgb_to_linear(rgb[..., c])
+        layer = 1.0 - light if paper == "white" else light   # what the dots draw
+        pts = stipple(1.0 - layer, n, seed=seed).points
+        pen = np.zeros(len(pts), dtype=int)
+        drawn = render_pens(pts, pen, pen_ink_radii(pts, pen, layer[None]), np.zeros((1, 3)),
+                            layer.shape)
+        drawn = drawn if paper == "white" else 1.0 - drawn   # white dots: light is their cover
+        out.append(preview_measures(drawn, np.repeat(rgb[..., c:c + 1], 3, axis=2), sigma)["corr_rgb"][0])
+    return out
+
+
+def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=("cmyk",),
+                          floor=False):
+    """Rows of stipplings of `name` and its :func:`dark_saturated` version (of `name` alone if it
+    is in ``DARK``) with each palette (``"cmyk"``, ``"auto:N"``, pens), CMYK at each black
+    generation, every palette at each pen share exponent (``pen_share_exponent`` of
+    :func:`stipple_colors`); with `floor`, each row gets its image's :func:`channel_floor` on
+    white paper (``floor_rgb``) and on black (``floor_black_rgb``)."""
     photo = load_rgb(ROOT / "tests/data/color" / f"{name}.png")
-    for variant, rgb in (("bright", photo), ("dark", dark_saturated(photo))):
+    variants = ((("dark (photograph)", photo),) if name in DARK
+                else (("bright", photo), ("dark", dark_saturated(photo))))
+    for variant, rgb in variants:
         sigma = float(np.sqrt(rgb.shape[0] * rgb.shape[1] / n))
+        extra = ({"floor_rgb": channel_floor(rgb, n, seed),
+                  "floor_black_rgb": channel_floor(rgb, n, seed, "black")} if floor else {})
         for palette, a in itertools.product(palettes, exponents):
             for g in settings if palette == "cmyk" else (1.0,):   # G is CMYK's alone
                 t = time.perf_counter()
@@ -171,7 +217,7 @@ def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=
                        "colors": [hex_color(c) for c in res.colors], "seconds": seconds,
                        "counts": np.asarray(res.counts).tolist(), "ink_kept": ink_kept(res),
                        **preview_measures(drawn, rgb, sigma),
-                       "separation": preview_measures(ideal, rgb, sigma)}
+                       "separation": preview_measures(ideal, rgb, sigma), **extra}
 
 
 def ink_kept(res, scale=3):
@@ -216,10 +262,13 @@ def black_generation_table(rows):
 
 def palette_table(rows):
     """Markdown rows of :func:`black_generation_rows` over palettes: per image, variant and
-    palette, the pens, the means over seeds (CIEDE2000 ± half its range over seeds) and the
-    separation alone."""
+    palette, the pens, the means over seeds (CIEDE2000 ± half its range over seeds), the
+    separation alone and, where the rows have it, the mean :func:`channel_floor` on white and
+    on black paper."""
+    floor = "floor_rgb" in rows[0]
     out = ["| image | pens | dots per pen | correlation R / G / B | CIEDE2000 | "
-           "separation alone: correlation, CIEDE2000 |", "| --- " * 6 + "|"]
+           "separation alone: correlation, CIEDE2000 |"
+           + " floor R / G / B, white paper | black paper |" * floor, "| --- " * (6 + 2 * floor) + "|"]
     groups = {}
     for r in rows:
         groups.setdefault((r["image"], r["variant"], r.get("palette", "cmyk")), []).append(r)
@@ -230,7 +279,9 @@ def palette_table(rows):
         pens = palette if palette == "cmyk" else f"{palette}: {' '.join(rs[0]['colors'])}"
         out.append(f"| {image} ({variant}) | {pens} | {'/'.join(map(str, rs[0]['counts']))} | "
                    f"{_cells(np.mean([r['corr_rgb'] for r in rs], axis=0))} | "
-                   f"{np.mean(de):.1f}{spread} | {_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |")
+                   f"{np.mean(de):.1f}{spread} | {_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |"
+                   + "".join(f" {_cells(np.mean([r[k] for r in rs], axis=0))} |"
+                             for k in ("floor_rgb", "floor_black_rgb") if floor))
     return "\n".join(out)
 
 
@@ -256,7 +307,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--table", metavar="JSONL", help="print the markdown table of a results file and stop")
     ap.add_argument("--n", type=int, nargs="+", default=[5000, 15000])
-    ap.add_argument("--images", nargs="+", default=list(IMAGES))
+    ap.add_argument("--images", nargs="+", help="photographs of tests/data/color (default: "
+                    f"{', '.join(IMAGES)}; with --black-generation or --palettes also {', '.join(DARK)})")
     ap.add_argument("--out", help="results file (default docs/color_quality.jsonl; none with "
                     "--black-generation)")
     ap.add_argument("--black-generation", type=float, nargs="+", metavar="G",
@@ -271,6 +323,8 @@ def main(argv=None):
     ap.add_argument("--no-figures", action="store_true")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0],
                     help="stipple each pair with these seeds (the spread over seeds is the noise)")
+    ap.add_argument("--floor", action="store_true", help="with --black-generation or --palettes: "
+                    "each image's noise floor per channel (channel_floor)")
     ap.add_argument("--multi-only", action="store_true",
                     help="the multi-class runs alone, without the naive overlays")
     args = ap.parse_args(argv)
@@ -279,19 +333,24 @@ def main(argv=None):
         return
     if args.black_generation or args.palettes:
         rows = []
-        for name, n, seed in itertools.product(args.images, args.n, args.seeds):
+        images = args.images or IMAGES + DARK
+        for name, n, seed in itertools.product(images, args.n, args.seeds):
             for row in black_generation_rows(name, n, args.black_generation or [1.0], seed,
-                                             args.pen_share_exponent, args.palettes or ["cmyk"]):
+                                             args.pen_share_exponent, args.palettes or ["cmyk"],
+                                             args.floor):
                 rows.append(row)
                 print(f"{name} {row['variant']} {row['palette']} seed {seed}: corr "
                       f"{_cells(row['corr_rgb'])} CIEDE2000 {row['ciede2000']:.2f} "
-                      f"{row['seconds']:.1f} s", flush=True)
+                      f"{row['seconds']:.1f} s"
+                      + (f" floor {_cells(row['floor_rgb'])}, on black {_cells(row['floor_black_rgb'])}"
+                         if args.floor else ""), flush=True)
         if args.out:
             Path(args.out).write_text("".join(json.dumps(r) + "\n" for r in rows))
         print((palette_table if args.palettes else black_generation_table)(rows))
         return
-    jobs = [(name, "cmyk", n) for name in args.images for n in args.n]
-    jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in args.images]
+    images = args.images or IMAGES
+    jobs = [(name, "cmyk", n) for name in images for n in args.n]
+    jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in images]
     with open(args.out or ROOT / "docs/color_quality.jsonl", "w") as fh:
         for (name, palette, n), seed in itertools.product(jobs, args.seeds):
             figures = not args.no_figures and palette == "cmyk" and n == max(args.n) and seed == args.seeds[0]
