@@ -32,16 +32,16 @@ per-channel correlation (sRGB) and mean CIEDE2000 of the blurred drawing
 and, as ``separation``, of the perfect area mix of the layers against the
 photograph (:func:`preview_measures`), and the ink each pen's drawn dots
 keep (:func:`ink_kept`); rows to ``--out`` if given, the markdown table of
-``docs/color.md`` to stdout. The photographs of ``DARK`` (retina,
-hubble_deep_field) are dark already and are measured as they are
+``docs/color.md`` to stdout. ``--palettes PENS [PENS ...]`` measures the
+same way other pens against CMYK (``cmyk``, ``auto:N``: black and N - 1 of
+the image's hues, :func:`diskpack_cl.color.auto_palette`, or
+``NAME=COLOR,...``; :func:`palette_table`). The photographs of ``DARK``
+(retina, hubble_deep_field) are dark already and are measured as they are
 (variant ``dark (photograph)``), without a synthetic dark version; these
 modes stipple all five photographs unless ``--images`` is given. With
 ``--floor``, every row also gets the noise floor of its image
 (:func:`channel_floor`): per channel, what that channel stippled alone
-with all n dots reaches, black dots on white paper and white on black. ``--palettes PENS [PENS ...]`` measures the
-same way other pens against CMYK (``cmyk``, ``auto:N``: black and N - 1 of
-the image's hues, :func:`diskpack_cl.color.auto_palette`, or
-``NAME=COLOR,...``; :func:`palette_table`).
+with all n dots reaches, black dots on white paper and white on black.
 """
 
 from __future__ import annotations
