@@ -42,6 +42,7 @@ modes stipple all five photographs unless ``--images`` is given. With
 ``--floor``, every row also gets the noise floor of its image
 (:func:`channel_floor`): per channel, what that channel stippled alone
 with all n dots reaches, black dots on white paper and white on black.
+``--paper black`` draws light pens on black paper (:func:`negative`).
 """
 
 from __future__ import annotations
@@ -190,13 +191,22 @@ def channel_floor(rgb, n, seed=0, paper="white"):
     return out
 
 
+def negative(rgb):
+    """The negative of an sRGB image or colour in linear light: pens of colours ``c`` drawing
+    a picture on black paper put on it the light that pens of colours ``negative(c)`` leave
+    of white paper drawing ``negative(picture)`` (the same dots; overlaps aside)."""
+    return linear_to_srgb(1.0 - srgb_to_linear(np.asarray(rgb, dtype=np.float64)))
+
+
 def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=("cmyk",),
-                          floor=False):
+                          floor=False, paper="white"):
     """Rows of stipplings of `name` and its :func:`dark_saturated` version (of `name` alone if it
     is in ``DARK``) with each palette (``"cmyk"``, ``"auto:N"``, pens), CMYK at each black
     generation, every palette at each pen share exponent (``pen_share_exponent`` of
     :func:`stipple_colors`); with `floor`, each row gets its image's :func:`channel_floor` on
-    white paper (``floor_rgb``) and on black (``floor_black_rgb``)."""
+    white paper (``floor_rgb``) and on black (``floor_black_rgb``). On black `paper`, the
+    :func:`negative` of the image is stippled on white and the drawing's negative measured:
+    the pens chosen for the negative, as their negatives, are light pens on black paper."""
     photo = load_rgb(ROOT / "tests/data/color" / f"{name}.png")
     variants = ((("dark (photograph)", photo),) if name in DARK
                 else (("bright", photo), ("dark", dark_saturated(photo))))
@@ -207,14 +217,20 @@ def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=
         for palette, a in itertools.product(palettes, exponents):
             for g in settings if palette == "cmyk" else (1.0,):   # G is CMYK's alone
                 t = time.perf_counter()
-                res = stipple_colors(rgb, n, palette, black_generation=g, pen_share_exponent=a,
+                src = rgb if paper == "white" else negative(rgb)
+                res = stipple_colors(src, n, palette, black_generation=g, pen_share_exponent=a,
                                      seed=seed)
                 seconds = time.perf_counter() - t
                 drawn = render_pens(res.points, res.pen, res.pen_radius, res.colors, rgb.shape[:2])
-                ideal = srgb_to_linear(separate(rgb, palette, black_generation=g).render())
-                yield {"image": name, "variant": variant, "n": n, "seed": seed, "palette": palette,
-                       "black_generation": g, "pen_share_exponent": a, "pens": list(res.names),
-                       "colors": [hex_color(c) for c in res.colors], "seconds": seconds,
+                ideal = srgb_to_linear(separate(src, palette, black_generation=g).render())
+                if paper == "black":   # the negatives of the drawing, the mix and the pens
+                    drawn, ideal = 1.0 - drawn, 1.0 - ideal
+                colors = res.colors if paper == "white" else negative(res.colors)
+                yield {"image": name, "variant": variant, "paper": paper, "n": n, "seed": seed,
+                       "palette": palette, "black_generation": g, "pen_share_exponent": a,
+                       "pens": list(res.names) if paper == "white" else [hex_color(c) for c in colors],
+                       "colors": [hex_color(c) for c in colors],
+                       "seconds": seconds,
                        "counts": np.asarray(res.counts).tolist(), "ink_kept": ink_kept(res),
                        **preview_measures(drawn, rgb, sigma),
                        "separation": preview_measures(ideal, rgb, sigma), **extra}
@@ -271,7 +287,8 @@ def palette_table(rows):
            + " floor R / G / B, white paper | black paper |" * floor, "| --- " * (6 + 2 * floor) + "|"]
     groups = {}
     for r in rows:
-        groups.setdefault((r["image"], r["variant"], r.get("palette", "cmyk")), []).append(r)
+        variant = r["variant"] + (", black paper" if r.get("paper") == "black" else "")
+        groups.setdefault((r["image"], variant, r.get("palette", "cmyk")), []).append(r)
     for (image, variant, palette), rs in groups.items():
         de = [r["ciede2000"] for r in rs]
         spread = f" ± {(max(de) - min(de)) / 2:.1f}" if len(rs) > 1 else ""
@@ -323,6 +340,9 @@ def main(argv=None):
     ap.add_argument("--no-figures", action="store_true")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0],
                     help="stipple each pair with these seeds (the spread over seeds is the noise)")
+    ap.add_argument("--paper", choices=("white", "black"), default="white",
+                    help="with --black-generation or --palettes: the paper (black: light pens, "
+                    "measured on the image's negative)")
     ap.add_argument("--floor", action="store_true", help="with --black-generation or --palettes: "
                     "each image's noise floor per channel (channel_floor)")
     ap.add_argument("--multi-only", action="store_true",
@@ -337,7 +357,7 @@ def main(argv=None):
         for name, n, seed in itertools.product(images, args.n, args.seeds):
             for row in black_generation_rows(name, n, args.black_generation or [1.0], seed,
                                              args.pen_share_exponent, args.palettes or ["cmyk"],
-                                             args.floor):
+                                             args.floor, args.paper):
                 rows.append(row)
                 print(f"{name} {row['variant']} {row['palette']} seed {seed}: corr "
                       f"{_cells(row['corr_rgb'])} CIEDE2000 {row['ciede2000']:.2f} "
