@@ -231,8 +231,9 @@ def _array_to_gray(a, *, name="array", copy=True):
             top = float(a.max(initial=0))
             bits = 8 if top <= 255 else 16
         if a.dtype == np.uint8:
-            # a table of the 256 quotients: one pass and one array (the division's values)
-            f = (np.arange(256) / 255.0)[a]
+            # one pass and one array; a table of the 256 quotients indexed by the
+            # image gives the same values at about twenty times the time
+            f = np.divide(a, 255.0, dtype=np.float64)
         else:
             f = a.astype(np.float64) / (2.0**bits - 1.0)
     elif np.issubdtype(a.dtype, np.floating):
@@ -314,13 +315,15 @@ def to_gray(image, *, invert=False, allow_large=False, copy=True):
     return 1.0 - g if invert else g
 
 
-def adjust_tone(gray, *, black=0.0, white=1.0, gamma=1.0):
+def adjust_tone(gray, *, black=0.0, white=1.0, gamma=1.0, copy=True):
     """Tone controls before stippling, for every schedule: black and white point, gamma.
 
     Gray levels at or below ``black`` become 0 (full ink), at or above
     ``white`` 1 (blank paper: no dots there), linear in between, then raised
     to ``gamma`` (above 1: darker mid-tones, more dots; below 1: lighter).
-    The input is not modified.
+    The input is not modified, unless `copy` is False and it is a float64
+    array: then it is adjusted in place and returned (with the identity
+    controls 0, 1, 1 that only clips it to [0, 1]).
 
     Examples
     --------
@@ -334,8 +337,11 @@ def adjust_tone(gray, *, black=0.0, white=1.0, gamma=1.0):
                          f"{black:g} and white {white:g}")
     if not 0.0 < gamma < float("inf"):
         raise ValueError(f"the tone gamma must be a finite number > 0, got {gamma:g}")
-    g = np.asarray(gray, dtype=np.float64) - black   # a new array: the rest in place
-    g /= white - black
+    g = np.array(gray, dtype=np.float64) if copy else np.asarray(gray, dtype=np.float64)
+    if black != 0.0:
+        g -= black
+    if white - black != 1.0:
+        g /= white - black
     np.clip(g, 0.0, 1.0, out=g)
     if gamma != 1.0:
         g **= gamma   # numpy's operator, as g**gamma (square and square root by their own ufuncs)
@@ -377,6 +383,6 @@ class ToneOptions:
         """The keyword arguments of :func:`adjust_tone` (recorded as ``params["tone"]``)."""
         return {"black": self.black_point, "white": self.white_point, "gamma": self.tone_gamma}
 
-    def adjust(self, gray):
-        """``gray`` with these tone controls (:func:`adjust_tone`)."""
-        return adjust_tone(gray, **self.params())
+    def adjust(self, gray, copy=True):
+        """``gray`` with these tone controls (:func:`adjust_tone`; `copy` False: in place)."""
+        return adjust_tone(gray, **self.params(), copy=copy)

@@ -415,7 +415,7 @@ def _item_image(path, params):
     color = params.get("color")
     if color is None:
         gray = ToneOptions(**params.get("tone", {})).adjust(
-            load_gray(path, allow_large=params.get("allow_large", False)))
+            load_gray(path, allow_large=params.get("allow_large", False)), copy=False)
         return gray, gray, stipple
 
     def run(image, n, options, **keywords):

@@ -89,6 +89,7 @@ from .radii import certified_k, detail_fields, field_at, gaussian_blur, largest_
 from .schedule import StippleOptions, StipplePlan
 from .engine import make_engine
 from .image import to_gray
+from .memory import freed_memory_kept
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
            "equal_ink", "off_support", "reseat_dead"]
@@ -530,9 +531,11 @@ def _blurred(darkness, sigma):
     return gaussian_blur(darkness, sigma) if sigma > 0 else darkness
 
 
-def _centroid_density(darkness, opt):
-    """Density of the centroid integrals per grid cell: blurred darkness, upsampled."""
-    d = np.maximum(_blurred(darkness, opt.density_sigma), 1e-6)
+def _centroid_density(darkness, opt, *, overwrite=False):
+    """Density of the centroid integrals per grid cell: blurred darkness, upsampled
+    (`overwrite`: made in `darkness` where it can be)."""
+    blurred = _blurred(darkness, opt.density_sigma)
+    d = np.maximum(blurred, 1e-6, out=blurred if overwrite or blurred is not darkness else None)
     s = opt.supersample
     return np.ascontiguousarray(d) if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
 
@@ -559,7 +562,7 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None):
         rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell)
     darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
     ink = _blurred(darkness, INK_SIGMA) if opt.support > 0 else None   # only off_support reads it
-    density = _centroid_density(darkness, opt)
+    density = _centroid_density(darkness, opt, overwrite=True)   # darkness is not read again
     if window is None:
         return StippleStage(engine, opt, rfield, density, weight, ink)
     s = opt.supersample
@@ -647,10 +650,18 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     >>> res.n, res.certificate.valid, res.engine
     (60, True, 'exact')
     """
+    options = (options or StippleOptions()).replace(**overrides)
+    with freed_memory_kept():   # the run makes and drops many whole-picture arrays
+        # (in a function of its own: its arrays are freed before the block gives memory back)
+        return _stipple(image, n, options, start, callback,
+                        dict(device=device, backend=backend, profile=profile, verify=verify))
+
+
+def _stipple(image, n, options, start, callback, engine_args):
+    """The body of :func:`stipple`."""
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its own stages and the engine's
     with watch("load"):
-        options = (options or StippleOptions()).replace(**overrides)
         # the caller's gray array itself where it is one (nothing here changes it): no copy
         gray = to_gray(image, invert=options.invert, copy=False)
         H, W = gray.shape
@@ -661,9 +672,8 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     with watch("start"):
         x = _start_points(gray, opt, start)
     with watch("setup"):
-        engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                             grid=opt.grid_shape(W, H), profile=profile, verify=verify,
-                             timings=watch)
+        engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
+                             **engine_args)
         stage = _make_stage(gray, opt, engine)
     del gray   # the stage holds every field the steps read
     state, history = _run(StippleState(x, float(opt.k0)), stage, callback)

@@ -162,7 +162,7 @@ def _write_raster(image, path, tone, invert, paper_tone, allow_large):
         shape, strips = gray_strips(image, allow_large=allow_large)
         out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.float32, shape=shape)
         for y0, g in strips:
-            g = tone.adjust(g)
+            g = tone.adjust(g, copy=False)   # a strip of its own
             if invert:
                 g = 1.0 - g
             if paper_tone > 0:

@@ -1,0 +1,43 @@
+"""freed_memory_kept: memory freed inside the block stays in the process, and is given back after it."""
+
+import sys
+
+import numpy as np
+import pytest
+
+from diskpack_cl import memory
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux") or memory._glibc() is None,
+                                reason="glibc's mallopt and /proc/self/status")
+
+MIB = 2**20
+
+
+def _rss():
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) * 1024 for line in fh if line.startswith("VmRSS:"))
+
+
+def _touch_and_free(nbytes):
+    a = np.ones(nbytes // 8)   # every page written
+    del a
+
+
+def test_freed_memory_stays_inside_the_block_and_goes_back_after():
+    before = _rss()
+    with memory.freed_memory_kept():
+        with memory.freed_memory_kept():   # nested: only the outermost block gives memory back
+            _touch_and_free(256 * MIB)
+        inside = _rss()
+        _touch_and_free(256 * MIB)         # the same pages again: no growth
+        again = _rss()
+    after = _rss()
+    assert inside - before > 200 * MIB
+    assert again - inside < 32 * MIB
+    assert after - before < 64 * MIB
+
+
+def test_outside_the_block_freed_memory_goes_back():
+    before = _rss()
+    _touch_and_free(256 * MIB)
+    assert _rss() - before < 64 * MIB
