@@ -28,6 +28,13 @@ coverages. Separation inverts this model per pixel:
   pen colours with ``--pens``.
 * **CMY** (``--colors cmy``): the three coloured pens by the model above;
   their darkest grey is 2/3 of white (in linear light).
+* **Black paper** (``--invert``, ``invert=True``): light pens on black
+  paper, ``(1 - sum a_p) * black + sum a_p c_p``. That is the negative, in
+  linear light, of pens ``1 - c_p`` on white paper drawing the negative of
+  the image (:func:`linear_negative`), so the separation above runs on the
+  negatives. ``auto:N`` chooses white and N - 1 light pens (the negatives
+  of those it chooses for the negative image); ``cmyk`` and ``cmy`` are
+  made for white paper and refused (:func:`check_paper`).
 
 The ``"overprint"`` model (``separate(..., model="overprint")``, CMYK and
 CMY only) is the textbook separation for inks printed over each other, and
@@ -59,7 +66,7 @@ from .options import OptionConflict, check_fields, option
 from .image import load_gray
 
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
-           "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
+           "linear_to_srgb", "linear_negative", "check_paper", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
            "pen_ink_radii",
            "pen_spacing", "color_measures", "palette_of", "auto_palette", "parse_auto"]
 
@@ -101,6 +108,22 @@ _RGB_TO_XYZ = np.array([[0.4124564, 0.3575761, 0.1804375],
                         [0.2126729, 0.7151522, 0.0721750],
                         [0.0193339, 0.1191920, 0.9503041]])
 _WHITE_D65 = _RGB_TO_XYZ.sum(axis=1)
+
+
+def linear_negative(rgb):
+    """The negative of sRGB colours in [0, 1] in linear light: ``1 - c`` in linear light, as sRGB.
+
+    Area mixing is linear in linear light, so pens of colours ``c_p`` on
+    paper ``P`` give the negative of what pens ``linear_negative(c_p)`` give
+    on paper ``linear_negative(P)``: light pens on black paper are dark pens
+    on white paper drawing the negative.
+
+    Examples
+    --------
+    >>> linear_negative(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])).round(6).tolist()
+    [[0.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
+    """
+    return linear_to_srgb(1.0 - srgb_to_linear(rgb))
 
 
 def srgb_to_lab(rgb):
@@ -294,8 +317,9 @@ def _mix_error(target_lin, target_lab, pens_lin):
     return float(np.mean(np.sqrt(np.sum(d * d, axis=1))))
 
 
-def auto_palette(image, n, *, seed=0):
-    """Black and ``n - 1`` pens of the image's own hues (``--colors auto:N``).
+def auto_palette(image, n, *, seed=0, invert=False):
+    """Black and ``n - 1`` pens of the image's own hues (``--colors auto:N``); with `invert`,
+    white and ``n - 1`` light pens for black paper.
 
     The candidates are the image's hues at full strength (grey part removed,
     largest channel 1; :func:`_hue_candidates`): dark colours are then drawn
@@ -306,7 +330,9 @@ def auto_palette(image, n, *, seed=0):
     chosen greedily, then improved by swaps, to minimise the mean CIE 1976
     Delta E of the area-mix separation of the image averaged over blocks of
     1/48 of its long side. Deterministic for a given `seed` (the pixel draw
-    and the k-means).
+    and the k-means). On black paper (`invert`) the pens are the negatives
+    (:func:`linear_negative`) of those chosen for the image's negative: light
+    pens on black mix as their negatives do on white.
 
     Parameters
     ----------
@@ -316,11 +342,14 @@ def auto_palette(image, n, *, seed=0):
         Pens, black included: 2 to :data:`AUTO_MAX_PENS`.
     seed : int
         Seed of the pixel draw and the k-means.
+    invert : bool
+        Pens for black paper.
 
     Returns
     -------
     names : tuple of str
-        ``"black"`` last, the others their own ``#rrggbb`` (lightest first).
+        ``"black"`` last, the others their own ``#rrggbb`` (lightest first);
+        with `invert`, ``"white"`` last and the others darkest first.
     colors : (n, 3) float64
         sRGB in [0, 1].
 
@@ -334,7 +363,13 @@ def auto_palette(image, n, *, seed=0):
     >>> img = np.zeros((8, 24, 3)); img[:, :8] = [1.0, 0.5, 0.0]; img[:, 8:16] = [0.0, 0.6, 1.0]
     >>> auto_palette(img, 3)[0]
     ('#ff8000', '#0099ff', 'black')
+    >>> auto_palette(img, 3, invert=True)[0]
+    ('#0099ff', '#ff8000', 'white')
     """
+    if invert:
+        names, colors = auto_palette(linear_negative(load_rgb(image)), n, seed=seed)
+        colors = np.round(linear_negative(colors) * 255) / 255
+        return tuple(hex_color(c) for c in colors[:-1]) + ("white",), colors
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= AUTO_MAX_PENS:
         raise ValueError(f"auto:N takes N = 2 to {AUTO_MAX_PENS} pens, got {n!r}")
     rgb = load_rgb(image)
@@ -399,6 +434,8 @@ class Separation:
         Pen colours, sRGB in [0, 1].
     rgb : (H, W, 3) float64
         The image separated (sRGB in [0, 1], after the clean tolerances).
+    invert : bool
+        Light pens on black paper (the pens mix with black, not white).
 
     Examples
     --------
@@ -411,6 +448,7 @@ class Separation:
     names: tuple
     colors: np.ndarray
     rgb: np.ndarray
+    invert: bool = False
 
     @property
     def darkness(self):
@@ -419,18 +457,23 @@ class Separation:
 
     def render(self):
         """The area mix of the layers (sRGB, (H, W, 3)): what a perfect stippling shows."""
-        return area_mix(self.layers, self.colors)
+        return area_mix(self.layers, self.colors, invert=self.invert)
 
 
-def area_mix(coverage, colors):
-    """sRGB image of pens side by side: ``(1 - sum a_p) + sum a_p c_p`` in linear light.
+def area_mix(coverage, colors, *, invert=False):
+    """sRGB image of pens side by side: ``(1 - sum a_p) paper + sum a_p c_p`` in linear light,
+    the paper white, or black with `invert`.
 
     Examples
     --------
     >>> area_mix(np.full((1, 1, 1), 0.5), np.array([[0.0, 0.0, 0.0]])).round(4).tolist()
     [[[0.7354, 0.7354, 0.7354]]]
+    >>> area_mix(np.full((1, 1, 1), 0.5), np.array([[1.0, 1.0, 1.0]]), invert=True).round(4).tolist()
+    [[[0.7354, 0.7354, 0.7354]]]
     """
     a = np.asarray(coverage, dtype=np.float64)
+    if invert:   # the negative of the negative pens on white
+        return linear_negative(area_mix(a, linear_negative(colors)))
     absorb = 1.0 - srgb_to_linear(colors)               # (P, 3)
     lin = 1.0 - np.tensordot(a, absorb, axes=([0], [0]))
     return linear_to_srgb(lin)
@@ -524,8 +567,25 @@ def palette_of(names, colors):
     return [(name, tuple(float(v) for v in c)) for name, c in zip(names, colors)]
 
 
+def check_paper(colors, invert):
+    """Refuse a named palette made for white paper (``cmyk``, ``cmy``) on black paper (one line).
+
+    Examples
+    --------
+    >>> check_paper("auto:3", True)
+    >>> check_paper("cmyk", True)
+    Traceback (most recent call last):
+    ...
+    ValueError: cmyk is for white paper: on black paper give auto:N (white and N - 1 of the image's hues) or light pens, e.g. white=#fff,red=#f00,green=#0f0,blue=#00f
+    """
+    if invert and isinstance(colors, str) and colors.strip().lower() in PALETTES:
+        raise ValueError(f"{colors.strip()} is for white paper: on black paper give auto:N "
+                         f"(white and N - 1 of the image's hues) or light pens, e.g. "
+                         f"white=#fff,red=#f00,green=#0f0,blue=#00f")
+
+
 def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, clean_white=0.0,
-             model="area"):
+             model="area", invert=False):
     """Separate a colour image into pen layers (see the module docstring).
 
     Parameters
@@ -544,6 +604,12 @@ def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, cle
         Ink model: ``"area"`` (dots side by side, the packing's) or
         ``"overprint"`` (CMYK and CMY only: layers printed over each
         other, as independent layers give on average; see the module docstring).
+    invert : bool
+        Light pens on black paper: the pens' mix with black
+        (:func:`linear_negative`: the negative pens separating the negative
+        image on white); ``auto:N`` chooses white and N - 1 light pens
+        (:func:`auto_palette`); ``cmyk`` and ``cmy`` are refused
+        (:func:`check_paper`).
 
     Returns
     -------
@@ -555,7 +621,13 @@ def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, cle
     >>> sep = separate(img, "cmyk")
     >>> sep.names, sep.layers[:, 0, :].round(3).T.tolist()
     (('yellow', 'cyan', 'magenta', 'black'), [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
+
+    On black paper, black is no ink, white all white pen, cyan all cyan pen:
+
+    >>> separate(img, "white=#fff,cyan=#0ff", invert=True).layers[:, 0, :].round(6).tolist()
+    [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     """
+    check_paper(colors, invert)
     auto = parse_auto(colors)
     names, pens = (None, None) if auto is not None else _palette(colors)
     if model not in ("area", "overprint"):
@@ -572,14 +644,17 @@ def separate(image, colors="cmyk", *, black_generation=1.0, clean_black=0.0, cle
     rgb = np.where((rgb.max(axis=2) <= clean_black)[..., None], 0.0, rgb)
     rgb = np.where((rgb.min(axis=2) >= 1.0 - clean_white)[..., None], 1.0, rgb)
     if auto is not None:
-        names, pens = auto_palette(rgb, auto)
+        names, pens = auto_palette(rgb, auto, invert=invert)
     q = np.round(rgb * 255).astype(np.int64)
     keys, inverse = np.unique((q[..., 0] << 16) | (q[..., 1] << 8) | q[..., 2], return_inverse=True)
     uniq = np.stack([keys >> 16, (keys >> 8) & 255, keys & 255], axis=1) / 255.0
     gcr = black_generation if palette == "cmyk" else None
-    cov = _separate_unique(uniq, names, pens, gcr, model)
+    if invert:   # light pens on black: the negative pens on white, drawing the negative
+        cov = _separate_unique(linear_negative(uniq), names, linear_negative(pens), gcr, model)
+    else:
+        cov = _separate_unique(uniq, names, pens, gcr, model)
     layers = np.moveaxis(cov[inverse.reshape(rgb.shape[:2])], 2, 0)
-    return Separation(np.ascontiguousarray(layers), names, pens, rgb)
+    return Separation(np.ascontiguousarray(layers), names, pens, rgb, bool(invert))
 
 
 def load_rgb(image):
@@ -628,23 +703,30 @@ PEN_SHARE_EXPONENT = 0.7
 MIN_DOTS = 50
 
 
-def render_pens(points, pen, radii, colors, shape, *, scale=3):
+def render_pens(points, pen, radii, colors, shape, *, scale=3, invert=False):
     """Linear-light RGB (H, W, 3) of dots drawn with their pens' inks, overprinting where they overlap.
 
     Each pen's dots (radius ``radii[p]`` px) are drawn at `scale` times the
     image resolution (:func:`diskpack_cl.picture_measures.render_dots`), coverage
     clipped at 1; inks multiply, ``prod_p (1 - a_p (1 - c_p))``, so pens
     side by side mix by area and overlapping dots overprint; the result is
-    averaged back to the image's pixels.
+    averaged back to the image's pixels. With `invert`, light pens on black
+    paper: the negative of the negative pens on white,
+    ``1 - prod_p (1 - a_p c_p)`` (side by side, the area mix over black).
 
     Examples
     --------
     >>> img = render_pens([[2.0, 2.0]], [0], [1.0], np.array([[0.0, 0.0, 0.0]]), (4, 4))
     >>> round(float(img[..., 0].mean()), 3)   # 1 - pi / 16
     0.804
+    >>> img = render_pens([[2.0, 2.0]], [0], [1.0], np.array([[1.0, 1.0, 1.0]]), (4, 4), invert=True)
+    >>> round(float(img[..., 0].mean()), 3)   # pi / 16
+    0.196
     """
     from .picture_measures import render_dots  # not loaded at start-up
 
+    if invert:
+        return 1.0 - render_pens(points, pen, radii, linear_negative(colors), shape, scale=scale)
     p = np.asarray(points, dtype=np.float64)
     pen = np.asarray(pen)
     H, W = shape
@@ -813,7 +895,7 @@ def pen_spacing(points, pen, shape, *, layers=None, pens=None, sigma=3.0):
             "p01_joint": spacing(p, total, sigma=sigma).p01}
 
 
-def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3.0):
+def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3.0, invert=False):
     """Colour fidelity and spacing of a colour stippling.
 
     Parameters
@@ -832,6 +914,8 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
         Blur in pixels for Delta E; default one dot spacing ``sqrt(W H / n)``.
     tone_sigma : float
         Blur in pixels for the SSIM and the spacing.
+    invert : bool
+        Light pens on black paper (:func:`render_pens`).
 
     Returns
     -------
@@ -862,7 +946,7 @@ def color_measures(points, pen, layers, colors, rgb, *, sigma=None, tone_sigma=3
     P, H, W = layers.shape
     counts = np.bincount(pen, minlength=P)
     sigma = float(np.sqrt(W * H / len(p))) if sigma is None else float(sigma)
-    drawn = render_pens(p, pen, pen_ink_radii(p, pen, layers), colors, (H, W))
+    drawn = render_pens(p, pen, pen_ink_radii(p, pen, layers), colors, (H, W), invert=invert)
 
     def blur(lin):
         return linear_to_srgb(ndimage.gaussian_filter(lin, (sigma, sigma, 0), mode="reflect"))

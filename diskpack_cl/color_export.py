@@ -10,13 +10,21 @@ writers with the pens added (a ``pen`` column, pen names and colours).
   layer's dots along a short pen path.
 * PNG: the inks composited (:func:`diskpack_cl.color.render_pens`'s model:
   coverages multiply in linear light), 8-bit sRGB.
+
+A stippling made with ``invert`` (light pens on black paper, its
+``params["invert"]``) is drawn on black: the SVG's paper is a black image
+in a layer that plotters skip (as for one pen), the PNG's paper black,
+each pen's light added as :func:`diskpack_cl.color.render_pens` adds it.
+The pens go darkest first and white last: as on white paper, the pen
+that stands out least from the paper first, so that where dots touch the
+one that carries the most light is on top.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .color import linear_to_srgb, srgb_to_linear
+from .color import linear_negative, linear_to_srgb, srgb_to_linear
 from .drawing import (FRAME_INK, MM_PER_INCH, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
                       place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
                       svg_size, xml_attr)
@@ -24,27 +32,54 @@ from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
 from .overlap import cap_radii, ink_figures
 
-__all__ = ["layer_order", "write_color_svg", "write_color_png", "write_color_page_png"]
+__all__ = ["layer_order", "on_black", "write_color_svg", "write_color_png", "write_color_page_png"]
 
 
-def layer_order(names, colors, pen_order=None):
-    """Pen indices in drawing order: `pen_order` (names), else lightest first (luminance).
+def layer_order(names, colors, pen_order=None, invert=False):
+    """Pen indices in drawing order: `pen_order` (names), else lightest first (luminance), on
+    black paper (`invert`) darkest first.
 
     Examples
     --------
     >>> layer_order(("black", "yellow"), np.array([[0, 0, 0], [1, 1, 0.0]]))
+    [1, 0]
+    >>> layer_order(("white", "blue"), np.array([[1, 1, 1], [0, 0, 1.0]]), invert=True)
     [1, 0]
     >>> layer_order(("black", "yellow"), np.zeros((2, 3)), ["black", "yellow"])
     [0, 1]
     """
     if pen_order is None:
         lum = srgb_to_linear(np.asarray(colors)) @ np.array([0.2126, 0.7152, 0.0722])
-        return [int(i) for i in np.argsort(-lum, kind="stable")]
+        return [int(i) for i in np.argsort(lum if invert else -lum, kind="stable")]
     order = list(pen_order)
     if sorted(order) != sorted(names):
         raise ValueError(f"pen order must name every pen once ({', '.join(names)}), got "
                          f"{', '.join(order)}")
     return [names.index(name) for name in order]
+
+
+def on_black(result, invert=False):
+    """Whether a colour stippling is drawn on black paper: as its pens were separated
+    (``params["invert"]``), or where it does not say (read from a CSV) as `invert` says.
+
+    Raises
+    ------
+    ValueError
+        `invert` for pens separated for white paper.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> on_black(SimpleNamespace(params={"invert": True})), on_black(SimpleNamespace(params={}), True)
+    (True, True)
+    """
+    made = (getattr(result, "params", None) or {}).get("invert")
+    if made is None:
+        return bool(invert)
+    if invert and not made:
+        raise ValueError("invert: this colour stippling's pens were separated for white paper; "
+                         "stipple it with invert for light pens on black paper")
+    return bool(made)
 
 
 def _radii(result, scale, dots, dot_mm, radius_scale):
@@ -91,7 +126,8 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
 
     The options are those of :func:`diskpack_cl.export.write_svg`, plus
     `pen_order` (pen names, first drawn first); ``dots="tone"`` draws each
-    pen's dots at the radius that holds its layer's ink. `invert` is refused.
+    pen's dots at the radius that holds its layer's ink; black paper where the
+    pens were separated for it (:func:`on_black`).
 
     Returns
     -------
@@ -114,8 +150,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     """
     from .multipen import hex_color
 
-    if invert:
-        raise ValueError("invert has no meaning for colour stippling")
+    black = on_black(result, invert)
     W, H = float(result.width), float(result.height)
     lay, pm, rad, drawn, moved = _drawn_dots(
         result, width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
@@ -124,11 +159,11 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     ink = ink_figures(pm, rad, np.asarray(result.radii) * lay["scale"], pen=pen_mm,
                       no_overlap=no_overlap)
     rad = drawn
-    order = layer_order(result.names, result.colors, pen_order)
-    meta = dict(svg_meta(result, lay, rad, pen_mm, False, result.names[order[0]]),
+    order = layer_order(result.names, result.colors, pen_order, black)
+    meta = dict(svg_meta(result, lay, rad, pen_mm, black, result.names[order[0]]),
                 pens=[result.names[p] for p in order])
     parts = [svg_head(lay, svg_size(lay, W, H, width_mm, height_mm, page), meta,
-                       _paint(hex_color(result.colors[order[0]]), pen_mm), False)]
+                       _paint(hex_color(result.colors[order[0]]), pen_mm), black)]
     layers, before, after, draw = [], 0.0, 0.0, 0.0
     for i, p in enumerate(order):
         idx = np.flatnonzero(result.pen == p)
@@ -162,7 +197,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     """Write a colour PNG preview: every pen's dots, inks composited (8-bit sRGB).
 
     Options and the returned dict as :func:`diskpack_cl.export.write_png`;
-    `invert` is refused.
+    black paper as :func:`on_black` says.
 
     Examples
     --------
@@ -177,8 +212,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     ...     im.mode, im.size
     ('RGB', (64, 48))
     """
-    if invert:
-        raise ValueError("invert has no meaning for colour stippling")
+    black = on_black(result, invert)
     ow, oh = max(1, round(result.width * scale)), max(1, round(result.height * scale))
     p = np.asarray(result.points) * scale
     rad = (np.full(len(result.points), float(dot_px)) if dot_px is not None
@@ -188,20 +222,23 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     if pen_px is not None:   # what the pen draws: at least a touch a pen wide
         rad = np.maximum(rad, 0.5 * pen_px)
     check_fit(rad, (ow, oh), pen_px, unit="px")
-    save_png(path, linear_to_srgb(_composite(result, p, rad, np.ones((oh, ow, 3)), aa, progress)))
+    paper = np.full((oh, ow, 3), 0.0 if black else 1.0)
+    save_png(path, linear_to_srgb(_composite(result, p, rad, paper, aa, progress, black)))
     return {"width": ow, "height": oh, "n": int(len(p))}
 
 
-def _composite(result, centres, rad, lin, aa, progress):
-    """``lin`` (linear light) under every pen's dots (centres and radii in its pixels)."""
-    oh, ow = lin.shape[:2]
-    absorb = 1.0 - srgb_to_linear(result.colors)
+def _composite(result, centres, rad, paper, aa, progress, black=False):
+    """The paper (linear light) under every pen's dots (centres and radii in its pixels); on
+    black paper the negative of the negative pens on the negative paper."""
+    oh, ow = paper.shape[:2]
+    lin = 1.0 - paper if black else paper
+    absorb = 1.0 - srgb_to_linear(linear_negative(result.colors) if black else result.colors)
     for q in range(len(result.names)):
         mine = result.pen == q
         if np.any(mine):
             cover = ink_coverage(centres[mine], rad[mine], ow, oh, int(aa), progress)
             lin *= 1.0 - cover[..., None] * absorb[q]
-    return lin
+    return 1.0 - lin if black else lin
 
 
 def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert=False,
@@ -212,8 +249,8 @@ def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert
     stippling: the paper, a light line at the margins, each pen's dots where
     the SVG draws them, as far as their ink reaches, inks composited as in
     :func:`write_color_png`. `drawing` are the options of
-    :func:`write_color_svg` that lay out the page and size the dots;
-    `invert` is refused.
+    :func:`write_color_svg` that lay out the page and size the dots; black
+    paper and a light line as :func:`on_black` says.
 
     Examples
     --------
@@ -227,14 +264,14 @@ def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert
     >>> info["width"], info["height"], round(info["dpi"], 1)
     (296, 420, 50.8)
     """
-    if invert:
-        raise ValueError("invert has no meaning for colour stippling")
+    black = on_black(result, invert)
     lay, pm, _, rad, _ = _drawn_dots(result, **drawing)
     line = page_frame(lay, px_per_mm)
     pen = drawing.get("pen_mm")
     ink_rad = rad if pen is None else np.maximum(rad, 0.5 * pen)
-    paper = np.repeat(1.0 - FRAME_INK * line[..., None], 3, axis=2)
-    lin = _composite(result, pm * px_per_mm, ink_rad * px_per_mm, paper, aa, progress)
+    frame = np.repeat(FRAME_INK * line[..., None], 3, axis=2)
+    lin = _composite(result, pm * px_per_mm, ink_rad * px_per_mm,
+                     frame if black else 1.0 - frame, aa, progress, black)
     save_png(path, linear_to_srgb(lin), dpi=px_per_mm * MM_PER_INCH)
     return {"width": line.shape[1], "height": line.shape[0], "n": int(len(pm)),
             "dpi": px_per_mm * MM_PER_INCH}

@@ -432,9 +432,9 @@ _COLOR_FIELDS = frozenset(f.name for f in fields(ColorOptions))
 def _separate(image, n, color, counts, joint, pen_pull, options):
     """Check the arguments of :func:`stipple_colors`; the separation, the options resolved,
     the counts and :func:`dot_density`."""
-    for name in ("invert", "paper_tone"):
-        if getattr(options, name):
-            raise ValueError(f"{name} is for one pen: colour stippling draws the pens on white")
+    if options.paper_tone:
+        raise ValueError("paper_tone is for one pen: colour stippling draws on white or, with "
+                         "invert, black paper")
     for name, v in (("joint", joint), ("pen_pull", pen_pull)):
         if not 0.0 <= v <= 1.0:
             raise ValueError(f"{name} must be in [0, 1], got {v}")
@@ -442,9 +442,10 @@ def _separate(image, n, color, counts, joint, pen_pull, options):
     if counts is not None and separation["counts"] is not None:
         raise ValueError("give the dots per pen once: counts or pen_dots, not both")
     sep = separate(image, separation["colors"], black_generation=color.black_generation,
-                   clean_black=color.clean_black, clean_white=color.clean_white)
+                   clean_black=color.clean_black, clean_white=color.clean_white,
+                   invert=options.invert)
     if not sep.darkness.max() > 1e-9:
-        raise ValueError("nothing to stipple: the image is white")
+        raise ValueError(f"nothing to stipple: the image is {'black' if options.invert else 'white'}")
     if options.capacity is None:   # measured: equal ink per dot costs tone per pen
         options = options.replace(capacity=COLOR_CAPACITY)
     counts = dots_per_pen(sep.names, sep.layers, check_count(n),
@@ -480,8 +481,10 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     options : StippleOptions, optional
         The stippling options, as for :func:`diskpack_cl.stipple`, applied
         to the joint density; ``capacity`` defaults to
-        :data:`COLOR_CAPACITY` (off). ``invert`` and ``paper_tone`` are
-        refused.
+        :data:`COLOR_CAPACITY` (off). ``invert``: light pens on black
+        paper (:func:`diskpack_cl.color.separate`; ``auto:N`` chooses white
+        and N - 1 light pens, ``cmyk`` and ``cmy`` are refused);
+        ``paper_tone`` is refused.
     counts : sequence of int or mapping of str to int, optional
         Dots per pen (:func:`dots_per_pen`): all (summing to n), or some by
         name, the others sharing the rest by their ink to the power of the
@@ -524,6 +527,13 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     ...                        StippleOptions(schedule=[("mix", 4, 0.5)]), backend="exact")
     >>> bool(np.array_equal(again.points, res.points))
     True
+
+    Light pens on black paper:
+
+    >>> dark = stipple_colors(img, 120, "auto:3", invert=True, schedule=[("mix", 4, 0.5)],
+    ...                       backend="exact")
+    >>> dark.names, dark.params["invert"]
+    (('#4600ff', '#ff00a4', 'white'), True)
     """
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its stages, the main engine's and "pens"

@@ -384,7 +384,9 @@ class StippleOptions:
         0, "seed of the error-diffusion start (default 0; same seed, same result)",
         check=check_seed, cli_type=seed_text, group=_STIPPLING, metavar="SEED")
     invert: bool = option(
-        False, "stipple the light parts (light dots on a dark ground)", group=_STIPPLING)
+        False, "stipple the light parts (light dots on a dark ground); with --colors/--pens, "
+        "light pens on black paper (auto:N: white and N - 1 light pens; cmyk and cmy are for "
+        "white paper)", group=_STIPPLING)
     k0: float = option(1e-6, "initial scale factor k (the paper: 1e-6, so that no disks "
                        "overlap)", lo=0, lo_open=True, cli=False)
     radius_sigma: float = option(None, "blur of the darkness in the density radius mapping",

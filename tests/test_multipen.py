@@ -60,7 +60,7 @@ def test_given_counts_and_errors():
     assert res.counts.tolist() == [50, 100, 50] and res.certificate.valid
     with pytest.raises(ValueError, match="counts must be 3 non-negative integers summing to n = 200"):
         stipple_colors(_image(), 200, PENS3, counts=[50, 100, 49])
-    with pytest.raises(ValueError, match="invert is for one pen"):
+    with pytest.raises(ValueError, match="cmyk is for white paper: on black paper give auto:N"):
         stipple_colors(_image(), 200, invert=True)
     with pytest.raises(ValueError, match="paper_tone is for one pen"):
         stipple_colors(_image(), 200, paper_tone=0.1)

@@ -144,13 +144,19 @@ def _count(args):
 
 
 def _refuse_mixed(args, options, tone, write, separation):
-    """Usage errors of options that do not go together: one pen's with several, a pen
-    order without pens, -n tone without a dot size."""
+    """Usage errors of options that do not go together: one pen's with several, a palette
+    for white paper on black (--invert), a pen order without pens, -n tone without a dot size."""
+    from diskpack_cl.color import check_paper  # not loaded at start-up
+
     if separation is not None:
-        mono = [flag_name(k) for k in ("invert", "paper_tone") if getattr(options, k)]
+        mono = [flag_name("paper_tone")] if options.paper_tone else []
         mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
         if mono:
             raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
+        try:
+            check_paper(separation["colors"], options.invert)
+        except ValueError as exc:
+            raise _UsageError(f"--invert: {exc}") from None
     elif write.pen_order is not None:
         raise _UsageError("--pen-order orders the pens of --colors or --pens")
     if args.n == "tone" and write.dot_mm is None and write.pen_mm is None:
