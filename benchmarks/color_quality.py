@@ -42,7 +42,9 @@ modes stipple all five photographs unless ``--images`` is given. With
 ``--floor``, every row also gets the noise floor of its image
 (:func:`channel_floor`): per channel, what that channel stippled alone
 with all n dots reaches, black dots on white paper and white on black.
-``--paper black`` draws light pens on black paper (:func:`negative`).
+``--paper black`` draws light pens on black paper (``stipple_colors(...,
+invert=True)``; palettes for white paper, ``cmyk`` and ``cmy``, are refused
+there and get no row).
 """
 
 from __future__ import annotations
@@ -58,8 +60,9 @@ import numpy as np
 
 from diskpack_cl import stipple
 from diskpack_cl.picture_measures import spacing
-from diskpack_cl.color import (PALETTES, PEN_SHARE_EXPONENT, color_measures, linear_to_srgb,
-                               load_rgb, pen_ink_radii, render_pens, separate, srgb_to_linear)
+from diskpack_cl.color import (PALETTES, PEN_SHARE_EXPONENT, check_paper, color_measures,
+                               linear_to_srgb, load_rgb, pen_ink_radii, render_pens, separate,
+                               srgb_to_linear)
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.multipen import hex_color, stipple_colors
 
@@ -110,7 +113,16 @@ def crop(name, results, box, out, scale=2):
     sheet.save(out, optimize=True)
 
 
-BOXES = {"astronaut": (50, 10, 128), "coffee": (64, 40, 128), "chelsea": (70, 20, 128)}
+BOXES = {"astronaut": (50, 10, 128), "coffee": (64, 40, 128), "chelsea": (70, 20, 128),
+         "retina": (64, 64, 128), "hubble_deep_field": (64, 64, 128)}
+
+
+def paper_crop(name, n, out, palette="auto:3", seed=0):
+    """The photograph, `palette` on white paper and on black paper (light pens) side by side:
+    the crop ``BOXES[name]`` of stipplings of `n` dots."""
+    path = ROOT / "tests/data/color" / f"{name}.png"
+    crop(name, [stipple_colors(path, n, palette, seed=seed, invert=black)
+                for black in (False, True)], BOXES[name], out)
 
 
 def run(name, palette, n, figures, seed=0, overlays=True):
@@ -191,22 +203,15 @@ def channel_floor(rgb, n, seed=0, paper="white"):
     return out
 
 
-def negative(rgb):
-    """The negative of an sRGB image or colour in linear light: pens of colours ``c`` drawing
-    a picture on black paper put on it the light that pens of colours ``negative(c)`` leave
-    of white paper drawing ``negative(picture)`` (the same dots; overlaps aside)."""
-    return linear_to_srgb(1.0 - srgb_to_linear(np.asarray(rgb, dtype=np.float64)))
-
-
 def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=("cmyk",),
                           floor=False, paper="white"):
     """Rows of stipplings of `name` and its :func:`dark_saturated` version (of `name` alone if it
     is in ``DARK``) with each palette (``"cmyk"``, ``"auto:N"``, pens), CMYK at each black
     generation, every palette at each pen share exponent (``pen_share_exponent`` of
     :func:`stipple_colors`); with `floor`, each row gets its image's :func:`channel_floor` on
-    white paper (``floor_rgb``) and on black (``floor_black_rgb``). On black `paper`, the
-    :func:`negative` of the image is stippled on white and the drawing's negative measured:
-    the pens chosen for the negative, as their negatives, are light pens on black paper."""
+    white paper (``floor_rgb``) and on black (``floor_black_rgb``). On black `paper`, light
+    pens (``stipple_colors(..., invert=True)``, drawn by ``render_pens(..., invert=True)``);
+    a palette made for white paper is refused there and skipped."""
     photo = load_rgb(ROOT / "tests/data/color" / f"{name}.png")
     variants = ((("dark (photograph)", photo),) if name in DARK
                 else (("bright", photo), ("dark", dark_saturated(photo))))
@@ -216,20 +221,23 @@ def black_generation_rows(name, n, settings, seed=0, exponents=(1.0,), palettes=
                   "floor_black_rgb": channel_floor(rgb, n, seed, "black")} if floor else {})
         for palette, a in itertools.product(palettes, exponents):
             for g in settings if palette == "cmyk" else (1.0,):   # G is CMYK's alone
+                black = paper == "black"
+                try:
+                    check_paper(palette, black)
+                except ValueError as exc:
+                    print(f"{name} {variant} {palette}: {exc}", flush=True)
+                    continue
                 t = time.perf_counter()
-                src = rgb if paper == "white" else negative(rgb)
-                res = stipple_colors(src, n, palette, black_generation=g, pen_share_exponent=a,
-                                     seed=seed)
+                res = stipple_colors(rgb, n, palette, black_generation=g, pen_share_exponent=a,
+                                     seed=seed, invert=black)
                 seconds = time.perf_counter() - t
-                drawn = render_pens(res.points, res.pen, res.pen_radius, res.colors, rgb.shape[:2])
-                ideal = srgb_to_linear(separate(src, palette, black_generation=g).render())
-                if paper == "black":   # the negatives of the drawing, the mix and the pens
-                    drawn, ideal = 1.0 - drawn, 1.0 - ideal
-                colors = res.colors if paper == "white" else negative(res.colors)
+                drawn = render_pens(res.points, res.pen, res.pen_radius, res.colors, rgb.shape[:2],
+                                    invert=black)
+                ideal = srgb_to_linear(separate(rgb, palette, black_generation=g,
+                                                invert=black).render())
                 yield {"image": name, "variant": variant, "paper": paper, "n": n, "seed": seed,
                        "palette": palette, "black_generation": g, "pen_share_exponent": a,
-                       "pens": list(res.names) if paper == "white" else [hex_color(c) for c in colors],
-                       "colors": [hex_color(c) for c in colors],
+                       "pens": list(res.names), "colors": [hex_color(c) for c in res.colors],
                        "seconds": seconds,
                        "counts": np.asarray(res.counts).tolist(), "ink_kept": ink_kept(res),
                        **preview_measures(drawn, rgb, sigma),
@@ -293,7 +301,8 @@ def palette_table(rows):
         de = [r["ciede2000"] for r in rs]
         spread = f" ± {(max(de) - min(de)) / 2:.1f}" if len(rs) > 1 else ""
         sep = rs[0]["separation"]
-        pens = palette if palette == "cmyk" else f"{palette}: {' '.join(rs[0]['colors'])}"
+        pens = (palette if palette in PALETTES else
+                f"{'' if '=' in palette else palette + ': '}{' '.join(rs[0]['colors'])}")
         out.append(f"| {image} ({variant}) | {pens} | {'/'.join(map(str, rs[0]['counts']))} | "
                    f"{_cells(np.mean([r['corr_rgb'] for r in rs], axis=0))} | "
                    f"{np.mean(de):.1f}{spread} | {_cells(sep['corr_rgb'])}, {sep['ciede2000']:.1f} |"
@@ -342,14 +351,21 @@ def main(argv=None):
                     help="stipple each pair with these seeds (the spread over seeds is the noise)")
     ap.add_argument("--paper", choices=("white", "black"), default="white",
                     help="with --black-generation or --palettes: the paper (black: light pens, "
-                    "measured on the image's negative)")
+                    "stipple_colors(..., invert=True); cmyk and cmy are refused there)")
     ap.add_argument("--floor", action="store_true", help="with --black-generation or --palettes: "
                     "each image's noise floor per channel (channel_floor)")
+    ap.add_argument("--paper-figure", nargs="+", metavar="IMAGE",
+                    help="write docs/figures/color_crop_paper_IMAGE.png (paper_crop, auto:3 at the "
+                    "first --n) and stop")
     ap.add_argument("--multi-only", action="store_true",
                     help="the multi-class runs alone, without the naive overlays")
     args = ap.parse_args(argv)
     if args.table:
         print(table(args.table))
+        return
+    for name in args.paper_figure or ():
+        paper_crop(name, args.n[0], ROOT / "docs/figures" / f"color_crop_paper_{name}.png")
+    if args.paper_figure:
         return
     if args.black_generation or args.palettes:
         rows = []
