@@ -193,7 +193,8 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
     image : str, Path or array_like, optional
         The colour image it was stippled from. It is separated again into
         the pens' layers (CMYK and CMY as such, with the black generation and
-        clean tolerances recorded in an ``.npz``; other pens by their colours).
+        clean tolerances recorded in an ``.npz``; other pens by their colours;
+        on black paper where its ``params`` say ``invert``).
     sigma : float
         Blur in pixels for the spacing and SSIM.
 
@@ -237,8 +238,10 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
                              f"stippling of a {W}x{H} px image")
         kw = {k: st.params[k] for k in ("black_generation", "clean_black", "clean_white")
               if k in st.params}
-        sep = separate(rgb, palette_of(names, st.colors), **kw)
-        measures = color_measures(points, pen, sep.layers, st.colors, rgb, tone_sigma=sigma)
+        black = bool(st.params.get("invert", False))   # light pens on black paper
+        sep = separate(rgb, palette_of(names, st.colors), invert=black, **kw)
+        measures = color_measures(points, pen, sep.layers, st.colors, rgb, tone_sigma=sigma,
+                                  invert=black)
         numbers.update(reference="image", delta_e=_num(measures["delta_e"]),
                        delta_e_sigma=_num(measures["sigma"]))
     counts = np.bincount(pen, minlength=len(names))

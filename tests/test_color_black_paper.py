@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 from diskpack_cl.cli import main
-from diskpack_cl.color import (auto_palette, linear_negative, render_pens, separate,
-                               srgb_to_linear)
+from diskpack_cl.color import (auto_palette, color_measures, linear_negative, render_pens,
+                               separate, srgb_to_linear)
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.export import read_stipple
 from diskpack_cl.multipen import stipple_colors
@@ -183,3 +183,13 @@ def test_vpype_draws_the_light_pens_and_refuses_cmyk_on_black(tmp_path):
     result = CliRunner().invoke(vpype_cli.cli, ["diskpack", str(image), "-n", "100",
                                                 "--colors", "cmyk", "--invert"])
     assert result.exit_code == 2 and "cmyk is for white paper" in result.output
+
+
+def test_analyze_measures_a_black_paper_stippling_on_black(tmp_path):
+    from diskpack_cl.reports import analyze_color_stippling
+
+    img = _dark_image() / 255.0
+    res = stipple_colors(img, 300, "auto:3", invert=True)
+    got = analyze_color_stippling("a.npz", res, img)["delta_e"]
+    drawn = color_measures(res.points, res.pen, res.layers, res.colors, img, invert=True)
+    assert got == pytest.approx(drawn["delta_e"], rel=1e-9)
