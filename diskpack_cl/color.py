@@ -66,8 +66,8 @@ from .options import OptionConflict, check_fields, option
 from .image import load_gray
 
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
-           "linear_to_srgb", "linear_negative", "check_paper", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
-           "pen_ink_radii",
+           "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
+           "pen_ink_radii", "linear_negative", "check_paper",
            "pen_spacing", "color_measures", "palette_of", "auto_palette", "parse_auto"]
 
 #: Named palettes: (name, sRGB hex) per pen, lightest first.
