@@ -492,7 +492,8 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     H, W = image.shape[:2]
     n, tone_n = _item_dots(params, write, gray, W, H, note)
     # the ink without the paper tone: no more than the stippling's, so no smaller a raster
-    ink = None if gray is None else float((gray if options.invert else 1.0 - gray).sum())
+    # (for the memory check alone: summed without a second whole image)
+    ink = None if gray is None else float(gray.sum()) if options.invert else gray.size - float(gray.sum())
     area = write.preview_area(W, H)
     check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
                          png_scale=preview_scale(*area, write.png_scale), png_area=area,

@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 
 from .geometry import CertificateError, certify_disks, radius_octaves
 
-__all__ = ["base_radii", "radius_field", "detail_scale", "detail_fields", "field_at", "largest_valid_k",
+__all__ = ["base_radii", "radius_field", "detail_scale", "detail_ell", "detail_fields", "field_at", "largest_valid_k",
            "certified_k", "in_bands", "gaussian_blur", "TRUNCATE"]
 
 #: Gaussian blurs reach ``int(TRUNCATE * sigma + 0.5)`` pixels (scipy.ndimage's default).
@@ -184,6 +184,25 @@ def detail_scale(ink, n, dmed):
     return float(np.sqrt(ink / (max(int(n), 1) * max(dmed, 1e-3))))
 
 
+def _darkness_scale(d, n):
+    """:func:`detail_scale` of a darkness image `d` (its median over the pixels darker than 0.05)."""
+    dark = d[d > 0.05]
+    dmed = float(np.median(dark, overwrite_input=True)) if dark.size else float(d.mean())
+    del dark
+    return detail_scale(float(d.sum()), n, dmed)
+
+
+def detail_ell(gray, n):
+    """The scale ``ell`` :func:`detail_fields` finds for a whole gray image and `n` dots.
+
+    Examples
+    --------
+    >>> detail_ell(np.full((10, 10), 0.75), 25)   # dark 0.25 everywhere: the dot spacing
+    2.0
+    """
+    return _darkness_scale(1.0 - np.asarray(gray, dtype=np.float64), n)
+
+
 def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
     """The radius field and the blend weight of ``features="detail"``.
 
@@ -238,10 +257,7 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
     """
     d = 1.0 - np.asarray(gray, dtype=np.float64)
     if ell is None:
-        dark = d[d > 0.05]
-        dmed = float(np.median(dark, overwrite_input=True)) if dark.size else float(d.mean())
-        del dark
-        ell = detail_scale(float(d.sum()), n, dmed)
+        ell = _darkness_scale(d, n)
     coarse = gaussian_blur(d, ell / 2.0)
     weight = gaussian_blur(d, fine) if fine > 0 else d.copy()
     del d
@@ -262,7 +278,8 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
 
 
 def field_at(field, points):
-    """Value of a per-pixel field at the pixel holding each point (clipped to the image).
+    """Value of a per-pixel field at the pixel holding each point (clipped to the image),
+    as float64 whatever the field's type.
 
     Examples
     --------
@@ -272,11 +289,11 @@ def field_at(field, points):
     H, W = field.shape
     row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
     if not field.flags.c_contiguous:   # (a flat view would be a copy of the whole field)
-        return field[row, col]
+        return field[row, col].astype(np.float64, copy=False)
     # a flat take: numpy's two-array index is about twice as slow (1M points: 30-40 against 80 ms)
     row *= W
     row += col
-    return np.take(field.reshape(-1), row)
+    return np.take(field.reshape(-1), row).astype(np.float64, copy=False)
 
 
 def largest_valid_k(points, r, width, height):

@@ -76,6 +76,7 @@ never lose a point.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -85,7 +86,7 @@ from ._timing import Stopwatch
 from .picture_measures import tone_radius
 from .dithering import error_diffusion
 from .domain import Domain
-from .radii import certified_k, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
+from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
 from .engine import make_engine
 from .image import to_gray
@@ -550,18 +551,76 @@ def _toned(gray, paper_tone):
     return gray, darkness
 
 
-def _make_stage(gray, opt, engine, *, window=None, ell=None):
+#: Rows of a large picture whose fields :func:`_make_stage` makes at once: its blurs and
+#: dilation then hold a band's temporaries, not the picture's (the peak memory of a run).
+FIELD_BAND_ROWS = 512
+
+
+def field_margin(plan, ell):
+    """Pixels around a window within which every field's blur (4 sigma) and dilation reach
+    (`ell`: the detail scale, :func:`~diskpack_cl.radii.detail_ell`).
+
+    Examples
+    --------
+    >>> field_margin(StippleOptions().plan(1000, 200, 200), 4.0)
+    12
+    """
+    sigmas = [plan.radius_sigma, plan.density_sigma, INK_SIGMA]
+    dilation = 0
+    if plan.features == "detail":
+        sigmas.append(ell / 2.0)
+        dilation = max(1, int(round(ell / 4.0)))
+    return int(math.ceil(4.0 * max(sigmas) + 0.5)) + dilation + 2
+
+
+def _banded_stage(gray, opt, engine, rows):
+    """:func:`_make_stage` of a whole picture, its fields made `rows` rows at a time, each
+    band from itself and the margin its blurs and dilation reach (the same values)."""
+    H, W = gray.shape
+    ell = detail_ell(gray, opt.n) if opt.features == "detail" else None
+    m, s = field_margin(opt, ell), opt.supersample
+    names = ("radius_field", "density", "blend_weight", "ink")
+    fields = {}
+    for y0 in range(0, H, rows):
+        y1 = min(y0 + rows, H)
+        lo, hi = max(0, y0 - m), min(H, y1 + m)
+        part = _make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), slice(0, W)),
+                           ell=ell)
+        for name in names:
+            f = getattr(part, name)
+            if f is None:
+                fields[name] = None
+                continue
+            scale = s if name == "density" else 1
+            if name not in fields:
+                fields[name] = np.empty((H * scale, W * scale), f.dtype)
+            fields[name][y0 * scale:y1 * scale] = f
+    return StippleStage(engine, opt, *(fields[name] for name in names))
+
+
+def _sampled(field):
+    """A field read only at the dots (:func:`~diskpack_cl.radii.field_at`), as it is kept."""
+    return None if field is None else field.astype(np.float32)
+
+
+def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS):
     """The :class:`StippleStage` of a gray image: radius field, centroid density, ink.
 
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
     of that part of `gray`, computed with the margin around it, and `ell`
-    is the detail scale of the whole picture (:func:`~diskpack_cl.tiles.stipple_tiled`)."""
+    is the detail scale of the whole picture (:func:`~diskpack_cl.tiles.stipple_tiled`).
+    Without it, a picture of more than twice `band_rows` rows has its fields made in bands."""
+    if window is None and gray.shape[0] > 2 * band_rows:
+        return _banded_stage(gray, opt, engine, band_rows)
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
     weight = None
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell)
+    # the fields read at the dots alone are kept in float32 (half the memory: 7 digits are
+    # more than a radius or a blend needs); the density, summed over cells, in float64
+    rfield, weight = _sampled(rfield), _sampled(weight)
     darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
-    ink = _blurred(darkness, INK_SIGMA) if opt.support > 0 else None   # only off_support reads it
+    ink = _sampled(_blurred(darkness, INK_SIGMA)) if opt.support > 0 else None   # off_support's
     density = _centroid_density(darkness, opt, overwrite=True)   # darkness is not read again
     if window is None:
         return StippleStage(engine, opt, rfield, density, weight, ink)

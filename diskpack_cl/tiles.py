@@ -59,7 +59,7 @@ from .options import check_fields, option
 from .radii import certified_k, detail_scale
 from .schedule import StippleOptions
 from .dithering import error_diffusion
-from .stipple import INK_SIGMA, StippleResult, StippleState, _make_stage, _run, dot_radii
+from .stipple import StippleResult, field_margin, StippleState, _make_stage, _run, dot_radii
 
 __all__ = ["TileOptions", "tile_grid", "stipple_tiled"]
 
@@ -322,16 +322,6 @@ def _holding(held, start):
     return before
 
 
-def _field_margin(plan, ell):
-    """Pixels around a window within which every field's blur (4 sigma) and dilation reach."""
-    sigmas = [plan.radius_sigma, plan.density_sigma, INK_SIGMA]
-    dilation = 0
-    if plan.features == "detail":
-        sigmas.append(ell / 2.0)
-        dilation = max(1, int(round(ell / 4.0)))
-    return int(math.ceil(4.0 * max(sigmas) + 0.5)) + dilation + 2
-
-
 # ------------------------------------------------------------------ driver
 
 
@@ -490,7 +480,7 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
     band, halo = tiling.seam_band * spacing, tiling.halo * spacing
     _check_room(xs, ys, band + halo)
     # a margin of at least 4 dot spacings: the tile's error diffusion starts and ends in it
-    margin = max(_field_margin(plan, ell), int(math.ceil(4 * spacing)))
+    margin = max(field_margin(plan, ell), int(math.ceil(4 * spacing)))
     base = Part(raster, (0, 0, W, H), margin, plan, ell, backend,
                 devices[0] if devices and client is None else None)
     records = []

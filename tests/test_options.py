@@ -88,7 +88,7 @@ def test_every_stipple_option_reaches_stipple(f, monkeypatch, tmp_path):
         seen["options"] = options
         raise Stop
 
-    def tone(gray, **kwargs):
+    def tone(gray, copy=True, **kwargs):   # copy: whether the loaded picture is adjusted in place
         seen["tone"] = kwargs
         return np.asarray(gray, dtype=np.float64)
 

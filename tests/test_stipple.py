@@ -290,7 +290,8 @@ def test_default_schedule_certified_and_deterministic(ctx):
     assert np.all((factor >= 1 / INK_RANGE) & (factor <= INK_RANGE))
     c = stipple(g, 150, seed=5, capacity=0.0)
     row, col = np.floor(c.points[:, 1]).astype(int), np.floor(c.points[:, 0]).astype(int)
-    np.testing.assert_array_equal(c.base_radii, f[row, col])
+    # the stage keeps the field in float32 (read at the dots only)
+    np.testing.assert_array_equal(c.base_radii, f.astype(np.float32)[row, col])
 
 
 def test_paper_schedule_keeps_the_paper_mapping(ctx):
@@ -551,3 +552,27 @@ def test_one_collector_times_a_colour_stippling():
     res = stipple_colors(img, 120, "cmy", schedule=[("mix", 4, 0.5)], backend="exact")
     # the pens' own centroids count in the steps and the totals alike
     _check_one_collector(res, (("separate",), ("certify", "total")))
+
+
+@pytest.mark.parametrize("n, shape, supersample", [(900, (90, 110), None), (900, (90, 110), 2),
+                                                   (20000, (300, 260), None)])
+def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
+    """A large picture's stage fields come band by band (peak memory); every value is the same."""
+    from diskpack_cl.engine import make_engine
+    from diskpack_cl.stipple import _make_stage
+
+    H, W = shape
+    rng = np.random.default_rng(3)
+    g = np.clip(rng.random(shape) * 0.3 + np.linspace(0, 0.7, W), 0, 1)
+    g[H // 3:H // 2] = 1.0   # white paper across band borders
+    options = StippleOptions() if supersample is None else StippleOptions(supersample=supersample)
+    plan = options.plan(n, W, H, ink=float((1 - g).sum()))
+    engine = make_engine(Domain.rect(W, H), n, "exact")
+    whole = _make_stage(g, plan, engine, band_rows=H)
+    for rows in (7, 16, 40):
+        part = _make_stage(g, plan, engine, band_rows=rows)
+        for name in ("radius_field", "density", "blend_weight", "ink"):
+            a, b = getattr(whole, name), getattr(part, name)
+            assert (a is None) == (b is None), name
+            if a is not None:
+                np.testing.assert_array_equal(b, a, err_msg=f"{name}, bands of {rows} rows")

@@ -13,7 +13,7 @@ from diskpack_cl import tiles
 from diskpack_cl.domain import Domain
 from diskpack_cl.engine import make_engine
 from diskpack_cl.schedule import StippleOptions
-from diskpack_cl.stipple import _make_stage
+from diskpack_cl.stipple import _make_stage, field_margin
 from diskpack_cl.tiles import TileOptions, stipple_tiled, tile_grid
 
 SHORT = dict(schedule=[("mix", 3, 0.6), ("mix", 1, 0.75)])
@@ -91,7 +91,7 @@ def test_fields_of_a_window_are_the_pictures():
     d = 1 - g
     ell = detail_scale(float(d.sum()), n, float(np.median(d[d > 0.05])))
     whole = _make_stage(g, plan, make_engine(Domain.rect(110, 90), n, "exact"), ell=ell)
-    m = tiles._field_margin(plan, ell)
+    m = field_margin(plan, ell)
     x0, y0, x1, y1 = 40, 30, 75, 60
     win = g[y0 - m:y1 + m, x0 - m:x1 + m]
     part = _make_stage(win, plan, make_engine(Domain.rect(35, 30), n, "exact"),
