@@ -548,7 +548,7 @@ class PowerRaster:
         sites in grid-cell units, and the zeroed sums (host array and buffer)."""
         ny, nx = self.shape
         if self._density is None or self._density[0] is not density:
-            d = np.ascontiguousarray(density, self._real)
+            d = np.ascontiguousarray(density, np.float32)   # summed in `real` on the device
             if d.shape != self.shape:
                 raise ValueError(f"density must have the raster shape {self.shape}")
             if self.ctx.devices[0].type & cl.device_type.CPU:

@@ -58,7 +58,7 @@ inline void site_origin(__global const real *site, int l, int nsite, int ny, rea
 
 __kernel void cell_sums(
     __global const int *label,       /* owning site of each grid cell */
-    __global const real *density,    /* density of each grid cell */
+    __global const float *density,   /* density of each grid cell (float: read, not summed) */
     __global const real *site,       /* site positions in grid-cell units, x then y */
     const int nsite,                 /* sites: labels in [0, nsite) */
     const int nx, const int ny,      /* raster size */
@@ -116,7 +116,7 @@ inline int add_to_slot(__local int *own, __local real *sum, int k, int l, real m
 __kernel __attribute__((reqd_work_group_size(1, 1, 1)))
 void power_sums_tile(
     LABEL_ARGS,
-    __global const real *density,    /* density of each grid cell */
+    __global const float *density,   /* density of each grid cell (float: read, not summed) */
     __global const real *gsite,      /* site positions in grid-cell units, x then y, by caller's index */
     const int nsite,                 /* sites */
     __global int *status,            /* in/out: ST_* bits (common.h), init 0 */
