@@ -11,6 +11,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import math
+import mmap
 import os
 import threading
 from contextlib import contextmanager
@@ -19,7 +20,7 @@ from .options import NamedOptionError
 
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
            "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_poisson_memory",
-           "check_stipple_memory", "freed_memory_kept"]
+           "check_stipple_memory", "freed_memory_kept", "PageReserve"]
 
 # Peak bytes per unit of a stippling run (default schedule; PNG writer)
 HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
@@ -124,6 +125,42 @@ def freed_memory_kept():
             if _kept["depth"] == 0:
                 _set_thresholds(libc, _MMAP_AFTER, _TRIM_AFTER)
                 libc.malloc_trim(ctypes.c_size_t(0))
+
+
+class PageReserve:
+    """`nbytes` of memory whose pages another thread touches now, handed back on :meth:`release`.
+
+    Inside :func:`freed_memory_kept` the arrays made after the release take
+    these pages: the first touch of each page (a page fault, far dearer on
+    virtual machines that hand freed pages back to their host) is paid on an
+    idle core while the caller goes on with work of one core (reading the
+    picture, the error diffusion). Outside such a block, or with another C
+    library, it reserves nothing.
+
+    Examples
+    --------
+    >>> with freed_memory_kept():
+    ...     reserve = PageReserve(1 << 20)   # ... work of one core ...
+    ...     reserve.release()                # ... then the arrays that reuse its pages
+    """
+
+    def __init__(self, nbytes):
+        self._block = self._thread = None
+        if nbytes > 0 and _kept["depth"] > 0 and _glibc() is not None:
+            import numpy as np   # (this module is read at start-up without numpy)
+
+            self._block = np.empty(int(nbytes), np.uint8)
+            self._thread = threading.Thread(target=self._touch, name="diskpack-reserve", daemon=True)
+            self._thread.start()
+
+    def _touch(self):
+        self._block[::mmap.PAGESIZE] = 0   # numpy lets the other threads run meanwhile
+
+    def release(self):
+        """Wait for the touching thread and give the memory to the heap."""
+        if self._thread is not None:
+            self._thread.join()
+        self._block = self._thread = None
 
 
 def _gib(b):

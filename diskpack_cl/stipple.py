@@ -90,7 +90,7 @@ from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_bl
 from .schedule import StippleOptions, StipplePlan
 from .engine import make_engine
 from .image import to_gray
-from .memory import freed_memory_kept
+from .memory import PageReserve, freed_memory_kept
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
            "equal_ink", "off_support", "reseat_dead"]
@@ -551,6 +551,10 @@ def _toned(gray, paper_tone):
     return gray, darkness
 
 
+#: Bytes a pixel of the picture takes in the stage's fields (float32 radius field, blend
+#: weight, ink and density), reserved while the run starts (:class:`~diskpack_cl.memory.PageReserve`).
+STAGE_BYTES_PER_PIXEL = 16
+
 #: Rows of a large picture whose fields :func:`_make_stage` makes at once: its blurs and
 #: dilation then hold a band's temporaries, not the picture's (the peak memory of a run).
 FIELD_BAND_ROWS = 512
@@ -724,6 +728,8 @@ def _stipple(image, n, options, start, callback, engine_args):
         # the caller's gray array itself where it is one (nothing here changes it): no copy
         gray = to_gray(image, invert=options.invert, copy=False)
         H, W = gray.shape
+        # the pages of the stage's fields, touched on another core while this one starts
+        reserve = PageReserve(STAGE_BYTES_PER_PIXEL * W * H)
         gray, darkness = _toned(gray, options.paper_tone)
         ink = float(darkness.sum())
         del darkness   # a whole image; the stage makes what it needs
@@ -731,6 +737,7 @@ def _stipple(image, n, options, start, callback, engine_args):
     with watch("start"):
         x = _start_points(gray, opt, start)
     with watch("setup"):
+        reserve.release()
         engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
                              **engine_args)
         stage = _make_stage(gray, opt, engine)

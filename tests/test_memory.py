@@ -41,3 +41,23 @@ def test_outside_the_block_freed_memory_goes_back():
     before = _rss()
     _touch_and_free(256 * MIB)
     assert _rss() - before < 64 * MIB
+
+
+def test_a_page_reserve_is_touched_and_its_pages_reused():
+    with memory.freed_memory_kept():
+        before = _rss()
+        reserve = memory.PageReserve(256 * MIB)
+        reserve.release()
+        touched = _rss()
+        a = np.ones(256 * MIB // 8)   # the reserve's pages
+        reused = _rss()
+        del a
+    assert touched - before > 200 * MIB
+    assert reused - touched < 32 * MIB
+
+
+def test_a_page_reserve_outside_the_block_reserves_nothing():
+    before = _rss()
+    reserve = memory.PageReserve(256 * MIB)
+    reserve.release()
+    assert _rss() - before < 32 * MIB
