@@ -59,6 +59,7 @@ from .options import check_fields, option
 from .radii import certified_k, detail_scale
 from .schedule import StippleOptions
 from .dithering import error_diffusion
+from .memory import freed_memory_kept
 from .stipple import StippleResult, field_margin, StippleState, _make_stage, _run, dot_radii
 
 __all__ = ["TileOptions", "tile_grid", "stipple_tiled"]
@@ -249,6 +250,11 @@ class Part:
 
 def run_part(part):
     """Stipple one :class:`Part`; a dict of the moved dots: ``points``, ``base_radii``, ``ink``, ``k``."""
+    with freed_memory_kept():   # as a whole picture's run (in a function of its own: its
+        return _run_part(part)  # arrays are freed before the block gives memory back)
+
+
+def _run_part(part):
     t0 = time.perf_counter()
     x0, y0, x1, y1 = part.rect
     gray, window = _window(part.raster, part.rect, part.margin)
