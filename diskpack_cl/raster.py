@@ -30,7 +30,7 @@ __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 INT_MAX = np.iinfo(np.int32).max
 TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/power_diagram.cl)
 CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/cell_sums.cl
-TILE_W, TILE_H = 8, 16   # grid cells per work item of power_labels_tile (TW, TH there)
+TILE_CELLS = 128   # grid cells per work item of the CPU layout (TW x TH in power_gather.h)
 # 8 x 8 work-groups per enqueue of power_labels (about 4 M grid cells): each enqueue is
 # waited for on its own (wait_for's helper thread); bands of 0.26 M grid cells made an
 # 8192 x 8192 raster 256 waits a pass (1M sites, 2 loaded cores: 2.0-2.3 s a labels and
@@ -165,6 +165,19 @@ class RasterResult:
         return np.unique(p, axis=0)
 
 
+def tile_lanes(device):
+    """Vector lanes of the CPU tile layout for `device`: 16 where PoCL compiles for AVX-512
+    (its device name carries the LLVM target, e.g. ``pthread-skylake-avx512-...``), else 8.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> tile_lanes(SimpleNamespace(name="pthread-skylake-avx512-AMD EPYC")), tile_lanes(SimpleNamespace(name="cpu-haswell"))
+    (16, 8)
+    """
+    return 16 if "avx512" in device.name.lower() else 8
+
+
 class PowerRaster:
     """OpenCL processing object for the discrete power diagram of one grid.
 
@@ -188,6 +201,12 @@ class PowerRaster:
         the raster is labelled in bands of tile rows, each waited for in a
         way that lets Ctrl-C through, so that stage timings are exact and an
         interrupt is answered between bands, even on huge rasters.
+    layout : {None, "tile", "item"}
+        Labels-only layout: vector tiles (CPUs, the default there) or one
+        work item per grid cell (elsewhere).
+    lanes : {None, 8, 16}
+        Vector lanes of the tile layout (:func:`tile_lanes` of the device
+        when None); the labels are the same either way.
 
     Notes
     -----
@@ -209,7 +228,7 @@ class PowerRaster:
     """
 
     def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None,
-                 profile=False, timings=None):
+                 lanes=None, profile=False, timings=None):
         self.domain = domain
         self.timings = Stopwatch() if timings is None else timings
         self.shape = (int(shape[0]), int(shape[1]))
@@ -224,6 +243,9 @@ class PowerRaster:
         if self.max_groups < 1:
             raise ValueError(f"max_groups must be at least 1, got {max_groups}")
         periodic = int(domain.periodic)
+        self.lanes = tile_lanes(self.ctx.devices[0]) if lanes is None else int(lanes)
+        if self.lanes not in (8, 16):
+            raise ValueError(f"lanes must be 8 or 16, got {lanes!r}")
         prg, self.tile = self._labels_program(periodic)
         self._k_labels, self._k_tile = prg["power_labels"], prg["power_labels_tile"]
         # labels-only layout: vector tiles on CPUs, one work item per grid cell elsewhere
@@ -237,7 +259,8 @@ class PowerRaster:
         self._k_sums = self._k_fused = None
         if "cl_khr_int64_base_atomics" in dev.extensions:
             fp64 = int("cl_khr_fp64" in dev.extensions)
-            sums = build_program(self.ctx, "cell_sums", {"PERIODIC": periodic, "USE_FP64": fp64})
+            sums = build_program(self.ctx, "cell_sums", {"PERIODIC": periodic, "USE_FP64": fp64,
+                                                  "TW": self.lanes})
             self._k_sums = sums["cell_sums"]
             # labels and sums in one pass where labels come in tiles
             self._k_fused = sums["power_sums_tile"] if layout == "tile" else None
@@ -266,7 +289,8 @@ class PowerRaster:
         tile = TILE
         while True:
             if tile * tile <= dev.max_work_group_size and tile <= min(dev.max_work_item_sizes[:2]):
-                prg = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": tile})
+                prg = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": tile,
+                                                                  "TW": self.lanes})
                 if tile == 1 or tile * tile <= _device.kernel_group_limit(prg["power_labels"], dev):
                     return prg, tile
             tile //= 2
@@ -344,8 +368,9 @@ class PowerRaster:
         nbx, nby, bw, bh = grid
         ny, nx = self.shape
         dom = self.domain
-        tx, ty = -(-nx // TILE_W), -(-ny // TILE_H)
-        band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_W * TILE_H))
+        tw, th = self.lanes, TILE_CELLS // self.lanes
+        tx, ty = -(-nx // tw), -(-ny // th)
+        band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_CELLS))
         for y0 in range(0, ty, band):
             self._wait(kernel(
                 self.queue, (tx, min(band, ty - y0)), (1, 1), *bufs,

@@ -34,8 +34,8 @@ def _raster(ctx, dom, shape, n, heavy):
 
     pts, w = _sites(dom, n, 1, heavy)
     out = {}
-    for layout in ("item", "tile"):
-        pr = PowerRaster(dom, shape, device=ctx, layout=layout, max_groups=2)
+    for layout, lanes in (("item", None), ("tile", 8), ("tile16", 16)):
+        pr = PowerRaster(dom, shape, device=ctx, layout=layout[:4], lanes=lanes, max_groups=2)
         est = pr.compute(pts, w, neighbors=True)
         out.update({f"{layout}_label": est.labels.copy(), f"{layout}_dist": est.dist.copy(),
                     f"{layout}_nbr": est.neighbor.copy(), f"{layout}_radii": est.radii})
@@ -43,7 +43,8 @@ def _raster(ctx, dom, shape, n, heavy):
         c, mass = est.centroids(dens)
         out.update({f"{layout}_centroids": c, f"{layout}_mass": mass})
         out[f"{layout}_labels_only"] = pr.compute(pts, w, distance=False).labels.copy()
-    out["fused_centroids"], out["fused_mass"] = pr.centroids(pts, w, dens)   # the tile layout's
+        if layout != "item":   # the tile layout's one-pass labels and sums
+            out[f"{layout}_fused_centroids"], out[f"{layout}_fused_mass"] = pr.centroids(pts, w, dens)
     return out
 
 

@@ -324,22 +324,26 @@ def test_labels_only_layouts_agree_with_the_reference(ctx, case):
 
     dom, shape, pts, w = case
     labs = {}
-    for layout in ("tile", "item"):
-        pr = PowerRaster(dom, shape, device=ctx, layout=layout)
-        labs[layout] = pr.compute(pts, w, distance=False).labels.copy()
-    assert np.array_equal(labs["tile"], labs["item"])
+    for layout, lanes in (("tile", 8), ("tile", 16), ("item", None)):
+        pr = PowerRaster(dom, shape, device=ctx, layout=layout, lanes=lanes)
+        labs[layout, lanes] = pr.compute(pts, w, distance=False).labels.copy()
+    assert np.array_equal(labs["tile", 8], labs["item", None])
+    assert np.array_equal(labs["tile", 16], labs["item", None])
+    labs["tile"] = labs["tile", 8]
     rl, gap = ref.power_labels_ref(pts, w, dom, shape)
     s = _scale(dom)
     assert not np.any((labs["tile"] != rl) & (gap > TIE * s * s))
 
 
+@pytest.mark.parametrize("lanes", [8, 16])
 @pytest.mark.parametrize("shape", [(1, 203), (203, 1), (2, 999), (17, 9)])
-def test_tile_layout_on_partial_tiles_and_thin_rasters(ctx, shape):
+def test_tile_layout_on_partial_tiles_and_thin_rasters(ctx, shape, lanes):
     from diskpack_cl.raster import PowerRaster
 
     dom = Domain.rect(float(shape[1]), float(shape[0]))
     pts = np.random.default_rng(3).random((40, 2)) * (dom.width, dom.height)
-    lab = PowerRaster(dom, shape, device=ctx, layout="tile").compute(pts, distance=False).labels
+    lab = PowerRaster(dom, shape, device=ctx, layout="tile", lanes=lanes).compute(
+        pts, distance=False).labels
     rl, gap = ref.power_labels_ref(pts, None, dom, shape)
     assert not np.any((lab != rl) & (gap > TIE * _scale(dom) ** 2))
 
@@ -349,11 +353,13 @@ def test_bad_layout(ctx):
 
     with pytest.raises(ValueError, match="layout must be"):
         PowerRaster(Domain.torus(), (8, 8), device=ctx, layout="gpu")
+    with pytest.raises(ValueError, match="lanes must be 8 or 16"):
+        PowerRaster(Domain.torus(), (8, 8), device=ctx, lanes=4)
 
 
-@pytest.mark.parametrize("fused", [False, True])
+@pytest.mark.parametrize("fused, lanes", [(False, None), (True, 8), (True, 16)])
 @pytest.mark.parametrize("periodic", [True, False])
-def test_device_centroids_match_bincount(ctx, periodic, fused):
+def test_device_centroids_match_bincount(ctx, periodic, fused, lanes):
     """The on-device reductions (cell_sums.cl: cell_sums, and power_sums_tile,
     which labels too) against numpy.bincount on the same labels."""
     from diskpack_cl.labels import cell_centroids
@@ -366,7 +372,7 @@ def test_device_centroids_match_bincount(ctx, periodic, fused):
     w = (rng.random(2000) * 0.01 * dom.width) ** 2
     dens = rng.random(shape) ** 3
     # the fused kernel comes with the CPU (tile) layout, which any device can run
-    pr = PowerRaster(dom, shape, device=ctx, layout="tile" if fused else None)
+    pr = PowerRaster(dom, shape, device=ctx, layout="tile" if fused else None, lanes=lanes)
     if pr._k_sums is None:
         pytest.skip("device without 64-bit integer atomics: centroids on the host")
     est = pr.compute(pts, w, distance=False)
@@ -519,9 +525,9 @@ def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit,
         np.testing.assert_array_equal(a, b)   # (NaN centroids of empty cells compare equal)
 
 
-@pytest.mark.parametrize("layout", [None, "tile", "item"])
+@pytest.mark.parametrize("layout, lanes", [(None, None), ("tile", 8), ("tile", 16), ("item", None)])
 @pytest.mark.parametrize("order", [(0, 1), (1, 0)])
-def test_power_ties_go_to_the_lowest_index(ctx, order, layout):
+def test_power_ties_go_to_the_lowest_index(ctx, order, layout, lanes):
     """Two sites mirrored about the middle column of a 5 x 5 grid: every cell of that
     column is an exact tie, which the kernels (and the reference) give to site 0."""
     from diskpack_cl.raster import PowerRaster
@@ -531,7 +537,7 @@ def test_power_ties_go_to_the_lowest_index(ctx, order, layout):
     if layout is None:      # labels with the distance map
         lab = _raster(ctx, dom, (5, 5), pts)[2]
     else:                   # labels only
-        lab = PowerRaster(dom, (5, 5), device=ctx, layout=layout).compute(
+        lab = PowerRaster(dom, (5, 5), device=ctx, layout=layout, lanes=lanes).compute(
             pts, distance=False).labels.copy()
     rl, gap = ref.power_labels_ref(pts, None, dom, (5, 5))
     assert np.all(gap[:, 2] == 0)                 # the middle column ties exactly

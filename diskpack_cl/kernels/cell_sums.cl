@@ -129,13 +129,13 @@ void power_sums_tile(
     __local real sum[3 * TW * TH];   /* and their sums */
     const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
     if (gx0 >= nx || gy0 >= ny) return;
-    int8 best_id[TH];
+    intT best_id[TH];
     tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
     int k = 0, cur = -1;             /* owners in the table; the run's owner (-1: none yet) */
     real m = 0, mx = 0, my = 0, sx = 0, sy = 0;
     for (int r = 0; r < TH && gy0 + r < ny; ++r) {
         int ids[TW];
-        vstore8(best_id[r], 0, ids);
+        vstoreT(best_id[r], 0, ids);
         const size_t base = (size_t)(gy0 + r) * nx;
         const real py = gy0 + r + (real)0.5;
         for (int c = 0; c < TW && gx0 + c < nx; ++c) {

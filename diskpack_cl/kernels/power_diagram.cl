@@ -193,16 +193,16 @@ void power_labels_tile(
     __local int cid[CAP];
     const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
     if (gx0 >= nx || gy0 >= ny) return;
-    int8 best_id[TH];
+    intT best_id[TH];
     tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
     const int cols = imin(TW, nx - gx0);
     for (int r = 0; r < TH && gy0 + r < ny; ++r) {
         __global int *row = label + (size_t)(gy0 + r) * nx + gx0;
         if (cols == TW) {
-            vstore8(best_id[r], 0, row);
+            vstoreT(best_id[r], 0, row);
         } else {
             int tmp[TW];
-            vstore8(best_id[r], 0, tmp);
+            vstoreT(best_id[r], 0, tmp);
             for (int k = 0; k < cols; ++k) row[k] = tmp[k];
         }
     }

@@ -3,7 +3,8 @@
  * tile bound U, and the CPU layout's owner scan of a TW x TH tile.  See
  * power_diagram.cl for the bounds.
  *
- * Build-time switches: PERIODIC (common.h); CAP, the local candidate list
+ * Build-time switches: PERIODIC (common.h); TW, the CPU tile's lanes (8 or
+ * 16, see tile_owners); CAP, the local candidate list
  * (default 256; longer lists are streamed in chunks).
  */
 #ifndef DISKPACK_POWER_GATHER_H
@@ -201,23 +202,42 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
 #define LABEL_PASS site, weight, site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax, nx, ny
 
 /* The CPU layout: one work item per TW x TH tile of grid cells, no
- * barriers, and the candidate scan written with explicit float8 vectors (a
- * row of the tile at a time), which PoCL turns into packed SIMD
+ * barriers, and the candidate scan written with explicit TW-wide vectors
+ * (a row of the tile at a time), which PoCL turns into packed SIMD
  * instructions where it would not vectorize the scalar scan of
  * power_labels.  The candidates and the arithmetic are those of
  * power_labels' pass 1, so both give the same labels.  (GPUs want the
  * opposite layout: one work item per grid cell, power_labels.) */
-/* (8 lanes: AVX2 registers; 16-wide vectors would change the call ABI of
- * the builtins on CPUs without AVX-512) */
+/* TW lanes (build-time: 8 fills AVX2 registers; 16 fills AVX-512 ones and
+ * would change the call ABI of the builtins on CPUs without it), TH rows:
+ * 128 grid cells a tile either way. */
+#ifndef TW
 #define TW 8
+#endif
+#if TW == 16
+#define TH 8
+#define intT int16
+#define floatT float16
+#define vstoreT vstore16
+#define convert_floatT convert_float16
+#define LANES ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+#elif TW == 8
 #define TH 16
+#define intT int8
+#define floatT float8
+#define vstoreT vstore8
+#define convert_floatT convert_float8
+#define LANES ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
+#else
+#error "TW must be 8 or 16"
+#endif
 
 /* Owners of the tile whose first grid cell is (gx0, gy0): best_id[r] holds
  * row r's, caller's indices (lanes past the raster repeat its last column).
  * A grid cell of the raster left without one sets ST_NO_OWNER. */
 inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
                         __local float2 *cpos, __local float *cw, __local int *cid,
-                        __global int *status, int8 *best_id)
+                        __global int *status, intT *best_id)
 {
     const float hx = W / nx, hy = H / ny;
     const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
@@ -225,15 +245,14 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
     const float pad = 1e-4f * (hx * hx + hy * hy);
     const float U = tile_bound(x0, y0, x1, y1, pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
 
-    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
     /* columns past the raster shadow its last column */
-    const float8 px = (convert_float8(min(gx0 + lane, (int8)(nx - 1))) + 0.5f) * hx;
+    const floatT px = (convert_floatT(min(gx0 + LANES, (intT)(nx - 1))) + 0.5f) * hx;
     float py[TH];
-    float8 best[TH];
+    floatT best[TH];
     for (int r = 0; r < TH; ++r) {
         py[r] = (imin(gy0 + r, ny - 1) + 0.5f) * hy;
-        best[r] = (float8)(INFINITY);
-        best_id[r] = (int8)(INT_MAX);
+        best[r] = (floatT)(INFINITY);
+        best_id[r] = (intT)(INT_MAX);
     }
     for (int chunk = 0; ; ++chunk) {
         const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
@@ -243,13 +262,13 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
             const float wc = cw[c];
-            const int8 id = (int8)(cid[c]);
-            const float8 dx = px - s.x;
-            const float8 dx2 = dx * dx;
+            const intT id = (intT)(cid[c]);
+            const floatT dx = px - s.x;
+            const floatT dx2 = dx * dx;
             for (int r = 0; r < TH; ++r) {
                 const float dy = py[r] - s.y;
-                const float8 pw = (dx2 + dy * dy) - wc;
-                const int8 take = (pw < best[r]) | ((pw == best[r]) & (id < best_id[r]));
+                const floatT pw = (dx2 + dy * dy) - wc;
+                const intT take = (pw < best[r]) | ((pw == best[r]) & (id < best_id[r]));
                 best[r] = take ? pw : best[r];
                 best_id[r] = take ? id : best_id[r];
             }
@@ -257,7 +276,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
         if (total <= (chunk + 1) * CAP) break;
     }
     for (int r = 0; r < TH && gy0 + r < ny; ++r)
-        if (any(best_id[r] == (int8)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
+        if (any(best_id[r] == (intT)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
 }
 
 #endif
