@@ -80,9 +80,9 @@ def _glibc():
     return _kept["libc"] or None
 
 
-def _set_thresholds(libc, mmap, trim):
-    libc.mallopt(_M_MMAP_THRESHOLD, ctypes.c_int(mmap))
-    libc.mallopt(_M_TRIM_THRESHOLD, ctypes.c_int(trim))
+def _set_thresholds(libc, mmap_bytes, trim_bytes):
+    libc.mallopt(_M_MMAP_THRESHOLD, ctypes.c_int(mmap_bytes))
+    libc.mallopt(_M_TRIM_THRESHOLD, ctypes.c_int(trim_bytes))
 
 
 @contextmanager

@@ -621,7 +621,7 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAN
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell)
     # the fields read at the dots alone are kept in float32 (half the memory: 7 digits are
-    # more than a radius or a blend needs); the density, summed over cells, in float64
+    # more than a radius or a blend needs); so is the density (_centroid_density)
     rfield, weight = _sampled(rfield), _sampled(weight)
     darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
     ink = _sampled(_blurred(darkness, INK_SIGMA)) if opt.support > 0 else None   # off_support's
