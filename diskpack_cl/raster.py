@@ -30,7 +30,7 @@ __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 INT_MAX = np.iinfo(np.int32).max
 TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/power_diagram.cl)
 CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/cell_sums.cl
-TILE_CELLS = 128   # grid cells per work item of the CPU layout (TW x TH in power_gather.h)
+TILE_ROWS = 16   # grid rows of a work item's tile in the CPU layout (TH in power_gather.h)
 # 8 x 8 work-groups per enqueue of power_labels (about 4 M grid cells): each enqueue is
 # waited for on its own (wait_for's helper thread); bands of 0.26 M grid cells made an
 # 8192 x 8192 raster 256 waits a pass (1M sites, 2 loaded cores: 2.0-2.3 s a labels and
@@ -368,9 +368,9 @@ class PowerRaster:
         nbx, nby, bw, bh = grid
         ny, nx = self.shape
         dom = self.domain
-        tw, th = self.lanes, TILE_CELLS // self.lanes
+        tw, th = self.lanes, TILE_ROWS
         tx, ty = -(-nx // tw), -(-ny // th)
-        band = max(1, (self.max_groups * TILE * TILE) // (tx * TILE_CELLS))
+        band = max(1, (self.max_groups * TILE * TILE) // (tx * tw * th))
         for y0 in range(0, ty, band):
             self._wait(kernel(
                 self.queue, (tx, min(band, ty - y0)), (1, 1), *bufs,

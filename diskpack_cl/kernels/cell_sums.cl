@@ -12,13 +12,14 @@
  * for sites the host refuses) adds nothing and reads no site.
  *
  * power_sums_tile labels and sums in one pass, in the CPU layout of
- * power_labels_tile: each work item sums its tile's grid cells per owner in
- * local memory and adds each owner's sums once, so no label map is written
- * or read, and a tile costs a few atomics instead of three per run of each
- * row.  Its totals are cell_sums' of power_labels_tile's labels, but for
- * where the fixed point rounds (per tile and owner, not per run).
+ * power_labels_tile: each work item takes its tile's owners one by one and
+ * sums each owner's grid cells with TW-wide vectors masked by the label
+ * (lanes, then a fixed reduction order), so no label map is written or read
+ * and a tile costs one atomic add per owner and total.  Its totals are
+ * cell_sums' of power_labels_tile's labels, but for where the fixed point
+ * rounds (per tile and owner, not per run).
  *
- * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1), CAP
+ * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1), TW and CAP
  * (power_gather.h).
  */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
@@ -27,8 +28,14 @@
 #if USE_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real;
+typedef double8 real8;
+typedef double4 real4;
+typedef double2 real2;
 #else
 typedef float real;
+typedef float8 real8;
+typedef float4 real4;
+typedef float2 real2;
 #endif
 
 #define SEG 32
@@ -94,25 +101,59 @@ __kernel void cell_sums(
     add_run(acc, cur, nsite, m, mx, my);
 }
 
-/* Add a run of owner l's sums to its slot in the tile's table of `k` owners
- * (a new slot for a new owner); returns the owners now in the table. */
-inline int add_to_slot(__local int *own, __local real *sum, int k, int l, real m, real mx, real my)
+/* Vectors of `real` as wide as the tile's rows, and their reductions in a
+ * fixed order (so the sums do not depend on the compiler's choices). */
+#if USE_FP64 && TW == 16
+#define realT double16
+#define convert_realT convert_double16
+#elif USE_FP64
+#define realT double8
+#define convert_realT convert_double8
+#elif TW == 16
+#define realT float16
+#define convert_realT convert_float16
+#else
+#define realT float8
+#define convert_realT convert_float8
+#endif
+
+inline real hsum(realT v)
 {
-    int t = 0;
-    while (t < k && own[t] != l) ++t;
-    if (t == k) {
-        own[k++] = l;
-        sum[3 * t] = sum[3 * t + 1] = sum[3 * t + 2] = 0;
-    }
-    sum[3 * t] += m;
-    sum[3 * t + 1] += mx;
-    sum[3 * t + 2] += my;
-    return k;
+#if TW == 16
+    const real8 a = v.lo + v.hi;
+#else
+    const real8 a = v;
+#endif
+    const real4 b = a.lo + a.hi;
+    const real2 c = b.lo + b.hi;
+    return c.lo + c.hi;
 }
 
-/* Labels (as power_labels_tile) and density sums (as cell_sums) of one tile:
- * runs of equal owners are summed in registers, as in cell_sums, then per
- * owner in local memory, and each owner's totals get one atomic add each. */
+inline int hmin(intT v)
+{
+#if TW == 16
+    const int8 a = min(v.lo, v.hi);
+#else
+    const int8 a = v;
+#endif
+    const int4 b = min(a.lo, a.hi);
+    const int2 c = min(b.lo, b.hi);
+    return min(c.lo, c.hi);
+}
+
+/* Row `row` of the density from column gx0, TW wide; zero past the raster. */
+inline floatT density_row(__global const float *density, size_t row, int gx0, int nx)
+{
+    if (gx0 + TW <= nx) return vloadT(0, density + row * nx + gx0);
+    float part[TW];
+    for (int c = 0; c < TW; ++c) part[c] = gx0 + c < nx ? density[row * nx + gx0 + c] : 0.0f;
+    return vloadT(0, part);
+}
+
+/* Labels (as power_labels_tile) and density sums (as cell_sums) of one tile.
+ * The tile's owners are taken in increasing index; each owner's sums are
+ * formed lane by lane over the tile's rows, masked by its label, then
+ * reduced across the lanes, and added with one atomic add each. */
 __kernel __attribute__((reqd_work_group_size(1, 1, 1)))
 void power_sums_tile(
     LABEL_ARGS,
@@ -125,40 +166,38 @@ void power_sums_tile(
     __local float2 cpos[CAP];
     __local float cw[CAP];
     __local int cid[CAP];
-    __local int own[TW * TH];        /* the tile's owners so far */
-    __local real sum[3 * TW * TH];   /* and their sums */
     const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
     if (gx0 >= nx || gy0 >= ny) return;
     intT best_id[TH];
     tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
-    int k = 0, cur = -1;             /* owners in the table; the run's owner (-1: none yet) */
-    real m = 0, mx = 0, my = 0, sx = 0, sy = 0;
-    for (int r = 0; r < TH && gy0 + r < ny; ++r) {
-        int ids[TW];
-        vstoreT(best_id[r], 0, ids);
-        const size_t base = (size_t)(gy0 + r) * nx;
-        const real py = gy0 + r + (real)0.5;
-        for (int c = 0; c < TW && gx0 + c < nx; ++c) {
-            const int l = ids[c];
-            if (l != cur) {
-                if (owned(cur, nsite)) k = add_to_slot(own, sum, k, cur, m, mx, my);
-                cur = l;
-                m = mx = my = 0;
-                sx = owned(l, nsite) ? gsite[2 * l] : 0;
-                sy = owned(l, nsite) ? gsite[2 * l + 1] : 0;
-            }
-            const real d = density[base + gx0 + c];
-            real dx = (gx0 + c + (real)0.5) - sx, dy = py - sy;
+    const int rows = imin(TH, ny - gy0);
+    /* lanes past the raster repeat its last column's owner and read no
+       density (density_row), so they add nothing */
+    int l = INT_MAX;
+    for (int r = 0; r < rows; ++r) l = imin(l, hmin(best_id[r]));
+    const realT cx = convert_realT(gx0 + LANES) + (real)0.5;
+    while (l != INT_MAX) {
+        const int ok = owned(l, nsite);
+        const real sx = ok ? gsite[2 * l] : 0, sy = ok ? gsite[2 * l + 1] : 0;
+        realT dx = cx - sx;
 #if PERIODIC
-            dx -= nx * RINT(dx / nx);
-            dy -= ny * RINT(dy / ny);
+        dx -= nx * rint(dx / nx);
 #endif
-            m += d;
-            mx += d * dx;
-            my += d * dy;
+        realT m = 0, mx = 0, my = 0;
+        intT after = (intT)(INT_MAX);
+        for (int r = 0; r < rows; ++r) {
+            const floatT d = density_row(density, gy0 + r, gx0, nx);
+            const realT dd = convert_realT(select((floatT)(0.0f), d, best_id[r] == l));
+            real dy = gy0 + r + (real)0.5 - sy;
+#if PERIODIC
+            dy -= ny * rint(dy / ny);
+#endif
+            m += dd;
+            mx += dd * dx;
+            my += dd * dy;
+            after = min(after, select((intT)(INT_MAX), best_id[r], best_id[r] > l));
         }
+        add_run(acc, l, nsite, hsum(m), hsum(mx), hsum(my));
+        l = hmin(after);
     }
-    if (owned(cur, nsite)) k = add_to_slot(own, sum, k, cur, m, mx, my);
-    for (int t = 0; t < k; ++t)
-        add_run(acc, own[t], nsite, sum[3 * t], sum[3 * t + 1], sum[3 * t + 2]);
 }

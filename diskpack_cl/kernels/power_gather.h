@@ -209,23 +209,25 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
  * power_labels' pass 1, so both give the same labels.  (GPUs want the
  * opposite layout: one work item per grid cell, power_labels.) */
 /* TW lanes (build-time: 8 fills AVX2 registers; 16 fills AVX-512 ones and
- * would change the call ABI of the builtins on CPUs without it), TH rows:
- * 128 grid cells a tile either way. */
+ * would change the call ABI of the builtins on CPUs without it), TH = 16
+ * rows: the bucket walk of a tile is paid once for 128 or 256 grid cells
+ * (tiles of 16 x 32 rows spill registers and are slower). */
 #ifndef TW
 #define TW 8
 #endif
+#define TH 16
 #if TW == 16
-#define TH 8
 #define intT int16
 #define floatT float16
 #define vstoreT vstore16
+#define vloadT vload16
 #define convert_floatT convert_float16
 #define LANES ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
 #elif TW == 8
-#define TH 16
 #define intT int8
 #define floatT float8
 #define vstoreT vstore8
+#define vloadT vload8
 #define convert_floatT convert_float8
 #define LANES ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
 #else
