@@ -367,8 +367,7 @@ def reseat_dead(points, mass, disk, ink, size):
     dead = np.flatnonzero(~live & (mass >= 0))
     if not dead.size:
         return points, ink, 0
-    live = np.flatnonzero(live)
-    heavy = live[np.argsort(-mass[live], kind="stable")][np.arange(dead.size) % live.size]
+    heavy = _heaviest(mass, np.flatnonzero(live), dead.size)
     angle = _GOLDEN_ANGLE * np.arange(dead.size)
     step = 0.5 * disk[heavy, None] * np.column_stack([np.cos(angle), np.sin(angle)])
     points = points.copy()
@@ -377,6 +376,17 @@ def reseat_dead(points, mass, disk, ink, size):
         ink = ink.copy()
         ink[dead] = ink[heavy]
     return points, ink, int(dead.size)
+
+
+def _heaviest(mass, live, count):
+    """The `count` dots of `live` with the most ink, heaviest first (ties in index
+    order), repeated in turn when `count` exceeds them: the prefix of a stable sort
+    of all of them, sorting only those at least as heavy as the count-th."""
+    if count < live.size:
+        kth = np.partition(mass[live], live.size - count)[live.size - count]
+        live = live[mass[live] >= kth]
+    order = live[np.argsort(-mass[live], kind="stable")]
+    return order[np.arange(count) % order.size]
 
 
 def _blend_weights(stage, x, mic_centers, cen, blend):
