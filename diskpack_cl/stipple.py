@@ -84,7 +84,7 @@ import numpy as np
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
-from .dithering import error_diffusion
+from .dithering import _least, error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
@@ -367,7 +367,9 @@ def reseat_dead(points, mass, disk, ink, size):
     dead = np.flatnonzero(~live & (mass >= 0))
     if not dead.size:
         return points, ink, 0
-    heavy = _heaviest(mass, np.flatnonzero(live), dead.size)
+    live = np.flatnonzero(live)
+    order = live[_least(-mass[live], dead.size)]   # heaviest first, ties in index order
+    heavy = order[np.arange(dead.size) % order.size]
     angle = _GOLDEN_ANGLE * np.arange(dead.size)
     step = 0.5 * disk[heavy, None] * np.column_stack([np.cos(angle), np.sin(angle)])
     points = points.copy()
@@ -376,17 +378,6 @@ def reseat_dead(points, mass, disk, ink, size):
         ink = ink.copy()
         ink[dead] = ink[heavy]
     return points, ink, int(dead.size)
-
-
-def _heaviest(mass, live, count):
-    """The `count` dots of `live` with the most ink, heaviest first (ties in index
-    order), repeated in turn when `count` exceeds them: the prefix of a stable sort
-    of all of them, sorting only those at least as heavy as the count-th."""
-    if count < live.size:
-        kth = np.partition(mass[live], live.size - count)[live.size - count]
-        live = live[mass[live] >= kth]
-    order = live[np.argsort(-mass[live], kind="stable")]
-    return order[np.arange(count) % order.size]
 
 
 def _blend_weights(stage, x, mic_centers, cen, blend):

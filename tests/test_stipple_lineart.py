@@ -2,11 +2,12 @@
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl.picture_measures import stray_dots
-from diskpack_cl.stipple import _heaviest, reseat_dead, stipple
+from diskpack_cl.dithering import _least
+from diskpack_cl.stipple import reseat_dead, stipple
 
 
 def sketch(width=192, height=144):
@@ -46,16 +47,15 @@ def test_reseat_dead_puts_inkless_dots_beside_the_heaviest():
 
 
 @settings(max_examples=200, deadline=None)
-@given(mass=st.lists(st.integers(0, 4), min_size=1, max_size=40), data=st.data())
-def test_heaviest_is_the_prefix_of_a_stable_sort(mass, data):
-    """The heaviest live dots, found by partition then a sort of the few, are
-    the full stable sort's first ones, ties (small integer masses) included."""
-    mass = np.asarray(mass, float)
-    live = np.flatnonzero(data.draw(st.lists(st.booleans(), min_size=mass.size, max_size=mass.size)))
-    assume(live.size)
-    count = data.draw(st.integers(1, 3 * mass.size))
-    full = live[np.argsort(-mass[live], kind="stable")]
-    np.testing.assert_array_equal(_heaviest(mass, live, count), full[np.arange(count) % live.size])
+@given(values=st.lists(st.integers(0, 4), min_size=1, max_size=40), data=st.data())
+def test_least_is_the_prefix_of_a_stable_sort(values, data):
+    """The k least values (reseat_dead's heaviest cells, the start's count fix), found
+    by a partition and a sort of the few, are a full stable sort's first k, ties
+    (small integers) included."""
+    values = np.asarray(values, float)
+    k = data.draw(st.integers(1, values.size + 3))
+    full = np.argsort(values, kind="stable")
+    np.testing.assert_array_equal(_least(values, k), full[:k])
 
 
 @pytest.fixture(scope="module")
