@@ -12,6 +12,9 @@ from ._checks import check_count
 
 __all__ = ["error_diffusion"]
 
+#: Points whose pixels :func:`_pixels_in_blocks` draws at a time.
+PICK_CHUNK = 1 << 16
+
 
 def _fs_wavefront(v):
     """Multi-level Floyd-Steinberg error diffusion of ``v >= 0``.
@@ -90,38 +93,52 @@ def _fix_count(counts, resid, n):
     return counts
 
 
-def _block_sums(blocks, rows=64):
+def _block_sums(blocks, dark, rows=64):
     """``(Hc, Wc)`` sums of the ``(Hc, b, Wc, b)`` blocks of a density, each over its
     ``b * b`` pixels in row-major order, made `rows` block rows at a time (a copy of
     the whole density with each block's pixels contiguous would be another image).
+    With `dark`, the blocks hold gray and the density is its darkness ``1 - gray``,
+    made a band at a time too.
 
     Examples
     --------
-    >>> _block_sums(np.arange(16.0).reshape(2, 2, 2, 2)).tolist()
+    >>> _block_sums(np.arange(16.0).reshape(2, 2, 2, 2), False).tolist()
     [[10.0, 18.0], [42.0, 50.0]]
+    >>> _block_sums(np.full((1, 2, 1, 2), 0.25), True).tolist()
+    [[3.0]]
     """
     Hc, b, Wc, _ = blocks.shape
     out = np.empty((Hc, Wc))
     for r0 in range(0, Hc, rows):
-        part = blocks[r0:r0 + rows].transpose(0, 2, 1, 3)
-        out[r0:r0 + rows] = part.reshape(-1, b * b).sum(axis=1).reshape(-1, Wc)
+        part = blocks[r0:r0 + rows].transpose(0, 2, 1, 3).reshape(-1, b * b)
+        if dark:
+            part = 1.0 - part
+        out[r0:r0 + rows] = part.sum(axis=1).reshape(-1, Wc)
     return out
 
 
-def _pixels_in_blocks(blk, blocks, b, shape, rng):
+def _pixels_in_blocks(blk, blocks, dark, shape, rng):
     """(row, col) of a pixel for each point of block ``blk``, drawn by the block's density.
 
     ``blocks`` is the ``(Hc, b, Wc, b)`` view of the density padded to whole
-    blocks.  A block without density (a point added by the residual fix) or
-    a draw past the image picks a pixel of its block uniformly.
+    blocks (with `dark`, of the gray whose darkness is the density).  A
+    block without density (a point added by the residual fix) or a draw past
+    the image picks a pixel of its block uniformly.
     """
     H, W = shape
     n = len(blk)
+    b = blocks.shape[1]
     Wc = -(-W // b)
-    cum = np.cumsum(blocks[blk // Wc, :, blk % Wc, :].reshape(n, b * b), axis=1)
-    tot = cum[:, -1]
-    u = rng.random(n) * tot
-    sub = np.count_nonzero(cum <= u[:, None], axis=1)
+    u = rng.random(n)
+    tot, sub = np.empty(n), np.empty(n, np.int64)
+    for c0 in range(0, n, PICK_CHUNK):   # in chunks: a few MiB of temporaries, not n * b * b
+        sl = slice(c0, c0 + PICK_CHUNK)
+        cum = blocks[blk[sl] // Wc, :, blk[sl] % Wc, :].reshape(-1, b * b)   # a copy: index arrays
+        if dark:
+            np.subtract(1.0, cum, out=cum)
+        np.cumsum(cum, axis=1, out=cum)
+        tot[sl] = cum[:, -1]
+        sub[sl] = np.count_nonzero(cum <= (u[sl] * tot[sl])[:, None], axis=1)
     bad = (tot <= 0) | (sub >= b * b)
     sub[bad] = rng.integers(0, b * b, size=int(bad.sum()))
     brow, bcol = np.divmod(blk, Wc)
@@ -173,8 +190,8 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     (100, 2)
     """
     n = check_count(n)
-    d = _density(gray, density)
-    total = d.sum()
+    # the darkness is read from the gray a band or a block at a time: no second image
+    d, dark = (_checked_gray(gray), True) if density is None else (_density(gray, density), False)
     H, W = d.shape
     # Few points for many pixels: diffuse on b x b blocks (about 4 points per
     # block... at most), so that the error does not wander across half the
@@ -185,11 +202,11 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     if (Hc * b, Wc * b) == (H, W):
         dp = d
     else:
-        dp = np.zeros((Hc * b, Wc * b))
+        dp = np.full((Hc * b, Wc * b), 1.0 if dark else 0.0)   # no density past the image
         dp[:H, :W] = d
     blocks = dp.reshape(Hc, b, Wc, b)
-    coarse = _block_sums(blocks)
-    scale = n / total
+    coarse = _block_sums(blocks, dark)
+    scale = n / coarse.sum()
     counts, resid = _fs_wavefront(coarse * scale)
     m = int(counts.sum())
     if abs(m - n) > max(8, 0.002 * n):
@@ -199,25 +216,39 @@ def error_diffusion(gray, n, *, seed=None, density=None):
     counts = _fix_count(counts, resid, n)
     blk = np.repeat(np.arange(Hc * Wc), counts)
     rng = np.random.default_rng(seed)
-    row, col = _pixels_in_blocks(blk, blocks, b, (H, W), rng) if b > 1 else np.divmod(blk, W)
+    row, col = _pixels_in_blocks(blk, blocks, dark, (H, W), rng) if b > 1 else np.divmod(blk, W)
     return _jittered(row, col, rng.random((n, 2)))
 
 
+def _checked_gray(gray):
+    """`gray` as float64 (no copy where it is one), checked: 2-D, finite, at most 1, not all white."""
+    g = _plane(gray)
+    lo, hi = g.min(), g.max()   # NaN wins both
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi > 1.0:
+        raise ValueError("gray must be finite and at most 1 (darkness non-negative)")
+    if not lo < 1.0:
+        raise ValueError("nothing to stipple: the image is white (zero darkness everywhere)")
+    return g
+
+
 def _density(gray, density):
-    """The checked density (default: the darkness ``1 - gray``) of :func:`error_diffusion`."""
-    g = np.asarray(gray, dtype=np.float64)
-    if g.ndim != 2 or g.size == 0:
-        raise ValueError(f"gray must be a non-empty 2-D array, got shape {g.shape}")
-    # this function's own array, which the clamp below may change in place
-    d = 1.0 - g if density is None else np.array(density, dtype=np.float64)
+    """The checked `density` of :func:`error_diffusion`, a copy of its own."""
+    g = _plane(gray)
+    d = np.array(density, dtype=np.float64)
     if d.shape != g.shape:
         raise ValueError(f"density shape {d.shape} differs from the image shape {g.shape}")
     if not np.all(np.isfinite(d)) or d.min() < 0:
         raise ValueError("density must be finite and non-negative")
-    np.maximum(d, 0.0, out=d)
     if not d.sum() > 0:
         raise ValueError("nothing to stipple: the image is white (zero darkness everywhere)")
     return d
+
+
+def _plane(gray):
+    g = np.asarray(gray, dtype=np.float64)
+    if g.ndim != 2 or g.size == 0:
+        raise ValueError(f"gray must be a non-empty 2-D array, got shape {g.shape}")
+    return g
 
 
 def _jittered(row, col, jitter):

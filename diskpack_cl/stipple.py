@@ -543,13 +543,13 @@ def _centroid_density(darkness, opt):
 
 
 def _toned(gray, paper_tone):
-    """The gray image under the paper tone and its darkness (refused when white)."""
+    """The gray image under the paper tone and its ink, the summed darkness (refused when
+    white); no darkness image is made (a whole picture's fresh memory)."""
     if paper_tone > 0:
         gray = gray * (1.0 - paper_tone)
-    darkness = 1.0 - gray
-    if not darkness.max() > 1e-9:
+    if not 1.0 - gray.min() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
-    return gray, darkness
+    return gray, float(gray.size - gray.sum())
 
 
 #: Bytes a pixel of the picture takes in the stage's fields (float32 radius field, blend
@@ -731,9 +731,7 @@ def _stipple(image, n, options, start, callback, engine_args):
         H, W = gray.shape
         # the pages of the stage's fields, touched on another core while this one starts
         reserve = PageReserve(STAGE_BYTES_PER_PIXEL * W * H)
-        gray, darkness = _toned(gray, options.paper_tone)
-        ink = float(darkness.sum())
-        del darkness   # a whole image; the stage makes what it needs
+        gray, ink = _toned(gray, options.paper_tone)
         opt = options.plan(n, W, H, ink=ink)
     with watch("start"):
         x = _start_points(gray, opt, start)

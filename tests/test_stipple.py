@@ -71,6 +71,20 @@ def test_error_diffusion_exact_count_inside(n):
     assert not np.array_equal(p, error_diffusion(g, n, seed=4))
 
 
+@pytest.mark.parametrize("shape", [(64, 64), (61, 50)])   # whole blocks, and blocks past the image
+def test_error_diffusion_same_points_in_any_chunks_and_from_gray_or_its_darkness(shape, monkeypatch):
+    """The pixels are drawn in chunks of points, and the darkness is read off the gray a band
+    at a time: the points do not depend on the chunk, and are those of the same density given
+    as an array of its own (the whole darkness, as the start once made it)."""
+    import diskpack_cl.dithering as dithering
+
+    g = np.clip(np.random.default_rng(2).random(shape) * 1.3 - 0.1, 0.0, 1.0)
+    whole = error_diffusion(g, 150, seed=5)
+    np.testing.assert_array_equal(whole, error_diffusion(g, 150, seed=5, density=1.0 - g))
+    monkeypatch.setattr(dithering, "PICK_CHUNK", 7)
+    np.testing.assert_array_equal(error_diffusion(g, 150, seed=5), whole)
+
+
 def test_error_diffusion_follows_darkness():
     g = gradient(64, 128)
     p = error_diffusion(g, 3000, seed=0)
