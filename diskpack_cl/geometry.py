@@ -874,16 +874,21 @@ def certify_disks(centers, radii, domain):
         inside = edge_gap >= 0
     # one tree per radius octave: disk i meets the disks of octave c only
     # within r_i + (largest radius of c), a short query even when the radii
-    # vary by orders of magnitude; every pair is found from both sides
+    # vary by orders of magnitude; a pair is asked for by its disk of the
+    # lower octave only (both ask within one octave: kept once), so the
+    # smaller disks' queries stay within their own octaves' reach
     i, j = [], []
-    for cls in radius_octaves(r):
+    below = np.zeros(len(C), bool)   # the disks of the octaves done
+    for cls in radius_octaves(r):   # ascending
+        rows = np.concatenate([np.flatnonzero(below), cls])
         _, tree_c = kdtree(C[cls], domain)
-        ii, jj = _query_pairs(tree_c, C, r + r[cls].max())
-        i.append(ii)
-        j.append(cls[jj])
+        ii, jj = _query_pairs(tree_c, C[rows], r[rows] + r[cls].max())
+        ii, jj = rows[ii], cls[jj]
+        keep = below[ii] | (ii < jj)   # a pair from below is found once
+        i.append(ii[keep])
+        j.append(jj[keep])
+        below[cls] = True
     i, j = np.concatenate(i), np.concatenate(j)
-    keep = j > i
-    i, j = i[keep], j[keep]
     d = domain.shortest(C[j] - C[i])
     gaps = np.hypot(d[:, 0], d[:, 1]) - r[i] - r[j]
     pair_gap = float(gaps.min()) if len(gaps) else np.inf
