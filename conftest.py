@@ -39,6 +39,7 @@ OPENCL_DOCTESTS = {
     "diskpack_cl._device.get_context",
     "diskpack_cl._device.describe",
     "diskpack_cl._device.group_size",
+    "diskpack_cl.blur.DeviceBlur",
     "diskpack_cl.raster.PowerRaster",
     "diskpack_cl.raster.RasterResult",
     "diskpack_cl.cells.has_fp64",

@@ -123,7 +123,7 @@ def base_radii(gray, points, *, gamma=3.0, floor=0.1):
     return np.maximum(g[row, col], floor) ** (0.5 * gamma)
 
 
-def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
+def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0, blur=None):
     """Base radius per pixel: ``r_i`` of a point is the value at its pixel.
 
     Parameters
@@ -144,6 +144,9 @@ def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
         blurred darkness (largest/smallest radius ratio ``floor ** -0.5``).
     sigma : float
         Blur of the darkness for ``"density"`` (pixels; 0 = none).
+    blur : callable, optional
+        ``blur(image, sigma)`` with the values of :func:`gaussian_blur` (the
+        default), such as a :class:`~diskpack_cl.blur.DeviceBlur`.
 
     Returns
     -------
@@ -162,7 +165,7 @@ def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0):
     if radii == "density":
         d = 1.0 - g
         if sigma and sigma > 0:
-            d = gaussian_blur(d, sigma)
+            d = (blur or gaussian_blur)(d, sigma)
         # sqrt(floor / max(d, floor)) in place: each temporary would be another whole image
         np.maximum(d, floor, out=d)
         np.divide(floor, d, out=d)
@@ -203,7 +206,7 @@ def detail_ell(gray, n):
     return _darkness_scale(1.0 - np.asarray(gray, dtype=np.float64), n)
 
 
-def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
+def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None, blur=None):
     """The radius field and the blend weight of ``features="detail"``.
 
     Structure finer than the dot spacing (small bright galaxies on a dark
@@ -239,6 +242,9 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
     ell : float, optional
         The scale ``ell`` (:func:`detail_scale`), when `gray` is a window
         of a larger picture whose scale it is.
+    blur : callable, optional
+        ``blur(image, sigma)`` with the values of :func:`gaussian_blur` (the
+        default), such as a :class:`~diskpack_cl.blur.DeviceBlur`.
 
     Returns
     -------
@@ -258,8 +264,9 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None):
     d = 1.0 - np.asarray(gray, dtype=np.float64)
     if ell is None:
         ell = _darkness_scale(d, n)
-    coarse = gaussian_blur(d, ell / 2.0)
-    weight = gaussian_blur(d, fine) if fine > 0 else d.copy()
+    blur = blur or gaussian_blur
+    coarse = blur(d, ell / 2.0)
+    weight = blur(d, fine) if fine > 0 else d.copy()
     del d
     # clip(gain |sharp - coarse| / max(coarse, 0.1), 0, 1), in place: on a
     # gigapixel-scale image each temporary would be another full image

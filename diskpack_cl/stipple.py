@@ -83,6 +83,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._timing import Stopwatch
+from .blur import DeviceBlur
+from .cells import has_fp64
 from .picture_measures import tone_radius
 from .dithering import _least, error_diffusion
 from .domain import Domain
@@ -529,14 +531,22 @@ def _start_points(gray, opt, start):
     return x
 
 
-def _blurred(darkness, sigma):
-    return gaussian_blur(darkness, sigma) if sigma > 0 else darkness
+def _blurred(darkness, sigma, blur):
+    return blur(darkness, sigma) if sigma > 0 else darkness
 
 
-def _centroid_density(darkness, opt):
+def _field_blur(engine):
+    """The fields' Gaussian blur: on the engine's OpenCL device where it has float64
+    (:class:`~diskpack_cl.blur.DeviceBlur`, scipy's values, a few times faster on a
+    large picture), else scipy's on the host (:func:`~diskpack_cl.radii.gaussian_blur`)."""
+    ctx = getattr(engine, "ctx", None)
+    return DeviceBlur(ctx) if ctx is not None and has_fp64(ctx) else gaussian_blur
+
+
+def _centroid_density(darkness, opt, blur=gaussian_blur):
     """Density of the centroid integrals per grid cell: blurred darkness, upsampled; float32
     (half the memory and the reads of every step; the engines sum it in float64)."""
-    blurred = _blurred(darkness, opt.density_sigma)
+    blurred = _blurred(darkness, opt.density_sigma, blur)
     d = np.maximum(blurred, 1e-6, out=np.empty(blurred.shape, np.float32))
     s = opt.supersample
     return d if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
@@ -584,13 +594,14 @@ def _banded_stage(gray, opt, engine, rows):
     H, W = gray.shape
     ell = detail_ell(gray, opt.n) if opt.features == "detail" else None
     m, s = field_margin(opt, ell), opt.supersample
+    blur = _field_blur(engine)
     names = ("radius_field", "density", "blend_weight", "ink")
     fields = {}
     for y0 in range(0, H, rows):
         y1 = min(y0 + rows, H)
         lo, hi = max(0, y0 - m), min(H, y1 + m)
         part = _make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), slice(0, W)),
-                           ell=ell)
+                           ell=ell, blur=blur)
         for name in names:
             f = getattr(part, name)
             if f is None:
@@ -608,7 +619,7 @@ def _sampled(field):
     return None if field is None else field.astype(np.float32)
 
 
-def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS):
+def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None):
     """The :class:`StippleStage` of a gray image: radius field, centroid density, ink.
 
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
@@ -617,16 +628,18 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAN
     Without it, a picture of more than twice `band_rows` rows has its fields made in bands."""
     if window is None and gray.shape[0] > 2 * band_rows:
         return _banded_stage(gray, opt, engine, band_rows)
-    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma)
+    blur = blur or _field_blur(engine)
+    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma,
+                          blur=blur)
     weight = None
     if opt.features == "detail":
-        rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell)
+        rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell, blur=blur)
     # the fields read at the dots alone are kept in float32 (half the memory: 7 digits are
     # more than a radius or a blend needs); so is the density (_centroid_density)
     rfield, weight = _sampled(rfield), _sampled(weight)
     darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
-    ink = _sampled(_blurred(darkness, INK_SIGMA)) if opt.support > 0 else None   # off_support's
-    density = _centroid_density(darkness, opt)
+    ink = _sampled(_blurred(darkness, INK_SIGMA, blur)) if opt.support > 0 else None   # off_support's
+    density = _centroid_density(darkness, opt, blur)
     if window is None:
         return StippleStage(engine, opt, rfield, density, weight, ink)
     s = opt.supersample

@@ -246,7 +246,17 @@ def unowned(ctx):
     return out
 
 
-SCENARIOS = {f.__name__: f for f in (raster_rect, raster_torus, raster_streamed, cells_rect,
+def blur(ctx):
+    """blur_columns and blur_rows: vector runs, the partial run at the right edge, and
+    lines shorter than the blur's reach (reflected more than once)."""
+    from diskpack_cl.blur import DeviceBlur
+
+    b = DeviceBlur(ctx)
+    a = np.random.default_rng(5).random((13, 21))
+    return {"wide": b(a, 2.0), "thin": b(a[:2, :3], 1.5), "fine": b(a, 0.5)}
+
+
+SCENARIOS = {f.__name__: f for f in (blur, raster_rect, raster_torus, raster_streamed, cells_rect,
                                      cells_torus, cells_list, nearest, cells_full, cells3_box,
                                      cells3_torus, dart_round, end_to_end, refused, bad_labels,
                                      unowned)}

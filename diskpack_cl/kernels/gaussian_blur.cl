@@ -1,0 +1,70 @@
+/* Separable Gaussian blur of a float64 image, as scipy.ndimage.gaussian_filter1d
+ * makes it along each axis in "reflect" mode (d c b a | a b c d | d c b a):
+ * blur_columns along the rows' direction (axis 0), then blur_rows (axis 1),
+ * each from its own input buffer.
+ *
+ * The weights w[0..2r] are symmetric about w[r], and every output is summed
+ * as scipy's correlate1d sums a symmetric kernel:
+ *     w[r] * in[i]  +  sum over j = r, r-1, ..., 1 of  w[r - j] * (in[i - j] + in[i + j]),
+ * with contraction into fused multiply-adds switched off, so that the sums
+ * round as scipy's do.  A work item makes 8 neighbouring outputs of a row
+ * with double8 vectors; those whose taps leave the image take the reflected
+ * index one by one.
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#pragma OPENCL FP_CONTRACT OFF
+
+/* Index i of a line of n samples under scipy's "reflect" mode (period 2n). */
+inline int reflect(int i, int n)
+{
+    const int p = 2 * n;
+    i %= p;
+    if (i < 0) i += p;
+    return i < n ? i : p - 1 - i;
+}
+
+/* out[y, x] for x = 8 g .. 8 g + 7 from the rows y - r .. y + r of `in`. */
+__kernel void blur_columns(__global const double *in, __global double *out,
+                           __global const double *w, const int r, const int nx, const int ny)
+{
+    const int x0 = get_global_id(0) * 8, y = get_global_id(1);
+    if (x0 >= nx || y >= ny) return;
+    if (x0 + 8 <= nx) {
+        double8 acc = w[r] * vload8(0, in + (size_t)y * nx + x0);
+        for (int j = r; j >= 1; --j) {
+            const double8 lo = vload8(0, in + (size_t)reflect(y - j, ny) * nx + x0);
+            const double8 hi = vload8(0, in + (size_t)reflect(y + j, ny) * nx + x0);
+            acc += w[r - j] * (lo + hi);
+        }
+        vstore8(acc, 0, out + (size_t)y * nx + x0);
+        return;
+    }
+    for (int x = x0; x < nx; ++x) {
+        double acc = w[r] * in[(size_t)y * nx + x];
+        for (int j = r; j >= 1; --j)
+            acc += w[r - j] * (in[(size_t)reflect(y - j, ny) * nx + x] + in[(size_t)reflect(y + j, ny) * nx + x]);
+        out[(size_t)y * nx + x] = acc;
+    }
+}
+
+/* out[y, x] for x = 8 g .. 8 g + 7 from the columns x - r .. x + 7 + r of row y of `in`. */
+__kernel void blur_rows(__global const double *in, __global double *out,
+                        __global const double *w, const int r, const int nx, const int ny)
+{
+    const int x0 = get_global_id(0) * 8, y = get_global_id(1);
+    if (x0 >= nx || y >= ny) return;
+    __global const double *row = in + (size_t)y * nx;
+    if (x0 - r >= 0 && x0 + 8 + r <= nx) {
+        double8 acc = w[r] * vload8(0, row + x0);
+        for (int j = r; j >= 1; --j)
+            acc += w[r - j] * (vload8(0, row + x0 - j) + vload8(0, row + x0 + j));
+        vstore8(acc, 0, out + (size_t)y * nx + x0);
+        return;
+    }
+    for (int x = x0; x < min(x0 + 8, nx); ++x) {
+        double acc = w[r] * row[x];
+        for (int j = r; j >= 1; --j)
+            acc += w[r - j] * (row[reflect(x - j, nx)] + row[reflect(x + j, nx)]);
+        out[(size_t)y * nx + x] = acc;
+    }
+}

@@ -1,0 +1,54 @@
+"""DeviceBlur (kernels/gaussian_blur.cl) against scipy.ndimage.gaussian_filter."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import ndimage
+
+from diskpack_cl.domain import Domain
+from diskpack_cl.engine import make_engine
+from diskpack_cl.radii import gaussian_blur
+
+
+
+@pytest.fixture(scope="module")
+def device_blur(ctx):
+    from diskpack_cl.blur import DeviceBlur
+    from diskpack_cl.cells import has_fp64
+
+    if not has_fp64(ctx):
+        pytest.skip("device without float64")
+    return DeviceBlur(ctx)
+
+
+@settings(max_examples=60, deadline=None)
+@given(h=st.integers(1, 40), w=st.integers(1, 40), sigma=st.sampled_from([0.0, 0.3, 0.5, 1.0, 2.0, 3.7, 9.0]),
+       seed=st.integers(0, 2**32 - 1))
+def test_device_blur_is_scipys(device_blur, h, w, sigma, seed):
+    """Any shape (widths off the 8-wide runs, lines shorter than the reach: reflected
+    more than once) and sigma, against scipy in "reflect" mode."""
+    a = np.random.default_rng(seed).random((h, w))
+    got = device_blur(a, sigma)
+    want = ndimage.gaussian_filter(a, sigma, mode="reflect") if sigma > 0 else a
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert got is not a
+
+
+def test_device_blur_of_a_band_of_a_large_picture_and_bad_shapes(device_blur):
+    a = np.random.default_rng(1).random((70, 1030))
+    np.testing.assert_allclose(device_blur(a, 4.2), gaussian_blur(a, 4.2), rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="non-empty 2-D"):
+        device_blur(np.zeros((3, 0)), 1.0)
+
+
+def test_stage_fields_the_same_with_the_device_blur_or_scipys(ctx, device_blur):
+    """The stage's fields (radius field, detail weight, ink, density) whichever blur makes them."""
+    from diskpack_cl.stipple import StippleOptions, _make_stage
+
+    g = np.clip(np.random.default_rng(3).random((60, 90)) * 1.4 - 0.2, 0.0, 1.0)
+    opt = StippleOptions().plan(400, 90, 60)
+    engine = make_engine(Domain.rect(90, 60), opt.n, device=ctx, grid=opt.grid_shape(90, 60))
+    host, dev = (_make_stage(g, opt, engine, blur=b) for b in (gaussian_blur, device_blur))
+    for name in ("radius_field", "density", "blend_weight", "ink"):
+        np.testing.assert_allclose(getattr(dev, name), getattr(host, name), rtol=1e-6, atol=1e-7)
