@@ -126,15 +126,13 @@ def _reversals(q, edge, i, j):
 _OR_SPAN = 64
 
 
-def _relocations(q, edge, i, c):
-    """Or-opt moves: the dot at position ``i`` moves next to its near neighbour at ``c``.
-
-    It goes between positions j and j + 1, for j = c and j = c - 1. Returns
+def _relocations(q, edge, i, j):
+    """Or-opt moves: the dot at position ``i`` moves between positions ``j`` and ``j + 1``
+    (next to its near neighbour at ``c``: ``j = c`` or ``c - 1``). Returns
     (gain, first edge, last edge, slice start, slice stop, kind): the slice
     rotates by -1 (kind 1, i < j) or +1 (kind 2, i > j).
     """
     m = len(q)
-    i, j = np.concatenate([i, i]), np.concatenate([c, c - 1])
     ok = (i >= 1) & (j >= 0) & (j != i) & (j != i - 1) & (np.abs(i - j) <= _OR_SPAN)
     i, j = i[ok], j[ok]
     last_i, last_j = i == m - 1, j == m - 1
@@ -146,33 +144,65 @@ def _relocations(q, edge, i, c):
             np.where(fwd, i, j + 1), np.where(fwd, j + 1, i + 1), np.where(fwd, 1, 2))
 
 
+#: Dots whose candidate moves :func:`_candidates` makes at a time.
+MOVE_CHUNK = 1 << 16
+
+
+def _candidates(q, edge, near, place, pos, tol):
+    """The moves that gain more than `tol`: every dot's 2-opt moves towards its near
+    neighbours, then its Or-opt moves next to them (after, then before each), as one
+    tuple of arrays (:func:`_reversals`).
+
+    Made for :data:`MOVE_CHUNK` dots at a time, and kept in the order of one pass
+    over all of them: a million dots' 18 million candidates would otherwise take
+    temporaries of gigabytes, each touched once, for the few that gain."""
+    k = near.shape[1]
+    parts = [[], [], []]
+    for a in range(0, len(q), MOVE_CHUNK):
+        rows = np.arange(a, min(a + MOVE_CHUNK, len(q)))
+        i = np.repeat(rows, k)
+        c = pos[near[place[rows]]].ravel()
+        for part, move in zip(parts, (_reversals(q, edge, i, c), _relocations(q, edge, i, c),
+                                      _relocations(q, edge, i, c - 1))):
+            gains = move[0] > tol
+            part.append([field[gains] for field in move])
+    return [np.concatenate([move[f] for part in parts for move in part]) for f in range(6)]
+
+
 def _dist(q, a, b):
     return np.hypot(*(q[a] - q[b]).T)
 
 
-def _apply_moves(moves, arrays, pos, tol):
-    """Apply the best moves that change disjoint edges; return how many."""
+def _apply_moves(moves, arrays, pos):
+    """Apply the best of the gaining `moves` that change disjoint edges; return how many."""
     gain, e0, e1, s0, s1, kind = moves
-    good = np.flatnonzero(gain > tol)
-    good = good[np.lexsort((-gain[good], e0[good]))]
+    good = np.lexsort((-gain, e0))
     good = good[np.diff(e0[good], prepend=-1) != 0]  # the best per first edge
     used = np.zeros(len(arrays[0]), dtype=bool)
+    # the moves' slices lie within their edges, so they are disjoint too: each
+    # one rearranges the positions of one permutation, applied to all at the end
+    perm = np.arange(len(arrays[0]))
     done = 0
     for k in good[np.argsort(-gain[good], kind="stable")]:
         if used[e0[k] : e1[k] + 1].any():
             continue
         used[e0[k] : e1[k] + 1] = True
-        sl = slice(s0[k], s1[k])
-        for arr in arrays:
-            arr[sl] = arr[sl][::-1] if kind[k] == 0 else np.roll(arr[sl], 2 * kind[k] - 3, axis=0)
-        pos[arrays[2][sl]] = np.arange(s0[k], s1[k])
+        sl = perm[s0[k]:s1[k]]
+        if kind[k] == 0:
+            sl[:] = sl[::-1]
+        else:   # a rotation by -1 (kind 1) or +1 (kind 2)
+            sl[:] = np.concatenate((sl[1:], sl[:1]) if kind[k] == 1 else (sl[-1:], sl[:-1]))
         done += 1
+    if done:
+        for arr in arrays:
+            arr[:] = arr[perm]
+        pos[arrays[2]] = np.arange(len(perm))
     return done
 
 
 #: Work of the 2-opt of :func:`pen_path_order`'s ``"auto"``, in dots times
-#: rounds: a round costs 2 to 4 us a dot on two CPU cores, so about 2 to 4 s
-#: in all. Counted in rounds, not seconds, so the order never depends on the
+#: rounds: a round costs a few microseconds a dot on two CPU cores, so a few
+#: seconds in all. Counted in rounds, not seconds, so the order never depends on the
 #: machine's speed or load.
 TWO_OPT_WORK = 1_000_000
 
@@ -211,7 +241,7 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
     if len(q) <= 3:
         return idx[1:]
     k = min(neighbors, len(q) - 1)
-    near = cKDTree(q).query(q, k=k + 1)[1][:, 1:]  # by place in the starting q
+    near = cKDTree(q).query(q, k=k + 1, workers=-1)[1][:, 1:]  # by place in the starting q
     place = np.arange(len(q))  # place[position now] = place in the starting q
     pos = np.arange(len(q))  # its inverse
     tol = 1e-9 * float(np.ptp(q, axis=0).max())
@@ -219,11 +249,7 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
     while rounds is None or done < rounds:
         done += 1
         edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
-        i = np.repeat(np.arange(len(q)), k)
-        j = pos[near[place]].ravel()
-        moves = [np.concatenate(v) for v in zip(_reversals(q, edge, i, j),
-                                                 _relocations(q, edge, i, j))]
-        if not _apply_moves(moves, (q, idx, place), pos, tol):
+        if not _apply_moves(_candidates(q, edge, near, place, pos, tol), (q, idx, place), pos):
             break
     return idx[1:]
 

@@ -285,6 +285,18 @@ def test_two_opt_keeps_a_permutation_never_longer_and_a_zero_budget():
     np.testing.assert_array_equal(two_opt(p, start, rounds=0), start)
 
 
+def test_two_opt_same_order_whatever_chunks_its_candidates_come_in(monkeypatch):
+    """The moves are made for a few dots at a time and kept in the order of one pass:
+    chunks of 7 dots give the order of one chunk of all of them."""
+    import diskpack_cl.pen_path as pen_path
+
+    p = np.random.default_rng(6).random((700, 2))
+    start = np.random.default_rng(8).permutation(700)
+    whole = pen_path.two_opt(p, start, rounds=6)
+    monkeypatch.setattr(pen_path, "MOVE_CHUNK", 7)
+    np.testing.assert_array_equal(pen_path.two_opt(p, start, rounds=6), whole)
+
+
 def test_pen_path_does_not_depend_on_the_clock(monkeypatch):
     """The order is counted in rounds: a slow machine (a clock that races) gets the same SVG order."""
     import time
