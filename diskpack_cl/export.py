@@ -635,9 +635,10 @@ def write_csv(path, result):
     """Write ``x,y,r`` rows (pixel units, 17 significant digits: exact round trip).
 
     The first line is a ``#`` comment without commas (:data:`CSV_TAG`,
-    then ``width=W height=H`` and, when known, ``k=`` and ``tone_radius=``),
-    so that :func:`read_stipple` reads the stippling back; CSV readers skip
-    it with ``comment="#"`` (numpy, pandas).
+    then ``width=W height=H`` and, when known, ``k=`` and ``tone_radius=``,
+    and ``invert=1`` for light dots on dark paper), so that
+    :func:`read_stipple` reads the stippling back; CSV readers skip it with
+    ``comment="#"`` (numpy, pandas).
 
     Examples
     --------
@@ -653,7 +654,9 @@ def write_csv(path, result):
     p, r, W, H = _arrays(result)
     tone = getattr(result, "tone_radius", None)
     meta = {"width": int(W), "height": int(H), "k": float(getattr(result, "k", np.nan)),
-            "tone_radius": None if tone is None else float(tone)}
+            "tone_radius": None if tone is None else float(tone),
+            # the paper it was made for: an export of the file draws on it (as of an .npz)
+            "invert": 1 if (getattr(result, "params", None) or {}).get("invert") else None}
     tag = " ".join(f"{key}={v!r}" for key, v in meta.items() if v is not None and v == v)
     with atomic_write(path, "w") as fh:
         if getattr(result, "pen", None) is not None:

@@ -67,8 +67,9 @@ def read_stipple(path):
 
     - ``.npz``: everything (the certificate's scalar fields as a namespace);
     - ``.csv``: ``points``, ``radii``, ``width``, ``height``, ``k``,
-      ``tone_radius`` (from the first line; a CSV without it gets the
-      smallest size holding its dots); a UTF-8 byte-order mark is read past;
+      ``tone_radius`` and ``params["invert"]`` (from the first line; a CSV
+      without it gets the smallest size holding its dots); a UTF-8
+      byte-order mark is read past;
     - ``.svg``: the drawing in pen-path order: ``points`` (from the mm
       coordinates, 4 decimals), ``radii`` the drawn dot radii (a pen touch:
       half the pen, unless all dots have one size), ``tone_radius`` (the
@@ -295,6 +296,9 @@ def _read_pens(z):
 def _read_csv(path):
     lines = Path(path).read_text(encoding="utf-8-sig").splitlines()
     meta = _csv_tag(lines.pop(0)[len(CSV_TAG):]) if lines and lines[0].startswith(CSV_TAG) else {}
+    if meta.get("invert", 0) not in (0, 1):
+        raise _Refused(f"first line: invert must be 0 or 1, got {meta['invert']:g}")
+    meta["params"] = {"invert": True} if meta.pop("invert", 0) == 1 else {}
     pens = meta.pop("pens", None)
     if pens is not None:
         return _read_pen_csv(lines, pens, meta)
@@ -306,7 +310,7 @@ def _read_csv(path):
     ext = np.ceil(np.max(data[:, :2] + data[:, 2:], axis=0, initial=1))
     width, height = (meta.get(side, v) for side, v in zip(("width", "height"), ext))
     return _stippling(data[:, :2], data[:, 2], width, height, k=meta.get("k"),
-                      tone_radius=meta.get("tone_radius"))
+                      tone_radius=meta.get("tone_radius"), params=meta["params"])
 
 
 def _csv_tag(tag):
@@ -359,7 +363,8 @@ def _read_pen_csv(lines, pens, meta):
     if "width" not in meta or "height" not in meta:
         raise _Refused("the first line must give width= and height=")
     return _stippling(data[:, :2], data[:, 2], meta["width"], meta["height"], k=meta.get("k"),
-                      tone_radius=meta.get("tone_radius"), pen=pen, names=names, colors=colors)
+                      tone_radius=meta.get("tone_radius"), params=meta["params"], pen=pen, names=names,
+                      colors=colors)
 
 
 # ------------------------------------------------------------------------------ .svg

@@ -106,7 +106,7 @@ def test_stipple_colors_on_black_records_its_paper():
 
 def test_cli_svg_png_npz_and_export_keep_black_paper(tmp_path, capsys):
     _dark_image(tmp_path / "dark.png")
-    out = {ext: str(tmp_path / f"a.{ext}") for ext in ("svg", "png", "npz")}
+    out = {ext: str(tmp_path / f"a.{ext}") for ext in ("svg", "png", "npz", "csv")}
     assert main(["stipple", str(tmp_path / "dark.png"), "--colors", "auto:3", "--invert",
                  "-n", "300", *sum((["-o", p] for p in out.values()), []), "-q"]) == 0
     root = ET.parse(out["svg"]).getroot()
@@ -134,6 +134,13 @@ def test_cli_svg_png_npz_and_export_keep_black_paper(tmp_path, capsys):
         assert a.read() == b.read()
     with Image.open(out["png"]) as a, Image.open(again["png"]) as b:
         assert np.array_equal(np.asarray(a), np.asarray(b))
+    # the CSV says so too: an export of it draws on black without --invert
+    from_csv = str(tmp_path / "c.svg")
+    assert main(["export", out["csv"], "-o", from_csv, "-q"]) == 0
+    assert read_stipple(out["csv"]).params == {"invert": True}
+    root = ET.parse(from_csv).getroot()
+    layers = [g.get(f"{INK}label") for g in root.iter() if g.get(f"{INK}groupmode") == "layer"]
+    assert layers == labels and read_stipple(from_csv).params["invert"] is True
     page = str(tmp_path / "page.png")
     assert main(["export", out["npz"], "-o", page, "--preview", "page", "--page", "100x80mm",
                  "-q"]) == 0

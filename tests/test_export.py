@@ -189,6 +189,24 @@ def test_csv_round_trip(tmp_path, result):
     np.testing.assert_array_equal(a[:, 2], result.radii)
 
 
+def test_csv_records_light_dots_on_dark_paper(tmp_path, result):
+    """A stippling made for dark paper says so in its CSV's first line, reads back with
+    it (as from an .npz) and writes again the same; a bad value there is refused."""
+    inverted = SimpleNamespace(**{**vars(result), "params": {"invert": True}})
+    out, again = tmp_path / "a.csv", tmp_path / "b.csv"
+    write_csv(out, inverted)
+    assert out.read_text().splitlines()[0].endswith(" invert=1")
+    back = read_stipple(out)
+    assert back.params == {"invert": True}
+    write_csv(again, back)
+    assert again.read_text() == out.read_text()
+    write_csv(again, result)   # white paper: nothing said, nothing read
+    assert "invert" not in again.read_text().splitlines()[0] and read_stipple(again).params == {}
+    out.write_text(out.read_text().replace("invert=1", "invert=2"))
+    with pytest.raises(ValueError, match="invert must be 0 or 1, got 2"):
+        read_stipple(out)
+
+
 def test_dispatch_and_errors(tmp_path, result):
     for ext in ("svg", "png", "npz", "csv"):
         write_stipple(tmp_path / f"x.{ext.upper()}", result)
