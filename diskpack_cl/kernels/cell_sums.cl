@@ -190,7 +190,7 @@ void power_sums_tile(
             const realT dd = convert_realT(select((floatT)(0.0f), d, best_id[r] == l));
             real dy = gy0 + r + (real)0.5 - sy;
 #if PERIODIC
-            dy -= ny * rint(dy / ny);
+            dy -= ny * RINT(dy / ny);   /* (dx above is a vector: RINT takes scalars) */
 #endif
             m += dd;
             mx += dd * dx;

@@ -23,6 +23,16 @@ inline int reflect(int i, int n)
     return i < n ? i : p - 1 - i;
 }
 
+/* Sample i of a line of n samples `stride` apart, blurred, each tap reflected. */
+inline double line_blur(__global const double *line, size_t stride, int i, int n,
+                        __global const double *w, int r)
+{
+    double acc = w[r] * line[(size_t)i * stride];
+    for (int j = r; j >= 1; --j)
+        acc += w[r - j] * (line[(size_t)reflect(i - j, n) * stride] + line[(size_t)reflect(i + j, n) * stride]);
+    return acc;
+}
+
 /* out[y, x] for x = 8 g .. 8 g + 7 from the rows y - r .. y + r of `in`. */
 __kernel void blur_columns(__global const double *in, __global double *out,
                            __global const double *w, const int r, const int nx, const int ny)
@@ -39,12 +49,8 @@ __kernel void blur_columns(__global const double *in, __global double *out,
         vstore8(acc, 0, out + (size_t)y * nx + x0);
         return;
     }
-    for (int x = x0; x < nx; ++x) {
-        double acc = w[r] * in[(size_t)y * nx + x];
-        for (int j = r; j >= 1; --j)
-            acc += w[r - j] * (in[(size_t)reflect(y - j, ny) * nx + x] + in[(size_t)reflect(y + j, ny) * nx + x]);
-        out[(size_t)y * nx + x] = acc;
-    }
+    for (int x = x0; x < nx; ++x)
+        out[(size_t)y * nx + x] = line_blur(in + x, nx, y, ny, w, r);
 }
 
 /* out[y, x] for x = 8 g .. 8 g + 7 from the columns x - r .. x + 7 + r of row y of `in`. */
@@ -61,10 +67,6 @@ __kernel void blur_rows(__global const double *in, __global double *out,
         vstore8(acc, 0, out + (size_t)y * nx + x0);
         return;
     }
-    for (int x = x0; x < min(x0 + 8, nx); ++x) {
-        double acc = w[r] * row[x];
-        for (int j = r; j >= 1; --j)
-            acc += w[r - j] * (row[reflect(x - j, nx)] + row[reflect(x + j, nx)]);
-        out[(size_t)y * nx + x] = acc;
-    }
+    for (int x = x0; x < min(x0 + 8, nx); ++x)
+        out[(size_t)y * nx + x] = line_blur(row, 1, x, nx, w, r);
 }
