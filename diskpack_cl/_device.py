@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import os
 import threading
+import warnings
 
-__all__ = ["NoOpenCLError", "get_context", "list_devices", "describe", "wait_for", "device_kind",
+__all__ = ["NoOpenCLError", "get_context", "context_unchecked", "list_devices", "describe", "wait_for", "device_kind",
            "kernel_group_limit", "group_size", "preferred_multiple", "padded"]
 
 _CONTEXTS: dict = {}
@@ -47,7 +48,19 @@ class NoOpenCLError(RuntimeError):
     """
 
 
+def _usable_pocl_cache():
+    """PoCL refuses every context when ``POCL_CACHE_DIR`` is set empty: point it at a
+    private folder of ours instead (before PoCL starts, which reads it once), with a note."""
+    if os.environ.get("POCL_CACHE_DIR", None) == "":
+        from .device_checks import DeviceWarning, cache_dir
+
+        os.environ["POCL_CACHE_DIR"] = str(cache_dir() / "pocl")
+        warnings.warn(DeviceWarning(f"POCL_CACHE_DIR was set empty, which PoCL cannot use: "
+                                    f"kernels are cached in {os.environ['POCL_CACHE_DIR']}"))
+
+
 def _platforms():
+    _usable_pocl_cache()
     try:
         import pyopencl as cl  # not loaded at start-up
     except ImportError as exc:  # pragma: no cover - pyopencl is a dependency
@@ -151,8 +164,6 @@ _PROBE = "kernel void probe(global float *a) { a[get_global_id(0)] = sqrt(a[0]);
 
 def _context_that_builds(device):
     """``(context, None)`` on `device`, or ``(None, why)`` when its compiler refuses :data:`_PROBE`."""
-    import warnings
-
     import pyopencl as cl  # not loaded at start-up
 
     ctx = cl.Context([device])
@@ -205,12 +216,23 @@ def _pick(spec):
 
 
 def get_context(device=None):
-    """Return a cached ``pyopencl.Context`` for the chosen device.
+    """Return a cached ``pyopencl.Context`` for the chosen device, once it is trusted.
+
+    A device is taken once its compiler builds a probe kernel and its core
+    programs gave the host's answers (:mod:`diskpack_cl.device_checks`: run
+    once per driver, device and kernel sources, in a child process, and
+    cached); a device that fails them is passed over, with one line saying
+    why, for the next one the device string allows.
 
     Parameters
     ----------
     device : str or pyopencl.Context, optional
-        Device string (see module docstring) or a ready context.
+        Device string (see module docstring) or a ready context (taken as it is).
+
+    Raises
+    ------
+    NoOpenCLError
+        No device, or none that builds kernels and gives the known answers.
 
     Examples
     --------
@@ -220,20 +242,50 @@ def get_context(device=None):
     """
     import pyopencl as cl  # not loaded at start-up
 
+    from .device_checks import DeviceWarning, verdict_of  # not loaded at start-up
+
     if isinstance(device, cl.Context):
         return device
-    spec = device or os.environ.get("DISKPACK_DEVICE") or os.environ.get("PYOPENCL_CTX") or ""
+    spec = _spec(device)
     if spec not in _CONTEXTS:
         refused = []
-        for d in _pick(spec):
-            ctx, why = _context_that_builds(d)
-            if ctx is not None:
+        for ctx, why in _contexts(spec):
+            failure = None if ctx is None else verdict_of(ctx).core_failure()
+            if ctx is not None and failure is None:
                 _CONTEXTS[spec] = ctx
                 break
+            if why is None:
+                why = f"{describe(ctx)} passed over: {failure}"
+                warnings.warn(DeviceWarning(why), stacklevel=2)
             refused.append(why)
         else:
             raise NoOpenCLError(f"{'; '.join(refused)}; {_FIX}")
     return _CONTEXTS[spec]
+
+
+def context_unchecked(device=None):
+    """The context :func:`get_context` would try first, before its known-answer checks
+    (``diskpack devices --check`` checks it); the probe kernel must still build."""
+    import pyopencl as cl  # not loaded at start-up
+
+    if isinstance(device, cl.Context):
+        return device
+    refused = []
+    for ctx, why in _contexts(_spec(device)):
+        if ctx is not None:
+            return ctx
+        refused.append(why)
+    raise NoOpenCLError(f"{'; '.join(refused)}; {_FIX}")
+
+
+def _spec(device):
+    return device or os.environ.get("DISKPACK_DEVICE") or os.environ.get("PYOPENCL_CTX") or ""
+
+
+def _contexts(spec):
+    """``(context, None)`` or ``(None, why)`` for each device `spec` names, the default first."""
+    for d in _pick(spec):
+        yield _context_that_builds(d)
 
 
 def wait_for(event):

@@ -7,9 +7,14 @@ from pathlib import Path
 
 import pyopencl as cl
 
-__all__ = ["kernel_dir", "build_program", "inline_math"]
+__all__ = ["kernel_dir", "build_program", "inline_math", "BuildError"]
 
 _PROGRAMS: dict = {}
+
+
+class BuildError(RuntimeError):
+    """A build that the driver reported done but that holds no kernels (a broken entry of
+    PoCL's kernel cache does this)."""
 
 
 def kernel_dir() -> Path:
@@ -41,5 +46,9 @@ def build_program(ctx, stem: str, defines: dict | None = None):
         src = (kernel_dir() / f"{stem}.cl").read_text()
         opts = ["-I", str(kernel_dir())] + [f"-D{k}={v}" for k, v in defines.items()]
         prg = cl.Program(ctx, src).build(options=opts)
-        _PROGRAMS[key] = {k.function_name: k for k in prg.all_kernels()}
+        kernels = {k.function_name: k for k in prg.all_kernels()}
+        if not kernels:
+            raise BuildError(f"{stem}.cl built without kernels on {ctx.devices[0].name.strip()} "
+                             "(a broken kernel-cache entry?)")
+        _PROGRAMS[key] = kernels
     return _PROGRAMS[key]

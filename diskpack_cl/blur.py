@@ -12,9 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pyopencl as cl
 
-from ._device import get_context
-from .cells import has_fp64
-from ._kernels import build_program
+from .device_stage import DeviceStage
 from .radii import TRUNCATE
 
 __all__ = ["DeviceBlur", "gaussian_weights"]
@@ -35,7 +33,7 @@ def gaussian_weights(sigma):
     return phi / phi.sum()
 
 
-class DeviceBlur:
+class DeviceBlur(DeviceStage):
     """``scipy.ndimage.gaussian_filter(image, sigma, mode="reflect")`` on an OpenCL device
     with float64, as :func:`~diskpack_cl.radii.gaussian_blur` makes it on the host.
 
@@ -50,8 +48,9 @@ class DeviceBlur:
 
     Raises
     ------
-    ValueError
-        The device has no float64.
+    RuntimeError
+        The device has no float64 (:class:`~diskpack_cl.device_checks.UntrustedProgram`:
+        the program failed its check there).
 
     Examples
     --------
@@ -62,11 +61,8 @@ class DeviceBlur:
     """
 
     def __init__(self, device=None):
-        self.ctx = get_context(device)
-        if not has_fp64(self.ctx):
-            raise ValueError("DeviceBlur needs an OpenCL device with float64 (cl_khr_fp64)")
-        self.queue = cl.CommandQueue(self.ctx)
-        k = build_program(self.ctx, "gaussian_blur")
+        super().__init__(device, fp64=True)
+        k = self.program("gaussian_blur")
         self._passes = (k["blur_columns"], k["blur_rows"])
         self._pass_buffers = None
 
@@ -93,7 +89,7 @@ class DeviceBlur:
         """The input's buffer (the host's array itself on a CPU), and the pass buffers,
         kept from call to call while the size stays (the bands of a picture)."""
         mf = cl.mem_flags
-        if self.ctx.devices[0].type & cl.device_type.CPU:
+        if self.is_cpu:
             src = cl.Buffer(self.ctx, mf.READ_ONLY | mf.USE_HOST_PTR, hostbuf=image)
         else:
             src = cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=image)

@@ -15,7 +15,7 @@ device's answer wherever the device proved it (the global iterates of
 kernel ``mic_rows`` then puts those answers into the caller's order on the
 device, and they are all that comes back.
 
-Devices without ``cl_khr_fp64`` cannot run this kernel; :func:`has_fp64`
+Devices without ``cl_khr_fp64`` cannot run this kernel; :func:`~diskpack_cl.device_stage.has_fp64`
 tells, and the engines fall back to the raster estimate refined by
 ``exact_mic``.
 """
@@ -31,13 +31,12 @@ from scipy.spatial import cKDTree
 import pyopencl as cl
 
 from ._checks import check_sites
-from ._device import describe, get_context, group_size, padded, preferred_multiple
-from ._kernels import build_program
-from ._timing import Stopwatch
+from ._device import group_size, padded, preferred_multiple
+from .device_stage import DeviceStage
 from .domain import Domain
 from .geometry import MIC, _centres, _checked_cells, _cramer, _vertex, exact_mic
 
-__all__ = ["CellMIC", "has_fp64", "FLAGS"]
+__all__ = ["CellMIC", "FLAGS"]
 
 MAXC = 64        # constraint list capacity per work item
 MAXNEAR = 8      # near-tight constraints reported besides the basis
@@ -81,19 +80,7 @@ def _keep_freed_memory():
     mallopt(M_TRIM_THRESHOLD, (1 << 31) - 1)
 
 
-def has_fp64(ctx):
-    """True when the context's device supports double precision (``cl_khr_fp64``).
-
-    Examples
-    --------
-    >>> from diskpack_cl import get_context
-    >>> has_fp64(get_context()) in (True, False)
-    True
-    """
-    return "cl_khr_fp64" in ctx.devices[0].extensions
-
-
-class CellMIC:
+class CellMIC(DeviceStage):
     """OpenCL processing object for the exact MICs of all power cells.
 
     Parameters
@@ -133,17 +120,10 @@ class CellMIC:
     def __init__(self, domain: Domain, device=None, *, profile=False, sites_per_bucket=2.0,
                  timings=None):
         self.domain = domain
-        self.timings = Stopwatch() if timings is None else timings
-        self.ctx = get_context(device)
-        if not has_fp64(self.ctx):
-            raise RuntimeError(f"{describe(self.ctx)} has no float64 support (cl_khr_fp64)")
-        self.device_name = describe(self.ctx)
-        props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
-        self.queue = cl.CommandQueue(self.ctx, properties=props)
-        self.profile = profile
+        super().__init__(device, profile=profile, timings=timings, fp64=True)
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
-        kernels = build_program(self.ctx, "cell_mic", defines)
+        kernels = self.program("cell_mic", defines)
         self._kernel, self._rows_kernel = kernels["cell_mic"], kernels["mic_rows"]
         dev = self.ctx.devices[0]
         self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
@@ -309,8 +289,10 @@ class CellMIC:
         True
         """
         X, w = check_sites(points, None, self.domain, minimum=2)
+        if not self.trusts("nearest"):
+            return _nearest(X, self.domain, np.arange(len(X)))
         # built on the first call: the stippling's cells never need it
-        kernel = build_program(self.ctx, "nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
+        kernel = self.program("nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
         group = group_size(kernel, self.ctx.devices[0], 64)
         with self.timings("buckets"):
             order, start, _, (nbx, nby, bw, bh) = self._buckets(X, w)

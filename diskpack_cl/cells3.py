@@ -26,9 +26,9 @@ from scipy.optimize import linprog
 from scipy.spatial import cKDTree
 import pyopencl as cl
 
-from ._device import describe, get_context, group_size, padded
-from ._kernels import build_program
-from .cells import _keep_freed_memory, has_fp64
+from ._device import group_size, padded
+from .cells import _keep_freed_memory
+from .device_stage import DeviceStage
 
 __all__ = ["Domain3", "CellMIC3", "MIS", "exact_mis", "certify_mis", "inscribed_sphere_linprog",
            "refine_basis"]
@@ -371,7 +371,7 @@ def refine_basis(X, domain, codes, tol=1e-9):
     return x[:, :3], x[:, 3], ok
 
 
-class CellMIC3:
+class CellMIC3(DeviceStage):
     """OpenCL processing object for the maximal inscribed spheres of 3D Voronoi cells.
 
     Parameters
@@ -390,13 +390,9 @@ class CellMIC3:
 
     def __init__(self, domain, device=None, *, sites_per_bucket=1.0):
         self.domain = domain
-        self.ctx = get_context(device)
-        if not has_fp64(self.ctx):
-            raise RuntimeError(f"{describe(self.ctx)} has no float64 support (cl_khr_fp64)")
-        self.device_name = describe(self.ctx)
-        self.queue = cl.CommandQueue(self.ctx)
+        super().__init__(device, fp64=True)
         self.sites_per_bucket = float(sites_per_bucket)
-        self._kernel = build_program(self.ctx, "cell_mic3", {"PERIODIC": int(domain.periodic)})["cell_mic3"]
+        self._kernel = self.program("cell_mic3", {"PERIODIC": int(domain.periodic)})["cell_mic3"]
         self.group = group_size(self._kernel, self.ctx.devices[0], GROUP)
         _keep_freed_memory()
 

@@ -358,7 +358,7 @@ def _route(ctx, backend, route):
     raster route on GPUs (and whenever OpenCL was asked for), the exact engine on CPUs."""
     import pyopencl as cl  # not loaded at start-up
 
-    from .cells import has_fp64  # not loaded at start-up
+    from .device_stage import has_fp64  # not loaded at start-up
 
     if route == "cells" or (route == "auto" and has_fp64(ctx)):
         return "cells"

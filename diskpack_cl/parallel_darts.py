@@ -36,7 +36,8 @@ import pyopencl as cl
 from ._checks import check_count
 from .measures import hexagonal_radius
 from ._device import NoOpenCLError, get_context, group_size, padded
-from ._kernels import build_program
+from .device_checks import UntrustedProgram, warn_fallback
+from .device_stage import DeviceStage
 
 __all__ = ["parallel_darts"]
 
@@ -181,7 +182,7 @@ def _round(grid, live, rng, room, empty):
     return live[~gone], keep.size
 
 
-class _DeviceGrid:
+class _DeviceGrid(DeviceStage):
     """The grid of :class:`_Grid` on an OpenCL device (``kernels/dart_round.cl``).
 
     The host draws a round's keys with the same generator calls and keeps a
@@ -200,8 +201,8 @@ class _DeviceGrid:
         self.d, self.d2 = d, d * d
         self.g = g = max(1, int(np.ceil(np.sqrt(2.0) / d)))
         self.c = 1.0 / g
-        self.ctx, self.queue = ctx, cl.CommandQueue(ctx)
-        self.k = build_program(ctx, "dart_round")
+        super().__init__(ctx, fp64=True)
+        self.k = self.program("dart_round")
         # explicit groups: left to itself, PoCL takes a divisor of the global size (1 for a prime)
         self.group = {name: group_size(k, ctx.devices[0], 64) for name, k in self.k.items()}
         # the host keeps the points it placed, by round (a full grid of 3.5M cells at 1M
@@ -349,7 +350,10 @@ def _grid_for(d, device):
         except NoOpenCLError:
             ctx = None
         if ctx is not None and "cl_khr_fp64" in ctx.devices[0].extensions:
-            return _DeviceGrid(d, ctx)
+            try:
+                return _DeviceGrid(d, ctx)
+            except UntrustedProgram as exc:
+                warn_fallback(exc, "dart rounds on the host")
     return _Grid(d)
 
 

@@ -18,9 +18,8 @@ import pyopencl as cl
 
 from . import _device
 from ._checks import check_sites
-from ._device import describe, get_context, group_size, padded, wait_for
-from ._kernels import build_program
-from ._timing import Stopwatch
+from ._device import group_size, padded
+from .device_stage import DeviceStage
 from .domain import Domain
 from .labels import cell_centroids
 from .measures import bucket_order
@@ -165,20 +164,7 @@ class RasterResult:
         return np.unique(p, axis=0)
 
 
-def tile_lanes(device):
-    """Vector lanes of the CPU tile layout for `device`: 16 where PoCL compiles for AVX-512
-    (its device name carries the LLVM target, e.g. ``pthread-skylake-avx512-...``), else 8.
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace
-    >>> tile_lanes(SimpleNamespace(name="pthread-skylake-avx512-AMD EPYC")), tile_lanes(SimpleNamespace(name="cpu-haswell"))
-    (16, 8)
-    """
-    return 16 if "avx512" in device.name.lower() else 8
-
-
-class PowerRaster:
+class PowerRaster(DeviceStage):
     """OpenCL processing object for the discrete power diagram of one grid.
 
     Parameters
@@ -205,8 +191,8 @@ class PowerRaster:
         Labels-only layout: vector tiles (CPUs, the default there) or one
         work item per grid cell (elsewhere).
     lanes : {None, 8, 16}
-        Vector lanes of the tile layout (:func:`tile_lanes` of the device
-        when None); the labels are the same either way.
+        Vector lanes of the tile layout (:attr:`DeviceStage.lanes` when None:
+        16 where the device checks trusted 512-bit vectors); the labels are the same either way.
 
     Notes
     -----
@@ -230,27 +216,26 @@ class PowerRaster:
     def __init__(self, domain: Domain, shape, device=None, *, max_groups=MAX_GROUPS, layout=None,
                  lanes=None, profile=False, timings=None):
         self.domain = domain
-        self.timings = Stopwatch() if timings is None else timings
         self.shape = (int(shape[0]), int(shape[1]))
         if min(self.shape) < 1:
             raise ValueError(f"raster shape must be positive, got {shape}")
-        self.ctx = get_context(device)
-        self.device_name = describe(self.ctx)
-        props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
-        self.queue = cl.CommandQueue(self.ctx, properties=props)
-        self.profile = profile
+        super().__init__(device, profile=profile, timings=timings)
         self.max_groups = int(max_groups)
         if self.max_groups < 1:
             raise ValueError(f"max_groups must be at least 1, got {max_groups}")
         periodic = int(domain.periodic)
-        self.lanes = tile_lanes(self.ctx.devices[0]) if lanes is None else int(lanes)
-        if self.lanes not in (8, 16):
-            raise ValueError(f"lanes must be 8 or 16, got {lanes!r}")
+        if lanes is not None:
+            if int(lanes) not in (8, 16):
+                raise ValueError(f"lanes must be 8 or 16, got {lanes!r}")
+            if int(lanes) > self.lanes:
+                raise ValueError(f"{lanes} lanes take 512-bit vectors, which {self.device_name} "
+                                 "was not trusted with (diskpack devices --check)")
+            self.lanes = int(lanes)
         prg, self.tile = self._labels_program(periodic)
         self._k_labels, self._k_tile = prg["power_labels"], prg["power_labels_tile"]
         # labels-only layout: vector tiles on CPUs, one work item per grid cell elsewhere
         if layout is None:
-            layout = "tile" if self.ctx.devices[0].type & cl.device_type.CPU else "item"
+            layout = "tile" if self.is_cpu else "item"
         if layout not in ("tile", "item"):
             raise ValueError(f"layout must be 'tile' or 'item', got {layout!r}")
         self.layout = layout
@@ -259,14 +244,14 @@ class PowerRaster:
         self._k_sums = self._k_fused = None
         if "cl_khr_int64_base_atomics" in dev.extensions:
             fp64 = int("cl_khr_fp64" in dev.extensions)
-            sums = build_program(self.ctx, "cell_sums", {"PERIODIC": periodic, "USE_FP64": fp64,
+            sums = self.program("cell_sums", {"PERIODIC": periodic, "USE_FP64": fp64,
                                                   "TW": self.lanes})
             self._k_sums = sums["cell_sums"]
             # labels and sums in one pass where labels come in tiles
             self._k_fused = sums["power_sums_tile"] if layout == "tile" else None
             self._real = np.float64 if fp64 else np.float32
         self._density = None
-        k = build_program(self.ctx, "inscribed_circle", {"PERIODIC": periodic})
+        k = self.program("inscribed_circle", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._groups = {name: group_size(k[name], dev, REDUCE_GROUP) for name in k}
         if self._k_sums is not None:
@@ -289,7 +274,7 @@ class PowerRaster:
         tile = TILE
         while True:
             if tile * tile <= dev.max_work_group_size and tile <= min(dev.max_work_item_sizes[:2]):
-                prg = build_program(self.ctx, "power_diagram", {"PERIODIC": periodic, "TILE": tile,
+                prg = self.program("power_diagram", {"PERIODIC": periodic, "TILE": tile,
                                                                   "TW": self.lanes})
                 if tile == 1 or tile * tile <= _device.kernel_group_limit(prg["power_labels"], dev):
                     return prg, tile
@@ -318,12 +303,6 @@ class PowerRaster:
         if host.nbytes:
             cl.enqueue_copy(self.queue, buf, host)
         return buf
-
-    def _wait(self, event, name):
-        """Wait for kernel `name` (signals get through); with `profile`, add its device time."""
-        wait_for(event)
-        if self.profile:
-            self.timings.kernel(name, (event.profile.end - event.profile.start) * 1e-9)
 
     def _map_buffer(self, name, nbytes):
         buf = self._maps.get(name)
@@ -372,7 +351,7 @@ class PowerRaster:
         tx, ty = -(-nx // tw), -(-ny // th)
         band = max(1, (self.max_groups * TILE * TILE) // (tx * tw * th))
         for y0 in range(0, ty, band):
-            self._wait(kernel(
+            self.wait(kernel(
                 self.queue, (tx, min(band, ty - y0)), (1, 1), *bufs,
                 np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
@@ -537,7 +516,7 @@ class PowerRaster:
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax), np.int32(nx),
                 np.int32(ny), np.int32(bool(distance)), maps["label"][0], maps["dist"][0],
                 maps["nbr"][0], b_status, global_offset=(0, y0))
-            self._wait(ev, "power_labels")
+            self.wait(ev, "power_labels")
         self._check_status(b_status)
 
     def _check_status(self, b_status):
@@ -563,7 +542,7 @@ class PowerRaster:
         # passes the raster (those work items return); bands never overlap
         band = padded(max(1, (self.max_groups * TILE * TILE) // (seg * CELL_SUMS_SEG)), g)
         for y0 in range(0, ny, band):
-            self._wait(self._k_sums(self.queue, (seg, padded(min(band, ny - y0), g)), (1, g),
+            self.wait(self._k_sums(self.queue, (seg, padded(min(band, ny - y0), g)), (1, g),
                                     label_buf, b_density, b_pts, np.int32(n),
                                     np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
         return self._sums_to_centroids(acc, b_acc, sites)
@@ -576,7 +555,7 @@ class PowerRaster:
             d = np.ascontiguousarray(density, np.float32)   # summed in `real` on the device
             if d.shape != self.shape:
                 raise ValueError(f"density must have the raster shape {self.shape}")
-            if self.ctx.devices[0].type & cl.device_type.CPU:
+            if self.is_cpu:
                 # the device reads the host's array where it is: no second copy of a
                 # whole raster (512 MiB at 8192 x 8192) and no upload; d is kept with it
                 buf = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR,

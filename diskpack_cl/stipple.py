@@ -84,7 +84,8 @@ import numpy as np
 
 from ._timing import Stopwatch
 from .blur import DeviceBlur
-from .cells import has_fp64
+from .device_checks import UntrustedProgram, warn_fallback
+from .device_stage import has_fp64
 from .picture_measures import tone_radius
 from .dithering import _least, error_diffusion
 from .domain import Domain
@@ -540,7 +541,13 @@ def _field_blur(engine):
     (:class:`~diskpack_cl.blur.DeviceBlur`, scipy's values, a few times faster on a
     large picture), else scipy's on the host (:func:`~diskpack_cl.radii.gaussian_blur`)."""
     ctx = getattr(engine, "ctx", None)
-    return DeviceBlur(ctx) if ctx is not None and has_fp64(ctx) else gaussian_blur
+    if ctx is None or not has_fp64(ctx):
+        return gaussian_blur
+    try:
+        return DeviceBlur(ctx)
+    except UntrustedProgram as exc:
+        warn_fallback(exc, "blurs on the host")
+        return gaussian_blur
 
 
 def _centroid_density(darkness, opt, blur=gaussian_blur):

@@ -32,9 +32,13 @@ def _raster(ctx, dom, shape, n, heavy):
     cell_sums and power_sums_tile, on a raster with partial tiles."""
     from diskpack_cl.raster import PowerRaster
 
+    from diskpack_cl.device_checks import verdict_of
+
     pts, w = _sites(dom, n, 1, heavy)
     out = {}
-    for layout, lanes in (("item", None), ("tile", 8), ("tile16", 16)):
+    # 16 lanes where the device is trusted with 512-bit vectors (device_checks)
+    wide = verdict_of(ctx).wide
+    for layout, lanes in (("item", None), ("tile", 8)) + ((("tile16", 16),) if wide else ()):
         pr = PowerRaster(dom, shape, device=ctx, layout=layout[:4], lanes=lanes, max_groups=2)
         est = pr.compute(pts, w, neighbors=True)
         out.update({f"{layout}_label": est.labels.copy(), f"{layout}_dist": est.dist.copy(),

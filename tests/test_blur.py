@@ -15,7 +15,7 @@ from diskpack_cl.radii import gaussian_blur
 @pytest.fixture(scope="module")
 def device_blur(ctx):
     from diskpack_cl.blur import DeviceBlur
-    from diskpack_cl.cells import has_fp64
+    from diskpack_cl.device_stage import has_fp64
 
     if not has_fp64(ctx):
         pytest.skip("device without float64")

@@ -107,7 +107,9 @@ def test_the_false_positive_is_what_its_reproduction_reports(icd_dir):
 
 def _run_on_oclgrind(name, settings, icd_dir, tmp_path):
     log, out = tmp_path / "oclgrind.log", tmp_path / "out.npz"
+    # the simulator's answers are checked here, scenario by scenario: no known-answer checks
     env = dict(os.environ, OCL_ICD_VENDORS=str(icd_dir), DISKPACK_DEVICE="oclgrind",
+               DISKPACK_CL_DEVICE_CHECKS="0",
                OCLGRIND_CHECK_API="1", OCLGRIND_DATA_RACES="1", OCLGRIND_UNIFORM_WRITES="1",
                OCLGRIND_LOG=str(log), **settings)
     script = Path(oclgrind_scenarios.__file__)
@@ -127,11 +129,13 @@ def test_scenario_is_clean_on_oclgrind_and_matches(ctx, icd_dir, tmp_path, name,
     assert not found, "\n\n".join(found[:5])
     # the reference in Oclgrind's tile lanes: tiles of another shape round the fused
     # sums per tile elsewhere (the scenarios name the lanes where they test both)
-    from diskpack_cl import raster
+    from diskpack_cl import device_stage
 
-    monkeypatch.setattr(raster, "tile_lanes", lambda device: 8)
+    monkeypatch.setattr(device_stage, "tile_lanes", lambda verdict: 8)
     want = oclgrind_scenarios.SCENARIOS[name](ctx)
-    assert sorted(got) == sorted(want)
+    # 16-lane tiles where both devices are trusted with them (only Oclgrind's, where this
+    # host's driver is not: its memory checks above still ran)
+    assert sorted(want) == sorted(k for k in got if k in want or not k.startswith("tile16"))
     for key, a in want.items():
         b = got[key]
         if a.dtype.kind == "f":

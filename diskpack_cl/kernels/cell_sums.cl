@@ -20,7 +20,7 @@
  * rounds (per tile and owner, not per run).
  *
  * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1), TW and CAP
- * (power_gather.h).
+ * (power_gather.h), WIDE_BUILTINS (wide.h).
  */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #include "power_gather.h"
@@ -108,13 +108,18 @@ __kernel void cell_sums(
 #define convert_realT convert_double16
 #elif USE_FP64
 #define realT double8
-#define convert_realT convert_double8
+#define convert_realT CONVERT_D8
 #elif TW == 16
 #define realT float16
 #define convert_realT convert_float16
 #else
 #define realT float8
 #define convert_realT convert_float8
+#endif
+#if USE_FP64 && TW == 8
+#define RINT_realT RINT_D8   /* a builtin on a 512-bit vector: wide.h */
+#else
+#define RINT_realT rint
 #endif
 
 inline real hsum(realT v)
@@ -181,7 +186,7 @@ void power_sums_tile(
         const real sx = ok ? gsite[2 * l] : 0, sy = ok ? gsite[2 * l + 1] : 0;
         realT dx = cx - sx;
 #if PERIODIC
-        dx -= nx * rint(dx / nx);
+        dx -= nx * RINT_realT(dx / nx);
 #endif
         realT m = 0, mx = 0, my = 0;
         intT after = (intT)(INT_MAX);

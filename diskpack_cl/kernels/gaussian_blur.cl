@@ -9,9 +9,10 @@
  * with contraction into fused multiply-adds switched off, so that the sums
  * round as scipy's do.  A work item makes 8 neighbouring outputs of a row
  * with double8 vectors; those whose taps leave the image take the reflected
- * index one by one.
+ * index one by one.  Build-time switch: WIDE_BUILTINS (wide.h).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#include "wide.h"
 #pragma OPENCL FP_CONTRACT OFF
 
 /* Index i of a line of n samples under scipy's "reflect" mode (period 2n). */
@@ -40,13 +41,13 @@ __kernel void blur_columns(__global const double *in, __global double *out,
     const int x0 = get_global_id(0) * 8, y = get_global_id(1);
     if (x0 >= nx || y >= ny) return;
     if (x0 + 8 <= nx) {
-        double8 acc = w[r] * vload8(0, in + (size_t)y * nx + x0);
+        double8 acc = w[r] * VLOAD_D8(in + (size_t)y * nx + x0);
         for (int j = r; j >= 1; --j) {
-            const double8 lo = vload8(0, in + (size_t)reflect(y - j, ny) * nx + x0);
-            const double8 hi = vload8(0, in + (size_t)reflect(y + j, ny) * nx + x0);
+            const double8 lo = VLOAD_D8(in + (size_t)reflect(y - j, ny) * nx + x0);
+            const double8 hi = VLOAD_D8(in + (size_t)reflect(y + j, ny) * nx + x0);
             acc += w[r - j] * (lo + hi);
         }
-        vstore8(acc, 0, out + (size_t)y * nx + x0);
+        VSTORE_D8(acc, out + (size_t)y * nx + x0);
         return;
     }
     for (int x = x0; x < nx; ++x)
@@ -61,10 +62,10 @@ __kernel void blur_rows(__global const double *in, __global double *out,
     if (x0 >= nx || y >= ny) return;
     __global const double *row = in + (size_t)y * nx;
     if (x0 - r >= 0 && x0 + 8 + r <= nx) {
-        double8 acc = w[r] * vload8(0, row + x0);
+        double8 acc = w[r] * VLOAD_D8(row + x0);
         for (int j = r; j >= 1; --j)
-            acc += w[r - j] * (vload8(0, row + x0 - j) + vload8(0, row + x0 + j));
-        vstore8(acc, 0, out + (size_t)y * nx + x0);
+            acc += w[r - j] * (VLOAD_D8(row + x0 - j) + VLOAD_D8(row + x0 + j));
+        VSTORE_D8(acc, out + (size_t)y * nx + x0);
         return;
     }
     for (int x = x0; x < min(x0 + 8, nx); ++x)

@@ -11,6 +11,7 @@
 #define DISKPACK_POWER_GATHER_H
 
 #include "common.h"
+#include "wide.h"
 
 #ifndef CAP
 #define CAP 256
@@ -214,6 +215,9 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
  * (tiles of 16 x 32 rows spill registers and are slower). */
 #ifndef TW
 #define TW 8
+#endif
+#if TW == 16 && !WIDE_BUILTINS
+#error "TW 16 takes 512-bit vectors through builtins: WIDE_BUILTINS must be 1"
 #endif
 #define TH 16
 #if TW == 16

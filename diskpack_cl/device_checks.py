@@ -1,0 +1,652 @@
+"""Known-answer checks: a device is trusted with a program once it gave the host's answers.
+
+A driver that builds a kernel may still compile it wrong (pip's PoCL 3.0 on
+AMD Zen 4 returns garbage or crashes in kernels that pass 512-bit vectors
+to its builtins).  So before a program's results are used on a device,
+each program runs on small fixed inputs that take its code paths (full
+vectors, partial tiles, image edges, ties, periodic seams) and its answers
+are compared with the host's (numpy and scipy, float64).  The checks run in
+a **child process**, one program after another, each under a time limit:
+a crash or a hang there is a verdict, not the end of the user's run.
+
+Verdicts are kept in the user's cache folder (:func:`cache_dir`), one file
+per driver version, device, kernel sources and package version, so the
+checks run once on a machine.  A program that failed is not used on that
+device: its stage runs on the host (:class:`UntrustedProgram` tells the
+stage), and a device whose core programs fail (:data:`CORE`) is passed
+over by :func:`diskpack_cl.get_context`.
+
+Two things are chosen by the checks, not by the device's name:
+
+- ``WIDE_BUILTINS`` (``kernels/wide.h``): 512-bit vectors through the
+  builtins where the wide build of every vector program gives the known
+  answers, else 256-bit halves (and 8-lane tiles);
+- a fresh kernel-cache entry: a program whose build crashed or came back
+  without kernels (a broken entry in PoCL's cache) is built and checked once
+  more with a salt define that PoCL's cache has never seen.
+
+``diskpack devices --check`` prints the table (:func:`check_table`).
+
+Examples
+--------
+>>> from diskpack_cl import get_context
+>>> v = verdict_of(get_context())
+>>> sorted(v.programs) == sorted(PROGRAMS)
+True
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ._kernels import BuildError
+
+__all__ = ["PROGRAMS", "CORE", "VECTOR_PROGRAMS", "Verdict", "UntrustedProgram", "DeviceWarning",
+           "cache_dir", "verdict_of", "warn_fallback", "check_device", "check_table", "checks_enabled", "main"]
+
+#: Every program the package runs on a device, and what it computes.
+PROGRAMS = {
+    "power_diagram": "labels of the discrete power diagram (tile and item layouts)",
+    "inscribed_circle": "raster MIC estimates (per-cell maxima of the distance map)",
+    "cell_sums": "density sums of the cells (label runs and fused tiles)",
+    "cell_mic": "MICs of 2D power cells (float64 simplex)",
+    "nearest": "nearest-neighbour distances",
+    "cell_mic3": "maximal inscribed spheres of 3D Voronoi cells",
+    "dart_round": "rounds of parallel dart throwing",
+    "gaussian_blur": "Gaussian blurs of the stippling's fields",
+}
+#: Programs without which the device is passed over (the engine's every step needs them).
+CORE = ("power_diagram", "inscribed_circle", "cell_sums", "cell_mic")
+#: Programs with 512-bit vectors through builtins in their wide build (``kernels/wide.h``).
+VECTOR_PROGRAMS = ("power_diagram", "cell_sums", "gaussian_blur")
+#: The programs that need float64 (``cl_khr_fp64``); elsewhere they are not run at all.
+FP64_PROGRAMS = ("cell_mic", "nearest", "cell_mic3", "dart_round", "gaussian_blur")
+
+_FORMAT = 1
+#: Seconds one program's check may take (a cold build included) before it counts as a hang.
+TIME_LIMIT_S = 300.0
+
+
+class UntrustedProgram(RuntimeError):
+    """A program failed its known-answer check on this device: its stage runs on the host."""
+
+
+class DeviceWarning(UserWarning):
+    """One line: a program or a device passed over, and why."""
+
+
+def warn_fallback(exc, instead):
+    """One line: a program refused on a device (`exc`), and what runs `instead`."""
+    warnings.warn(DeviceWarning(f"{exc}; {instead}"), stacklevel=3)
+
+
+def checks_enabled():
+    """False where ``DISKPACK_CL_DEVICE_CHECKS=0`` (simulators such as Oclgrind, whose
+    every kernel is checked by the tests themselves) or inside the checks' child."""
+    return os.environ.get("DISKPACK_CL_DEVICE_CHECKS", "1") != "0" and _CHILD not in os.environ
+
+
+#: Set in the child's environment: no check there (nor in anything it starts) starts another.
+_CHILD = "DISKPACK_CL_IN_DEVICE_CHECK"
+#: In the child: the verdict under check (the build switches the stages read).
+_CHILD_VERDICT = None
+
+
+def cache_dir():
+    """The folder of the verdicts: ``$DISKPACK_CL_CACHE_DIR``, else ``$XDG_CACHE_HOME/diskpack_cl``
+    (``~/.cache/diskpack_cl``)."""
+    env = os.environ.get("DISKPACK_CL_CACHE_DIR")
+    if env:
+        return Path(env)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "diskpack_cl"
+
+
+@dataclass
+class Verdict:
+    """What the checks said of one device.
+
+    Attributes
+    ----------
+    device : str
+        The device and its platform, as :func:`diskpack_cl.describe` names them.
+    wide : bool
+        Whether the programs are built with 512-bit vectors through builtins.
+    programs : dict
+        Per program ``{"ok": bool, "why": str, "seconds": float, "salt": int}``.
+    seconds : float
+        What the checks cost when they ran (0 for a verdict read from the cache).
+    cached : bool
+        Read from the cache folder rather than run now.
+    notes : list of str
+        What was retried and why.
+    """
+
+    device: str
+    wide: bool
+    programs: dict
+    seconds: float = 0.0
+    cached: bool = False
+    notes: list = field(default_factory=list)
+
+    def refused(self, stem):
+        """Why program `stem` may not run here, or None."""
+        entry = self.programs.get(stem)
+        return None if entry is None or entry["ok"] else entry["why"]
+
+    def defines(self, stem):
+        """The build-time defines the checks chose for `stem`: ``WIDE_BUILTINS``, and
+        ``DISKPACK_SALT`` where the program needed a fresh kernel-cache entry."""
+        out = {"WIDE_BUILTINS": int(self.wide)}
+        salt = self.programs.get(stem, {}).get("salt", 0)
+        if salt:
+            out["DISKPACK_SALT"] = salt
+        return out
+
+    def core_failure(self):
+        """``"program: why"`` for the first core program that failed, or None."""
+        for stem in CORE:
+            why = self.refused(stem)
+            if why is not None:
+                return f"{stem}: {why}"
+        return None
+
+
+def _trusted_without_checks(ctx):
+    return Verdict(_describe(ctx), _reports_wide(ctx.devices[0]),
+                   {stem: {"ok": True, "why": "", "seconds": 0.0, "salt": 0} for stem in PROGRAMS})
+
+
+def _describe(ctx):
+    d = ctx.devices[0]
+    return f"{d.name.strip()} ({d.platform.name.strip()})"
+
+
+def _reports_wide(device):
+    """Whether the device says its vectors are 512 bits (16 floats): the first guess."""
+    return device.native_vector_width_float >= 16
+
+
+def _sources_hash():
+    from ._kernels import kernel_dir
+
+    h = hashlib.sha256()
+    for p in sorted(kernel_dir().iterdir()):
+        if p.suffix in (".cl", ".h"):
+            h.update(p.name.encode() + b"\0" + p.read_bytes())
+    h.update(Path(__file__).read_bytes())   # the checks themselves
+    return h.hexdigest()
+
+
+def _key(device):
+    """What a verdict holds for: the driver, the device and the kernel sources."""
+    import pyopencl as cl
+
+    from . import __version__
+
+    p = device.platform
+    parts = [str(_FORMAT), __version__, cl.VERSION_TEXT, p.name, p.vendor, p.version, device.name,
+             device.vendor, device.version, device.driver_version, _sources_hash()]
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()[:32]
+
+
+_MEMO: dict = {}
+
+
+def verdict_of(ctx, *, refresh=False):
+    """The :class:`Verdict` of the context's device: from this process, the cache folder,
+    or the checks run now in a child process (and then kept in the cache).
+
+    Parameters
+    ----------
+    ctx : pyopencl.Context
+    refresh : bool
+        Run the checks again even where a verdict is cached.
+    """
+    if _CHILD_VERDICT is not None:
+        return _CHILD_VERDICT
+    if not checks_enabled():
+        return _trusted_without_checks(ctx)
+    device = ctx.devices[0]
+    key = _key(device)
+    if key in _MEMO and not refresh:
+        return _MEMO[key]
+    path = cache_dir() / "device-checks" / f"{key}.json"
+    verdict = None if refresh else _read(path)
+    if verdict is None:
+        verdict = _run_checks(device)
+        _write(path, verdict)
+    _MEMO[key] = verdict
+    return verdict
+
+
+def _read(path):
+    """A cached verdict, or None where the file is missing or not one (it is then rerun)."""
+    try:
+        data = json.loads(path.read_text())
+        programs = data["programs"]
+        if data.get("format") != _FORMAT or set(programs) != set(PROGRAMS) or not all(
+                isinstance(v.get("ok"), bool) for v in programs.values()):
+            return None
+        return Verdict(data["device"], bool(data["wide"]), programs, float(data.get("seconds", 0.0)),
+                       True, list(data.get("notes", [])))
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+
+
+def _write(path, verdict):
+    """Write the verdict atomically (a reader never sees half a file); a cache folder that
+    cannot be written costs a rerun next time, nothing else."""
+    data = {"format": _FORMAT, "device": verdict.device, "wide": verdict.wide,
+            "programs": verdict.programs, "seconds": verdict.seconds, "notes": verdict.notes}
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".verdict-", suffix=".tmp")
+        with os.fdopen(fd, "w") as f:
+            json.dump(data, f, indent=1)
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+# -- the parent: children, time limits, verdicts ------------------------------------------
+
+def _device_address(device):
+    """``(platform index, device index)`` of `device`, for the child to find it again."""
+    import pyopencl as cl
+
+    for ip, p in enumerate(cl.get_platforms()):
+        for idev, d in enumerate(p.get_devices()):
+            if d.int_ptr == device.int_ptr:
+                return ip, idev
+    raise LookupError(f"device {device.name} not found among the platforms")
+
+
+def _run_checks(device):
+    """Every program's verdict on `device`, the wide build first where the device reports
+    512-bit vectors and the 256-bit build where any vector program fails wide."""
+    start = time.perf_counter()
+    address = _device_address(device)
+    fp64 = "cl_khr_fp64" in device.extensions
+    stems = [s for s in PROGRAMS if fp64 or s not in FP64_PROGRAMS]
+    wide = _reports_wide(device)
+    results, notes = _checked(address, stems, wide)
+    if wide and any(not results[s]["ok"] for s in VECTOR_PROGRAMS if s in results):
+        # the vector programs, and any that failed with them (a stage builds several)
+        again = [s for s in results if s in VECTOR_PROGRAMS or not results[s]["ok"]]
+        narrow, more = _checked(address, again, False)
+        if all(v["ok"] for v in narrow.values()):
+            failed = [f"{s} ({results[s]['why']})" for s in VECTOR_PROGRAMS
+                      if s in narrow and not results[s]["ok"]]
+            notes.append(f"512-bit vectors through builtins failed: {'; '.join(failed)}; "
+                         "built with 256-bit halves")
+            results.update(narrow)
+            notes += more
+            wide = False
+    for s in PROGRAMS:
+        results.setdefault(s, {"ok": False, "why": "the device has no float64", "seconds": 0.0, "salt": 0})
+    desc = f"{device.name.strip()} ({device.platform.name.strip()})"
+    return Verdict(desc, wide, results, time.perf_counter() - start, False, notes)
+
+
+def _checked(address, stems, wide):
+    """Verdicts of `stems` (each retried once with a fresh kernel-cache entry where it
+    crashed or its build failed), and the notes of those retries."""
+    results = _children(address, stems, wide, salt=0)
+    notes = []
+    retry = [s for s in stems if not results[s]["ok"] and results[s].get("retry")]
+    if retry:
+        again = _children(address, retry, wide, salt=_salt())
+        for s in retry:
+            if again[s]["ok"]:
+                notes.append(f"{s}: {results[s]['why']}; built again in a fresh kernel-cache entry")
+                results[s] = again[s]
+    for v in results.values():
+        v.pop("retry", None)
+    return results, notes
+
+
+def _salt():
+    return int.from_bytes(os.urandom(3), "little") + 1
+
+
+def _children(address, stems, wide, salt):
+    """Run the checks of `stems` in child processes: one child until it ends; a program
+    whose child crashed or overran its time is failed, and the rest go to a new child."""
+    results = {}
+    todo = list(stems)
+    while todo:
+        got, running, why = _one_child(address, todo, wide, salt)
+        results.update(got)
+        todo = [s for s in todo if s not in results]
+        if running is not None and running not in results:
+            results[running] = {"ok": False, "why": why, "seconds": 0.0, "salt": salt, "retry": True}
+            todo.remove(running)
+        elif todo:   # the child ended without naming what it ran: fail the rest alike
+            for s in todo:
+                results[s] = {"ok": False, "why": why or "the check's process ended early",
+                              "seconds": 0.0, "salt": salt, "retry": True}
+            todo = []
+    return results
+
+
+def _one_child(address, stems, wide, salt):
+    """One child over `stems`: ``(results, program running when it ended, why it ended)``."""
+    cmd = [sys.executable, "-m", "diskpack_cl.device_checks", "--child", f"{address[0]}:{address[1]}",
+           "--wide", str(int(wide)), "--salt", str(salt), *stems]
+    limit = float(os.environ.get("DISKPACK_CL_CHECK_TIME_LIMIT_S", TIME_LIMIT_S))
+    results, running = {}, None
+    with tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL,
+                                env={**os.environ, _CHILD: "1"}, text=True, start_new_session=True)
+        deadline = time.monotonic() + limit
+        try:
+            for line in _lines(proc, lambda: deadline):
+                msg = json.loads(line)
+                if "start" in msg:
+                    running, deadline = msg["start"], time.monotonic() + limit
+                else:
+                    results[msg["stem"]] = {k: msg[k] for k in ("ok", "why", "seconds", "salt")}
+                    results[msg["stem"]]["retry"] = msg.get("retry", False)
+                    running = None
+        except TimeoutError:
+            _kill(proc)
+            return results, running, f"no answer in {limit:g} s (killed)"
+        finally:
+            if proc.poll() is None:
+                _kill(proc)
+        rc = proc.wait()
+        if rc == 0:
+            return results, running, None
+        err.seek(0)
+        tail = [ln.strip() for ln in err.read().splitlines() if ln.strip()]
+        why = (f"crashed ({signal.Signals(-rc).name})" if rc < 0 else f"the check's process exited {rc}")
+        return results, running, why + (f": {tail[-1][:200]}" if tail and rc > 0 else "")
+
+
+def _lines(proc, deadline):
+    """The child's stdout lines, raising TimeoutError past ``deadline()``."""
+    import selectors
+
+    sel = selectors.DefaultSelector()
+    sel.register(proc.stdout, selectors.EVENT_READ)
+    buf = ""
+    while True:
+        left = deadline() - time.monotonic()
+        if left <= 0:
+            raise TimeoutError
+        if not sel.select(min(left, 1.0)):
+            continue
+        chunk = os.read(proc.stdout.fileno(), 65536).decode()
+        if not chunk:
+            return
+        buf += chunk
+        *done, buf = buf.split("\n")
+        yield from (ln for ln in done if ln.strip())
+
+
+def _kill(proc):
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    proc.wait()
+
+
+# -- the child: the known answers --------------------------------------------------------
+
+def _child(address, wide, salt, stems):
+    """Run each check in turn, a line of JSON before (``start``) and after each."""
+    import pyopencl as cl
+
+    global _CHILD_VERDICT
+    ip, idev = address
+    ctx = cl.Context([cl.get_platforms()[ip].get_devices()[idev]])
+    _CHILD_VERDICT = Verdict(_describe(ctx), bool(wide),
+                             {s: {"ok": True, "why": "", "seconds": 0.0, "salt": salt} for s in PROGRAMS})
+    fault = dict(item.split("=", 1) for item in os.environ.get("DISKPACK_CL_CHECK_FAULT", "").split(",")
+                 if "=" in item)
+    for stem in stems:
+        print(json.dumps({"start": stem}), flush=True)
+        t0 = time.perf_counter()
+        retry = False
+        try:
+            _inject(fault.get(stem))
+            why = _CHECKS[stem](ctx, fault.get(stem) == "wrong")
+        except (cl.Error, KeyError, BuildError) as exc:   # a build that failed or came back without kernels
+            why, retry = f"{type(exc).__name__}: {str(exc).strip().splitlines()[-1][:200] if str(exc).strip() else ''}", True
+        except Exception as exc:  # noqa: BLE001 - any failure of a check is its verdict
+            why = f"{type(exc).__name__}: {str(exc)[:200]}"
+        print(json.dumps({"stem": stem, "ok": why is None, "why": why or "", "retry": retry,
+                          "seconds": round(time.perf_counter() - t0, 3), "salt": salt}), flush=True)
+
+
+def _inject(fault):
+    """The checks' own fault injection (``DISKPACK_CL_CHECK_FAULT=stem=crash|hang|wrong``):
+    what a broken driver does, so that tests can see each refused."""
+    if fault == "crash":
+        os.kill(os.getpid(), signal.SIGSEGV)
+    if fault == "hang":
+        while True:
+            time.sleep(60)
+
+
+def _differ(name, got, want, atol):
+    """None where `got` matches `want` to `atol` (NaNs alike), else a line saying how far off."""
+    got, want = np.asarray(got, np.float64), np.asarray(want, np.float64)
+    if got.shape != want.shape:
+        return f"{name}: shape {got.shape}, expected {want.shape}"
+    bad = ~((np.isnan(got) & np.isnan(want)) | (np.abs(got - want) <= atol))
+    if bad.any():
+        err = np.nanmax(np.where(bad, np.abs(got - want), 0)) if np.isfinite(got[bad]).all() else np.inf
+        return f"{name}: {int(bad.sum())} of {got.size} values off by up to {err:.3g} (tolerance {atol:g})"
+    return None
+
+
+def _cases2d():
+    """Small 2D inputs with the code paths in them: random sites, a lattice (ties), sites on
+    the borders and corners, and weights; a torus and a rectangle."""
+    from .domain import Domain
+
+    rng = np.random.default_rng(20261205)
+    lattice = (np.stack(np.meshgrid(np.arange(6), np.arange(5)), -1).reshape(-1, 2) + 0.5) / (6, 5)
+    border = np.array([[0.0, 0.0], [1.0, 0.3], [0.5, 1.0], [0.0, 0.71], [1.0, 1.0]])
+    rect = Domain.rect(40.0, 30.0)
+    pts = np.vstack([rng.random((40, 2)), border]) * (40.0, 30.0)
+    w = (rng.random(len(pts)) * 2.0) ** 2
+    return [(Domain.torus(), rng.random((60, 2)), None),
+            (Domain.torus(), lattice, None),
+            (rect, pts, w),
+            (rect, lattice * (40.0, 30.0), None)]
+
+
+def _power_gap(domain, shape, pts, w, labels):
+    """How much worse, in power distance, each grid cell's label is than its best site."""
+    from .labels import grid_centers
+
+    c = grid_centers(domain, shape).reshape(-1, 1, 2)
+    d = c - pts[None]
+    if domain.periodic:
+        d -= np.rint(d / (domain.width, domain.height)) * (domain.width, domain.height)
+    pw = (d ** 2).sum(-1) - (0.0 if w is None else w[None])
+    lab = labels.reshape(-1)
+    if lab.min() < 0 or lab.max() >= len(pts):
+        return np.inf
+    return float((pw[np.arange(len(lab)), lab] - pw.min(1)).max())
+
+
+def _check_power_diagram(ctx, wrong):
+    from .raster import PowerRaster
+
+    for domain, pts, w in _cases2d():
+        scale2 = max(domain.width, domain.height) ** 2
+        for shape in ((37, 45), (16, 8), (3, 70)):   # partial tiles, one full tile, thin
+            for layout in ("tile", "item"):
+                for lanes in ((16, 8) if _CHILD_VERDICT.wide else (8,)):
+                    pr = PowerRaster(domain, shape, ctx, layout=layout, lanes=lanes)
+                    lab = pr.compute(pts, w, distance=False).labels.copy() + int(wrong)
+                    gap = _power_gap(domain, shape, pts, w, lab)
+                    if not gap <= 1e-5 * scale2:
+                        return (f"{layout} layout, {lanes} lanes, {shape}: labels not the least power "
+                                f"distance (off by {gap:.3g})")
+    return None
+
+
+def _check_inscribed_circle(ctx, wrong):
+    from .raster import PowerRaster
+
+    for domain, pts, w in _cases2d():
+        pr = PowerRaster(domain, (41, 37), ctx, layout="item")
+        est = pr.compute(pts, w)
+        lab, dist = est.labels.copy(), est.dist.copy()
+        want = np.full(len(pts), -1.0)
+        np.maximum.at(want, lab.ravel(), dist.ravel())
+        if (why := _differ("cell maxima", est.radii + wrong, want, 0.0)) is not None:
+            return why
+    return None
+
+
+def _check_cell_sums(ctx, wrong):
+    from .labels import cell_centroids
+    from .raster import PowerRaster
+
+    rng = np.random.default_rng(7)
+    for domain, pts, w in _cases2d():
+        for shape in ((37, 45), (16, 8)):
+            density = rng.random(shape)
+            for layout in ("tile", "item"):
+                pr = PowerRaster(domain, shape, ctx, layout=layout)
+                if pr._k_sums is None:
+                    return None   # no 64-bit atomics: the host sums (nothing runs here)
+                lab = pr.compute(pts, w, distance=False).labels.copy()
+                got = pr.centroids(pts, w, density)
+                want = cell_centroids(lab, pts, density, domain)
+                scale = max(domain.width, domain.height)
+                for name, g, h, tol in (("mass", got[1], want[1], 1e-5 * density.size),
+                                        ("centroids", got[0], want[0], 1e-4 * scale)):
+                    if (why := _differ(f"{layout} {shape} {name}", g + wrong, h, tol)) is not None:
+                        return why
+    return None
+
+
+def _check_cell_mic(ctx, wrong):
+    from .cells import CellMIC
+    from .geometry import exact_mic
+
+    for domain, pts, w in _cases2d():
+        got = CellMIC(domain, ctx).solve(pts, w, certify=False)
+        want = exact_mic(pts, w, domain)
+        if (why := _differ("MIC radii", got.radii + wrong, want.radii, 1e-9)) is not None:
+            return why
+    return None
+
+
+def _check_nearest(ctx, wrong):
+    from scipy.spatial import cKDTree
+
+    from .cells import CellMIC
+    from .domain import Domain
+
+    rng = np.random.default_rng(3)
+    for pts in (rng.random((300, 2)), np.vstack([rng.random((50, 2)), [[0.0, 0.0], [0.999, 0.999]]])):
+        got = CellMIC(Domain.torus(), ctx).nearest(pts)
+        want = cKDTree(pts, boxsize=1.0).query(pts, k=2)[0][:, 1]
+        if (why := _differ("nearest distances", got + wrong, want, 1e-14)) is not None:
+            return why
+    return None
+
+
+def _check_cell_mic3(ctx, wrong):
+    from .cells3 import CellMIC3, Domain3, exact_mis
+
+    rng = np.random.default_rng(5)
+    lattice = (np.stack(np.meshgrid(*[np.arange(4)] * 3), -1).reshape(-1, 3) + 0.5) / 4
+    for domain, X in ((Domain3.torus(), rng.random((150, 3))), (Domain3.torus(), lattice),
+                      (Domain3.box(2.0, 1.0, 1.5), rng.random((120, 3)) * (2.0, 1.0, 1.5))):
+        got = CellMIC3(domain, ctx).solve(X, certify=False)
+        if (why := _differ("sphere radii", got.radii + wrong, exact_mis(X, domain).radii, 1e-9)) is not None:
+            return why
+    return None
+
+
+def _check_dart_round(ctx, wrong):
+    from .parallel_darts import parallel_darts
+
+    got = parallel_darts(3000, seed=11, device=ctx)
+    want = parallel_darts(3000, seed=11, device=False)
+    return _differ("dart points", got + wrong, want, 0.0)
+
+
+def _check_gaussian_blur(ctx, wrong):
+    from .blur import DeviceBlur
+    from .radii import gaussian_blur
+
+    rng = np.random.default_rng(9)
+    blur = DeviceBlur(ctx)
+    for shape, sigma in (((37, 53), 1.5), ((5, 3), 2.5), ((1, 40), 0.7), ((24, 16), 4.0)):
+        img = rng.random(shape)
+        if (why := _differ(f"blur {shape} sigma {sigma}", blur(img, sigma) + wrong,
+                           gaussian_blur(img, sigma), 1e-12)) is not None:
+            return why
+    return None
+
+
+_CHECKS = {name[len("_check_"):]: fn for name, fn in globals().items() if name.startswith("_check_")}
+assert set(_CHECKS) == set(PROGRAMS)
+
+
+# -- the table and the command line of the child -------------------------------------------
+
+def check_device(device=None, *, refresh=False):
+    """The :class:`Verdict` of a device string's device (see :func:`diskpack_cl.get_context`),
+    the checks run now where none is cached (or with `refresh`)."""
+    from ._device import context_unchecked
+
+    return verdict_of(context_unchecked(device), refresh=refresh)
+
+
+def check_table(verdict):
+    """Lines of text: one per program (ok or why not, seconds), the layout, the notes."""
+    rows = [f"{verdict.device}: vectors {'512' if verdict.wide else '256'}-bit through builtins; "
+            f"checks {'cached' if verdict.cached else 'run now'} "
+            f"({verdict.seconds:.1f} s when they ran)"]
+    for stem in PROGRAMS:
+        v = verdict.programs[stem]
+        state = "ok" if v["ok"] else "FAILED"
+        rows.append(f"  {stem:<17} {state:<7} {v['seconds']:7.2f} s  {v['why'] or PROGRAMS[stem]}")
+    rows += [f"  note: {n}" for n in verdict.notes]
+    return rows
+
+
+def main(argv=None):
+    """The child's entry: ``python -m diskpack_cl.device_checks --child P:D --wide W --salt S STEM...``."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m diskpack_cl.device_checks")
+    ap.add_argument("--child", required=True)
+    ap.add_argument("--wide", type=int, required=True)
+    ap.add_argument("--salt", type=int, default=0)
+    ap.add_argument("stems", nargs="+", choices=list(PROGRAMS))
+    args = ap.parse_args(argv)
+    ip, idev = (int(x) for x in args.child.split(":"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _child((ip, idev), args.wide, args.salt, args.stems)
+
+
+if __name__ == "__main__":
+    # the package's own module, not this __main__ copy: the stages read its verdict
+    from diskpack_cl.device_checks import main as _main
+
+    _main()

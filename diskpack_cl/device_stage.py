@@ -1,0 +1,121 @@
+"""The device base: what every stage that runs OpenCL programs holds, in one place.
+
+A stage (:class:`~diskpack_cl.raster.PowerRaster`, :class:`~diskpack_cl.cells.CellMIC`,
+:class:`~diskpack_cl.cells3.CellMIC3`, :class:`~diskpack_cl.blur.DeviceBlur`, the
+dart rounds' grid) is a small class on :class:`DeviceStage`: the context, one
+queue, the device's verdict (:mod:`diskpack_cl.device_checks`), programs
+built with the switches the checks chose and refused where they failed,
+waits that let Ctrl-C through, and kernel profiling.
+"""
+
+from __future__ import annotations
+
+import pyopencl as cl
+
+from ._device import describe, get_context, wait_for
+from ._kernels import build_program
+from ._timing import Stopwatch
+from .device_checks import UntrustedProgram, verdict_of
+
+__all__ = ["DeviceStage", "has_fp64", "tile_lanes"]
+
+
+def has_fp64(ctx):
+    """True when the context's device supports double precision (``cl_khr_fp64``).
+
+    Examples
+    --------
+    >>> from diskpack_cl import get_context
+    >>> has_fp64(get_context()) in (True, False)
+    True
+    """
+    return "cl_khr_fp64" in ctx.devices[0].extensions
+
+
+def tile_lanes(verdict):
+    """Vector lanes of the CPU tile layout: 16 where the device's checks trusted 512-bit
+    vectors through builtins (``verdict.wide``), else 8.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> tile_lanes(SimpleNamespace(wide=True)), tile_lanes(SimpleNamespace(wide=False))
+    (16, 8)
+    """
+    return 16 if verdict.wide else 8
+
+
+class DeviceStage:
+    """Context, queue, trusted programs and waits of one stage on one OpenCL device.
+
+    Parameters
+    ----------
+    device : str or pyopencl.Context, optional
+        See :func:`diskpack_cl.get_context`.
+    profile : bool
+        Profile the kernels with OpenCL events: :meth:`wait` adds each
+        kernel's device seconds to `timings` (``kernel_<name>``, ``kernel``).
+    timings : Stopwatch, optional
+        Where the stage's seconds go (default: a new one).
+    fp64 : bool
+        The stage needs float64: a device without ``cl_khr_fp64`` raises.
+
+    Raises
+    ------
+    NoOpenCLError
+        No device.
+    RuntimeError
+        `fp64` and the device has none.
+
+    Examples
+    --------
+    >>> stage = DeviceStage()
+    >>> sorted(stage.program("inscribed_circle", {"PERIODIC": 1}))
+    ['cell_argmax', 'cell_max']
+    """
+
+    def __init__(self, device=None, *, profile=False, timings=None, fp64=False):
+        self.ctx = get_context(device)
+        self.device_name = describe(self.ctx)
+        if fp64 and not has_fp64(self.ctx):
+            raise RuntimeError(f"{self.device_name} has no float64 support (cl_khr_fp64)")
+        self.verdict = verdict_of(self.ctx)
+        props = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
+        self.queue = cl.CommandQueue(self.ctx, properties=props)
+        self.profile = profile
+        self.timings = Stopwatch() if timings is None else timings
+        #: Vector lanes of the CPU tile layout (:func:`tile_lanes`).
+        self.lanes = tile_lanes(self.verdict)
+
+    @property
+    def device(self):
+        """The ``pyopencl.Device``."""
+        return self.ctx.devices[0]
+
+    @property
+    def is_cpu(self):
+        """Whether the device is a CPU (the stages pick their layouts by it)."""
+        return bool(self.device.type & cl.device_type.CPU)
+
+    def program(self, stem, defines=None):
+        """The kernels of ``kernels/<stem>.cl`` built with `defines` and the checks' switches.
+
+        Raises
+        ------
+        UntrustedProgram
+            The program failed its known-answer check on this device.
+        """
+        why = self.verdict.refused(stem)
+        if why is not None:
+            raise UntrustedProgram(f"{stem} failed its check on {self.device_name}: {why}")
+        return build_program(self.ctx, stem, {**(defines or {}), **self.verdict.defines(stem)})
+
+    def trusts(self, stem):
+        """Whether program `stem` passed its check on this device."""
+        return self.verdict.refused(stem) is None
+
+    def wait(self, event, name):
+        """Wait for kernel `name` (signals get through); with `profile`, add its device time."""
+        wait_for(event)
+        if self.profile:
+            self.timings.kernel(name, (event.profile.end - event.profile.start) * 1e-9)
