@@ -156,25 +156,14 @@ def _preferred(pairs):
     return order + [d for *_, d in pairs if d not in order]
 
 
-#: A kernel every OpenCL C compiler builds: a device whose compiler refuses it is no device
-#: (the pip build of PoCL 3.0, LLVM 14, refuses every kernel on CPUs newer than its LLVM,
-#: such as AMD's family 26: "unknown target CPU 'generic'").
-_PROBE = "kernel void probe(global float *a) { a[get_global_id(0)] = sqrt(a[0]); }"
-
-
-def _context_that_builds(device):
-    """``(context, None)`` on `device`, or ``(None, why)`` when its compiler refuses :data:`_PROBE`."""
+def _context(device):
+    """``(context, None)`` on `device`, or ``(None, why)`` where the driver refuses one."""
     import pyopencl as cl  # not loaded at start-up
 
-    ctx = cl.Context([device])
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            cl.Program(ctx, _PROBE).build()
+        return cl.Context([device]), None
     except cl.Error as exc:
-        lines = [ln.strip() for ln in str(exc).splitlines() if "error" in ln.lower()]
-        return None, f"{device.name.strip()} cannot build OpenCL kernels ({(lines or [str(exc)])[-1]})"
-    return ctx, None
+        return None, f"{device.name.strip()}: no OpenCL context ({exc})"
 
 
 def _pick(spec):
@@ -218,8 +207,7 @@ def _pick(spec):
 def get_context(device=None):
     """Return a cached ``pyopencl.Context`` for the chosen device, once it is trusted.
 
-    A device is taken once its compiler builds a probe kernel and its core
-    programs gave the host's answers (:mod:`diskpack_cl.device_checks`: run
+    A device is taken once its core programs gave the host's answers (:mod:`diskpack_cl.device_checks`: run
     once per driver, device and kernel sources, in a child process, and
     cached); a device that fails them is passed over, with one line saying
     why, for the next one the device string allows.
@@ -265,7 +253,7 @@ def get_context(device=None):
 
 def context_unchecked(device=None):
     """The context :func:`get_context` would try first, before its known-answer checks
-    (``diskpack devices --check`` checks it); the probe kernel must still build."""
+    (``diskpack devices --check`` checks it)."""
     import pyopencl as cl  # not loaded at start-up
 
     if isinstance(device, cl.Context):
@@ -285,7 +273,7 @@ def _spec(device):
 def _contexts(spec):
     """``(context, None)`` or ``(None, why)`` for each device `spec` names, the default first."""
     for d in _pick(spec):
-        yield _context_that_builds(d)
+        yield _context(d)
 
 
 def wait_for(event):

@@ -77,6 +77,8 @@ FP64_PROGRAMS = ("cell_mic", "nearest", "cell_mic3", "dart_round", "gaussian_blu
 _FORMAT = 1
 #: Seconds one program's check may take (a cold build included) before it counts as a hang.
 TIME_LIMIT_S = 300.0
+#: Seconds the probe of 512-bit builtins may take (``kernels/wide_probe.cl``).
+PROBE_LIMIT_S = 10.0
 
 
 class UntrustedProgram(RuntimeError):
@@ -280,8 +282,18 @@ def _run_checks(device):
     address = _device_address(device)
     fp64 = "cl_khr_fp64" in device.extensions
     stems = [s for s in PROGRAMS if fp64 or s not in FP64_PROGRAMS]
-    wide = _reports_wide(device)
-    results, notes = _checked(address, stems, wide)
+    wide = _reports_wide(device) and fp64
+    notes = []
+    if wide:
+        # a fresh build each time (a crashed one leaves a broken cache entry), and a short
+        # limit: the right answer takes a second; a driver that miscompiles it runs away
+        probe = _children(address, ["wide_probe"], True, salt=_salt(), limit=PROBE_LIMIT_S)["wide_probe"]
+        if not probe["ok"]:
+            wide = False
+            notes.append(f"512-bit vectors through builtins failed (wide_probe: {probe['why']}); "
+                         "built with 256-bit halves")
+    results, more = _checked(address, stems, wide)
+    notes += more
     if wide and any(not results[s]["ok"] for s in VECTOR_PROGRAMS if s in results):
         # the vector programs, and any that failed with them (a stage builds several)
         again = [s for s in results if s in VECTOR_PROGRAMS or not results[s]["ok"]]
@@ -296,6 +308,7 @@ def _run_checks(device):
             wide = False
     for s in PROGRAMS:
         results.setdefault(s, {"ok": False, "why": "the device has no float64", "seconds": 0.0, "salt": 0})
+    results.pop("wide_probe", None)
     desc = f"{device.name.strip()} ({device.platform.name.strip()})"
     return Verdict(desc, wide, results, time.perf_counter() - start, False, notes)
 
@@ -321,13 +334,13 @@ def _salt():
     return int.from_bytes(os.urandom(3), "little") + 1
 
 
-def _children(address, stems, wide, salt):
+def _children(address, stems, wide, salt, limit=None):
     """Run the checks of `stems` in child processes: one child until it ends; a program
     whose child crashed or overran its time is failed, and the rest go to a new child."""
     results = {}
     todo = list(stems)
     while todo:
-        got, running, why = _one_child(address, todo, wide, salt)
+        got, running, why = _one_child(address, todo, wide, salt, limit)
         results.update(got)
         todo = [s for s in todo if s not in results]
         if running is not None and running not in results:
@@ -341,11 +354,11 @@ def _children(address, stems, wide, salt):
     return results
 
 
-def _one_child(address, stems, wide, salt):
+def _one_child(address, stems, wide, salt, limit=None):
     """One child over `stems`: ``(results, program running when it ended, why it ended)``."""
     cmd = [sys.executable, "-m", "diskpack_cl.device_checks", "--child", f"{address[0]}:{address[1]}",
            "--wide", str(int(wide)), "--salt", str(salt), *stems]
-    limit = float(os.environ.get("DISKPACK_CL_CHECK_TIME_LIMIT_S", TIME_LIMIT_S))
+    limit = float(os.environ.get("DISKPACK_CL_CHECK_TIME_LIMIT_S", TIME_LIMIT_S) if limit is None else limit)
     results, running = {}, None
     with tempfile.TemporaryFile("w+") as err:
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL,
@@ -366,6 +379,7 @@ def _one_child(address, stems, wide, salt):
         finally:
             if proc.poll() is None:
                 _kill(proc)
+            proc.stdout.close()
         rc = proc.wait()
         if rc == 0:
             return results, running, None
@@ -414,7 +428,7 @@ def _child(address, wide, salt, stems):
     ip, idev = address
     ctx = cl.Context([cl.get_platforms()[ip].get_devices()[idev]])
     _CHILD_VERDICT = Verdict(_describe(ctx), bool(wide),
-                             {s: {"ok": True, "why": "", "seconds": 0.0, "salt": salt} for s in PROGRAMS})
+                             {s: {"ok": True, "why": "", "seconds": 0.0, "salt": salt} for s in _CHECKS})
     fault = dict(item.split("=", 1) for item in os.environ.get("DISKPACK_CL_CHECK_FAULT", "").split(",")
                  if "=" in item)
     for stem in stems:
@@ -435,8 +449,10 @@ def _child(address, wide, salt, stems):
 def _inject(fault):
     """The checks' own fault injection (``DISKPACK_CL_CHECK_FAULT=stem=crash|hang|wrong``):
     what a broken driver does, so that tests can see each refused."""
-    if fault == "crash":
-        os.kill(os.getpid(), signal.SIGSEGV)
+    if fault == "crash":   # a real invalid read, as a miscompiled kernel makes
+        import ctypes
+
+        ctypes.string_at(0)
     if fault == "hang":
         while True:
             time.sleep(60)
@@ -602,8 +618,28 @@ def _check_gaussian_blur(ctx, wrong):
     return None
 
 
+def _check_wide_probe(ctx, wrong):
+    import pyopencl as cl
+
+    from ._kernels import build_program
+
+    k = build_program(ctx, "wide_probe", _CHILD_VERDICT.defines("wide_probe"))["wide_probe"]
+    queue, mf = cl.CommandQueue(ctx), cl.mem_flags
+    x = np.linspace(-3.3, 4.1, 8)
+    f = np.linspace(-1.25, 2.5, 16).astype(np.float32)
+    out, fout = np.zeros(16), np.zeros(16, np.float32)
+    b_in, b_f = (cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=a) for a in (x, f))
+    b_out, b_fout = cl.Buffer(ctx, mf.WRITE_ONLY, out.nbytes), cl.Buffer(ctx, mf.WRITE_ONLY, fout.nbytes)
+    k(queue, (1,), None, b_in, b_f, b_out, b_fout)
+    cl.enqueue_copy(queue, out, b_out)
+    cl.enqueue_copy(queue, fout, b_fout)
+    want = np.concatenate([np.rint(x * 1.5), f[:8].astype(np.float64)])
+    return (_differ("double8 builtins", out + wrong, want, 0.0)
+            or _differ("float16 builtins", fout, np.where(np.arange(16) >= 7, 0.0, f), 0.0))
+
+
 _CHECKS = {name[len("_check_"):]: fn for name, fn in globals().items() if name.startswith("_check_")}
-assert set(_CHECKS) == set(PROGRAMS)
+assert set(_CHECKS) == set(PROGRAMS) | {"wide_probe"}
 
 
 # -- the table and the command line of the child -------------------------------------------
@@ -637,7 +673,7 @@ def main(argv=None):
     ap.add_argument("--child", required=True)
     ap.add_argument("--wide", type=int, required=True)
     ap.add_argument("--salt", type=int, default=0)
-    ap.add_argument("stems", nargs="+", choices=list(PROGRAMS))
+    ap.add_argument("stems", nargs="+", choices=list(_CHECKS))
     args = ap.parse_args(argv)
     ip, idev = (int(x) for x in args.child.split(":"))
     with warnings.catch_warnings():

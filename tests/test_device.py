@@ -4,7 +4,10 @@ import pyopencl as cl
 import pytest
 
 from diskpack_cl import NoOpenCLError
-from diskpack_cl import _device
+from types import SimpleNamespace
+
+from diskpack_cl import _device, device_checks
+from diskpack_cl.device_checks import DeviceWarning
 
 
 class _Dev:
@@ -61,7 +64,8 @@ def test_no_platform_message_names_no_command_line_flag(monkeypatch):
 def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
     made = []
     monkeypatch.setattr(_device, "_CONTEXTS", {})
-    monkeypatch.setattr(_device, "_context_that_builds", lambda d: (made.append([d]) or object(), None))
+    monkeypatch.setattr(_device, "_context", lambda d: (made.append([d]) or object(), None))
+    monkeypatch.setattr(device_checks, "verdict_of", lambda ctx: SimpleNamespace(core_failure=lambda: None))
     monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
     monkeypatch.setenv("PYOPENCL_CTX", "portable:0")
     ctx = _device.get_context()
@@ -71,35 +75,38 @@ def test_pyopencl_ctx_environment_is_read(fake, monkeypatch):
     assert made[-1] == [GPU1]
 
 
-# -- devices whose compiler refuses kernels -----------------------------------
+# -- devices whose compiler refuses kernels or gives wrong answers --------------------
 
 
-def test_a_device_that_builds_no_kernel_is_passed_over(fake, monkeypatch):
+def test_a_device_that_fails_its_core_checks_is_passed_over(fake, monkeypatch):
     monkeypatch.setattr(_device, "_CONTEXTS", {})
     monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
     monkeypatch.delenv("PYOPENCL_CTX", raising=False)
+    monkeypatch.setattr(_device, "_context", lambda d: (SimpleNamespace(devices=[d]), None))
+    monkeypatch.setattr(_device, "describe", lambda ctx: ctx.devices[0].name)
 
-    def builds(d):
-        if d is GPU0:
-            return None, "NVIDIA H200 cannot build OpenCL kernels (error: unknown target CPU 'generic')"
-        return f"context on {d.name}", None
-    monkeypatch.setattr(_device, "_context_that_builds", builds)
-    assert _device.get_context() == "context on NVIDIA A100"     # the next GPU
-    with pytest.raises(NoOpenCLError, match="NVIDIA H200 cannot build OpenCL kernels .*unknown target"):
-        _device.get_context("1:0")                                 # asked for by name: refused
+    def verdict(ctx):
+        why = "power_diagram: error: unknown target CPU 'generic'" if ctx.devices[0] is GPU0 else None
+        return SimpleNamespace(core_failure=lambda: why)
+    monkeypatch.setattr(device_checks, "verdict_of", verdict)
+    with pytest.warns(DeviceWarning, match="NVIDIA H200 passed over: power_diagram"):
+        assert _device.get_context().devices[0] is GPU1              # the next GPU
+    with pytest.raises(NoOpenCLError, match="NVIDIA H200 passed over: power_diagram: .*unknown target"):
+        with pytest.warns(DeviceWarning):
+            _device.get_context("1:0")                               # asked for by name: refused
 
 
-def test_no_device_that_builds_is_no_opencl(fake, monkeypatch):
+def test_no_device_with_a_context_is_no_opencl(fake, monkeypatch):
     monkeypatch.setattr(_device, "_CONTEXTS", {})
-    monkeypatch.setattr(_device, "_context_that_builds", lambda d: (None, f"{d.name} cannot build"))
-    with pytest.raises(NoOpenCLError, match="H200 cannot build; NVIDIA A100 cannot build; "
-                                            "pthread-AMD EPYC cannot build; install"):
+    monkeypatch.setattr(_device, "_context", lambda d: (None, f"{d.name}: no OpenCL context"))
+    with pytest.raises(NoOpenCLError, match="H200: no OpenCL context; NVIDIA A100: no OpenCL context; "
+                                            "pthread-AMD EPYC: no OpenCL context; install"):
         _device.get_context("")
 
 
-def test_the_probe_kernel_builds_on_a_real_device(ctx):
-    built, why = _device._context_that_builds(ctx.devices[0])
-    assert why is None and built.devices[0] == ctx.devices[0]
+def test_a_real_device_gives_a_context(ctx):
+    made, why = _device._context(ctx.devices[0])
+    assert why is None and made.devices[0] == ctx.devices[0]
 
 
 # -- devices that report several kinds ------------------------------------

@@ -1,16 +1,27 @@
-"""``diskpack devices``: list the OpenCL platforms and devices."""
+"""``diskpack devices``: list the OpenCL platforms and devices; ``--check`` their known answers."""
 
 from __future__ import annotations
 
+import argparse
 
 from ._common import _device_options
 
 
 def _add_devices(subparsers):
-    p = subparsers.add_parser("devices", help="list OpenCL platforms and devices",
-                              description="List OpenCL platforms and devices and say which "
-                                          "one diskpack would use.")
+    p = subparsers.add_parser(
+        "devices", help="list OpenCL platforms and devices; --check: which programs each runs",
+        description="List OpenCL platforms and devices and say which one diskpack would use. "
+                    "With --check, run the chosen device's known-answer checks (or read their "
+                    "cached verdict) and print, per program, whether the device gave the host's "
+                    "answers.",
+        epilog="examples:\n  diskpack devices\n  diskpack devices --check\n"
+               "  diskpack devices --check --recheck --device cpu",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     _device_options(p)
+    p.add_argument("--check", action="store_true",
+                   help="print the device's known-answer verdicts (run now where none is cached)")
+    p.add_argument("--recheck", action="store_true",
+                   help="with --check: run the checks again even where a verdict is cached")
     p.set_defaults(run=_run_devices)
 
 
@@ -22,5 +33,9 @@ def _run_devices(args):
         print(f"{index:>5}  {platform}  |  {device}  [{kind}]")
     if not rows:
         print("(no OpenCL devices)")
+    if args.check:
+        from diskpack_cl.device_checks import check_device, check_table  # not loaded at start-up
+
+        print("\n".join(check_table(check_device(args.device, refresh=args.recheck))))
     print(f"using: {describe(get_context(args.device))}")
     return 0

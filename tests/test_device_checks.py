@@ -1,0 +1,192 @@
+"""Known-answer checks (diskpack_cl.device_checks): faults injected into the check itself.
+
+Each fault is what a broken driver does: a program that returns wrong numbers,
+one that crashes its process, one that never returns, and broken entries of
+PoCL's kernel cache.  Each must be refused in the child, the parent (this
+test process) stays alive, the fallback is taken, and the verdict is cached
+and reused without running the checks again.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from diskpack_cl import NoOpenCLError, _device, device_checks
+from diskpack_cl.device_checks import DeviceWarning, check_device, verdict_of
+
+pytest.importorskip("pyopencl")
+
+
+@pytest.fixture
+def fresh(monkeypatch, tmp_path, ctx):
+    """A private verdict cache and no verdict or context remembered by this process."""
+    monkeypatch.setenv("DISKPACK_CL_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("DISKPACK_CL_CHECK_TIME_LIMIT_S", "60")
+    monkeypatch.setattr(device_checks, "_MEMO", {})
+    monkeypatch.setattr(_device, "_CONTEXTS", {})
+    return ctx
+
+
+def _cached_files(tmp_path):
+    return sorted((tmp_path / "cache" / "device-checks").glob("*.json"))
+
+
+def _no_children(monkeypatch):
+    """Make any further check process an error: a cached verdict must be enough."""
+    def refuse(*args, **kwargs):
+        raise AssertionError("the checks ran again where a verdict was cached")
+    monkeypatch.setattr(device_checks.subprocess, "Popen", refuse)
+
+
+def test_the_known_answers_pass_on_the_test_device(fresh, tmp_path):
+    v = verdict_of(fresh)
+    assert not v.cached and v.core_failure() is None
+    assert all(e["ok"] for e in v.programs.values() if e["why"] != "the device has no float64")
+    assert len(_cached_files(tmp_path)) == 1
+
+
+def test_wrong_numbers_refuse_a_core_program_and_the_device(fresh, tmp_path, monkeypatch):
+    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "cell_mic=wrong")
+    v = verdict_of(fresh)
+    why = v.refused("cell_mic")
+    assert why is not None and "MIC radii" in why and "off by" in why
+    assert v.refused("power_diagram") is None
+    # the device is passed over with one line, and the engine falls back to the host
+    with pytest.warns(DeviceWarning, match="passed over: cell_mic"):
+        with pytest.raises(NoOpenCLError, match="cell_mic"):
+            _device.get_context()
+    from diskpack_cl.domain import Domain
+    from diskpack_cl.engine import make_engine
+
+    with pytest.warns(DeviceWarning):
+        engine = make_engine(Domain.torus(), 100, "auto")
+    assert engine.backend == "exact" and "cell_mic" in engine.fallback
+    # cached, and reused without a child (the fault is gone: the verdict still holds)
+    monkeypatch.delenv("DISKPACK_CL_CHECK_FAULT")
+    monkeypatch.setattr(device_checks, "_MEMO", {})
+    _no_children(monkeypatch)
+    again = verdict_of(fresh)
+    assert again.cached and again.refused("cell_mic") == why
+
+
+def test_a_crash_refuses_that_program_only_and_its_stage_runs_on_the_host(fresh, monkeypatch):
+    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "gaussian_blur=crash")
+    v = verdict_of(fresh)
+    if v.programs["gaussian_blur"]["why"] == "the device has no float64":
+        pytest.skip("no float64: the blur never runs on this device")
+    assert "crashed (SIGSEGV)" in v.refused("gaussian_blur")
+    # the programs after it were checked in a new child
+    assert v.core_failure() is None and v.programs["cell_mic3"]["ok"]
+    from diskpack_cl.blur import DeviceBlur
+    from diskpack_cl.device_checks import UntrustedProgram
+    from diskpack_cl.stipple import stipple
+
+    with pytest.raises(UntrustedProgram, match="gaussian_blur failed its check"):
+        DeviceBlur(fresh)
+    g = np.linspace(0, 1, 48 * 32).reshape(32, 48)
+    with pytest.warns(DeviceWarning, match="blurs on the host"):
+        got = stipple(g, 60, seed=1, schedule=[("mix", 3, 0.5)], device=fresh)
+    assert got.engine == "opencl" and len(got.points) == 60
+
+
+def test_a_hang_is_killed_at_the_time_limit_and_refused(fresh, monkeypatch):
+    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "dart_round=hang")
+    monkeypatch.setenv("DISKPACK_CL_CHECK_TIME_LIMIT_S", "8")
+    v = verdict_of(fresh)
+    if v.programs["dart_round"]["why"] == "the device has no float64":
+        pytest.skip("no float64: the dart rounds never run on this device")
+    assert "no answer in 8 s (killed)" in v.refused("dart_round")
+    assert v.programs["gaussian_blur"]["ok"]   # checked after the hang, in a new child
+    from diskpack_cl.parallel_darts import parallel_darts
+
+    with pytest.warns(DeviceWarning, match="dart rounds on the host"):
+        got = parallel_darts(3000, seed=4, device=fresh)
+    np.testing.assert_array_equal(got, parallel_darts(3000, seed=4, device=False))
+
+
+def test_a_damaged_verdict_file_is_checked_again(fresh, tmp_path, monkeypatch):
+    verdict_of(fresh)
+    (path,) = _cached_files(tmp_path)
+    path.write_text('{"format": 1, "programs": {"cell_mic": ')
+    monkeypatch.setattr(device_checks, "_MEMO", {})
+    v = verdict_of(fresh)
+    assert not v.cached and json.loads(path.read_text())["programs"].keys() == v.programs.keys()
+
+
+def test_checks_off_trusts_without_a_child(monkeypatch, ctx):
+    monkeypatch.setenv("DISKPACK_CL_DEVICE_CHECKS", "0")
+    monkeypatch.setattr(device_checks, "_MEMO", {})
+    _no_children(monkeypatch)
+    assert verdict_of(ctx).core_failure() is None
+
+
+_SCRIPT = """
+import json, warnings
+warnings.simplefilter("always")
+from diskpack_cl.device_checks import check_device
+v = check_device()
+print(json.dumps({"notes": v.notes, "failed": {k: e["why"] for k, e in v.programs.items()
+                  if not e["ok"] and e["why"] != "the device has no float64"}}))
+"""
+
+
+def _check_in_process(env):
+    proc = subprocess.run([sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True,
+                          timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
+
+
+def _is_pocl(ctx):
+    return "Portable Computing Language" in ctx.devices[0].platform.name
+
+
+@pytest.mark.parametrize("damage", ["random", "empty"])
+def test_a_broken_kernel_cache_entry_is_rebuilt_fresh(ctx, tmp_path, damage):
+    if not _is_pocl(ctx):
+        pytest.skip("PoCL's kernel cache")
+    env = dict(os.environ, POCL_CACHE_DIR=str(tmp_path / "pocl"), DISKPACK_CL_CACHE_DIR=str(tmp_path / "a"),
+               DISKPACK_CL_CHECK_TIME_LIMIT_S="120")
+    first, _ = _check_in_process(env)
+    assert first["failed"] == {}
+    rng = np.random.default_rng(0)
+    broken = 0
+    for p in (tmp_path / "pocl").rglob("*"):
+        if p.is_file() and p.stat().st_size > 0:
+            p.write_bytes(rng.bytes(256) if damage == "random" else b"")
+            broken += 1
+    assert broken
+    env["DISKPACK_CL_CACHE_DIR"] = str(tmp_path / "b")   # no verdict yet: the checks run
+    second, _ = _check_in_process(env)
+    assert second["failed"] == {}
+    assert any("fresh kernel-cache entry" in n for n in second["notes"]), second
+
+
+def test_an_empty_pocl_cache_dir_gets_a_private_one(ctx, tmp_path):
+    if not _is_pocl(ctx):
+        pytest.skip("PoCL's kernel cache")
+    env = dict(os.environ, POCL_CACHE_DIR="", DISKPACK_CL_CACHE_DIR=str(tmp_path / "a"))
+    got, err = _check_in_process(env)
+    assert got["failed"] == {}
+    assert "POCL_CACHE_DIR was set empty" in err
+    assert (tmp_path / "a" / "pocl").is_dir()
+
+
+def test_devices_check_prints_the_table(fresh, capsys):
+    from diskpack_cl.cli import main
+
+    assert main(["devices", "--check"]) == 0
+    out = capsys.readouterr().out
+    for stem in device_checks.PROGRAMS:
+        assert stem in out
+    assert "using:" in out and "through builtins" in out
+
+
+def test_check_device_names_the_device(fresh):
+    v = check_device()
+    assert v.device == _device.describe(fresh)
+    assert check_device() is v   # remembered by this process
