@@ -45,6 +45,7 @@ OPENCL_DOCTESTS = {
     "diskpack_cl.device_stage.has_fp64",
     "diskpack_cl.device_stage.DeviceStage",
     "diskpack_cl.device_checks",
+    "diskpack_cl.known_answers",
     "diskpack_cl.engine.OpenCLEngine",
     "diskpack_cl.cells.CellMIC",
     "diskpack_cl.cells3.CellMIC3",

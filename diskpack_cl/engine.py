@@ -57,11 +57,14 @@ from ._timing import Stopwatch
 from .geometry import MIC, exact_mic
 from .labels import cell_centroids, grid_power_labels
 
-__all__ = ["BACKENDS", "ROUTES", "check_backend", "make_engine", "check_against_exact",
-           "ExactEngine", "OpenCLEngine"]
+__all__ = ["BACKENDS", "ROUTES", "HOST_DEVICE", "check_backend", "make_engine",
+           "check_against_exact", "stage_record", "engine_record", "ExactEngine", "OpenCLEngine"]
 
 BACKENDS = ("opencl", "exact", "auto")
 ROUTES = ("auto", "cells", "raster")
+
+#: The device of the host's stages (the exact engine, scipy's blur).
+HOST_DEVICE = "cpu (scipy)"
 
 
 def check_backend(backend):
@@ -107,6 +110,39 @@ def check_against_exact(points, weights, domain, radii, empty, tol=1e-9):
         i = int(np.argmax(bad))
         raise RuntimeError(f"{int(bad.sum())} MIC radii differ from exact_mic's (cell {i}: "
                            f"{radii[i]!r} against {ref.radii[i]!r})")
+
+
+def stage_record(backend, device=None, *, route=None, fallback=None):
+    """Where one stage of a run ran, as the summaries' ``stages`` hold it.
+
+    ``backend`` (``opencl`` or ``exact``: the host) and ``device`` always;
+    ``route`` and ``fallback`` (why the stage ran on the host where it
+    could have run on a device) only where given.
+
+    Examples
+    --------
+    >>> stage_record("exact", HOST_DEVICE, fallback="no float64")
+    {'backend': 'exact', 'device': 'cpu (scipy)', 'fallback': 'no float64'}
+    """
+    record = {"backend": backend, "device": device}
+    if route:
+        record["route"] = route
+    if fallback:
+        record["fallback"] = fallback
+    return record
+
+
+def engine_record(engine):
+    """The :func:`stage_record` of an engine: its backend, device, route and fallback.
+
+    Examples
+    --------
+    >>> from diskpack_cl.domain import Domain
+    >>> engine_record(make_engine(Domain.torus(), 100, "exact"))
+    {'backend': 'exact', 'device': 'cpu (scipy)', 'route': 'exact'}
+    """
+    return stage_record(engine.backend, engine.device, route=engine.name,
+                        fallback=engine.fallback)
 
 
 def _answer(mic, solver, nn=None):
@@ -168,7 +204,7 @@ class ExactEngine(_Engine):
     """
 
     name = backend = "exact"
-    device = "cpu (scipy)"
+    device = HOST_DEVICE
     profile = False   # no kernels to time
 
     def __init__(self, domain, grid=None, *, verify=False, fallback=None, timings=None):

@@ -56,7 +56,7 @@ from .schedule import StippleOptions
 from ._checks import check_count
 from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
                       dot_radii, result_summary)
-from .engine import make_engine
+from .engine import engine_record, make_engine
 from .pen_path import pen_path_order
 
 __all__ = ["ColorStippleResult", "assign_pens", "dot_density", "dots_per_pen", "pen_counts",
@@ -93,6 +93,9 @@ class ColorStippleResult(StippleResult):
     timings, params, engine, tone_radius
         As :class:`diskpack_cl.StippleResult`, over all dots together (the
         certificate covers every pair, whatever the pens).
+    stages
+        As :class:`diskpack_cl.StippleResult`, with ``pens``: the engine of
+        the pull of each dot to its own pen's centroid.
     pen : (n,) int64
         Pen index of each dot.
     names : tuple of str
@@ -573,4 +576,5 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
         pen_radius=pen_ink_radii(state.points, pen, sep.layers), width=W, height=H,
         history=history + more,
         timings=watch.seconds, params=params, engine=engine.backend,
-        tone_radius=tone_radius(opt.n, sep.darkness))
+        tone_radius=tone_radius(opt.n, sep.darkness),
+        stages=dict(stage.stages, pens=engine_record(pens[0])))

@@ -178,6 +178,9 @@ class PoissonDiskResult:
     stats : dict
         The relaxation's :attr:`RelaxResult.stats` (``fallback``: why
         ``backend="auto"`` took the exact backend).
+    stages : dict
+        Where the relaxation (or a density's stippling) ran:
+        :attr:`RelaxResult.stages` (:attr:`~diskpack_cl.stipple.StippleResult.stages`).
 
     Examples
     --------
@@ -201,6 +204,7 @@ class PoissonDiskResult:
     backend: str = ""
     device: str = ""
     stats: dict = field(default_factory=dict)
+    stages: dict = field(default_factory=dict)
 
 
 def as_box(box):
@@ -515,7 +519,8 @@ def poisson_summary(res):
             "min_distance": float(res.min_distance), "reached": bool(res.reached),
             "stop_reason": res.stop_reason, "seconds": float(res.seconds),
             "init_seconds": float(res.start_seconds), "backend": res.backend,
-            "device": res.device, "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
+            "device": res.device, "stages": res.stages,
+            "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
 
 
 def poisson_job(n, outputs, options=None, *, seed=None, device=None, callback=None, verify=False,
@@ -655,7 +660,8 @@ def _relaxed3(n, distance, box, seed, opt, options):
     reached = bool(d_min >= distance) if distance is not None else bool(res.rho[-1] >= eps)
     return PoissonDiskResult(res.points, domain, float(res.rho[-1]), d_min, reached,
                              res.stop_reason, res.iterations, res.seconds, t_start, float(eps),
-                             res.timings, float(res.rho[0]), res.backend, res.device)
+                             res.timings, float(res.rho[0]), res.backend, res.device, res.stats,
+                             res.stages)
 
 
 def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
@@ -675,7 +681,7 @@ def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
         d_min = _min_distance(pts, domain) if len(pts) >= 2 else float("inf")
     return PoissonDiskResult(pts, domain, rho, float(d_min), reached, res.stop_reason,
                              res.iterations, res.seconds, t_start, float(eps), res.timings,
-                             float(res.rho[0]), res.backend, res.device, res.stats)
+                             float(res.rho[0]), res.backend, res.device, res.stats, res.stages)
 
 
 def _with_density(n, density, domain, seed, backend, device):
@@ -697,4 +703,5 @@ def _with_density(n, density, domain, seed, backend, device):
     h, w = gray.shape
     pts = res.points * (domain.width / w, domain.height / h)
     return PoissonDiskResult(pts, domain, float("nan"), _min_distance(pts, domain), True, "density",
-                             len(res.history), time.perf_counter() - t0, 0.0, float("nan"))
+                             len(res.history), time.perf_counter() - t0, 0.0, float("nan"),
+                             stages=res.stages)

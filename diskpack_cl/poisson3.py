@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 
 from .cells3 import CellMIC3, Domain3, exact_mis
 from .domain import box_sizes
+from .engine import HOST_DEVICE
 from .relax import STALL_GAIN, RelaxResult
 from ._device import NoOpenCLError
 from .sampling import _first_come, _rng
@@ -169,9 +170,10 @@ def relax_poisson3(points, eps=0.75, *, domain=None, max_iter=1000, patience=100
     X = dom.check(points)
     if not 0.0 < eps < 1.0:
         raise ValueError(f"eps must be in (0, 1), got {eps}")
-    solve, name = _solver(dom, backend, device, certify)
+    solve, name, where, fallback = _solver(dom, backend, device, certify)
     t0 = time.perf_counter()
-    rho, best_at, it, reason, stats = [normalized_radius3(X, dom)], 0, 0, "max_iter", {}
+    rho, best_at, it, reason = [normalized_radius3(X, dom)], 0, 0, "max_iter"
+    stats = {"fallback": fallback} if fallback else {}
     while rho[-1] < eps and it < max_iter:
         it += 1
         step = solve(X)
@@ -189,18 +191,22 @@ def relax_poisson3(points, eps=0.75, *, domain=None, max_iter=1000, patience=100
     if rho[-1] >= eps:
         reason = "eps"
     return RelaxResult(X, np.array(rho), it, reason, time.perf_counter() - t0, {},
-                       name, name, stats)
+                       name, where, stats)
 
 
 def _solver(domain, backend, device, certify=True):
-    """``(points -> MIS, name)`` for the backend."""
+    """``(points -> MIS, backend, device, fallback)``: the solver of `backend`, where it
+    runs, and why ``auto`` took the exact one (None where it did not)."""
     if backend not in ("auto", "opencl", "exact"):
         raise ValueError(f"backend must be 'auto', 'opencl' or 'exact', got {backend!r}")
+    fallback = None
     if backend != "exact":
         try:
             engine = CellMIC3(domain, device)
-            return (lambda X: engine.solve(X, certify)), "opencl"
-        except (NoOpenCLError, RuntimeError):
+            return (lambda X: engine.solve(X, certify)), "opencl", engine.device_name, None
+        except (NoOpenCLError, RuntimeError) as exc:
             if backend == "opencl":
                 raise
-    return (lambda X: exact_mis(X, domain)), "exact"
+            # the 2D engine's words (diskpack_cl.engine.make_engine)
+            fallback = f"no OpenCL device ({exc})" if isinstance(exc, NoOpenCLError) else str(exc)
+    return (lambda X: exact_mis(X, domain)), "exact", HOST_DEVICE, fallback

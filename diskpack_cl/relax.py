@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from .domain import Domain
-from .engine import BACKENDS, check_backend, make_engine
+from .engine import BACKENDS, check_backend, make_engine, stage_record
 from .options import check_fields, option
 from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
                        min_distance, min_distance_at_most, min_distance_since,
@@ -96,6 +96,7 @@ def relax_summary(res, eps):
             "iterations": int(res.iterations), "rho_start": float(res.rho[0]),
             "rho_final": float(res.rho[-1]), "eps": float(eps), "stop_reason": res.stop_reason,
             "seconds": float(res.seconds), "backend": res.backend, "device": res.device,
+            "stages": res.stages,
             "stage_seconds": {k: float(v) for k, v in res.timings.items()}}
 
 
@@ -169,6 +170,14 @@ class RelaxResult:
     @property
     def seconds_per_iteration(self):
         return self.seconds / max(self.iterations, 1)
+
+    @property
+    def stages(self):
+        """Where the relaxation ran, as the summaries' ``stages``: ``{"engine": record}``
+        (:func:`~diskpack_cl.engine.stage_record`, with the route and any fallback)."""
+        why = self.stats.get("fallback")   # the per-cell kernel's count of that name is no reason
+        return {"engine": stage_record(self.backend, self.device, route=self.stats.get("engine"),
+                                       fallback=why if isinstance(why, str) else None)}
 
 
 def _check_points(points, domain):

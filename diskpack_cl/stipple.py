@@ -91,7 +91,7 @@ from .dithering import _least, error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
-from .engine import make_engine
+from .engine import HOST_DEVICE, engine_record, make_engine, stage_record
 from .image import to_gray
 from .memory import PageReserve, freed_memory_kept
 
@@ -139,6 +139,12 @@ class StippleResult:
         Radius (px) at which n equal dots hold the image's darkness as ink
         (:func:`diskpack_cl.picture_measures.tone_radius`): what the writers draw by
         default.
+    stages : dict
+        Where each stage ran (:attr:`StippleStage.stages`): ``engine`` (the
+        MICs and centroids) and ``blur`` (the fields' Gaussian blurs), each a
+        :func:`~diskpack_cl.engine.stage_record` (``backend``, ``device``,
+        and ``fallback``: why it ran on the host, where it did so for want
+        of a usable device).
 
     Examples
     --------
@@ -148,6 +154,8 @@ class StippleResult:
     ((60, 2), (60,), (48, 32), 3)
     >>> res.summary()["certificate"]["valid"]
     True
+    >>> res.summary()["stages"]["engine"]
+    {'backend': 'exact', 'device': 'cpu (scipy)', 'route': 'exact'}
     """
 
     points: np.ndarray
@@ -162,6 +170,7 @@ class StippleResult:
     params: dict = field(default_factory=dict)
     engine: str = "opencl"
     tone_radius: float = None
+    stages: dict = field(default_factory=dict)
 
     @property
     def n(self):
@@ -175,7 +184,15 @@ class StippleResult:
 
 def result_summary(result, **extra):
     """The JSON-ready summary of a stippling (one pen or several): sizes, k, radii,
-    iterations, `extra`, the certificate's fields, timings and params."""
+    iterations, `extra`, where each stage ran, the certificate's fields, timings and params.
+
+    Examples
+    --------
+    >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
+    >>> s = result_summary(stipple(g, 60, schedule=[("mix", 2, 0.5)], backend="exact"))
+    >>> s["iterations"], s["stages"]["blur"]["backend"]
+    (2, 'exact')
+    """
     return {
         "n": int(result.n),
         "width": int(result.width),
@@ -185,6 +202,7 @@ def result_summary(result, **extra):
         "max_radius": float(result.radii.max()),
         "iterations": len(result.history),
         **extra,
+        "stages": result.stages,
         "certificate": result.certificate.as_dict(),
         "timings": {k: float(v) for k, v in result.timings.items()},
         "params": result.params,
@@ -244,6 +262,9 @@ class StippleStage:
     density: np.ndarray
     blend_weight: object = None  # features="detail": per-pixel weight, see radii.detail_fields
     ink: np.ndarray = None       # darkness per pixel blurred by INK_SIGMA (support > 0)
+    #: Where the stage's parts ran: ``{"engine": ..., "blur": ...}``, each a
+    #: :func:`~diskpack_cl.engine.stage_record` (the results' ``stages``).
+    stages: dict = None
 
     @property
     def size(self):
@@ -537,17 +558,23 @@ def _blurred(darkness, sigma, blur):
 
 
 def _field_blur(engine):
-    """The fields' Gaussian blur: on the engine's OpenCL device where it has float64
-    (:class:`~diskpack_cl.blur.DeviceBlur`, scipy's values, a few times faster on a
-    large picture), else scipy's on the host (:func:`~diskpack_cl.radii.gaussian_blur`)."""
+    """``(blur, record)``: the fields' Gaussian blur and where it runs (a
+    :func:`~diskpack_cl.engine.stage_record`). On the engine's OpenCL device where it has
+    float64 (:class:`~diskpack_cl.blur.DeviceBlur`, scipy's values, a few times faster on
+    a large picture), else scipy's on the host (:func:`~diskpack_cl.radii.gaussian_blur`);
+    the record says why where the engine's device could not take it."""
     ctx = getattr(engine, "ctx", None)
-    if ctx is None or not has_fp64(ctx):
-        return gaussian_blur
+    if ctx is None:   # the exact engine: its record says why, where it fell back
+        return gaussian_blur, stage_record("exact", HOST_DEVICE)
+    if not has_fp64(ctx):
+        why = f"{engine.device} has no float64 (cl_khr_fp64)"
+        return gaussian_blur, stage_record("exact", HOST_DEVICE, fallback=why)
     try:
-        return DeviceBlur(ctx)
+        blur = DeviceBlur(ctx)
     except UntrustedProgram as exc:
         warn_fallback(exc, "blurs on the host")
-        return gaussian_blur
+        return gaussian_blur, stage_record("exact", HOST_DEVICE, fallback=str(exc))
+    return blur, stage_record("opencl", blur.device_name)
 
 
 def _centroid_density(darkness, opt, blur=gaussian_blur):
@@ -602,6 +629,7 @@ def _banded_stage(gray, opt, engine, rows):
     ell = detail_ell(gray, opt.n) if opt.features == "detail" else None
     m, s = field_margin(opt, ell), opt.supersample
     blur = _field_blur(engine)
+    stages = None
     names = ("radius_field", "density", "blend_weight", "ink")
     fields = {}
     for y0 in range(0, H, rows):
@@ -609,6 +637,7 @@ def _banded_stage(gray, opt, engine, rows):
         lo, hi = max(0, y0 - m), min(H, y1 + m)
         part = _make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), slice(0, W)),
                            ell=ell, blur=blur)
+        stages = part.stages
         for name in names:
             f = getattr(part, name)
             if f is None:
@@ -618,7 +647,7 @@ def _banded_stage(gray, opt, engine, rows):
             if name not in fields:
                 fields[name] = np.empty((H * scale, W * scale), f.dtype)
             fields[name][y0 * scale:y1 * scale] = f
-    return StippleStage(engine, opt, *(fields[name] for name in names))
+    return StippleStage(engine, opt, *(fields[name] for name in names), stages=stages)
 
 
 def _sampled(field):
@@ -632,10 +661,12 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAN
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
     of that part of `gray`, computed with the margin around it, and `ell`
     is the detail scale of the whole picture (:func:`~diskpack_cl.tiles.stipple_tiled`).
-    Without it, a picture of more than twice `band_rows` rows has its fields made in bands."""
+    Without it, a picture of more than twice `band_rows` rows has its fields made in bands.
+    `blur`: the ``(blur, record)`` of :func:`_field_blur` (default: the engine's)."""
     if window is None and gray.shape[0] > 2 * band_rows:
         return _banded_stage(gray, opt, engine, band_rows)
-    blur = blur or _field_blur(engine)
+    blur, blur_record = blur or _field_blur(engine)
+    stages = {"engine": engine_record(engine), "blur": blur_record}
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma,
                           blur=blur)
     weight = None
@@ -648,13 +679,14 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAN
     ink = _sampled(_blurred(darkness, INK_SIGMA, blur)) if opt.support > 0 else None   # off_support's
     density = _centroid_density(darkness, opt, blur)
     if window is None:
-        return StippleStage(engine, opt, rfield, density, weight, ink)
+        return StippleStage(engine, opt, rfield, density, weight, ink, stages)
     s = opt.supersample
     fine = tuple(slice(w.start * s, w.stop * s) for w in window)
 
     def cut(f, part=window):
         return None if f is None else np.ascontiguousarray(f[part])
-    return StippleStage(engine, opt, cut(rfield), cut(density, fine), cut(weight), cut(ink))
+    return StippleStage(engine, opt, cut(rfield), cut(density, fine), cut(weight), cut(ink),
+                        stages)
 
 
 def _certified_result(state, stage, history, t_start, ink):
@@ -671,6 +703,7 @@ def _certified_result(state, stage, history, t_start, ink):
         history=history, width=W, height=H, timings=watch.seconds,
         params=stage.options.params(),
         engine=stage.engine.backend, tone_radius=tone_radius(len(state.points), ink),
+        stages=stage.stages,
     )
 
 

@@ -275,6 +275,8 @@ def _run_part(part):
     return {"points": state.points[keep] + offset,
             "base_radii": dot_radii(state, stage, state.points)[keep], "ink": ink[keep],
             "k": float(state.k), "steps": len(history), "engine": engine.backend,
+            # a string: the work folder's .npz holds no dicts
+            "stages": json.dumps(stage.stages),
             "seconds": time.perf_counter() - t0, "peak_rss_mib": _peak_rss_mib()}
 
 
@@ -401,8 +403,30 @@ def _phase(work, name, parts, run, progress, records):
             progress(name, sum(r is not None for r in results), len(parts))
     for i, r in enumerate(results):
         records.append({"kind": name, "part": i, "n": int(len(r["points"])),
-                        **{k: r[k] for k in ("steps", "seconds", "peak_rss_mib", "engine")}})
+                        **{k: r[k] for k in ("steps", "seconds", "peak_rss_mib", "engine")},
+                        # a part saved by an earlier version has no record of its stages
+                        "stages": json.loads(r["stages"]) if "stages" in r else {}})
     return results
+
+
+def _merged_stages(parts):
+    """Where each stage of a tiled run ran: the one :func:`~diskpack_cl.engine.stage_record`
+    its parts share, or the list of their different records (parts on several devices,
+    or some that fell back).
+
+    Examples
+    --------
+    >>> a, b = {"backend": "opencl"}, {"backend": "exact"}
+    >>> _merged_stages([{"engine": a, "blur": b}, {"engine": a, "blur": a}])
+    {'engine': {'backend': 'opencl'}, 'blur': [{'backend': 'exact'}, {'backend': 'opencl'}]}
+    """
+    out = {}
+    for stages in parts:
+        for name, record in stages.items():
+            seen = out.setdefault(name, [])
+            if record not in seen:
+                seen.append(record)
+    return {name: seen[0] if len(seen) == 1 else seen for name, seen in out.items()}
 
 
 def _seam_parts(points, ink, k, edges, axis, size, band, halo, base):
@@ -455,7 +479,9 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
     -------
     StippleResult
         ``history`` holds one entry per task (``kind`` ``tile``, ``seam-x``
-        or ``seam-y``, its dots, steps, seconds and peak memory).
+        or ``seam-y``, its dots, steps, seconds, peak memory and stages);
+        ``stages`` those of all tasks (one record per stage, or a list of the
+        different records of its tasks).
 
     Examples
     --------
@@ -516,7 +542,8 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
                          certificate=cert, history=records, width=W, height=H,
                          timings=watch.seconds, params=params,
                          engine=records[0]["engine"] if records else backend,
-                         tone_radius=math.sqrt(ink.total / (n * math.pi)))
+                         tone_radius=math.sqrt(ink.total / (n * math.pi)),
+                         stages=_merged_stages(r["stages"] for r in records))
 
 
 def _tile_parts(base, xs, ys, shares, seed):

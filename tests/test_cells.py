@@ -401,7 +401,7 @@ def test_the_call_free_math_gives_the_builtins_answers(ctx, dom, monkeypatch):
     """kernels/common.h's INLINE_MATH (clang's builtins on PoCL's CPU device) and the
     OpenCL builtins give the same MICs and nearest neighbours, bit for bit: both are the
     IEEE operations.  Weighted sites too, so that the proof scan runs."""
-    from diskpack_cl import _kernels, cells
+    from diskpack_cl import _kernels, device_stage
 
     rng = np.random.default_rng(5)
     pts = rng.random((3000, 2)) * (dom.width, dom.height)
@@ -416,7 +416,7 @@ def test_the_call_free_math_gives_the_builtins_answers(ctx, dom, monkeypatch):
         pytest.skip("INLINE_MATH is for PoCL's CPU device only")
     first = answers()
     build = _kernels.build_program
-    monkeypatch.setattr(cells, "build_program",
+    monkeypatch.setattr(device_stage, "build_program",
                         lambda c, stem, defines=None: build(c, stem, {**(defines or {}), "INLINE_MATH": 0}))
     for a, b in zip(first, answers()):
         np.testing.assert_array_equal(a, b)

@@ -46,7 +46,8 @@ def fake_relax(monkeypatch):
             points=np.mod(np.asarray(points, dtype=float), 1.0), rho=np.array([0.7, 0.71, 0.72, 0.81]),
             iterations=3, stop_reason="eps", seconds=0.03,
             timings={"raster_labels": 0.01, "mic_estimate": 0.01, "exact_refine": 0.01},
-            backend=backend, device="fake", stats={})
+            backend=backend, device="fake", stats={},
+            stages={"engine": {"backend": backend, "device": "fake"}})
 
     monkeypatch.setattr(JOBS, "relax_poisson", relax_poisson)      # relax, poisson --init FILE
     monkeypatch.setattr(POISSON, "relax_poisson", relax_poisson)   # poisson's sets
@@ -353,6 +354,8 @@ def test_stipple_json(stippled):
     assert {"n", "width", "height", "k", "min_radius", "max_radius", "iterations", "certificate",
             "timings", "params", "outputs", "seconds", "image"} <= set(s)
     assert s["n"] == 150 and s["iterations"] == 7 and s["certificate"]["valid"] is True
+    assert s["stages"]["engine"]["backend"] == "opencl" and s["stages"]["engine"]["device"]
+    assert " iterations in " in stippled.err and " s on OpenCL (" in stippled.err
     assert s["params"]["schedule"] == [["pack", 3], ["lloyd", 2], ["pack", 2]]
     fmts = [o["format"] for o in s["outputs"]]
     assert fmts == ["svg", "png", "npz", "csv"]

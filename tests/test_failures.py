@@ -298,7 +298,8 @@ def test_auto_falls_back_and_says_so(tmp_path, no_opencl, capsys):
     rc, _, err = _run(["poisson", "-n", "64", "--max-iter", "2", "--allow-unreached", "-o",
                        str(tmp_path / "p.npz")], capsys)
     assert rc == 0, err
-    assert "diskpack: note: no OpenCL device" in err and "used the exact backend" in err
+    assert "on the host (exact engine)" in err
+    assert "diskpack: note: engine ran on the host: no OpenCL device" in err
     rc, _, err = _run(["poisson", "-n", "64", "--backend", "opencl", "-o",
                        str(tmp_path / "q.npz")], capsys)
     assert rc == 1 and "no OpenCL platform" in err
@@ -313,7 +314,8 @@ def test_stipple_without_opencl_says_which_engine(tmp_path, no_opencl, capsys):
     rc, _, err = _run(["stipple", str(tmp_path / "g.png"), "-n", "20", "--schedule", "pack",
                        "-o", str(tmp_path / "s.npz")], capsys)
     assert rc == 0, err
-    assert "diskpack: note: no OpenCL device: stippled with the exact (scipy) engine" in err
+    assert "s on the host (exact engine); wrote " in err
+    assert "diskpack: note: engine ran on the host: no OpenCL device" in err
 
 
 # ------------------------------------------------------------ sizes vs memory

@@ -45,6 +45,88 @@ def _checked(convert, test, want):
 _positive_int = _checked(int, lambda v: v >= 1, "at least 1")
 
 
+def _records(record):
+    """A stage's records: its one, or the list a tiled run gives where its parts differ."""
+    return record if isinstance(record, list) else [record]
+
+
+def device_name(description):
+    """The device's name alone, without its platform.
+
+    Examples
+    --------
+    >>> device_name("pthread-AMD EPYC 7B13 (Portable Computing Language)")
+    'pthread-AMD EPYC 7B13'
+    """
+    name, sep, rest = description.rpartition(" (")
+    return name if sep and rest.endswith(")") else description
+
+
+def where_ran(stages):
+    """A few words for a summary line: where the engine of a run's `stages` ran.
+
+    Examples
+    --------
+    >>> where_ran({"engine": {"backend": "opencl", "device": "Tesla T4 (NVIDIA CUDA)"}})
+    'on OpenCL (Tesla T4)'
+    >>> where_ran({"engine": {"backend": "exact", "device": "cpu (scipy)"}})
+    'on the host (exact engine)'
+    """
+    words = []
+    for r in _records(stages.get("engine", [])):
+        text = (f"OpenCL ({device_name(r['device'])})" if r["backend"] == "opencl"
+                else "the host (exact engine)")
+        if text not in words:
+            words.append(text)
+    return "on " + " and ".join(words) if words else ""
+
+
+def brief(reason):
+    """A fallback's reason on one short line: without asides inside its parentheses and
+    what follows its first sentence (the summaries keep it whole).
+
+    Examples
+    --------
+    >>> brief("no OpenCL device (none found; install a driver (e.g. PoCL) or a GPU's. "
+    ...       "Both run without)")
+    "no OpenCL device (none found; install a driver or a GPU's)"
+    """
+    kept, depth = [], 0
+    for ch in reason:
+        depth += ch == "("
+        if depth < 2:
+            kept.append(ch)
+        depth -= ch == ")"
+    text = re.sub(r"\s+([;,.)])", r"\1", re.sub(r"\s+", " ", "".join(kept)))
+    head, sep, _ = text.partition(". ")
+    return head + ")" * (head.count("(") - head.count(")")) if sep else text
+
+
+def fallback_notes(stages):
+    """One line per stage of `stages` that ran on the host for want of a device, and why.
+
+    Examples
+    --------
+    >>> fallback_notes({"engine": {"backend": "opencl", "device": "gpu"},
+    ...                 "blur": {"backend": "exact", "device": "cpu", "fallback": "no float64"}})
+    ['blur ran on the host: no float64']
+    """
+    notes = []
+    for name, record in stages.items():
+        for r in _records(record):
+            text = f"{name} ran on the host: {brief(r['fallback'])}" if r.get("fallback") else None
+            if text and text not in notes:
+                notes.append(text)
+    return notes
+
+
+def note_fallbacks(args, stages):
+    """Print :func:`fallback_notes` on stderr (``diskpack: note: ...``), unless --quiet."""
+    if not args.quiet:
+        for text in fallback_notes(stages):
+            print(f"{PROG}: note: {text}", file=sys.stderr)
+
+
 def _device_options(p):
     p.add_argument("--device", metavar="D", default=None,
                    help="OpenCL device: 'P' or 'P:D' indices (as in PYOPENCL_CTX) or a name "

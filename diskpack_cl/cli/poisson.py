@@ -13,9 +13,9 @@ from diskpack_cl.poisson import SIZE, STARTS, PoissonOptions, PoissonSetOptions,
 from diskpack_cl.relax import TRIAL_RELAX, max_points_for_radius
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import PROG, _bar, _image_path, _output_options, _positive_int
-from .relax import (_note_fallback, _progress, _relax, _relax_and_write, _relax_options,
-                    _unreached)
+from ._common import (PROG, _bar, _image_path, _output_options, _positive_int, note_fallbacks,
+                      where_ran)
+from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 
 
 def _add_poisson(subparsers):
@@ -147,12 +147,13 @@ def _run_poisson_set(args):
     finally:
         close()
     summary["output"] = str(args.output)
-    _note_fallback(args, res.stats)
     rho = ("variable spacing" if summary["rho_final"] is None
            else f"rho {res.rho_start:.4f} -> {res.rho:.4f}")
+    where = where_ran(res.stages)
     _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, {rho} in "
-                  f"{res.iterations} iterations ({res.seconds:.3g} s, stop: {res.stop_reason}); "
-                  f"wrote {args.output}", summary)
+                  f"{res.iterations} iterations ({res.seconds:.3g} s{' ' + where if where else ''}, "
+                  f"stop: {res.stop_reason}); wrote {args.output}", summary)
+    note_fallbacks(args, res.stages)
     if not res.reached:
         goal = (f"--min-distance {args.min_distance:g}" if args.min_distance is not None
                 else f"--eps {args.eps:g}")

@@ -7,7 +7,7 @@ import sys
 import argparse
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import PROG, _bar, _device_options, _output_options
+from ._common import PROG, _bar, _device_options, _output_options, note_fallbacks, where_ran
 from diskpack_cl.domain import DomainOptions
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.relax import RelaxOptions, relax_summary
@@ -57,13 +57,6 @@ def _progress(args, label):
     return callback, bar.close
 
 
-def _note_fallback(args, stats):
-    """Say on stderr why ``--backend auto`` took the exact backend, if it did."""
-    if stats.get("fallback") and not args.quiet:
-        print(f"{PROG}: note: {stats['fallback']}: used the exact backend (--backend auto)",
-              file=sys.stderr)
-
-
 def _relax_and_write(item, args, points=None, *, extra_summary=None):
     """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
     return the exit status."""
@@ -85,12 +78,12 @@ def _relax_and_write(item, args, points=None, *, extra_summary=None):
     }
     if extra_summary:
         summary.update(extra_summary)
-    _note_fallback(args, res.stats)
     if not args.quiet:
         print(f"{PROG}: {summary['n']} points, rho {summary['rho_start']:.4f} -> "
               f"{summary['rho_final']:.4f} in {summary['iterations']} iterations "
-              f"({summary['seconds']:.3g} s, {res.backend} on {res.device}, "
+              f"({summary['seconds']:.3g} s {where_ran(res.stages)}, "
               f"stop: {res.stop_reason}); wrote {args.output}", file=sys.stderr)
+    note_fallbacks(args, res.stages)
     if args.json:
         print(json.dumps(summary), flush=True)
     if res.stop_reason != "eps":

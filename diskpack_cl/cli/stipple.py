@@ -7,7 +7,8 @@ import sys
 import time
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import PROG, _UsageError, _bar, _checked_outputs, _device_options, _image_path
+from ._common import (PROG, _UsageError, _bar, _checked_outputs, _device_options, _image_path,
+                      note_fallbacks, where_ran)
 from ._drawing import _drawing_options, _write_and_report
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
@@ -206,10 +207,9 @@ def _run_stipple_one(args, options, tone, write, separation):
         close()
     tail = _write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
     if not args.quiet:
-        if res.engine == "exact":
-            _note("no OpenCL device: stippled with the exact (scipy) engine")
         print(f"{PROG}: {_result_text(res, summary)}, {summary['iterations']} iterations in "
-              f"{summary['seconds']:.3g} s{tail}", file=sys.stderr)
+              f"{summary['seconds']:.3g} s{_where(res)}{tail}", file=sys.stderr)
+    note_fallbacks(args, res.stages)
     return 0
 
 
@@ -244,7 +244,8 @@ def _run_stipple_tiled(args, options, tone, write, separation):
     if not args.quiet:
         print(f"{PROG}: {_result_text(res, summary)}, {res.params['tiles']} tiles "
               f"({len(res.history)} parts, largest part {summary['peak_rss_mib'] / 1024:.2f} GiB) "
-              f"in {summary['seconds']:.3g} s{tail}", file=sys.stderr)
+              f"in {summary['seconds']:.3g} s{_where(res)}{tail}", file=sys.stderr)
+    note_fallbacks(args, res.stages)
     return 0
 
 
@@ -261,6 +262,13 @@ def _tile_progress(bar):
 
 def _note(text):
     print(f"{PROG}: note: {text}", file=sys.stderr)
+
+
+def _where(res):
+    """`` on OpenCL (device)`` or `` on the host (exact engine)`` for the summary line
+    (nothing for a tiled run whose parts left no record)."""
+    where = where_ran(res.stages)
+    return f" {where}" if where else ""
 
 
 def _result_text(res, summary):
