@@ -35,7 +35,18 @@ step() {   # step NAME COMMAND...: run, time, keep its output and exit status
     tail -n 3 "$work/$name.out" >&2
 }
 
-step devices "$PYTHON" -c "import sys; from diskpack_cl.cli import main; sys.exit(main(['devices']))"
+step devices "$PYTHON" -c "import sys; from diskpack_cl.cli import main; sys.exit(main(['devices', '--check']))"
+# the lent machine's CPU may be of another family than the developers': the driver every
+# README user gets (pip's PoCL) alone, its known-answer checks, README (a)'s stippling and
+# the kernel tests on it
+PIP_ICD="$("$PYTHON" -c 'import pathlib, pyopencl; print(pathlib.Path(pyopencl.__file__).parent / ".libs" / "pocl.icd")')"
+lscpu | grep -E "Model name|CPU family|^Model:" > "$work/cpu.txt"
+step pip_driver env OCL_ICD_VENDORS="$PIP_ICD" DISKPACK_DEVICE=cpu DISKPACK_CL_CACHE_DIR="$work/verdicts" \
+    "$PYTHON" -c "import sys; from diskpack_cl.cli import main; sys.exit(main(['devices', '--check']))"
+step pip_readme_a env OCL_ICD_VENDORS="$PIP_ICD" DISKPACK_DEVICE=cpu DISKPACK_CL_CACHE_DIR="$work/verdicts" \
+    "$PYTHON" benchmarks/drivers.py --runs 2
+step pip_kernel_tests env OCL_ICD_VENDORS="$PIP_ICD" DISKPACK_DEVICE=cpu DISKPACK_CL_REQUIRE_OPENCL=1 \
+    "$PYTHON" -m pytest -q -p no:cacheprovider tests/test_device_checks.py tests/test_raster.py tests/test_blur.py
 step kernel_tests env DISKPACK_CL_REQUIRE_OPENCL=1 "$PYTHON" -m pytest -q -p no:cacheprovider \
     --junitxml="$work/tests.xml" tests/test_device.py tests/test_raster.py tests/test_cells.py \
     tests/test_engine.py tests/test_stipple_engine.py
@@ -73,6 +84,9 @@ for status in sorted(work.glob("*.status")):
         entry["stderr_tail"] = (work / f"{name}.err").read_text()[-2000:]
     report[name] = entry
 report["devices"]["lines"] = (work / "devices.out").read_text().splitlines()
+report["cpu"] = (work / "cpu.txt").read_text().splitlines()
+for name in ("pip_driver", "pip_readme_a", "pip_kernel_tests"):
+    report[name]["lines"] = (work / f"{name}.out").read_text().splitlines()[-14:]
 if (work / "tests.xml").exists():
     suite = ET.parse(work / "tests.xml").getroot().find("testsuite")
     report["kernel_tests"].update({k: int(suite.get(k, 0)) for k in ("tests", "failures", "errors", "skipped")})

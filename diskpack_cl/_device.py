@@ -27,9 +27,9 @@ _KINDS = ("GPU", "CPU", "ACCELERATOR")
 
 _FIX = (
     "install an OpenCL driver: on Linux x86-64 `pip install pocl-binary-distribution` "
-    "gives a CPU device; on CPUs newer than its LLVM (AMD Zen 5) your distribution's PoCL "
-    "does (Debian/Ubuntu: `sudo apt install pocl-opencl-icd`; a stippling about 20x faster "
-    "than on the host); GPUs: your vendor's OpenCL runtime. "
+    "gives a CPU device; on CPUs newer than its LLVM, such as AMD Zen 5, "
+    "`sudo apt install pocl-opencl-icd` gives one on Debian and Ubuntu, and a stippling "
+    "about 20x faster than on the host; GPUs: your vendor's OpenCL runtime. "
     "Both algorithms also run without OpenCL on the exact backend"
 )
 

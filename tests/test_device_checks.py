@@ -191,3 +191,18 @@ def test_check_device_names_the_device(fresh):
     v = check_device()
     assert v.device == _device.describe(fresh)
     assert check_device() is v   # remembered by this process
+
+
+def test_a_run_without_a_trusted_device_says_so_and_names_the_fix(ctx, tmp_path):
+    """No silent 20x: where the only device fails a core program (as pip's PoCL builds no
+    kernel on AMD Zen 5), the stippling runs on the host and its summary says why and
+    what gives a fast device."""
+    env = dict(os.environ, DISKPACK_CL_CACHE_DIR=str(tmp_path / "cache"),
+               DISKPACK_CL_CHECK_FAULT="power_diagram=wrong")
+    out = tmp_path / "s.npz"
+    proc = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", "stipple", "sample", "-n", "300",
+                           "-o", str(out)], env=env, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert out.exists()
+    text = proc.stderr
+    assert "on the host" in text and "power_diagram" in text and "pocl-opencl-icd" in text

@@ -30,7 +30,7 @@ import signal
 import threading
 
 from ._batches import _raise_terminated, _Terminated
-from ._common import PROG, _HelpFormatter, _Parser, _UsageError
+from ._common import PROG, _HelpFormatter, _Parser, _UsageError, show_device_notes
 from .analyze import _add_analyze
 from .devices import _add_devices
 from .export import _add_export
@@ -152,6 +152,7 @@ def _main(argv):
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 1
     handlers = _terminate_handlers()
+    show_device_notes(getattr(args, "quiet", False))
     try:
         # an explicit device (--device, DISKPACK_DEVICE) must exist, on every command that has one
         device = getattr(args, "device", None) or (

@@ -120,11 +120,45 @@ def fallback_notes(stages):
     return notes
 
 
+#: Device notes already printed by :func:`show_device_notes` (the summary's notes skip them).
+_SHOWN: list = []
+
+
+def show_device_notes(quiet=False):
+    """Print each :class:`~diskpack_cl.device_checks.DeviceWarning` as one line
+    (``diskpack: note: ...``) instead of Python's two-line warning; ``quiet``: not at all.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from diskpack_cl.device_checks import DeviceWarning
+    >>> with warnings.catch_warnings():
+    ...     show_device_notes()
+    ...     warnings.warn(DeviceWarning("cpu passed over: cell_mic: wrong"))
+    """
+    import warnings
+
+    from diskpack_cl.device_checks import DeviceWarning  # not loaded at start-up
+
+    python_way = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, DeviceWarning):
+            return python_way(message, category, filename, lineno, file, line)
+        if not quiet and str(message) not in _SHOWN:
+            print(f"{PROG}: note: {message}", file=sys.stderr)
+        _SHOWN.append(str(message))
+
+    warnings.showwarning = show
+
+
 def note_fallbacks(args, stages):
-    """Print :func:`fallback_notes` on stderr (``diskpack: note: ...``), unless --quiet."""
+    """Print :func:`fallback_notes` on stderr (``diskpack: note: ...``), unless --quiet
+    or a device note said it already."""
     if not args.quiet:
         for text in fallback_notes(stages):
-            print(f"{PROG}: note: {text}", file=sys.stderr)
+            if not any(text.partition(": ")[2].partition(" (")[0] in shown for shown in _SHOWN):
+                print(f"{PROG}: note: {text}", file=sys.stderr)
 
 
 def _device_options(p):
