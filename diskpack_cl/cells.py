@@ -130,7 +130,6 @@ class CellMIC(DeviceStage):
         self._rows_group = group_size(self._rows_kernel, dev, 64)
         # whole groups per enqueue: the last group of one must not reach into the next
         self.chunk = CHUNK - CHUNK % self.group
-        self._bufs = {}
         self._order = None
         _keep_freed_memory()
         self._warm()
@@ -143,19 +142,6 @@ class CellMIC(DeviceStage):
         with self.timings.discarded():
             self.solve(pts)
         self._order = None
-
-    # -- buffers -----------------------------------------------------------
-    def _buffer(self, name, nbytes):
-        buf = self._bufs.get(name)
-        if buf is None or buf.size < max(nbytes, 8):
-            buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 8))
-            self._bufs[name] = buf
-        return buf
-
-    def _upload(self, name, host):
-        buf = self._buffer(name, host.nbytes)
-        cl.enqueue_copy(self.queue, buf, host, is_blocking=False)
-        return buf
 
     def _grid(self, n, density=None):
         dom = self.domain
@@ -300,9 +286,9 @@ class CellMIC(DeviceStage):
         with self.timings("device"):
             n, dom = len(Xs), self.domain
             nn = np.empty(n)
-            b_nn = self._buffer("out_nn", nn.nbytes)
+            b_nn = self.buffer("out_nn", nn.nbytes)
             kernel(self.queue, (padded(n, group),), (group,),
-                   self._upload("site", Xs), self._upload("start", start), np.int32(n),
+                   self.upload("site", Xs, wait=False), self.upload("start", start, wait=False), np.int32(n),
                    np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
                    np.float64(dom.width), np.float64(dom.height), b_nn)
             cl.enqueue_copy(self.queue, nn, b_nn)
@@ -320,11 +306,11 @@ class CellMIC(DeviceStage):
         bwloc, win = self._local_wmax(bwmax, grid, ws.max())
         up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
               "bwmax": bwmax, "bwloc": bwloc, "cells": pos, "rows": rows.astype(np.int32)}
-        b = {k: self._upload(k, v) for k, v in up.items()}
+        b = {k: self.upload(k, v, wait=False) for k, v in up.items()}
         outs = {"mic": np.empty((n, 4)), "codes": np.empty((n, 4 + MAXNEAR), np.int32),
                 "center": np.empty((n, 2)), "radius": np.empty(n), "nn": np.empty(n),
                 "flags": np.empty(n, np.int32)}
-        bufs = {k: self._buffer("out_" + k, v.nbytes) for k, v in outs.items()}
+        bufs = {k: self.buffer("out_" + k, v.nbytes) for k, v in outs.items()}
         self._solve_cells(b, bufs, n, len(Xs), grid, win, ws.max())
         self._rows_kernel(self.queue, (padded(n, self._rows_group),), (self._rows_group,),
                           b["site"], b["cells"], b["rows"], np.int32(n), np.float64(dom.width),

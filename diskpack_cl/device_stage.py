@@ -86,6 +86,7 @@ class DeviceStage:
         self.timings = Stopwatch() if timings is None else timings
         #: Vector lanes of the CPU tile layout (:func:`tile_lanes`).
         self.lanes = tile_lanes(self.verdict)
+        self._kept = {}
 
     @property
     def device(self):
@@ -113,6 +114,23 @@ class DeviceStage:
     def trusts(self, stem):
         """Whether program `stem` passed its check on this device."""
         return self.verdict.refused(stem) is None
+
+    def buffer(self, name, nbytes):
+        """The stage's device buffer `name` of at least `nbytes` (kept from call to call,
+        made anew only when it must grow)."""
+        buf = self._kept.get(name)
+        if buf is None or buf.size < max(nbytes, 8):
+            buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, max(nbytes, 8))
+            self._kept[name] = buf
+        return buf
+
+    def upload(self, name, host, wait=True):
+        """:meth:`buffer` `name` holding the host array `host` (``wait=False``: the copy
+        is queued, and `host` must live until the queue has read it)."""
+        buf = self.buffer(name, host.nbytes)
+        if host.nbytes:
+            cl.enqueue_copy(self.queue, buf, host, is_blocking=wait)
+        return buf
 
     def wait(self, event, name):
         """Wait for kernel `name` (signals get through); with `profile`, add its device time."""

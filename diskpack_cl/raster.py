@@ -258,7 +258,6 @@ class PowerRaster(DeviceStage):
             # cell_sums runs (segments, rows) with groups along the rows
             self._groups["cell_sums"] = min(group_size(self._k_sums, dev, REDUCE_GROUP),
                                             dev.max_work_item_sizes[1])
-        self._site_bufs = {}
         self._maps = {}
         self._generation = 0
         self._warm()
@@ -294,16 +293,6 @@ class PowerRaster(DeviceStage):
             self.shape = shape
 
     # -- buffers -----------------------------------------------------------
-    def _site_buffer(self, name, host):
-        nbytes = max(host.nbytes, 4)
-        buf = self._site_bufs.get(name)
-        if buf is None or buf.size < nbytes:
-            buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, nbytes)
-            self._site_bufs[name] = buf
-        if host.nbytes:
-            cl.enqueue_copy(self.queue, buf, host)
-        return buf
-
     def _map_buffer(self, name, nbytes):
         buf = self._maps.get(name)
         if buf is None or buf.size != nbytes:
@@ -429,7 +418,7 @@ class PowerRaster(DeviceStage):
         order, start, wmax_b, grid = self._buckets(pts, w32)
         host = {"site": np.take(pts, order, axis=0).astype(np.float32), "weight": w32[order],
                 "id": order.astype(np.int32), "start": start, "wmax": wmax_b}
-        bufs = tuple(self._site_buffer(name, a) for name, a in host.items())
+        bufs = tuple(self.upload(name, a) for name, a in host.items())
         return pts, bufs, grid, float(wmax_b.max())
 
     def centroids(self, points, weights=None, density=None):
@@ -459,7 +448,7 @@ class PowerRaster(DeviceStage):
         t0 = time.perf_counter()
         pts, bufs, grid, wmax = self._upload_sites(points, weights)
         b_density, b_pts, acc, b_acc = self._sums_buffers(pts, density)
-        b_status = self._site_buffer("status", np.zeros(1, np.int32))
+        b_status = self.upload("status", np.zeros(1, np.int32))
         self._run_tiles(self._k_fused, "power_sums_tile", bufs, grid, wmax,
                         b_density, b_pts, np.int32(len(pts)), b_status, b_acc)
         self._check_status(b_status)
@@ -483,8 +472,8 @@ class PowerRaster(DeviceStage):
         npix = self.shape[0] * self.shape[1]
         rbits = np.full(n, -1, np.int32)
         argpix = np.full(n, INT_MAX, np.int32)
-        b_r = self._site_buffer("rbits", rbits)
-        b_a = self._site_buffer("argpix", argpix)
+        b_r = self.upload("rbits", rbits)
+        b_a = self.upload("argpix", argpix)
         lab, dist = maps["label"][0], maps["dist"][0]
         g = self._groups
         self._k_max(self.queue, (padded(npix, g["cell_max"]),), (g["cell_max"],), lab, dist,
@@ -500,7 +489,7 @@ class PowerRaster(DeviceStage):
         and refuse the result if the kernel set a status bit."""
         ny, nx = self.shape
         dom = self.domain
-        b_status = self._site_buffer("status", np.zeros(1, np.int32))
+        b_status = self.upload("status", np.zeros(1, np.int32))
         if not distance and self.layout == "tile":
             self._run_tiles(self._k_tile, "power_labels_tile", bufs, grid, wmax,
                             maps["label"][0], b_status)
@@ -561,12 +550,12 @@ class PowerRaster(DeviceStage):
                 buf = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR,
                                 hostbuf=d)
             else:
-                buf = self._site_buffer("density", d)
+                buf = self.upload("density", d)
             self._density = (density, buf, d)
         cell = (self.domain.width / nx, self.domain.height / ny)
-        b_pts = self._site_buffer("grid_sites", np.ascontiguousarray(sites / cell, self._real))
+        b_pts = self.upload("grid_sites", np.ascontiguousarray(sites / cell, self._real))
         acc = np.zeros((len(sites), 3), np.int64)
-        return self._density[1], b_pts, acc, self._site_buffer("sums", acc)
+        return self._density[1], b_pts, acc, self.upload("sums", acc)
 
     def _sums_to_centroids(self, acc, b_acc, sites):
         """``(centroids, mass)`` from the device's fixed-point sums."""
