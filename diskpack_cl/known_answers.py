@@ -154,9 +154,9 @@ def _check_cell_sums(ctx, wrong):
         for shape in ((37, 45), (16, 8)):
             density = rng.random(shape)
             for layout in ("tile", "item"):
+                if "cl_khr_int64_base_atomics" not in ctx.devices[0].extensions:
+                    return None   # the host sums (nothing of cell_sums runs on this device)
                 pr = PowerRaster(domain, shape, ctx, layout=layout)
-                if pr._k_sums is None:
-                    return None   # no 64-bit atomics: the host sums (nothing runs here)
                 lab = pr.compute(pts, w, distance=False).labels.copy()
                 got = pr.centroids(pts, w, density)
                 want = cell_centroids(lab, pts, density, domain)

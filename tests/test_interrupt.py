@@ -81,8 +81,10 @@ def test_labels_in_bands_equal_labels_in_one_enqueue(ctx, monkeypatch, max_group
     one = raster.PowerRaster(dom, shape, device=ctx).compute(pts, w)
     pr = raster.PowerRaster(dom, shape, device=ctx, max_groups=max_groups)
     waits = []
-    real = raster.wait_for
-    monkeypatch.setattr(raster, "wait_for", lambda ev: (waits.append(ev), real(ev)))
+    from diskpack_cl import device_stage
+
+    real = device_stage.wait_for
+    monkeypatch.setattr(device_stage, "wait_for", lambda ev: (waits.append(ev), real(ev)))
     banded = pr.compute(pts, w)
     np.testing.assert_array_equal(banded.labels, one.labels)
     np.testing.assert_array_equal(banded.dist, one.dist)

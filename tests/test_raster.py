@@ -62,6 +62,28 @@ def cases(draw, weighted=None, n_max=24):
     return dom, (ny, nx), pts, w
 
 
+def _wide(ctx):
+    from diskpack_cl.device_checks import verdict_of
+
+    return verdict_of(ctx).wide
+
+
+def _lanes_or_skip(ctx, lanes):
+    """16 lanes run only where the device's checks trusted 512-bit vectors."""
+    if lanes == 16 and not _wide(ctx):
+        pytest.skip("16 lanes: this device's checks did not trust 512-bit vectors")
+
+
+def test_sixteen_lanes_are_refused_where_512_bit_vectors_are_not_trusted(ctx, monkeypatch):
+    from diskpack_cl import device_stage
+    from diskpack_cl.raster import PowerRaster
+
+    monkeypatch.setattr(device_stage, "tile_lanes", lambda verdict: 8)
+    with pytest.raises(ValueError, match="16 lanes take 512-bit vectors"):
+        PowerRaster(Domain.torus(), (8, 8), device=ctx, layout="tile", lanes=16)
+    assert PowerRaster(Domain.torus(), (8, 8), device=ctx, layout="tile").lanes == 8
+
+
 def _scale(dom):
     return max(dom.width, dom.height)
 
@@ -325,6 +347,8 @@ def test_labels_only_layouts_agree_with_the_reference(ctx, case):
     dom, shape, pts, w = case
     labs = {}
     for layout, lanes in (("tile", 8), ("tile", 16), ("item", None)):
+        if lanes == 16 and not _wide(ctx):
+            continue
         pr = PowerRaster(dom, shape, device=ctx, layout=layout, lanes=lanes)
         labs[layout, lanes] = pr.compute(pts, w, distance=False).labels.copy()
     assert np.array_equal(labs["tile", 8], labs["item", None])
@@ -338,6 +362,7 @@ def test_labels_only_layouts_agree_with_the_reference(ctx, case):
 @pytest.mark.parametrize("lanes", [8, 16])
 @pytest.mark.parametrize("shape", [(1, 203), (203, 1), (2, 999), (17, 9)])
 def test_tile_layout_on_partial_tiles_and_thin_rasters(ctx, shape, lanes):
+    _lanes_or_skip(ctx, lanes)
     from diskpack_cl.raster import PowerRaster
 
     dom = Domain.rect(float(shape[1]), float(shape[0]))
@@ -360,6 +385,7 @@ def test_bad_layout(ctx):
 @pytest.mark.parametrize("fused, lanes", [(False, None), (True, 8), (True, 16)])
 @pytest.mark.parametrize("periodic", [True, False])
 def test_device_centroids_match_bincount(ctx, periodic, fused, lanes):
+    _lanes_or_skip(ctx, lanes)
     """The on-device reductions (cell_sums.cl: cell_sums, and power_sums_tile,
     which labels too) against numpy.bincount on the same labels."""
     from diskpack_cl.labels import cell_centroids
@@ -528,6 +554,7 @@ def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit,
 @pytest.mark.parametrize("layout, lanes", [(None, None), ("tile", 8), ("tile", 16), ("item", None)])
 @pytest.mark.parametrize("order", [(0, 1), (1, 0)])
 def test_power_ties_go_to_the_lowest_index(ctx, order, layout, lanes):
+    _lanes_or_skip(ctx, lanes)
     """Two sites mirrored about the middle column of a 5 x 5 grid: every cell of that
     column is an exact tie, which the kernels (and the reference) give to site 0."""
     from diskpack_cl.raster import PowerRaster

@@ -22,7 +22,7 @@ RUN_FLAGS = frozenset({
     "images", "inputs", "input", "image", "columns", "recursive", "allow_large",
     "output", "quiet", "json",
     "jobs", "manifest", "overwrite", "scheduler", "collect", "count", "device",
-    "verify", "profile", "allow_unreached",
+    "verify", "profile", "allow_unreached", "check", "recheck",
 })
 
 
@@ -133,6 +133,7 @@ def show_device_notes(quiet=False):
     >>> import warnings
     >>> from diskpack_cl.device_checks import DeviceWarning
     >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("always")
     ...     show_device_notes()
     ...     warnings.warn(DeviceWarning("cpu passed over: cell_mic: wrong"))
     """
