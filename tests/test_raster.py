@@ -351,8 +351,8 @@ def test_labels_only_layouts_agree_with_the_reference(ctx, case):
             continue
         pr = PowerRaster(dom, shape, device=ctx, layout=layout, lanes=lanes)
         labs[layout, lanes] = pr.compute(pts, w, distance=False).labels.copy()
-    assert np.array_equal(labs["tile", 8], labs["item", None])
-    assert np.array_equal(labs["tile", 16], labs["item", None])
+    for key in labs:   # 16 lanes where the device is trusted with them
+        assert np.array_equal(labs[key], labs["item", None]), key
     labs["tile"] = labs["tile", 8]
     rl, gap = ref.power_labels_ref(pts, w, dom, shape)
     s = _scale(dom)
