@@ -37,6 +37,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -48,6 +49,8 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from .io import atomic_write
 
 
 __all__ = ["PROGRAMS", "CORE", "VECTOR_PROGRAMS", "Verdict", "UntrustedProgram", "DeviceWarning",
@@ -179,6 +182,22 @@ class Verdict:
     cached: bool = False
     notes: list = field(default_factory=list)
 
+    @classmethod
+    def trusting(cls, device, wide, stems=PROGRAMS, salt=0):
+        """A verdict that trusts every program of `stems` on `device` (no checks run, or
+        the child's verdict under check), built with `wide` and `salt`.
+
+        Examples
+        --------
+        >>> from types import SimpleNamespace
+        >>> cpu = SimpleNamespace(name="cpu", platform=SimpleNamespace(name="PoCL"))
+        >>> v = Verdict.trusting(cpu, False, ["cell_mic"], salt=7)
+        >>> v.device, v.core_failure(), v.defines("cell_mic")
+        ('cpu (PoCL)', None, {'WIDE_BUILTINS': 0, 'DISKPACK_SALT': 7})
+        """
+        return cls(_describe(device), bool(wide),
+                   {s: {"ok": True, "why": "", "seconds": 0.0, "salt": salt} for s in stems})
+
     def refused(self, stem):
         """Why program `stem` may not run here, or None."""
         entry = self.programs.get(stem)
@@ -202,14 +221,9 @@ class Verdict:
         return None
 
 
-def _trusted_without_checks(ctx):
-    return Verdict(_describe(ctx), _reports_wide(ctx.devices[0]),
-                   {stem: {"ok": True, "why": "", "seconds": 0.0, "salt": 0} for stem in PROGRAMS})
-
-
-def _describe(ctx):
-    d = ctx.devices[0]
-    return f"{d.name.strip()} ({d.platform.name.strip()})"
+def _describe(device):
+    """As :func:`diskpack_cl.describe` names a context's device (that module reads this one)."""
+    return f"{device.name.strip()} ({device.platform.name.strip()})"
 
 
 def _reports_wide(device):
@@ -217,7 +231,9 @@ def _reports_wide(device):
     return device.native_vector_width_float >= 16
 
 
+@functools.lru_cache(maxsize=None)
 def _sources_hash():
+    """Of the kernel sources and the checks: read once a process (every stage asks)."""
     from ._kernels import kernel_dir
 
     h = hashlib.sha256()
@@ -263,7 +279,7 @@ def verdict_of(ctx, *, refresh=False):
     if _CHILD_VERDICT is not None:
         return _CHILD_VERDICT
     if not checks_enabled():
-        return _trusted_without_checks(ctx)
+        return Verdict.trusting(ctx.devices[0], _reports_wide(ctx.devices[0]))
     device = ctx.devices[0]
     key = _key(device)
     if key in _MEMO and not refresh:
@@ -298,10 +314,8 @@ def _write(path, verdict):
             "programs": verdict.programs, "seconds": verdict.seconds, "notes": verdict.notes}
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".verdict-", suffix=".tmp")
-        with os.fdopen(fd, "w") as f:
+        with atomic_write(path, "w") as f:
             json.dump(data, f, indent=1)
-        os.replace(tmp, path)
     except OSError:
         pass
 
@@ -353,8 +367,7 @@ def _run_checks(device):
     for s in PROGRAMS:
         results.setdefault(s, {"ok": False, "why": "the device has no float64", "seconds": 0.0, "salt": 0})
     results.pop("wide_probe", None)
-    desc = f"{device.name.strip()} ({device.platform.name.strip()})"
-    return Verdict(desc, wide, results, time.perf_counter() - start, False, notes)
+    return Verdict(_describe(device), wide, results, time.perf_counter() - start, False, notes)
 
 
 def _checked(address, stems, wide):

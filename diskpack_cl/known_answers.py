@@ -27,20 +27,14 @@ from .device_checks import PROGRAMS, Verdict, use_verdict, verdict_of
 
 __all__ = ["CHECKS", "check_device", "main"]
 
-_CHILD_VERDICT = None
-
-
 def _child(address, wide, salt, stems):
     """Run each check in turn, a line of JSON before (``start``) and after each."""
     import pyopencl as cl
 
-    global _CHILD_VERDICT
     ip, idev = address
     ctx = cl.Context([cl.get_platforms()[ip].get_devices()[idev]])
-    d = ctx.devices[0]
-    _CHILD_VERDICT = Verdict(f"{d.name.strip()} ({d.platform.name.strip()})", bool(wide),
-                             {s: {"ok": True, "why": "", "seconds": 0.0, "salt": salt} for s in CHECKS})
-    use_verdict(_CHILD_VERDICT)
+    # what every stage built here reads (verdict_of): the switches under check
+    use_verdict(Verdict.trusting(ctx.devices[0], wide, CHECKS, salt))
     fault = dict(item.split("=", 1) for item in os.environ.get("DISKPACK_CL_CHECK_FAULT", "").split(",")
                  if "=" in item)
     for stem in stems:
@@ -121,7 +115,7 @@ def _check_power_diagram(ctx, wrong):
         scale2 = max(domain.width, domain.height) ** 2
         for shape in ((37, 45), (16, 8), (3, 70)):   # partial tiles, one full tile, thin
             for layout in ("tile", "item"):
-                for lanes in ((16, 8) if _CHILD_VERDICT.wide else (8,)):
+                for lanes in ((16, 8) if verdict_of(ctx).wide else (8,)):
                     pr = PowerRaster(domain, shape, ctx, layout=layout, lanes=lanes)
                     lab = pr.compute(pts, w, distance=False).labels.copy() + int(wrong)
                     gap = _power_gap(domain, shape, pts, w, lab)
@@ -235,7 +229,7 @@ def _check_wide_probe(ctx, wrong):
 
     from ._kernels import build_program
 
-    k = build_program(ctx, "wide_probe", _CHILD_VERDICT.defines("wide_probe"))["wide_probe"]
+    k = build_program(ctx, "wide_probe", verdict_of(ctx).defines("wide_probe"))["wide_probe"]
     queue, mf = cl.CommandQueue(ctx), cl.mem_flags
     x = np.linspace(-3.3, 4.1, 8)
     f = np.linspace(-1.25, 2.5, 16).astype(np.float32)
