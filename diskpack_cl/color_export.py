@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from .color import linear_negative, linear_to_srgb, srgb_to_linear
-from .drawing import (FRAME_INK, MM_PER_INCH, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
+from .drawing import (FRAME_INK, MM_PER_INCH, PEN_LIFT_S, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
                       place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
                       svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
@@ -121,7 +121,7 @@ def _drawn_dots(result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
 def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
                     radius_scale=1.0, pen_path="auto", pen_mm=None, dots="tone", pen_order=None,
                     invert=False, page=None, landscape=False, margin_mm=None, plotter=None,
-                    plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False):
+                    plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False, pen_lift_s=PEN_LIFT_S):
     """Write an SVG with one named layer per pen (see the module docstring).
 
     The options are those of :func:`diskpack_cl.export.write_svg`, plus
@@ -177,8 +177,8 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
         text, length = svg_dots(pm[idx], rad[idx], pen_mm)
         parts.append(text)
         layers.append({"name": result.names[p], "color": c, "n": int(len(idx)),
-                       "plot_seconds": plot_time(len(idx), length, a,
-                                                 speed_mm_s=plot_speed_mm_s)})
+                       "plot_seconds": plot_time(len(idx), length, a, speed_mm_s=plot_speed_mm_s,
+                                                 pen_lift_s=pen_lift_s)})
         before, after, draw = before + b, after + a, draw + length
     with atomic_write(path, "w") as fh:
         fh.write("".join(parts) + "  </g>\n</svg>\n")
@@ -186,7 +186,8 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
             "page_mm": list(lay["page"]), "n": int(len(pm)), "layers": layers,
             "travel_before_mm": before, "travel_after_mm": after, "moved_inside": moved,
             "pen_downs": int(len(pm)), "draw_mm": draw, **ink,
-            "plot_seconds": plot_time(len(pm), draw, after, speed_mm_s=plot_speed_mm_s)}
+            "plot_seconds": plot_time(len(pm), draw, after, speed_mm_s=plot_speed_mm_s,
+                                      pen_lift_s=pen_lift_s)}
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info

@@ -24,7 +24,7 @@ from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, FRAME_INK, PAPERS, PEN_LIFT_
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.options import OptionConflict, check_fields, option
 from diskpack_cl.overlap import cap_radii, ink_figures
-from diskpack_cl.pen_path import PEN_PATHS, path_travel, pen_path_order
+from diskpack_cl.pen_path import PEN_PATHS, TWO_OPT_WORK, path_travel, pen_path_order
 from diskpack_cl.readers import CSV_TAG, csv_name, read_stipple
 
 __all__ = [
@@ -218,9 +218,11 @@ class WriteOptions:
     radius_scale: float = option(1.0, "factor on the dot radii of --dots in SVG and PNG "
                                  "(default 1.0)", lo=0, lo_open=True, metavar="F",
                                  group=_OUTPUT)
-    pen_path: str = option("auto", "SVG dot order: auto (default) = the shorter of greedy and "
-                           "Hilbert, then 2-opt for at most 2 s; hilbert = Hilbert curve; "
-                           "greedy = nearest neighbour; none = as computed",
+    pen_path: str = option("auto", f"SVG dot order: auto (default) = the shorter of greedy and "
+                           f"Hilbert, then ceil({TWO_OPT_WORK} / dots) rounds of 2-opt (a fixed "
+                           f"work, not a time bound: the same order on every machine; seconds "
+                           f"for 20000 dots); hilbert = Hilbert curve; greedy = nearest "
+                           f"neighbour; none = as computed",
                            choices=PEN_PATHS, group=_OUTPUT)
     png_scale: float = option(None, f"PNG pixels per image pixel (default 2.0, at most a "
                               f"{PREVIEW_MAX_PX} px long side)", lo=0, lo_open=True,
@@ -232,8 +234,11 @@ class WriteOptions:
                           choices=PREVIEWS, group=_OUTPUT)
     plot_speed_mm_s: float = option(
         PLOT_SPEED_MM_S, f"plot-time estimate: pen speed V mm/s drawing and travelling, plus "
-        f"{PEN_LIFT_S:g} s to lower and raise the pen per dot (default {PLOT_SPEED_MM_S:g})",
+        f"--pen-lift-s per dot (default {PLOT_SPEED_MM_S:g})",
         unit="mm/s", lo=0, lo_open=True, metavar="V", group=_OUTPUT)
+    pen_lift_s: float = option(
+        PEN_LIFT_S, f"plot-time estimate: seconds to lower and raise the pen once per dot "
+        f"(default {PEN_LIFT_S:g})", unit="s", lo=0, metavar="S", group=_OUTPUT)
     no_overlap: bool = option(False, "drawn dots never touch, the pen's width included: each "
                               "dot at most its packing disk (lighter where the tone dots "
                               "are wider than the packing allows; the summary says how much "
@@ -291,7 +296,7 @@ LAYER = "stipples"
 def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
               radius_scale=1.0, pen_path="auto", layer=LAYER, invert=False, pen_mm=None,
               dots="tone", page=None, landscape=False, margin_mm=None, plotter=None,
-              plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False):
+              plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False, pen_lift_s=PEN_LIFT_S):
     """Write an SVG for pen plotters, vpype and Inkscape.
 
     One element per dot, in pen-path order, in one Inkscape layer; user
@@ -324,8 +329,8 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     page, landscape, margin_mm, plotter : optional
         The paper and what of it the plotter reaches (:func:`paper_size`,
         :func:`svg_layout`).
-    plot_speed_mm_s : float
-        Speed of the plot-time estimate (:func:`plot_time`).
+    plot_speed_mm_s, pen_lift_s : float
+        Speed and pen lift of the plot-time estimate (:func:`plot_time`).
     no_overlap : bool
         No two drawn dots touch: each at most its packing disk
         (:func:`diskpack_cl.overlap.cap_radii`).
@@ -368,7 +373,8 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
             "page_mm": list(lay["page"]), "n": int(len(p)), "travel_before_mm": before,
             "travel_after_mm": after, "moved_inside": moved, "pen_downs": int(len(p)),
             "draw_mm": draw, **ink,
-            "plot_seconds": plot_time(len(p), draw, after, speed_mm_s=plot_speed_mm_s)}
+            "plot_seconds": plot_time(len(p), draw, after, speed_mm_s=plot_speed_mm_s,
+                                      pen_lift_s=pen_lift_s)}
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info

@@ -387,6 +387,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     drawing = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, invert=o.invert, pen_mm=o.pen_mm,
                    dots=dots, no_overlap=o.no_overlap, **o.layout())
     svg_opts = dict(drawing, pen_path=o.pen_path, plot_speed_mm_s=o.plot_speed_mm_s,
+                    pen_lift_s=o.pen_lift_s,
                     **({"pen_order": o.pen_order} if color else {}))
     png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
                     no_overlap=o.no_overlap, progress=progress)

@@ -783,3 +783,28 @@ def test_pen_width_changes_what_is_drawn(stippled, tmp_path, capsys, command):
     assert drawn[True]["svg"] != drawn[False]["svg"]
     assert drawn[True]["png"] != drawn[False]["png"]
     assert b"<circle" in drawn[False]["svg"] and b"<circle" not in drawn[True]["svg"]
+
+
+# ------------------------------------------------------------------ plotter options
+
+@pytest.mark.parametrize("lift", [0.0, 1.25])
+def test_pen_lift_sets_the_plot_time(stippled, tmp_path, capsys, lift):
+    """--pen-lift-s replaces the 0.3 s per dot of the plot-time estimate (JSON and summary)."""
+    s, err = _run_json(["export", str(stippled.outs["npz"]), "-o", str(tmp_path / "a.svg"),
+                        "--pen-lift-s", str(lift), "--json"], capsys)
+    plot = s["plot"]
+    assert plot["pen_lift_s"] == lift
+    assert plot["plot_seconds"] == pytest.approx(
+        (plot["draw_mm"] + plot["travel_after_mm"]) / 50.0 + 150 * lift)
+    assert f"{lift:g} s a pen lift" in err
+
+
+@pytest.mark.parametrize("command", ["stipple", "export"])
+def test_pen_path_help_says_what_it_runs(capsys, command):
+    """The 2-opt of --pen-path auto is a number of rounds, not a time bound."""
+    from diskpack_cl.pen_path import TWO_OPT_WORK
+
+    assert cli.main([command, "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "at most 2 s" not in text
+    assert f"ceil({TWO_OPT_WORK} / dots) rounds of 2-opt" in text

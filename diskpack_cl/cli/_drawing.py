@@ -42,6 +42,7 @@ def _plot_summary(written, write):
                                 "plot_seconds", "touching_share", "touching_share_uncapped",
                                 "no_overlap_ink", "median_spacing_mm", "median_ink_mm")}
     speed = plot["plot_speed_mm_s"] = write.plot_speed_mm_s
+    plot["pen_lift_s"] = write.pen_lift_s
     pens = ""
     if "layers" in svg:   # a colour stippling: each pen's plot time too
         plot["layers"] = [{k: layer[k] for k in ("name", "n", "plot_seconds")}
@@ -50,7 +51,8 @@ def _plot_summary(written, write):
                                 for layer in svg["layers"]) + ")"
     return plot, (f"; pen-up travel {plot['travel_before_mm']:.0f} -> "
                   f"{plot['travel_after_mm']:.0f} mm, plot about "
-                  f"{_duration(plot['plot_seconds'])}{pens} at {speed:g} mm/s; "
+                  f"{_duration(plot['plot_seconds'])}{pens} at {speed:g} mm/s and "
+                  f"{write.pen_lift_s:g} s a pen lift; "
                   f"{_touching_text(plot, write.no_overlap)}")
 
 

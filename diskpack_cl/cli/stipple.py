@@ -184,7 +184,7 @@ def _warn_long_plot(args):
     """Before the work: say so when the SVG of -n dots takes more than a working day to plot."""
     from diskpack_cl.drawing import long_plot  # not loaded at start-up
 
-    slow = long_plot(args.n)
+    slow = long_plot(args.n, pen_lift_s=args.pen_lift_s)
     if slow and not args.quiet and any(str(o).lower().endswith(".svg") for o in args.output):
         print(f"{PROG}: warning: {slow}", file=sys.stderr)
 
