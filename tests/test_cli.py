@@ -808,3 +808,58 @@ def test_pen_path_help_says_what_it_runs(capsys, command):
     text = " ".join(capsys.readouterr().out.split())
     assert "at most 2 s" not in text
     assert f"ceil({TWO_OPT_WORK} / dots) rounds of 2-opt" in text
+
+
+# ------------------------------------------------------------------ help
+
+def _help(command, capsys):
+    assert cli.main([command, "--help"]) == 0
+    return capsys.readouterr().out
+
+
+def _examples(text):
+    """The argument lists of the help's examples: each line of its ``examples:`` block,
+    joined with its `` \\`` continuations, without ``diskpack``."""
+    import shlex
+
+    found, current = [], None
+    block = text.partition("\nexamples:\n")[2].partition("\n\n")[0]
+    for line in block.splitlines():
+        words = line.strip()
+        current = words.rstrip("\\") if current is None else current + " " + words.rstrip("\\")
+        if not words.endswith("\\"):
+            found.append(shlex.split(current)[1:])
+            current = None
+    return found
+
+
+def test_stipple_help_leads_with_what_users_came_for(capsys):
+    """The first screen (40 lines): the usage, a plotter example and the everyday options."""
+    first = _help("stipple", capsys).splitlines()[:40]
+    assert first[0] == "usage: diskpack stipple IMAGE -n N -o OUT [options]"
+    flags = {word.rstrip(",") for line in first for word in line.split()[:3]}
+    assert {"-n", "-o", "--page", "--pen-mm", "--plotter"} <= flags
+    example = _examples("\n".join(first))[0]
+    assert "--plotter" in example and "--pen-mm" in example
+
+
+@pytest.mark.parametrize("command", ["stipple", "export"])
+def test_leading_options_have_one_line_helps(command):
+    """Each help of the leading groups fits beside its option on an 80-column terminal."""
+    from diskpack_cl.cli.help import EVERYDAY, PLOTTER
+
+    parser = cli.build_parser(command)._subparsers._group_actions[0].choices[command]
+    formatter = parser._get_formatter()
+    leading = [g for g in parser._action_groups if g.title in (EVERYDAY, PLOTTER)]
+    assert [g.title for g in parser._action_groups if g._group_actions][1:3] == [EVERYDAY, PLOTTER]
+    for action in (a for g in leading for a in g._group_actions):
+        assert len(formatter._expand_help(action)) <= 80 - 24, action.option_strings
+
+
+@pytest.mark.parametrize("command", ["stipple", "poisson", "relax", "export", "analyze",
+                                     "devices"])
+def test_every_subcommand_has_examples_that_parse(capsys, command):
+    examples = _examples(_help(command, capsys))
+    assert examples and all(argv[0] == command for argv in examples)
+    for argv in examples:
+        assert cli.build_parser(command).parse_args(argv).command == command, argv

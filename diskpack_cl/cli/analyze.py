@@ -11,27 +11,29 @@ from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.reports import AnalyzeOptions, PLOT_HINT, analyze, have_matplotlib
 
 from ._common import PROG, _GivenOnce, _image_path
+from .help import with_examples
 
 
 def _add_analyze(subparsers):
     p = subparsers.add_parser(
         "analyze", help="spectra and measures of point sets or of a stippling, as a figure",
-        description="Point sets on the unit torus (.npz, .npy, .csv, .txt, .xy): one figure "
-                    "with the points, the mean periodogram (averaged over all files, as "
-                    "realizations), the radial mean power and the anisotropy in dB, with n, "
-                    "rho and the mean nearest-neighbour rho. A stippling (.npz written by "
-                    "'diskpack stipple', with --image): the rendering beside the input, both "
-                    "blurred with the tone SSIM, the spacing histogram and the certificate "
-                    "(re-checked from the file). A colour stippling (.npz or .csv with a pen "
-                    "column, written by 'diskpack stipple --colors/--pens'; --json): the "
-                    "spacing P01 of each pen and of all dots, against the layers of --image "
-                    "separated again (with the CIELAB Delta E of the drawing and the SSIM of "
-                    "each layer), or without --image against the dots' own density; and the "
-                    "certificate over all dots. Figures need matplotlib: "
-                    "pip install \"diskpack_cl[plot]\".",
-        epilog="\n  ".join(["examples:", "diskpack analyze a.npz b.npz c.npz -o report.png --json",
-                            "diskpack analyze stipple.npz --image sample -o stipple_report.png",
-                            "diskpack analyze colour.npz --image photo.png --json"]),
+        description=with_examples(
+            "Point sets on the unit torus (.npz, .npy, .csv, .txt, .xy): one figure "
+            "with the points, the mean periodogram (averaged over all files, as "
+            "realizations), the radial mean power and the anisotropy in dB, with n, "
+            "rho and the mean nearest-neighbour rho. A stippling (.npz written by "
+            "'diskpack stipple', with --image): the rendering beside the input, both "
+            "blurred with the tone SSIM, the spacing histogram and the certificate "
+            "(re-checked from the file). A colour stippling (.npz or .csv with a pen "
+            "column, written by 'diskpack stipple --colors/--pens'; --json): the "
+            "spacing P01 of each pen and of all dots, against the layers of --image "
+            "separated again (with the CIELAB Delta E of the drawing and the SSIM of "
+            "each layer), or without --image against the dots' own density; and the "
+            "certificate over all dots. Figures need matplotlib: "
+            "pip install \"diskpack_cl[plot]\".",
+            ["diskpack analyze a.npz b.npz c.npz -o report.png --json",
+             "diskpack analyze stipple.npz --image sample -o stipple_report.png",
+             "diskpack analyze colour.npz --image photo.png --json"]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="POINTS",
                    help="point files (realizations of one process), or one stippling .npz "

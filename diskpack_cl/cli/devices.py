@@ -5,17 +5,19 @@ from __future__ import annotations
 import argparse
 
 from ._common import _device_options
+from .help import with_examples
 
 
 def _add_devices(subparsers):
     p = subparsers.add_parser(
         "devices", help="list OpenCL platforms and devices; --check: which programs each runs",
-        description="List OpenCL platforms and devices and say which one diskpack would use. "
-                    "With --check, run the chosen device's known-answer checks (or read their "
-                    "cached verdict) and print, per program, whether the device gave the host's "
-                    "answers.",
-        epilog="examples:\n  diskpack devices\n  diskpack devices --check\n"
-               "  diskpack devices --check --recheck --device cpu",
+        description=with_examples(
+            "List OpenCL platforms (with their version and where their driver comes from) and "
+            "devices, and say which one diskpack would use. With --check, run the chosen "
+            "device's known-answer checks (or read their cached verdict) and print, per "
+            "program, whether the device gave the host's answers.",
+            ["diskpack devices", "diskpack devices --check",
+             "diskpack devices --check --recheck --device cpu"]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     _device_options(p)
     p.add_argument("--check", action="store_true",

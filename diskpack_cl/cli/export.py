@@ -8,27 +8,29 @@ import time
 
 from ._common import PROG, _checked_outputs
 from ._drawing import _drawing_options, _write_and_report
+from .help import lead_with, with_examples
 from diskpack_cl.options import from_namespace
 
 
 def _add_export(subparsers):
     p = subparsers.add_parser(
         "export", help="draw a finished stippling again, for another paper, pen or dot size",
-        description="Draw a stippling that 'diskpack stipple' wrote (.npz; its .csv and .svg "
-                    "are read too) again without recomputing it: another paper (--page), "
-                    "size, pen (--pen-mm), dot size or pen path. The dots keep the size whose "
-                    "ink equals the image's darkness (stored in the .npz) unless --dot-mm or "
-                    "--dots packing is given.",
-        epilog="examples:\n"
-               "  diskpack export out.npz -o a4.svg --page a4 --pen-mm 0.5\n"
-               "  diskpack export out.npz -o a3.svg -o a3.png --page a3 --landscape "
-               "--margin-mm 20",
+        usage="%(prog)s STIPPLING -o OUT [options]",
+        description=with_examples(
+            "Draw a stippling that 'diskpack stipple' wrote (.npz; its .csv and .svg are read "
+            "too) again without recomputing it: another paper (--page), size, pen (--pen-mm), "
+            "dot size or pen path. The dots keep the size whose ink equals the image's "
+            "darkness (stored in the .npz) unless --dot-mm or --dots packing is given.",
+            ["diskpack export out.npz -o a4.svg --page a4 --plotter hp7475a --pen-mm 0.5",
+             "diskpack export out.npz -o a3.svg -o a3.png --page a3 --landscape --margin-mm 20",
+             "diskpack export out.csv -o big.svg --width-mm 400 --pen-path hilbert"]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("input", metavar="STIPPLING",
                    help="a stippling written by diskpack stipple (.npz, .csv or .svg)")
     p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
                    help="output file; repeat for several: .svg, .png, .npz, .csv")
     _drawing_options(p, "n, the input, ")
+    lead_with(p)
     p.set_defaults(run=_run_export)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
@@ -15,16 +16,25 @@ from diskpack_cl.relax import TRIAL_RELAX, max_points_for_radius
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import (PROG, _bar, _image_path, _output_options, _positive_int, note_fallbacks,
                       where_ran)
+from .help import with_examples
 from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 
 
 def _add_poisson(subparsers):
     p = subparsers.add_parser(
         "poisson", help="make a Poisson disk set on the unit torus, in a box, 2D or 3D",
-        description="Make a start set (dart throwing, uniform random or a file) on the unit "
-                    "torus (or in a --box, or in 3D with --dim 3) and relax it by disk packing "
-                    "until rho >= EPS (paper Algorithm 1). Exit status 3 when rho stops short "
-                    "of EPS (the set is written; --allow-unreached: 0).")
+        usage="%(prog)s -n N -o OUT [options]",
+        description=with_examples(
+            "Make a start set (dart throwing, uniform random or a file) on the unit torus (or "
+            "in a --box, or in 3D with --dim 3) and relax it by disk packing until rho >= EPS "
+            "(paper Algorithm 1). Exit status 3 when rho stops short of EPS (the set is "
+            "written; --allow-unreached: 0).",
+            ["diskpack poisson -n 4096 -o points.npz",
+             "diskpack poisson -n 20000 --eps 0.9 -o points.csv --json",
+             "diskpack poisson --min-distance 0.02 --box 2x1 -o box.npz",
+             "diskpack poisson -n 3000 --mask shape.png -o shape.npz",
+             "diskpack poisson -n 1000 --count 16 --seed 7 -o sets/{i:04d}.npz"]),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p, PoissonSetOptions, groups={SIZE: p.add_mutually_exclusive_group()})
     add_arguments(p, PoissonOptions)
     _output_options(p)

@@ -8,6 +8,7 @@ import argparse
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import PROG, _bar, _device_options, _output_options, note_fallbacks, where_ran
+from .help import with_examples
 from diskpack_cl.domain import DomainOptions
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.relax import RelaxOptions, relax_summary
@@ -95,8 +96,14 @@ def _relax_and_write(item, args, points=None, *, extra_summary=None):
 def _add_relax(subparsers):
     p = subparsers.add_parser(
         "relax", help="relax a point file on the unit torus",
-        description="Relax a point set on the unit torus by disk packing until rho >= EPS. "
-                    "Points outside [0,1)^2 are wrapped onto the torus.")
+        usage="%(prog)s IN -o OUT [options]",
+        description=with_examples(
+            "Relax a point set on the unit torus by disk packing until rho >= EPS. Points "
+            "outside [0,1)^2 are wrapped onto the torus.",
+            ["diskpack relax points.npz -o relaxed.npz --eps 0.9",
+             "diskpack relax scan.csv --columns x,y -o relaxed.csv --json",
+             "diskpack relax sets/*.npz -o relaxed/{stem}.npz"]),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="IN",
                    help="point file (.npz, .npy, .csv, .txt, .xy); several make a batch "
                         "(-o a template such as out/{stem}.npz)")

@@ -11,7 +11,31 @@ from ._common import (PROG, _UsageError, _bar, _checked_outputs, _device_options
                       note_fallbacks, where_ran)
 from ._drawing import _drawing_options, _write_and_report
 from diskpack_cl.image import ToneOptions
+from .help import lead_with, with_examples
 from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
+
+#: The examples of ``diskpack stipple --help``, a plotter's first.
+EXAMPLES = (
+    "diskpack stipple photo.jpg -n 20000 -o plot.svg -o plot.png \\\n"
+    "      --page a4 --plotter hp7475a --pen-mm 0.5",
+    "diskpack stipple sample -n 20000 -o out.svg -o out.png",
+    "diskpack stipple photo.jpg -n 20000 --colors cmyk -o colour.svg --page a3",
+    "diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json",
+    "diskpack stipple photos/ --density 80000 -o out/{stem}.svg -o out/{stem}.png",
+)
+
+#: How the stippling works, for the end of its --help.
+ABOUT = ("Stipple an image with N dots by unequal disk packing on power diagrams. "
+         "From an error-diffusion start, the default schedule moves every dot "
+         "towards the centre of the largest circle inside its power cell (pack) "
+         "and part-way to the cell's centroid (mix), with radii from the image's "
+         "density; its phases follow the dot spacing (see --schedule; --schedule "
+         "paper runs the paper's Algorithm 2 loop). The disks are certified inside "
+         "the image and pairwise disjoint (exact float64); the outputs draw every "
+         "dot at one size whose ink equals the image's darkness (--dots), as the "
+         "plotter's pen draws it with --pen-mm. Every output path is checked before "
+         "the computation; the outputs are written together after it, so a failed "
+         "or interrupted run writes nothing and leaves earlier files as they were.")
 
 
 def _phase_text(phase):
@@ -49,35 +73,21 @@ def _add_stipple(subparsers):
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
-        description="Stipple an image with N dots by unequal disk packing on power diagrams. "
-                    "From an error-diffusion start, the default schedule moves every dot "
-                    "towards the centre of the largest circle inside its power cell (pack) "
-                    "and part-way to the cell's centroid (mix), with radii from the image's "
-                    "density; its phases follow the dot spacing (see --schedule; --schedule "
-                    "paper runs the paper's Algorithm 2 loop). The disks are certified inside "
-                    "the image and pairwise disjoint (exact float64); the outputs draw every "
-                    "dot at one size whose ink equals the image's darkness (--dots), as the "
-                    "plotter's pen draws it with --pen-mm. Every output path is checked before "
-                    "the computation; the outputs are written together after it, so a failed "
-                    "or interrupted run writes nothing and leaves earlier files as they were.",
-        epilog="schedules (--schedule): " + _schedules_text() + "\n\nexamples:\n"
-               "  diskpack stipple sample -n 20000 -o out.svg -o out.png\n"
-               "  diskpack stipple photo.jpg -n 50000 -o plot.svg --width-mm 200 --dot-mm 0.5\n"
-               "  diskpack stipple photo.png -n 20000 -o base.npz --method lloyd --json\n"
-               "  diskpack stipple photos/ --density 80000 -o out/{stem}.svg -o out/{stem}.png",
+        usage="%(prog)s IMAGE -n N -o OUT [options]",
+        description=with_examples(
+            "Stipple IMAGE with N dots by disk packing: an SVG for a pen plotter, a PNG "
+            "preview, the points (.npz, .csv). How it works: at the end.", EXAMPLES),
+        epilog=ABOUT + "\n\nschedules (--schedule): " + _schedules_text(),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("images", nargs="+", metavar="IMAGE",
-                   help="image file Pillow reads (PNG, JPEG, TIFF, ...; colour is converted to "
-                        "luminance), or the word 'sample' for the bundled 512x512 sample "
-                        "photograph (use ./sample for a file of that name); several files or "
-                        "folders make a batch")
+                   help="image files or folders, or 'sample' (the bundled photograph)")
     add_arguments(p, StippleCount, groups={COUNT: p.add_mutually_exclusive_group(required=True)})
     p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
                    help="output file; repeat for several: .svg (pen plotters, Inkscape), .png "
                         "(anti-aliased preview), .npz (points, radii, k, width, height), .csv "
                         "(x,y,r in pixels)")
     groups = add_arguments(p, StippleOptions)
-    g = groups[_STIPPLING]
+    g = p.add_argument_group("device and checks")
     g.add_argument("--verify", action="store_true",
                    help="check every MIC step against scipy (exact_mic); slow, for testing "
                         "(single inputs)")
@@ -95,6 +105,7 @@ def _add_stipple(subparsers):
     _batch_options(p).add_argument("--recursive", "-r", action="store_true",
                                    help="a folder given as IMAGE contributes the images of "
                                         "its subfolders too")
+    lead_with(p, last=("device and checks", _STIPPLING))
     p.set_defaults(run=_run_stipple)
 
 
