@@ -243,8 +243,16 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
 HOST_BYTES_PER_POINT = 1000
 
 
-def check_poisson_memory(n, *, free=None):
+def check_poisson_memory(n, *, free=None, names=("n", "min_distance")):
     """Refuse, before the work, a Poisson disk set of `n` points that memory cannot hold.
+
+    Parameters
+    ----------
+    n : int
+    free : int, optional
+        Bytes available (default :func:`available_memory`).
+    names : (str, str), optional
+        The options that ask for the count: the count itself and the distance.
 
     Raises
     ------
@@ -265,4 +273,4 @@ def check_poisson_memory(n, *, free=None):
         raise MemoryLimit(f"{n} points need about {_gib(n * HOST_BYTES_PER_POINT)}, more than "
                           f"the memory available ({_gib(free)}): ask for at most "
                           f"{free // HOST_BYTES_PER_POINT} points (a smaller {{}} or a larger "
-                          f"{{}})", "n", "min_distance")
+                          f"{{}})", *names)

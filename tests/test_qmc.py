@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import scipy
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 from scipy.spatial.distance import pdist
 from scipy.stats import qmc
 
@@ -127,3 +127,97 @@ def test_a_packing_that_stops_short_still_keeps_the_radius(monkeypatch):
     monkeypatch.setattr(diskpack_cl.qmc, "poisson_disk", stopped_short)
     pts = PoissonDisk(2, radius=0.05, rng=0).fill_space()
     assert len(pts) > 50 and pdist(pts).min() >= 0.05
+
+
+@pytest.mark.parametrize("bounds", [
+    dict(l_bounds=[0, 1], u_bounds=[1, 1]),            # an empty box: no room at all
+    dict(l_bounds=[0.5, 0.5], u_bounds=0.5),
+])
+def test_empty_bounds_are_refused(bounds):
+    with pytest.raises(ValueError, match="Bounds are not consistent"):
+        PoissonDisk(2, **bounds)
+
+
+@pytest.mark.parametrize("bounds, match", [
+    (dict(l_bounds=[-np.inf, 0]), r"must be finite, got l_bounds=\[-inf"),
+    (dict(u_bounds=[1, np.nan]), r"must be finite, got .*u_bounds=\[ 1. nan\]"),
+    (dict(l_bounds=[-1e308, 0], u_bounds=[1e308, 1]), "overflows float64"),
+    (dict(l_bounds=["a", 0]), "must be numbers, got l_bounds=\\['a', 0\\]"),
+])
+def test_bounds_that_are_not_finite_numbers_are_refused(bounds, match):
+    with pytest.raises(ValueError, match=match):
+        PoissonDisk(2, **bounds)
+
+
+@pytest.mark.parametrize("n, error, match", [
+    (-1, ValueError, "n must be a non-negative integer, got -1"),
+    (2.5, TypeError, "n must be an integer, got 2.5"),
+    ("3", TypeError, "n must be an integer, got '3'"),
+])
+def test_a_bad_count_is_refused_and_counts_nothing(n, error, match):
+    eng = PoissonDisk(2, radius=0.1, rng=0)
+    first = eng.random(3)
+    with pytest.raises(error, match=match):
+        eng.random(n)
+    assert eng.num_generated == 3
+    assert np.array_equal(np.vstack([first, eng.random(np.int64(4))]),
+                          PoissonDisk(2, radius=0.1, rng=0).random(7))
+
+
+@settings(max_examples=12, deadline=None)
+@given(exponent=st.integers(0, 15), negative=st.booleans(), radius=st.floats(0.08, 0.3),
+       seed=st.integers(0, 2 ** 32 - 1))
+def test_the_radius_holds_far_from_the_origin(exponent, negative, radius, seed):
+    """Rounding into the caller's coordinates (8 values a unit at 1e15) keeps the radius."""
+    lower = np.full(2, (-1.0 if negative else 1.0) * 10.0 ** exponent)
+    eng = PoissonDisk(2, radius=radius, rng=seed, l_bounds=lower, u_bounds=lower + 1)
+    pts = eng.fill_space()
+    assert len(pts) >= 2 and eng.num_generated == len(pts)
+    assert np.all((pts >= lower) & (pts <= lower + 1))
+    assert pdist(pts).min() >= radius
+
+
+def test_a_few_points_of_a_huge_box_pack_nothing(monkeypatch):
+    import diskpack_cl.qmc
+
+    def no_packing(**kwargs):
+        raise AssertionError("packed the whole box for 10 points")
+
+    monkeypatch.setattr(diskpack_cl.qmc, "poisson_disk", no_packing)
+    eng = PoissonDisk(2, radius=1e-4, rng=0)   # ~7e7 packed points, 69 GiB to pack
+    pts = np.vstack([eng.random(10), eng.random(1000)])
+    assert pts.shape == (1010, 2) and eng.num_generated == 1010
+    assert np.all((pts >= 0) & (pts <= 1)) and pdist(pts).min() >= 1e-4
+    assert np.array_equal(eng.reset().random(10), pts[:10])
+
+
+@settings(max_examples=6, deadline=None)
+@given(draws=st.lists(st.integers(1, 40), min_size=1, max_size=3),
+       seed=st.integers(0, 2 ** 32 - 1), radius=st.floats(0.03, 0.06))
+def test_darts_then_the_packing_keep_the_radius(draws, seed, radius):
+    import diskpack_cl.qmc
+
+    eng = PoissonDisk(2, radius=radius, rng=seed, l_bounds=[-1, 2], u_bounds=[0.5, 3])
+    assume(sum(draws) <= diskpack_cl.qmc.DART_SHARE * eng.capacity)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(diskpack_cl.qmc, "DART_FROM", 2)   # darts in a box this small
+        mp.setattr(diskpack_cl.qmc, "poisson_disk", None)   # and nothing packed for them
+        parts = [eng.random(n) for n in draws]
+    parts.append(eng.fill_space())
+    pts = np.vstack(parts)
+    assert [len(p) for p in parts[:-1]] == draws and eng.num_generated == len(pts)
+    assert len(parts[-1]) > 2 * sum(draws)   # the packing fills the rest of the box
+    assert pdist(pts).min() >= radius
+
+
+def test_filling_a_box_that_memory_cannot_hold_names_the_size(monkeypatch):
+    import diskpack_cl.memory
+    import diskpack_cl.qmc
+    from diskpack_cl.memory import MemoryLimit
+
+    monkeypatch.setattr(diskpack_cl.memory, "available_memory", lambda: 2 ** 30)
+    monkeypatch.setattr(diskpack_cl.qmc, "poisson_disk", None)   # never reached
+    eng = PoissonDisk(2, radius=1e-4, rng=0)
+    assert len(eng.random(10)) == 10
+    with pytest.raises(MemoryLimit, match=r"points need about 6\d.\d GiB.*a larger radius"):
+        eng.fill_space()
