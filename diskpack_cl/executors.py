@@ -25,6 +25,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import replace
 from pathlib import Path
 
+from .extras import install_command
 from .io import atomic_write, atomic_writes
 from .io import json_default
 from .jobs import run_job
@@ -41,7 +42,7 @@ pip build: its device then reports that many compute units),
 ``POCL_CPU_MAX_CU_NUM`` in later releases. Both are set for each worker."""
 
 
-DASK_HINT = 'the Dask path needs the dask extra: pip install "diskpack_cl[dask]"'
+DASK_HINT = "the Dask path needs the dask extra: " + install_command("dask")
 
 
 MANIFEST_NAME = "manifest.jsonl"

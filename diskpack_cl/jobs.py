@@ -27,6 +27,7 @@ import string
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -40,6 +41,7 @@ from .memory import check_stipple_memory
 from .multipen import stipple_colors
 from .options import changed
 from .poisson import PoissonOptions, as_box, poisson_job
+from .progress import RunProgress, running, stage
 from .relax import RELAX_FIELDS, RelaxOptions, relax_poisson, relax_summary
 from .schedule import StippleOptions
 from .stipple import stipple
@@ -353,8 +355,11 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     options : WriteOptions, optional
         How the dots are drawn (:class:`diskpack_cl.export.WriteOptions`;
         ``pen_mm``: the PNG preview shows what the pen draws).
-    progress : callable, optional
-        ``progress(k)`` after each ``k`` dots a PNG preview stamped.
+    progress : callable or RunProgress, optional
+        ``progress(stage, done, total)`` (:mod:`diskpack_cl.progress`): the
+        stage ``writing``, counted in files and, in a PNG preview, in the
+        dots it stamped, and within it an SVG's ``pen path`` (its 2-opt
+        rounds); None: the run going on, if any.
     **overrides
         Fields of :class:`~diskpack_cl.export.WriteOptions` replacing those of `options`.
 
@@ -390,23 +395,39 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
                     pen_lift_s=o.pen_lift_s,
                     **({"pen_order": o.pen_order} if color else {}))
     png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
-                    no_overlap=o.no_overlap, progress=progress)
+                    no_overlap=o.no_overlap)
     if dot_mm is not None:  # preview the pen's dots
         png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
     if o.pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots
         png_opts["pen_px"] = o.pen_mm / scale * png_scale
     written = []
-    with atomic_writes():
-        for out in outputs:
+    units = [len(result.points) if out.lower().endswith(".png") else 1 for out in outputs]
+    with running(progress), stage("writing", sum(units)) as advance, atomic_writes():
+        for out, done in zip(outputs, np.cumsum([0, *units[:-1]]).tolist()):
             ext = check_output_path(out)
+            stamped = _stamped(advance, done)
             if ext == ".png" and o.preview == "page":
-                info = write_page_png(out, result, scale=o.png_scale, progress=progress,
+                info = write_page_png(out, result, scale=o.png_scale, progress=stamped,
                                       **drawing)
             else:
-                opts = svg_opts if ext == ".svg" else png_opts if ext == ".png" else {}
+                opts = svg_opts if ext == ".svg" else dict(png_opts, progress=stamped) \
+                    if ext == ".png" else {}
                 info = write_stipple(out, result, **opts)
+            advance(done + units[len(written)])
             written.append({"path": out, "format": ext[1:], **info})
     return dot_mm, written
+
+
+def _stamped(advance, done):
+    """``progress(k)`` of a PNG writer (`k` more dots stamped): the writing stage's
+    ``advance``, from the `done` units of the outputs before."""
+    count = [done]
+
+    def progress(k):
+        count[0] += k
+        advance(count[0])
+
+    return progress
 
 
 def _item_image(path, params):
@@ -443,7 +464,8 @@ def _item_dots(params, write, gray, width, height, note):
     return n, tone_n
 
 
-def stipple_item(item, *, device=None, callback=None, verify=False, profile=False, note=None):
+def stipple_item(item, *, device=None, callback=None, progress=None, verify=False, profile=False,
+                 note=None):
     """Stipple the image of one item: what a single input and every item of a batch run.
 
     Loads the image (tone controls applied, or the colour image with
@@ -460,6 +482,13 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     callback : callable, optional
         ``callback(entry, total)`` after each iteration: the history entry and
         the number of iterations of the schedule.
+    progress : callable or RunProgress, optional
+        ``progress(stage, done, total)`` as each stage starts, advances and
+        ends (:mod:`diskpack_cl.progress`): ``load`` (the image read, the dot
+        count, the memory check), then those of :func:`diskpack_cl.stipple`;
+        with a :class:`~diskpack_cl.progress.RunProgress` the caller reads
+        each stage's seconds (:attr:`~diskpack_cl.progress.RunProgress.seconds`)
+        and goes on with the writers (:func:`write_stipple_outputs`).
     verify, profile : bool
         As for :func:`diskpack_cl.stipple` (one pen).
     note : callable, optional
@@ -486,6 +515,32 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     >>> result.n, result.certificate.valid, summary["image"].endswith("astronaut.png")
     (300, True, True)
     """
+    with running(progress):
+        return _stipple_item_run(item, device, callback, verify, profile, note)
+
+
+def _stipple_item_run(item, device, callback, verify, profile, note):
+    """The body of :func:`stipple_item`, in its run."""
+    with stage("load"):
+        loaded = _stipple_item_load(item, device, note)
+    res = _stipple_item_stipple(item, loaded, device, callback, verify, profile)
+    return res, loaded.gray, dict(res.summary(), image=item.input, tone_n=loaded.tone_n)
+
+
+class _Loaded(NamedTuple):
+    """A stipple item read: see :func:`_item_image` and :func:`_item_dots`."""
+
+    gray: object
+    image: object
+    run: object
+    tone_n: object
+    n: int
+    options: StippleOptions
+
+
+def _stipple_item_load(item, device, note):
+    """The :class:`_Loaded` of a stipple item: its image read, its dot count, the memory it
+    needs checked."""
     params = item.params
     write = WriteOptions(**item.write)
     options = StippleOptions(**params.get("options", {}))
@@ -499,6 +554,13 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
                          png_scale=preview_scale(*area, write.png_scale), png_area=area,
                          device=device, outputs=item.outputs)
+    return _Loaded(gray, image, run, tone_n, n, options)
+
+
+def _stipple_item_stipple(item, loaded, device, callback, verify, profile):
+    """The stippling of a :class:`_Loaded` item."""
+    params, (gray, image, run, _, n, options) = item.params, loaded
+    H, W = image.shape[:2]
     each = None
     if callback is not None:
         total = sum(ph[1] for ph in options.plan(n, W, H).phases)
@@ -510,9 +572,8 @@ def stipple_item(item, *, device=None, callback=None, verify=False, profile=Fals
     res = run(image, n, options, device=device, callback=each,
               backend=params.get("backend", "auto"), **extra)
     if gray is not None:   # recorded in the .npz and the --json params
-
         res.params["tone"] = ToneOptions(**params.get("tone", {})).params()
-    return res, gray, dict(res.summary(), image=item.input, tone_n=tone_n)
+    return res
 
 
 def _stipple_item(item, device, progress):
@@ -522,11 +583,13 @@ def _stipple_item(item, device, progress):
         def callback(entry, total):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
-    res, gray, summary = stipple_item(item, device=device, callback=callback)
-    t = time.perf_counter()
-    dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), **item.write)
+    with running(RunProgress()) as run:   # the item's own run: its seconds per stage
+        res, gray, summary = stipple_item(item, device=device, callback=callback)
+        t = time.perf_counter()
+        dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), **item.write)
     summary.pop("params", None)
-    summary.update(dot_mm=dot_mm, files=written, write_seconds=time.perf_counter() - t)
+    summary.update(dot_mm=dot_mm, files=written, write_seconds=time.perf_counter() - t,
+                   stage_seconds=run.by_stage())
     return summary
 
 

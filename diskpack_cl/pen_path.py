@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .progress import stage
+
 __all__ = ["GREEDY_MAX", "PEN_PATHS", "TWO_OPT_WORK", "path_travel", "pen_path_order", "two_opt",
            "two_opt_rounds"]
 
@@ -218,7 +220,7 @@ def two_opt_rounds(n):
     return max(1, -(-TWO_OPT_WORK // max(int(n), 1)))
 
 
-def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
+def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None, progress=None):
     """Shorten an open pen path by 2-opt and Or-opt moves towards near neighbours.
 
     Each round evaluates, for every dot and each of its ``neighbors``
@@ -226,6 +228,7 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
     and the moves of the dot next to it (Or-opt), all with numpy, applies
     the best ones that change disjoint edges, and stops when none gains or
     after `rounds` rounds (None: no limit). The start is fixed.
+    ``progress(done)``, if given, after each round.
 
     Examples
     --------
@@ -251,6 +254,8 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None):
         edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
         if not _apply_moves(_candidates(q, edge, near, place, pos, tol), (q, idx, place), pos):
             break
+        if progress is not None:
+            progress(done)
     return idx[1:]
 
 
@@ -298,15 +303,24 @@ def pen_path_order(points, *, method="auto", start=(0.0, 0.0), rounds=None):
     n = len(p)
     if method not in PEN_PATHS:
         raise ValueError(f"pen path method must be one of {', '.join(PEN_PATHS)}, got {method!r}")
-    orders = [np.arange(n)]
-    if n >= 2 and method in ("auto", "hilbert"):
-        orders.append(_hilbert_order(p))
-    if n >= 2 and (method == "greedy" or (method == "auto" and n <= GREEDY_MAX)):
-        orders.append(_greedy_order(p, start))
+    rounds = (two_opt_rounds(n) if rounds is None else rounds) if method == "auto" and n >= 2 else 0
+    # the run's stage (diskpack_cl.progress): the first orders, then each 2-opt round
+    with stage("pen path", 1 + rounds) as advance:
+        orders = [np.arange(n)]
+        if n >= 2 and method in ("auto", "hilbert"):
+            orders.append(_hilbert_order(p))
+        if n >= 2 and (method == "greedy" or (method == "auto" and n <= GREEDY_MAX)):
+            orders.append(_greedy_order(p, start))
+        order, before, after = _shortest(p, orders, start)
+        advance(1)
+        if rounds:
+            order = two_opt(p, order, start=start, rounds=rounds, progress=lambda k: advance(1 + k))
+            after = path_travel(p, order, start=start)
+    return order, before, after
+
+
+def _shortest(p, orders, start):
+    """``(order, travel of the first order, travel)`` of the shortest of `orders`."""
     travel = [path_travel(p, o, start=start) for o in orders]
     best = int(np.argmin(travel))
-    order, after = orders[best], travel[best]
-    if method == "auto" and n >= 2:
-        order = two_opt(p, order, start=start, rounds=two_opt_rounds(n) if rounds is None else rounds)
-        after = path_travel(p, order, start=start)
-    return order, travel[0], after
+    return orders[best], travel[0], travel[best]

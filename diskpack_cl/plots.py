@@ -20,13 +20,14 @@ from scipy import ndimage
 from PIL import Image
 
 from . import analysis, picture_measures
+from .extras import install_command
 from .io import atomic_write
 from .box_analysis import box_measures
 
 __all__ = ["figure_format", "point_set_numbers", "point_set_report", "stipple_numbers",
            "stipple_report"]
 
-_MISSING = "plots need matplotlib: pip install 'diskpack_cl[plot]'"
+_MISSING = "plots need matplotlib: " + install_command("plot")
 _FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
 _DPI = 100
 

@@ -12,6 +12,8 @@ The profiles are vpype's (its bundled ``vpype_config.toml`` and the user's
 
 from __future__ import annotations
 
+from .extras import install_command
+
 __all__ = ["plotter_config", "plotting_area"]
 
 MM_PER_PX = 25.4 / 96   # vpype's unit is the CSS pixel
@@ -36,8 +38,8 @@ def plotter_config(name):
     try:
         import vpype  # the optional vpype extra
     except ImportError:
-        raise ValueError("--plotter reads vpype's device profiles: pip install "
-                         "\"diskpack_cl[vpype]\"") from None
+        raise ValueError("--plotter reads vpype's device profiles: "
+                         + install_command("vpype")) from None
     try:
         config = vpype.config_manager.get_plotter_config(name)
     except ValueError as exc:

@@ -15,6 +15,7 @@ import numpy as np
 from .domain import DomainOptions, box_sizes
 from .options import check_fields, option
 from .geometry import Domain, certify_disks
+from .extras import install_command
 from .image import load_gray
 from .io import load_npz, read_points
 from .measures import nearest_neighbor_distances
@@ -22,7 +23,7 @@ from .measures import nearest_neighbor_distances
 __all__ = ["PLOT_HINT", "have_matplotlib", "AnalyzeOptions", "analyze", "analyze_stippling",
            "analyze_color_stippling", "analyze_point_sets", "point_file_box"]
 
-PLOT_HINT = 'figures need matplotlib: pip install "diskpack_cl[plot]"'
+PLOT_HINT = "figures need matplotlib: " + install_command("plot")
 
 
 @dataclass(frozen=True)

@@ -87,6 +87,7 @@ from .blur import DeviceBlur
 from .device_checks import UntrustedProgram, warn_fallback
 from .device_stage import has_fp64
 from .picture_measures import tone_radius
+from .progress import running, stage as run_stage
 from .dithering import _least, error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
@@ -513,9 +514,15 @@ def _run(state, stage, callback, *, first=0, before=None):
     given, runs before each step (within its time) and returns None or a
     function that the stepped state goes through (the colour stippling's
     pull to each pen's centroid)."""
-    history = []
     watch = stage.engine.timings
     total = sum(ph[1] for ph in stage.options.phases)
+    with run_stage("iterations", total) as advance:
+        return _steps(state, stage, callback, first, before, watch, total, advance)
+
+
+def _steps(state, stage, callback, first, before, watch, total, advance):
+    """The body of :func:`_run`; ``advance(done)`` after each step."""
+    history = []
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
         blend = float(phase[2]) if len(phase) == 3 else stage.options.blend
@@ -535,6 +542,7 @@ def _run(state, stage, callback, *, first=0, before=None):
             entry.update({f"{name}_s": secs for name, secs in watch.since(mark).items()})
             entry["seconds"] = time.perf_counter() - t0
             history.append(entry)
+            advance(len(history))
             if callback is not None:
                 callback(entry)
     return state, history
@@ -694,7 +702,7 @@ def _certified_result(state, stage, history, t_start, ink):
     (`ink`: the picture's summed darkness, for the tone radius)."""
     W, H = stage.size
     watch = stage.engine.timings
-    with watch("certify"):
+    with watch("certify"), run_stage("certificate"):
         r = dot_radii(state, stage, state.points)
         k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     watch.add("total", time.perf_counter() - t_start)
@@ -707,8 +715,8 @@ def _certified_result(state, stage, history, t_start, ink):
     )
 
 
-def stipple(image, n, options=None, *, start=None, callback=None, device=None, backend="auto",
-            verify=False, profile=False, **overrides):
+def stipple(image, n, options=None, *, start=None, callback=None, progress=None, device=None,
+            backend="auto", verify=False, profile=False, **overrides):
     """Stipple an image with ``n`` dots by unequal disk packing (paper Algorithm 2).
 
     Parameters
@@ -726,6 +734,12 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
         Start points instead of error diffusion (must lie inside the image).
     callback : callable, optional
         Called with each history entry (a dict) after every iteration.
+    progress : callable or RunProgress, optional
+        ``progress(stage, done, total)`` as each stage of the run starts,
+        advances and ends (:mod:`diskpack_cl.progress`: ``load``, ``device``,
+        ``start``, ``setup``, ``iterations``, ``certificate``); the stage
+        ``device`` (the OpenCL device, its checks on a first run, its
+        programs) is ``setup``'s with ``backend="exact"``.
     device : str or pyopencl.Context, optional
         OpenCL device (see :func:`diskpack_cl.get_context`).
     backend : {"auto", "opencl", "exact"}
@@ -766,9 +780,21 @@ def stipple(image, n, options=None, *, start=None, callback=None, device=None, b
     >>> res = stipple(g, 60, schedule=[("mix", 3, 0.5)], backend="exact")
     >>> res.n, res.certificate.valid, res.engine
     (60, True, 'exact')
+
+    The stages as they end:
+
+    >>> def show(stage, done, total):
+    ...     if done == total:
+    ...         print(stage, done)
+    >>> res = stipple(g, 60, schedule=[("mix", 3, 0.5)], backend="exact", progress=show)
+    load 1
+    start 1
+    setup 1
+    iterations 3
+    certificate 1
     """
     options = (options or StippleOptions()).replace(**overrides)
-    with freed_memory_kept():   # the run makes and drops many whole-picture arrays
+    with freed_memory_kept(), running(progress):   # the run makes and drops many whole-picture arrays
         # (in a function of its own: its arrays are freed before the block gives memory back)
         return _stipple(image, n, options, start, callback,
                         dict(device=device, backend=backend, profile=profile, verify=verify))
@@ -778,7 +804,7 @@ def _stipple(image, n, options, start, callback, engine_args):
     """The body of :func:`stipple`."""
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its own stages and the engine's
-    with watch("load"):
+    with watch("load"), run_stage("load"):
         # the caller's gray array itself where it is one (nothing here changes it): no copy
         gray = to_gray(image, invert=options.invert, copy=False)
         H, W = gray.shape
@@ -786,13 +812,16 @@ def _stipple(image, n, options, start, callback, engine_args):
         reserve = PageReserve(STAGE_BYTES_PER_PIXEL * W * H)
         gray, ink = _toned(gray, options.paper_tone)
         opt = options.plan(n, W, H, ink=ink)
-    with watch("start"):
+    with watch("start"), run_stage("start"):
         x = _start_points(gray, opt, start)
     with watch("setup"):
         reserve.release()
-        engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
-                             **engine_args)
-        stage = _make_stage(gray, opt, engine)
+        exact = engine_args["backend"] == "exact"   # no device: the engine is part of the setup
+        with run_stage("setup" if exact else "device"):
+            engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
+                                 **engine_args)
+        with run_stage("setup", 0 if exact else 1):
+            stage = _make_stage(gray, opt, engine)
     del gray   # the stage holds every field the steps read
     state, history = _run(StippleState(x, float(opt.k0)), stage, callback)
     return _certified_result(state, stage, history, t_start, ink)

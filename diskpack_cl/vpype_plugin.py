@@ -30,6 +30,7 @@ from diskpack_cl.export import WriteOptions
 from diskpack_cl.image import ToneOptions, sample_image_path
 from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs
 from diskpack_cl.options import NamedOptionError, cli_fields, flag_name
+from diskpack_cl.progress import stage_text, with_bars
 from diskpack_cl.schedule import StippleOptions
 
 __all__ = ["click_options", "diskpack", "QUANTIZATION_MM"]
@@ -161,10 +162,13 @@ def _stippling_document(image, n, kw):
         (item,) = plan_stipple([sample_image_path() if image == "sample" else image], [svg],
                                _of(StippleOptions, kw), n=n, write=write,
                                tone=_of(ToneOptions, kw), color=separation, make_folders=False)
-        result, gray, summary = stipple_item(item, note=logging.warning)
-        _, (info,) = write_stipple_outputs(result, gray, [svg], write)
-        logging.info(f"diskpack: {result.n} dots, plot about {info['plot_seconds'] / 60:.0f} min, "
-                     f"{info['touching_share']:.1%} of the drawn dots touch")
+        with with_bars() as run:   # a bar per stage on stderr, as diskpack stipple draws them
+            result, gray, summary = stipple_item(item, note=logging.warning)
+            _, (info,) = write_stipple_outputs(result, gray, [svg], write)
+        times = stage_text(run.by_stage(), summary["iterations"], run.elapsed())
+        logging.info(f"diskpack: {result.n} dots; {times}; plot about "
+                     f"{info['plot_seconds'] / 60:.0f} min, {info['touching_share']:.1%} of the "
+                     "drawn dots touch")
         doc = vpype.read_multilayer_svg(svg, vpype.convert_length(f"{QUANTIZATION_MM}mm"))
     # the page in vpype's exact pixels (the SVG reader rounds its mm), which vpype's HPGL
     # writer matches with its papers

@@ -334,6 +334,54 @@ def test_dask_poisson_and_cli_scheduler(tmp_path, cluster, capsys):
     assert _differences(tmp_path / "d", tmp_path / "l") == []
 
 
+@pytest.fixture
+def remote_cluster(tmp_path):
+    """A scheduler and a worker started as ``dask`` commands in a folder of their own: a
+    cluster whose working folder is not the caller's, as on other machines."""
+    pytest.importorskip("distributed")
+    away = tmp_path / "cluster"
+    away.mkdir()
+    dask = [str(Path(sys.executable).parent / "dask")]
+    file = away / "scheduler.json"
+    common = dict(cwd=away, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    procs = [subprocess.Popen(dask + ["scheduler", "--host", "127.0.0.1", "--port", "0",
+                                      "--no-dashboard", "--scheduler-file", str(file)], **common)]
+    try:
+        for _ in range(600):
+            if file.exists() and file.stat().st_size:
+                break
+            time.sleep(0.1)
+        procs.append(subprocess.Popen(dask + ["worker", "--scheduler-file", str(file),
+                                              "--nworkers", "1", "--nthreads", "1",
+                                              "--no-dashboard"], **common))
+        address = json.loads(file.read_text())["address"]
+        import distributed
+
+        with distributed.Client(address) as client:
+            client.wait_for_workers(1, timeout=120)
+        yield address, away
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+            proc.wait(timeout=60)
+
+
+@pytest.mark.parametrize("collect", [[], ["--collect"]])
+def test_dask_relative_paths_resolve_in_the_callers_folder(ctx, tmp_path, remote_cluster,
+                                                          monkeypatch, capsys, collect):
+    """Relative inputs and outputs mean the caller's folder, not the workers' (each item
+    failed "image file not found: photos/astronaut.png" on a cluster started elsewhere)."""
+    address, away = remote_cluster
+    caller = tmp_path / "caller"
+    _photos(caller / "photos", size=(24, 24))
+    monkeypatch.chdir(caller)
+    rc, _, err = _cli(["stipple", "photos/", "-n", 40, *QUICK_CLI, "-o", "out/{stem}.npz",
+                       "--scheduler", address, *collect], capsys)
+    assert rc == 0, err
+    assert sorted(_files(caller / "out")) == ["astronaut.npz", "camera.npz", "coffee.npz"]
+    assert not (away / "out").exists()
+
+
 def test_scheduler_without_dask_names_the_extra(tmp_path):
     code = ("import sys; sys.modules['distributed'] = None\n"
             "from diskpack_cl.cli import main\n"
@@ -341,7 +389,7 @@ def test_scheduler_without_dask_names_the_extra(tmp_path):
             "'--scheduler', 'tcp://127.0.0.1:1']))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 1
-    assert 'pip install "diskpack_cl[dask]"' in proc.stderr
+    assert '.venv/bin/pip install ".[dask]"' in proc.stderr
 
 
 def test_item_identity_follows_the_input(tmp_path):

@@ -355,7 +355,7 @@ def test_stipple_json(stippled):
             "timings", "params", "outputs", "seconds", "image"} <= set(s)
     assert s["n"] == 150 and s["iterations"] == 7 and s["certificate"]["valid"] is True
     assert s["stages"]["engine"]["backend"] == "opencl" and s["stages"]["engine"]["device"]
-    assert " iterations in " in stippled.err and " s on OpenCL (" in stippled.err
+    assert " 7 iterations " in stippled.err and " s in all on OpenCL (" in stippled.err
     assert s["params"]["schedule"] == [["pack", 3], ["lloyd", 2], ["pack", 2]]
     fmts = [o["format"] for o in s["outputs"]]
     assert fmts == ["svg", "png", "npz", "csv"]

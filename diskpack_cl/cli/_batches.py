@@ -7,6 +7,7 @@ import os
 import sys
 import time
 
+from diskpack_cl.extras import install_command
 from diskpack_cl.io import json_default
 
 from ._common import PROG, _UsageError, _bar, _positive_int
@@ -37,8 +38,8 @@ def _batch_options(p):
                    help="redo every item, also those the manifest records as done")
     g.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="send the items to this dask.distributed scheduler (default: "
-                        "DASK_SCHEDULER_ADDRESS when set); needs pip install "
-                        "\"diskpack_cl[dask]\"")
+                        "DASK_SCHEDULER_ADDRESS when set); needs "
+                        + install_command("dask"))
     g.add_argument("--collect", action="store_true",
                    help="with --scheduler: workers return the outputs' bytes and this "
                         "command writes them (no shared output folder needed)")

@@ -292,6 +292,15 @@ def _bar(args, desc, unit, total=None, *, leave=False):
                 leave=leave)
 
 
+def command_run(args):
+    """The command as one run (:func:`diskpack_cl.progress.with_bars`): a context yielding
+    its :class:`~diskpack_cl.progress.RunProgress`, which draws a bar per stage on stderr (on
+    a terminal, not with --quiet or --json); inside a run already going on, that run."""
+    from diskpack_cl.progress import with_bars  # not loaded at start-up
+
+    return with_bars(quiet=args.quiet or getattr(args, "json", False))
+
+
 SAMPLE = "sample"
 
 

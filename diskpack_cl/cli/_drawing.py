@@ -8,7 +8,7 @@ import time
 
 from diskpack_cl.io import json_default
 
-from ._common import PROG, _bar
+from ._common import PROG, command_run
 from diskpack_cl.options import add_arguments
 
 
@@ -24,13 +24,6 @@ def _drawing_options(p, summary):
                         f"info, plot (pen-down count, pen-up travel before and after the "
                         f"pen path, plot time) and seconds")
     return o
-
-
-def _write_bar(args, n, outputs):
-    """Return (callback, close): a bar over the dots the PNG previews stamp."""
-    pngs = sum(o.lower().endswith(".png") for o in outputs)
-    bar = _bar(args, "write", "dot", n * pngs) if pngs else None
-    return (None, lambda: None) if bar is None else (bar.update, bar.close)
 
 
 def _plot_summary(written, write):
@@ -80,21 +73,19 @@ def _warn_crowded(args, plot):
 
 
 def _write_and_report(args, write, res, gray, outputs, summary, t0):
-    """Write the outputs, add their figures to ``summary`` (and ``seconds`` since ``t0``),
-    print it with --json; return the tail of the summary line."""
+    """Write the outputs in the command's run (:func:`~._common.command_run`), add their
+    figures to ``summary`` (``seconds`` since ``t0``, and ``stage_seconds``: the run's seconds
+    per stage), print it with --json; return the tail of the summary line."""
     from diskpack_cl.jobs import write_stipple_outputs  # not loaded at start-up
 
     t_write = time.perf_counter()
-    progress, close = _write_bar(args, len(res.points), outputs)
-    try:
-        dot_mm, written = write_stipple_outputs(res, gray, outputs, write, progress=progress)
-    finally:
-        close()
+    with command_run(args) as run:
+        dot_mm, written = write_stipple_outputs(res, gray, outputs, write)
     plot, text = _plot_summary(written, write)
     _warn_crowded(args, plot)
     summary.update(dot_mm=dot_mm, outputs=written, plot=plot,
                    write_seconds=time.perf_counter() - t_write,
-                   seconds=time.perf_counter() - t0)
+                   seconds=time.perf_counter() - t0, stage_seconds=run.by_stage())
     if args.json:
         print(json.dumps(summary, default=json_default), flush=True)
     return f"{text}; wrote " + ", ".join(outputs)

@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from diskpack_cl.extras import install_command
 from diskpack_cl.io import check_not_inputs, check_writable, json_default
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.reports import AnalyzeOptions, PLOT_HINT, analyze, have_matplotlib
@@ -30,7 +31,7 @@ def _add_analyze(subparsers):
             "separated again (with the CIELAB Delta E of the drawing and the SSIM of "
             "each layer), or without --image against the dots' own density; and the "
             "certificate over all dots. Figures need matplotlib: "
-            "pip install \"diskpack_cl[plot]\".",
+            + install_command("plot") + ".",
             ["diskpack analyze a.npz b.npz c.npz -o report.png --json",
              "diskpack analyze stipple.npz --image sample -o stipple_report.png",
              "diskpack analyze colour.npz --image photo.png --json"]),
