@@ -8,7 +8,7 @@ import time
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import (PROG, _UsageError, _bar, _checked_outputs, _device_options, _image_path,
-                      note_fallbacks, where_ran)
+                      command_run, note_fallbacks, where_ran)
 from ._drawing import _drawing_options, _write_and_report
 from diskpack_cl.image import ToneOptions
 from .help import lead_with, with_examples
@@ -109,30 +109,6 @@ def _add_stipple(subparsers):
     p.set_defaults(run=_run_stipple)
 
 
-def _stipple_progress(args):
-    """Return (callback, close): a tqdm bar (iteration, phase kind, k) on a terminal,
-    made at the first iteration, when the schedule's length is known."""
-    bars = []
-
-    def callback(entry, total):
-        if not bars:
-            bars.append(_bar(args, "stipple", "it", total or None))
-        bar = bars[0]
-        if bar is None:
-            return
-        post = f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}"
-        if entry.get("empty"):
-            post += f" empty={entry['empty']}"
-        bar.set_postfix_str(post, refresh=False)
-        bar.update(int(entry.get("iteration", bar.n)) + 1 - bar.n)
-
-    def close():
-        if bars and bars[0] is not None:
-            bars[0].close()
-
-    return callback, close
-
-
 def _stipple_objects(args):
     """The options of the arguments: ``(StippleOptions, ToneOptions, WriteOptions, ColorOptions)``.
 
@@ -205,21 +181,20 @@ def _run_stipple_one(args, options, tone, write, separation):
     without a manifest; every refusal comes before the computation."""
     from diskpack_cl.jobs import plan_stipple, stipple_item  # not loaded at start-up
 
+    from diskpack_cl.progress import stage, stage_text  # not loaded at start-up
+
     t0 = time.perf_counter()
-    (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
-                           options, **_count(args), allow_large=args.allow_large,
-                           write=write, tone=tone, color=separation, make_folders=False)
-    callback, close = _stipple_progress(args)
-    try:
-        res, gray, summary = stipple_item(item, device=args.device, callback=callback,
-                                          verify=args.verify, profile=args.profile,
-                                          note=None if args.quiet else _note)
-    finally:
-        close()
-    tail = _write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
+    with command_run(args):   # one bar per stage, and their seconds in the summary
+        with stage("load"):
+            (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
+                                   options, **_count(args), allow_large=args.allow_large,
+                                   write=write, tone=tone, color=separation, make_folders=False)
+        res, gray, summary = stipple_item(item, device=args.device, verify=args.verify,
+                                          profile=args.profile, note=None if args.quiet else _note)
+        tail = _write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
     if not args.quiet:
-        print(f"{PROG}: {_result_text(res, summary)}, {summary['iterations']} iterations in "
-              f"{summary['seconds']:.3g} s{_where(res)}{tail}", file=sys.stderr)
+        times = stage_text(summary["stage_seconds"], summary["iterations"], summary["seconds"])
+        print(f"{PROG}: {_result_text(res, summary)}; {times}{_where(res)}{tail}", file=sys.stderr)
     note_fallbacks(args, res.stages)
     return 0
 
