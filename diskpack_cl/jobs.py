@@ -40,6 +40,7 @@ from .io import (atomic_writes, box_record, check_not_inputs, check_points_path,
 from .memory import check_stipple_memory
 from .multipen import stipple_colors
 from .options import changed
+from .picture_measures import tone_radius
 from .poisson import PoissonOptions, as_box, poisson_job
 from .progress import RunProgress, running, stage
 from .relax import RELAX_FIELDS, RelaxOptions, relax_poisson, relax_summary
@@ -452,16 +453,53 @@ def _item_dots(params, write, gray, width, height, note):
     n, tone_n = params.get("n"), None
     dot = write.dot_mm or write.pen_mm
     if gray is not None and dot is not None:
-        tone = tone_dot_count(gray if write.invert else 1.0 - gray, write.scale(width, height), dot)
-        if isinstance(n, int) and not 2 / 3 <= n / tone <= 3 / 2 and note is not None:
-            note(f"{tone} dots of {dot:g} mm give the image's ink on this paper; -n {n} will "
-                 f"look {'darker' if n > tone else 'lighter'} (-n tone uses {tone})")
+        darkness, scale = gray if write.invert else 1.0 - gray, write.scale(width, height)
+        tone = tone_dot_count(darkness, scale, dot)
+        text = isinstance(n, int) and _ink_note(n, _drawn_dot_mm(write, n, darkness, scale),
+                                                darkness, scale, tone)
+        if text and note is not None:
+            note(text)
         n, tone_n = (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
     elif n == "tone":
         raise ValueError("n='tone' needs the dot size: give dot_mm or pen_mm")
     n = dots_for_image(width, height, n=n, density=params.get("density"),
                        dots_per_cm2=params.get("dots_per_cm2"), **write.layout())
     return n, tone_n
+
+
+def _drawn_dot_mm(write, n, darkness, scale):
+    """Diameter (mm) of the ink of each of `n` dots as `write` draws them: its dot size, or
+    the tone size of n dots times its radius scale, and at least the pen's width (a
+    narrower dot is one pen touch); None for the packing disks, which have no one size."""
+    if write.dot_mm is not None:
+        dot = write.dot_mm
+    elif (write.dots or "tone") == "tone":
+        dot = 2.0 * tone_radius(n, darkness) * write.radius_scale * scale
+    else:
+        return None
+    return max(dot, write.pen_mm or 0.0)
+
+
+def _ink_note(n, drawn_mm, darkness, scale, tone):
+    """What to say when `n` dots `drawn_mm` wide hold far more or less ink than the image
+    on paper (`tone`: the count of ``-n tone``), else None.
+
+    Examples
+    --------
+    >>> _ink_note(100, 2.0, np.full((10, 10), 0.5), 6.0, 573)
+    "573 dots of 2 mm give the image's ink on this paper; -n 100 will look lighter (-n tone uses 573)"
+    >>> _ink_note(573, 2.0, np.full((10, 10), 0.5), 6.0, 573) is None
+    True
+    """
+    if drawn_mm is None:
+        return None
+    ink_mm2 = float(np.sum(darkness)) * scale * scale
+    like = int(round(ink_mm2 / (0.25 * np.pi * drawn_mm * drawn_mm)))
+    if 2 / 3 <= n / max(like, 1) <= 3 / 2:
+        return None
+    return (f"{like} dots of {drawn_mm:.3g} mm give the image's ink on this paper; -n {n} will "
+            f"look {'darker' if n > like else 'lighter'}"
+            + (f" (-n tone uses {tone})" if like == tone else ""))
 
 
 def stipple_item(item, *, device=None, callback=None, progress=None, verify=False, profile=False,

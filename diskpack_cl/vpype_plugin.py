@@ -25,6 +25,7 @@ import click
 import vpype
 import vpype_cli
 
+from diskpack_cl.cli.help import LEADING, one_line_help
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions
 from diskpack_cl.image import ToneOptions, sample_image_path
@@ -57,17 +58,27 @@ class _Parsed(click.ParamType):
             self.fail(str(exc), param, ctx)
 
 
+#: Place of each leading option (diskpack stipple's first groups) in vpype's --help.
+_LEADING_ORDER = {dest: i for i, (dest, _) in enumerate(e for _, group in LEADING for e in group)}
+
+
+def _help(field):
+    """The option's help in vpype's --help: its one-line help where it leads, else its own."""
+    text = one_line_help(field.name)
+    return field.metadata["help"] if text is None else text % {"default": field.default}
+
+
 def _click_option(field, choices, parse):
     m, flag = field.metadata, flag_name(field.name)
     if isinstance(field.default, bool):
-        return click.option(flag, is_flag=True, help=m["help"])
+        return click.option(flag, is_flag=True, help=_help(field))
     if choices is not None:
         kind = click.Choice([str(c) for c in choices])
         if parse is not None:   # choices that are not strings: the text is checked, then read
             kind = _Parsed(field.name, lambda text, c=kind: parse(c.convert(text, None, None)))
-        return click.option(flag, type=kind, default=field.default, help=m["help"])
+        return click.option(flag, type=kind, default=field.default, help=_help(field))
     return click.option(flag, type=_Parsed(field.name, parse), default=field.default,
-                        metavar=m["metavar"] or "X", help=m["help"])
+                        metavar=m["metavar"] or "X", help=_help(field))
 
 
 def click_options(*classes, skip=()):
@@ -75,7 +86,9 @@ def click_options(*classes, skip=()):
 
     The options are those :func:`diskpack_cl.options.add_arguments` gives
     ``diskpack stipple``: same flags, defaults, choices, checks and help. A
-    field of two classes is added once.
+    field of two classes is added once. The options of
+    :data:`diskpack_cl.cli.help.LEADING` come first, in its order and with
+    its one-line helps, as ``diskpack stipple --help`` shows them.
 
     Examples
     --------
@@ -94,6 +107,7 @@ def click_options(*classes, skip=()):
         for spec in cli_fields(cls, skip=seen):
             specs.append(spec)
             seen.add(spec[0].name)
+    specs.sort(key=lambda spec: _LEADING_ORDER.get(spec[0].name, len(_LEADING_ORDER)))
 
     def decorate(fn):
         for spec in reversed(specs):
@@ -151,6 +165,11 @@ def _of(cls, kw):
     return cls(**{k: v for k, v in kw.items() if k in cls.__dataclass_fields__})
 
 
+def _note(text):
+    """A note of the stippling on stderr, as ``diskpack stipple`` prints it."""
+    click.echo(f"diskpack: note: {text}", err=True)
+
+
 def _stippling_document(image, n, kw):
     """Stipple ``image`` as ``diskpack stipple`` does; the SVG it writes, read by vpype."""
     write, color = _of(WriteOptions, kw), _of(ColorOptions, kw)
@@ -163,7 +182,7 @@ def _stippling_document(image, n, kw):
                                _of(StippleOptions, kw), n=n, write=write,
                                tone=_of(ToneOptions, kw), color=separation, make_folders=False)
         with with_bars() as run:   # a bar per stage on stderr, as diskpack stipple draws them
-            result, gray, summary = stipple_item(item, note=logging.warning)
+            result, gray, summary = stipple_item(item, note=_note)
             _, (info,) = write_stipple_outputs(result, gray, [svg], write)
         times = stage_text(run.by_stage(), summary["iterations"], run.elapsed())
         logging.info(f"diskpack: {result.n} dots; {times}; plot about "
@@ -181,9 +200,7 @@ def _stippling_document(image, n, kw):
 
 @click.command(cls=_PipelineCommand)
 @click.argument("image", metavar="IMAGE")
-@click.option("-n", "n", type=_dot_count, required=True, metavar="N",
-              help="number of dots (at least 2), or 'tone' with --dot-mm or --pen-mm: as many "
-                   "dots as give the image's ink on the paper")
+@click.option("-n", "n", type=_dot_count, required=True, metavar="N", help=one_line_help("n"))
 @click_options(StippleOptions, ToneOptions, WriteOptions, ColorOptions, skip=_NOT_IN_VPYPE)
 @vpype_cli.global_processor
 def diskpack(document, image, n, **kw):
@@ -192,6 +209,14 @@ def diskpack(document, image, n, **kw):
     IMAGE is an image file, or the word 'sample' for the bundled sample
     photograph. The options are those of `diskpack stipple`; the page is
     the stippling's SVG page (--page, --plotter, --width-mm, ...).
+
+    \b
+    Examples:
+      vpype diskpack photo.jpg -n 20000 --page a4 --plotter hp7475a \\
+          --pen-mm 0.5 write --device hp7475a --page-size a4 out.hpgl
+      vpype diskpack sample -n 20000 --page a4 --pen-mm 0.5 write out.svg
+      vpype diskpack photo.jpg -n 20000 --colors cmyk --page a3 \\
+          --pen-mm 0.5 write colour.svg
     """
     try:
         document.extend(_stippling_document(image, n, kw))

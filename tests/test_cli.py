@@ -863,3 +863,16 @@ def test_every_subcommand_has_examples_that_parse(capsys, command):
     assert examples and all(argv[0] == command for argv in examples)
     for argv in examples:
         assert cli.build_parser(command).parse_args(argv).command == command, argv
+
+
+# ------------------------------------------------------------------ notes
+
+@pytest.mark.parametrize("pen, note", [("0.5", None), ("5", "-n 200 will look darker")])
+def test_ink_note_is_computed_from_the_drawn_dots(ctx, tmp_path, capsys, pen, note):
+    """With --pen-mm alone the dots are drawn at the tone size, whose ink is the image's
+    at any n: no note; a pen wider than the tone dots draws them darker: a note."""
+    image = _gradient_png(tmp_path / "g.png", 24)
+    _, err = _run_json(["stipple", str(image), "-n", "200", "--width-mm", "60", "--pen-mm", pen,
+                        "--schedule", "pack", "--json", "-o", str(tmp_path / "o.svg")], capsys)
+    assert ("will look" in err) == (note is not None)
+    assert note is None or note in err

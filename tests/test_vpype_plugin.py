@@ -101,3 +101,45 @@ def test_a_bad_value_is_refused_as_diskpack_stipple_refuses_it():
                                                 "--black-point", "2"])
     assert result.exit_code == 2
     assert "--black-point': must be in [0, 1], got 2.0" in result.output
+
+
+def test_help_leads_with_the_everyday_options_and_examples():
+    """The options of diskpack stipple's first groups come first, in their order."""
+    import click
+
+    from diskpack_cl.cli.help import LEADING
+
+    leading = [d for _, group in LEADING for d, _ in group]
+    names = [p.name for p in diskpack.params if isinstance(p, click.Option)]
+    first = names[:len(set(names) & set(leading))]
+    assert set(first) <= set(leading) and first == sorted(first, key=leading.index)
+    text = _vpype(["diskpack", "--help"]).output
+    assert "at most 2 s" not in " ".join(text.split())
+    assert "--plotter" in text.partition("Examples:")[2].partition("Options:")[0]
+
+
+def test_every_example_of_the_help_parses():
+    """Each example's diskpack tokens parse, and what follows is a vpype command."""
+    import click
+    import shlex
+
+    block = diskpack.help.partition("Examples:")[2].replace("\\\n", " ")
+    examples = [shlex.split(line)[1:] for line in block.splitlines()
+                if line.strip().startswith("vpype ")]
+    assert examples
+    parent = click.Context(vpype_cli.cli)
+    for args in examples:
+        assert args[0] == "diskpack"
+        ctx = diskpack.make_context("diskpack", args[1:], parent=parent)
+        assert ctx.params["n"] == 20000 and ctx.args[0] in vpype_cli.cli.commands, args
+
+
+def test_a_note_is_diskpack_s_not_the_root_logger_s(tmp_path):
+    """A note says 'diskpack: note:' on stderr, as diskpack stipple does (not WARNING:root:)."""
+    image = tmp_path / "g.png"
+    Image.fromarray(np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)).save(image)
+    run = subprocess.run([sys.executable, "-m", "vpype_cli", "diskpack", str(image), "-n", "200",
+                          "--width-mm", "60", "--pen-mm", "5", "--schedule", "pack", "stat"],
+                         capture_output=True, text=True, check=True)
+    assert "diskpack: note: " in run.stderr and "will look darker" in run.stderr
+    assert "WARNING:root" not in run.stderr
