@@ -12,6 +12,7 @@ manifest line matches and whose outputs exist (the example of :func:`run_batch`)
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import json
 import multiprocessing
 import os
@@ -19,6 +20,7 @@ import platform
 import signal
 import sys
 import tempfile
+import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, as_completed, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -244,7 +246,8 @@ def _exit_on_first_term(*_):
     sys.exit(143)
 
 
-def _init_worker(slots, devices, threads):
+def _init_worker(slots, devices, threads, parent, ready):
+    _die_with(parent)
     slot = slots.get()
     if threads:
         for var in POCL_THREAD_VARS:
@@ -252,6 +255,43 @@ def _init_worker(slots, devices, threads):
     if devices:
         os.environ["DISKPACK_DEVICE"] = devices[slot % len(devices)]
     _ignore_interrupts_and_exit_on_term()
+    with ready.get_lock():
+        ready.value += 1
+
+
+#: Linux's prctl option that sends this process a signal when its parent ends.
+PR_SET_PDEATHSIG = 1
+#: Seconds between a worker's looks at its parent, and from the parent's end (and the
+#: SIGTERM then sent) to the worker's forced exit.
+PARENT_POLL_S, PARENT_GONE_GRACE_S = 0.5, 10.0
+
+
+def _die_with(parent):
+    """End this worker when its coordinator (process id `parent`) ends, however it ends.
+
+    A SIGKILLed coordinator runs no cleanup, and the workers' queues do not
+    close (each worker holds both ends of them), so without this they lived
+    on, holding memory and the caller's stderr. Linux sends SIGTERM at the
+    parent's death (``PR_SET_PDEATHSIG``, which removes the partial files);
+    a thread watching the parent process id does it elsewhere, and ends a
+    worker that the SIGTERM did not end.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+    if os.getppid() != parent:   # it ended before the request above could see it
+        os._exit(143)
+    threading.Thread(target=_watch_parent, args=(parent,), name="diskpack-parent-watch",
+                     daemon=True).start()
+
+
+def _watch_parent(parent):
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL_S)
+    os.kill(os.getpid(), signal.SIGTERM)
+    time.sleep(PARENT_GONE_GRACE_S)
+    os._exit(143)
 
 
 def _run_in_worker(item, collect):
@@ -266,28 +306,102 @@ def _failed(item, error):
             "finished": time.time()}
 
 
+class _WorkerPool(ProcessPoolExecutor):
+    """A process pool whose workers start with Ctrl-C ignored and end with their coordinator.
+
+    A Ctrl-C sent to the terminal's process group reaches the workers too;
+    one that arrives while a worker imports (before its initializer ignores
+    it) printed a KeyboardInterrupt traceback there. A process started while
+    SIGINT is ignored keeps it ignored, through ``exec``, from its first
+    instruction; the coordinator answers Ctrl-C for all of them.
+    """
+
+    def __init__(self, jobs, devices):
+        ctx = multiprocessing.get_context("spawn")  # OpenCL does not survive fork
+        slots = ctx.Queue()
+        for k in range(jobs):
+            slots.put(k)
+        #: Workers whose initializer finished (see :meth:`died_starting`).
+        self.ready = ctx.Value("i", 0)
+        threads = max(1, default_jobs() // jobs)
+        super().__init__(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
+                         initargs=(slots, devices, threads, os.getpid(), self.ready))
+
+    def _spawn_process(self):
+        if threading.current_thread() is not threading.main_thread():
+            return super()._spawn_process()   # signal handlers belong to the main thread
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            super()._spawn_process()
+        finally:
+            signal.signal(signal.SIGINT, old)
+
+    def died_starting(self):
+        """Whether the workers died before any of them was ready (their start failed)."""
+        return self.ready.value == 0
+
+    def submit_all(self, fn, argss):
+        """``{future: k}`` for ``fn(*argss[k])``, submitted with signals deferred.
+
+        Ctrl-C, SIGTERM or SIGHUP while the pool starts (it spawns a worker
+        and starts its manager thread in ``submit``) left it half made: its
+        shutdown then raised "cannot join thread before it is started". Such
+        a signal is answered once every task is submitted.
+        """
+        with _signals_deferred():
+            return {self.submit(fn, *args): k for k, args in enumerate(argss)}
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """SIGINT, SIGTERM and SIGHUP that arrive in the block are answered after it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got = []
+    sigs = [s for s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None))
+            if s is not None and callable(signal.getsignal(s))]
+    old = {s: signal.signal(s, lambda num, frame: got.append(num)) for s in sigs}
+    try:
+        yield
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
+        if got:
+            old[got[0]](got[0], None)
+
+
 def _spawn_pool(jobs, devices):
-    """``jobs`` spawned worker processes (spawn: OpenCL does not survive fork), PoCL threads
-    capped to ``cores // jobs``, one device of `devices` each."""
-    ctx = multiprocessing.get_context("spawn")
-    slots = ctx.Queue()
-    for k in range(jobs):
-        slots.put(k)
-    threads = max(1, default_jobs() // jobs)
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker,
-                               initargs=(slots, devices, threads))
+    """``jobs`` spawned worker processes, PoCL threads capped to ``cores // jobs``, one
+    device of `devices` each (:class:`_WorkerPool`)."""
+    return _WorkerPool(jobs, devices)
+
+
+#: What a worker that died while it started most often means, and the fix.
+MAIN_GUARD_HINT = ("spawned workers import the main script again: a script that runs "
+                   "a batch or tiles with jobs > 1 must put its code under "
+                   "'if __name__ == \"__main__\":'")
+
+
+def _death_text(pool, exc):
+    """Why a worker of `pool` died (`exc`, a BrokenProcessPool), with the likely cause."""
+    if not pool.died_starting():
+        return f"worker process died: {exc}"
+    main = getattr(sys.modules.get("__main__"), "__file__", None)
+    cause = f"; {MAIN_GUARD_HINT} ({main})" if main else ""
+    return f"worker process died while it started, before it ran anything{cause}"
 
 
 def _local_pool(todo, jobs, devices, collect):
     """Yield records from ``jobs`` spawned worker processes."""
     pool = _spawn_pool(jobs, devices)
     try:
-        futures = {pool.submit(_run_in_worker, item, collect): item for item in todo}
+        futures = pool.submit_all(_run_in_worker, [(item, collect) for item in todo])
         for fut in as_completed(futures):
             try:
                 yield fut.result()
             except BrokenProcessPool as exc:
-                yield _failed(futures[fut], f"worker process died: {exc}")
+                yield _failed(todo[futures[fut]], _death_text(pool, exc))
     finally:  # stop the workers first: shutdown() forgets them
         _stop_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
@@ -393,7 +507,9 @@ def _pool_map(fn, tasks, jobs, devices, retries):
     while left:
         pool = _spawn_pool(jobs, devices)
         try:
-            pending = {pool.submit(_call_in_worker, fn, tasks[i]): i for i in sorted(left)}
+            order = sorted(left)
+            pending = {fut: order[k] for fut, k in
+                       pool.submit_all(_call_in_worker, [(fn, tasks[i]) for i in order]).items()}
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in done:
@@ -403,6 +519,8 @@ def _pool_map(fn, tasks, jobs, devices, retries):
                     except Exception as exc:
                         failures[i] += 1
                         if failures[i] > retries:
+                            if isinstance(exc, BrokenProcessPool):
+                                raise BrokenProcessPool(_death_text(pool, exc)) from exc
                             raise
                         if not isinstance(exc, BrokenProcessPool):   # else: a new pool
                             pending[pool.submit(_call_in_worker, fn, tasks[i])] = i

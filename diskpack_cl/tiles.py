@@ -42,8 +42,11 @@ import json
 import math
 import os
 import re
+import sys
 import tempfile
 import time
+import warnings
+import zipfile
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,7 +65,7 @@ from .dithering import error_diffusion
 from .memory import freed_memory_kept
 from .stipple import StippleResult, field_margin, StippleState, _make_stage, _run, dot_radii
 
-__all__ = ["TileOptions", "tile_grid", "stipple_tiled"]
+__all__ = ["TileOptions", "tile_grid", "stipple_tiled", "WorkFolderBusy", "WorkFolderWarning"]
 
 _TILES = "tiles (one large picture in parts, on --jobs workers or a Dask cluster)"
 
@@ -149,15 +152,30 @@ def _edges(size, parts):
 # ------------------------------------------------------------------ raster
 
 
-#: The files of a work folder: the raster, the job's key and one per finished part; no other
-#: file there is read or removed.
+#: The files of a work folder: the raster and its digest, the job's key, the lock, the mark
+#: of a folder a run made, and one per finished part; no other file there is read or removed.
 RASTER = "diskpack-gray.npy"
+RASTER_DIGEST = "diskpack-gray.sha256"
 KEY = "diskpack-job.json"
-_OURS = re.compile(r"diskpack-(gray\.npy|job\.json|(tile|seam-x|seam-y)-\d+\.npz)")
+LOCK = "diskpack-lock.json"
+MADE = "diskpack-made"
+_OURS = re.compile(r"diskpack-(gray\.npy|gray\.sha256|job\.json|lock\.json|made|"
+                   r"(tile|seam-x|seam-y)-\d+\.npz)")
+_CHUNK = 1 << 20
+
+
+def _file_digest(path):
+    """The sha256 of a file's bytes, read a MiB at a time."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(_CHUNK), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def _write_raster(image, path, tone, invert, paper_tone, allow_large):
-    """The toned gray picture as a float32 ``.npy`` at `path`, written strip by strip."""
+    """The toned gray picture as a float32 ``.npy`` at `path`, written strip by strip, and
+    its digest beside it (:data:`RASTER_DIGEST`), read back before a rerun uses it."""
     tmp = path + ".part"
     try:
         shape, strips = gray_strips(image, allow_large=allow_large)
@@ -171,10 +189,31 @@ def _write_raster(image, path, tone, invert, paper_tone, allow_large):
             out[y0:y0 + len(g)] = g
         out.flush()
         del out
+        with atomic_write(os.path.join(os.path.dirname(path), RASTER_DIGEST), "w") as fh:
+            fh.write(_file_digest(tmp))
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
+
+
+def _raster_fault(path):
+    """Why the raster at `path` cannot be used (None: it can): missing, its digest missing
+    or not its bytes', or not a 2-D float32 ``.npy``."""
+    if not os.path.exists(path):
+        return "missing"
+    try:
+        with open(os.path.join(os.path.dirname(path), RASTER_DIGEST)) as fh:
+            digest = fh.read().strip()
+        if _file_digest(path) != digest:
+            return "its bytes are not those written (truncated or changed)"
+        gray = np.load(path, mmap_mode="r")
+        shape, fortran, dtype = gray.shape, np.isfortran(gray), gray.dtype
+    except (OSError, ValueError) as exc:
+        return str(exc) or type(exc).__name__
+    if len(shape) != 2 or fortran or dtype != np.float32:
+        return f"not a 2-D float32 raster ({dtype}, shape {shape})"
+    return None
 
 
 @dataclass(frozen=True)
@@ -334,66 +373,210 @@ def _holding(held, start):
 
 
 def _job_key(image, n, options, tiling, tone, backend):
-    """What makes two runs the same job: the picture (path, size, time or bytes) and the options."""
+    """What makes two runs the same job: the picture's bytes (a file's or an array's, hashed)
+    and the options. A file's size and time do not tell another picture of the same size
+    written in the same second."""
     if isinstance(image, (str, os.PathLike)):
-        st = os.stat(image)
-        picture = [os.path.abspath(image), st.st_size, st.st_mtime_ns]
+        picture = _file_digest(image)
     else:
-        picture = hashlib.sha256(np.ascontiguousarray(image).tobytes()).hexdigest()
+        a = np.ascontiguousarray(image)
+        picture = [hashlib.sha256(a.tobytes()).hexdigest(), list(a.shape), str(a.dtype)]
     job = {"picture": picture, "n": int(n), "options": dataclasses.asdict(options),
            "tiles": [tiling.tiles, tiling.seam_band, tiling.halo], "tone": tone.params(),
            "backend": backend}
     return json.loads(json.dumps(job, default=str))
 
 
-class _WorkFolder:
-    """The work folder of one job: its key, raster and finished tasks; stale contents cleared."""
+class WorkFolderBusy(ValueError):
+    """Another run holds the work folder (its lock names that run)."""
 
-    def __init__(self, path, key):
-        self.path, self.made = path, not os.path.isdir(path)
-        os.makedirs(path, exist_ok=True)
-        key_path = os.path.join(path, KEY)
-        old = None
-        if os.path.exists(key_path):
-            try:
-                with open(key_path) as fh:
-                    old = json.load(fh)
-            except (OSError, ValueError):
-                old = None
-        if old != key:
-            self._clear()
-            with atomic_write(key_path, "w") as fh:
+
+class _WorkFolder:
+    """The work folder of one job, held by one run at a time: its key, raster and finished tasks.
+
+    Stale contents (another job's) are cleared; every part is checked when read
+    (:meth:`done`). Used as a context manager: the lock is released at its end,
+    and :meth:`remove` (after the outputs are written) leaves nothing behind.
+    """
+
+    def __init__(self, path, key, *, made=False):
+        self.path, self.broken = path, []
+        if not os.path.isdir(path):
+            os.makedirs(path)
+            made = True
+        self._lock = _lock_folder(self.file(LOCK))
+        if made:
+            open(self.file(MADE), "wb").close()
+        self.job = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
+        if _read_json(self.file(KEY)) != key:
+            self._clear(keep=(LOCK, MADE))
+            with atomic_write(self.file(KEY), "w") as fh:
                 json.dump(key, fh)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self._lock is not None:
+            self._lock.close()   # (the kernel releases its lock)
+            self._lock = None
 
     def file(self, name):
         return os.path.join(self.path, name)
 
-    def done(self, name):
-        """A finished task's result, or None (missing or unreadable: it runs again)."""
-        try:
-            with np.load(self.file(f"diskpack-{name}.npz")) as z:
-                return {k: (z[k] if z[k].ndim else z[k].item()) for k in z.files}
-        except (OSError, ValueError, KeyError):
+    def done(self, name, check):
+        """A finished task's result, or None (missing: it runs again).
+
+        A result that cannot be read, is another job's or part's, or fails
+        ``check(result)`` (a text: what is wrong) is removed and announced
+        with ``(path, why)`` in :attr:`broken`; it runs again too.
+        """
+        path = self.file(f"diskpack-{name}.npz")
+        if not os.path.exists(path):
             return None
+        try:
+            with open(path, "rb") as fh, np.load(fh) as z:   # (np.load leaks a bad zip's file)
+                result = {k: (z[k] if z[k].ndim else z[k].item()) for k in z.files}
+            why = _part_fault(result, self.job, name) or check(result)
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+            why = f"unreadable ({type(exc).__name__}: {exc})"
+        if why is None:
+            return result
+        os.remove(path)
+        self.broken.append((path, why))
+        return None
 
     def save(self, name, result):
+        """Save a task's result with the job, its name and a digest of its arrays."""
+        marked = dict(result, job=self.job, part=name)
+        marked["digest"] = _arrays_digest(marked)
         with atomic_write(self.file(f"diskpack-{name}.npz"), "wb") as fh:
-            np.savez(fh, **result)
+            np.savez(fh, **marked)
 
-    def _clear(self):
+    def _clear(self, keep=()):
         for name in os.listdir(self.path):
-            if _OURS.fullmatch(name):
+            if _OURS.fullmatch(name) and name not in keep:
                 os.remove(self.file(name))
 
     def remove(self):
-        self._clear()
-        if self.made and not os.listdir(self.path):
+        """Remove this job's files, and the folder where a run made it and it is empty."""
+        made = os.path.exists(self.file(MADE))
+        self._clear(keep=(LOCK,))
+        os.remove(self.file(LOCK))   # while held: a run that opened it before finds it taken
+        if made and not os.listdir(self.path):
             os.rmdir(self.path)
 
 
-def _phase(work, name, parts, run, progress, records):
-    """Results of `parts` (saved ones read back), the others run with `run` (map_tasks)."""
-    results = [work.done(f"{name}-{i}") for i in range(len(parts))]
+def _read_json(path):
+    """A JSON file's value, or None where it is missing or unreadable."""
+    try:
+        with open(path) as fh:
+            return json.load(fh)
+    except (OSError, ValueError):
+        return None
+
+
+def _lock_folder(path):
+    """Hold the lock file at `path` (``fcntl.flock``) and name this run in it; its open file.
+
+    Raises
+    ------
+    WorkFolderBusy
+        Another live run holds it; the message names that run.
+    """
+    try:
+        import fcntl   # POSIX: elsewhere a folder is not locked
+    except ImportError:  # pragma: no cover - not POSIX
+        return None
+    while True:
+        fh = open(path, "a+")
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            fh.close()
+            raise WorkFolderBusy(f"the work folder {os.path.dirname(path)} is in use by another "
+                                 f"run ({_holder(path)}); wait for it to end, or give another "
+                                 f"work folder") from None
+        try:
+            same = os.fstat(fh.fileno()).st_ino == os.stat(path).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:   # else the run that held it removed it meanwhile: take the new one
+            break
+        fh.close()
+    fh.seek(0)
+    fh.truncate()
+    json.dump({"pid": os.getpid(), "started": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+               "command": " ".join(sys.argv)}, fh)
+    fh.flush()
+    return fh
+
+
+def _holder(path):
+    """The run named in a lock file: ``pid P, started T: COMMAND``."""
+    who = _read_json(path)
+    if not isinstance(who, dict):
+        return "a run that has not named itself yet"
+    return f"pid {who.get('pid')}, started {who.get('started')}: {who.get('command')}"
+
+
+def _arrays_digest(result):
+    """The sha256 of a result's entries (names, types, shapes and bytes), ``digest`` left out."""
+    h = hashlib.sha256()
+    for key in sorted(result):
+        if key != "digest":
+            a = np.asarray(result[key])
+            h.update(f"{key}:{a.dtype.str}:{a.shape}:".encode())
+            h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+#: The arrays of a task's result and their columns (None: one value a dot).
+_PER_DOT = {"points": 2, "base_radii": None, "ink": None}
+
+
+def _part_fault(result, job, name):
+    """What is wrong with a saved result (None: nothing): its job, part, digest, arrays."""
+    if result.get("job") != job or result.get("part") != name:
+        return "another job's or part's result"
+    if result.get("digest") != _arrays_digest(result):
+        return "its contents do not match their digest"
+    m = None
+    for key, cols in _PER_DOT.items():
+        a = np.asarray(result.get(key))
+        if a.dtype.kind != "f" or a.ndim != (1 if cols is None else 2) \
+                or (cols is not None and a.shape[1] != cols) or (m is not None and len(a) != m):
+            return f"{key}: not one float{' pair' if cols else ''} a dot"
+        if not np.all(np.isfinite(a)):
+            return f"{key}: not finite"
+        m = len(a)
+    if not np.all(result["base_radii"] > 0) or not (float(result.get("k", 0)) > 0):
+        return "radii or k not positive"
+    return None
+
+
+def _part_check(part):
+    """``check(result)`` for :meth:`_WorkFolder.done`: the dots of `part`, inside its rect."""
+    n = part.plan.n if part.moving is None else int(part.moving.sum())
+    x0, y0, x1, y1 = part.rect
+
+    def check(result):
+        p = result["points"]
+        if len(p) != n:
+            return f"{len(p)} dots where the part has {n}"
+        if not np.all((p >= (x0, y0)) & (p <= (x1, y1))):
+            return f"dots outside the part's rectangle {part.rect}"
+        return None
+    return check
+
+
+def _phase(work, name, parts, run, progress, records, note):
+    """Results of `parts` (saved ones read back and checked), the others run with `run`
+    (map_tasks); ``note(text)`` for each saved one that was broken."""
+    results = [work.done(f"{name}-{i}", _part_check(part)) for i, part in enumerate(parts)]
+    while work.broken:
+        path, why = work.broken.pop(0)
+        note(f"{path}: {why}; computing that part again")
     todo = [i for i, r in enumerate(results) if r is None]
     for j, result in run([parts[i] for i in todo]):
         i = todo[j]
@@ -404,8 +587,7 @@ def _phase(work, name, parts, run, progress, records):
     for i, r in enumerate(results):
         records.append({"kind": name, "part": i, "n": int(len(r["points"])),
                         **{k: r[k] for k in ("steps", "seconds", "peak_rss_mib", "engine")},
-                        # a part saved by an earlier version has no record of its stages
-                        "stages": json.loads(r["stages"]) if "stages" in r else {}})
+                        "stages": json.loads(r["stages"])})
     return results
 
 
@@ -447,7 +629,8 @@ def _seam_parts(points, ink, k, edges, axis, size, band, halo, base):
 
 
 def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, client=None,
-                  devices=None, backend="auto", allow_large=False, progress=None, **overrides):
+                  devices=None, backend="auto", allow_large=False, progress=None, finish=None,
+                  note=None, **overrides):
     """Stipple a large picture in tiles with ``n`` dots: one certified stippling.
 
     Parameters
@@ -472,6 +655,14 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
         Lift Pillow's decompression-bomb limit.
     progress : callable, optional
         ``progress(phase, done, total)`` after each task.
+    finish : callable, optional
+        ``finish(result)``, called while the work folder is still held, before
+        it is removed: write the outputs there, so that a failure or a signal
+        while they are written leaves the finished parts for a rerun.
+    note : callable, optional
+        ``note(text)``: a broken part of the work folder (unreadable, another
+        job's, or with wrong contents) named and computed again (default:
+        a :class:`WorkFolderWarning`).
     **overrides
         Fields of :class:`StippleOptions`.
 
@@ -482,6 +673,12 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
         or ``seam-y``, its dots, steps, seconds, peak memory and stages);
         ``stages`` those of all tasks (one record per stage, or a list of the
         different records of its tasks).
+
+    Raises
+    ------
+    WorkFolderBusy
+        Another run holds the work folder (one run at a time: a lock file in
+        it names the run that holds it).
 
     Examples
     --------
@@ -494,12 +691,42 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
     t_start = time.perf_counter()
     options = (options or StippleOptions()).replace(**overrides)
     tiling, tone = tiling or TileOptions(), tone or ToneOptions()
+    key = _job_key(image, n, options, tiling, tone, backend)
     folder = tiling.work_dir or tempfile.mkdtemp(prefix="diskpack-tiles-")
-    work = _WorkFolder(folder, _job_key(image, n, options, tiling, tone, backend))
+    with _WorkFolder(folder, key, made=tiling.work_dir is None) as work:
+        try:
+            result = _stipple_in(work, image, n, options, tiling, tone, jobs=jobs,
+                                 client=client, devices=devices, backend=backend,
+                                 allow_large=allow_large, progress=progress, note=note or _warn)
+            result.timings["total"] = time.perf_counter() - t_start
+            if finish is not None:
+                finish(result)
+        except BaseException:
+            if tiling.work_dir is None:   # a folder of a random name: no rerun finds it
+                work.remove()
+            raise
+        work.remove()
+    return result
+
+
+class WorkFolderWarning(UserWarning):
+    """A broken part of a tiled run's work folder, computed again."""
+
+
+def _warn(text):
+    warnings.warn(WorkFolderWarning(text), stacklevel=4)
+
+
+def _stipple_in(work, image, n, options, tiling, tone, *, jobs, client, devices, backend,
+                allow_large, progress, note):
+    """:func:`stipple_tiled` in the held work folder `work`."""
     watch = Stopwatch()
     with watch("load"):
         raster = work.file(RASTER)
-        if not os.path.exists(raster):
+        fault = _raster_fault(raster)
+        if fault is not None:
+            if fault != "missing":
+                note(f"{raster}: {fault}; reading the picture again")
             _write_raster(image, raster, tone, options.invert, options.paper_tone, allow_large)
         H, W = np.load(raster, mmap_mode="r").shape
     rows, cols = tiling.grid(W, H)
@@ -522,7 +749,7 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
 
     with watch("tiles"):
         parts = _tile_parts(base, xs, ys, _shares(n, ink.tiles), plan.seed)
-        done = _phase(work, "tile", parts, run, progress, records)
+        done = _phase(work, "tile", parts, run, progress, records, note)
     points = np.concatenate([r["points"] for r in done])
     radii = np.concatenate([r["base_radii"] for r in done])
     inks = np.concatenate([r["ink"] for r in done])
@@ -530,12 +757,10 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
     with watch("seams"):
         for axis, edges, name in ((0, xs, "seam-x"), (1, ys, "seam-y")):
             parts, index = _seam_parts(points, inks, k, edges, axis, (W, H), band, halo, base)
-            for i, r in zip(index, _phase(work, name, parts, run, progress, records)):
+            for i, r in zip(index, _phase(work, name, parts, run, progress, records, note)):
                 points[i], radii[i], inks[i] = r["points"], r["base_radii"], r["ink"]
     with watch("certify"):
         k, disks, cert = certified_k(points, radii, W, H, Domain.rect(W, H))
-    work.remove()
-    watch.add("total", time.perf_counter() - t_start)
     params = dict(plan.params(), tiles=f"{rows}x{cols}", seam_band=tiling.seam_band,
                   halo=tiling.halo)
     return StippleResult(points=points, radii=disks, k=float(k), base_radii=radii,

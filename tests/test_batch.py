@@ -548,3 +548,65 @@ def test_a_worker_ignores_a_second_sigterm_while_it_cleans_up():
     finally:
         for s, h in saved.items():
             signal.signal(s, h)
+
+
+# ------------------------------------------------------- workers end with their run
+
+
+def _group(pgid):
+    """Process ids of the process group `pgid`, from /proc (no psutil)."""
+    out = []
+    for entry in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{entry}/stat") as fh:
+                fields = fh.read().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):   # not a process, or it ended meanwhile
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            out.append(int(entry))
+    return out
+
+
+def _pipe_closed(pipe, seconds):
+    """Whether reading `pipe` reaches its end within `seconds`."""
+    import select
+
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        ready, _, _ = select.select([pipe], [], [], 0.2)
+        if ready and not os.read(pipe.fileno(), 65536):
+            return True
+    return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc")
+@pytest.mark.parametrize("argv", [
+    ["stipple", "sample", "-n", "20000", "--tiles", "2x2", "--jobs", "2", "-o", "{out}/t.npz"],
+    ["poisson", "--count", "40", "-n", "3000", "--backend", "exact", "--jobs", "2",
+     "-o", "{out}/{{i}}.npz"]], ids=["tiles", "batch"])
+def test_workers_end_when_the_coordinator_is_killed(tmp_path, argv):
+    """SIGKILL (the OOM killer, timeout -s KILL) runs no cleanup in the coordinator: its
+    spawned workers lived on (> 90 s, ~190 MiB each) and held its stderr open."""
+    argv = [a.format(out=tmp_path) for a in argv]
+    proc = subprocess.Popen([sys.executable, "-m", "diskpack_cl.cli", *argv],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    try:
+        for _ in range(1200):   # until both workers run
+            if len(_group(proc.pid)) >= 3 or proc.poll() is not None:
+                break
+            time.sleep(0.05)
+        time.sleep(1.0)   # the workers past their start, at work
+        assert proc.poll() is None, "the run ended before it could be killed"
+        proc.kill()
+        proc.wait()
+        assert _pipe_closed(proc.stderr, 20), "a worker still holds stderr"
+        for _ in range(100):
+            if not _group(proc.pid):
+                break
+            time.sleep(0.1)
+        assert _group(proc.pid) == []
+    finally:
+        proc.stderr.close()
+        for pid in _group(proc.pid):
+            os.kill(pid, signal.SIGKILL)

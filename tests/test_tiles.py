@@ -4,6 +4,7 @@ wherever the parts ran, resumed and retried parts, fields of a window equal to t
 import os
 import subprocess
 import sys
+import tempfile
 
 import numpy as np
 import pytest
@@ -234,3 +235,126 @@ def test_strips_of_a_file_are_its_gray_image(tmp_path, mode):
     shape, strips = gray_strips(path, rows=8)
     whole = np.concatenate([s for _, s in strips])
     assert shape == whole.shape and np.array_equal(whole, load_gray(path))
+
+
+# ------------------------------------------------------------- the work folder
+
+
+def _stopped_after_tiles(g, tiling, n=700):
+    """A run stopped after its tiles: the work folder holds the raster and the tiles."""
+    def stop(phase, done, total):
+        if phase != "tile":
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        stipple_tiled(g, n, tiling=tiling, progress=stop, **SHORT)
+
+
+def _spy_parts(monkeypatch):
+    ran = []
+    real = tiles.run_part
+    monkeypatch.setattr(tiles, "run_part", lambda part: ran.append(part) or real(part))
+    return ran
+
+
+def _truncate(path):
+    with open(path, "r+b") as fh:
+        fh.truncate(os.path.getsize(path) // 2)
+
+
+def _forge_points(path):
+    """The tile's dots moved outside it, with a digest made for the forgery."""
+    with np.load(path) as z:
+        part = {k: z[k] for k in z.files}
+    part["points"] = part["points"] + 1000.0
+    part["digest"] = tiles._arrays_digest(part)
+    with open(path, "wb") as fh:
+        np.savez(fh, **part)
+
+
+def _copy_of_another_tile(path):
+    with open(path.replace("tile-0", "tile-1"), "rb") as fh:
+        data = fh.read()
+    with open(path, "wb") as fh:
+        fh.write(data)
+
+
+@pytest.mark.parametrize("damage", [_truncate, _forge_points, _copy_of_another_tile])
+def test_a_broken_part_is_named_and_computed_again(tmp_path, monkeypatch, damage):
+    """A truncated tile raised zipfile.BadZipFile at every rerun; a forged one was used."""
+    g = seam_picture()
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "w"))
+    full = stipple_tiled(g, 700, tiling=tiling.replace(work_dir=None), **SHORT)
+    _stopped_after_tiles(g, tiling)
+    broken = str(tmp_path / "w" / "diskpack-tile-0.npz")
+    damage(broken)
+    ran, notes = _spy_parts(monkeypatch), []
+    again = stipple_tiled(g, 700, tiling=tiling, note=notes.append, **SHORT)
+    assert len(notes) == 1 and notes[0].startswith(broken + ": ")
+    assert [p.rect for p in ran if p.points is None] == [(0, 0, 80, 120)]   # that tile alone
+    assert again.points.tobytes() == full.points.tobytes()
+
+
+def test_a_truncated_raster_is_named_and_read_again(tmp_path):
+    """It gave "mmap length is greater than file size", naming no file."""
+    g = seam_picture()
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "w"))
+    _stopped_after_tiles(g, tiling)
+    raster = str(tmp_path / "w" / tiles.RASTER)
+    _truncate(raster)
+    notes = []
+    res = stipple_tiled(g, 700, tiling=tiling, note=notes.append, **SHORT)
+    assert res.certificate.valid and notes[0].startswith(raster + ": ")
+
+
+def test_another_picture_of_the_same_size_and_time_is_not_resumed(tmp_path):
+    """The picture is known by its bytes: one replaced by another of the same size and
+    modification time was resumed from the old raster (dots of the old picture)."""
+    from PIL import Image
+
+    path = str(tmp_path / "p.bmp")   # uncompressed: both pictures of one size
+    pictures = [seam_picture(), seam_picture()[:, ::-1]]
+    Image.fromarray((pictures[0] * 255).astype(np.uint8)).save(path)
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "w"))
+    _stopped_after_tiles(path, tiling)
+    stamp = os.stat(path)
+    Image.fromarray((pictures[1] * 255).astype(np.uint8)).save(path)
+    os.utime(path, ns=(stamp.st_atime_ns, stamp.st_mtime_ns))
+    assert os.path.getsize(path) == stamp.st_size
+    resumed = stipple_tiled(path, 700, tiling=tiling, **SHORT)
+    fresh = stipple_tiled(path, 700, tiling=tiling.replace(work_dir=None), **SHORT)
+    assert resumed.points.tobytes() == fresh.points.tobytes()
+
+
+def test_one_run_at_a_time_holds_the_folder(tmp_path):
+    g = seam_picture()
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "w"))
+    with tiles._WorkFolder(tiling.work_dir, {"another": "job"}):
+        with pytest.raises(tiles.WorkFolderBusy, match=f"in use by another run \\(pid {os.getpid()}"):
+            stipple_tiled(g, 700, tiling=tiling, **SHORT)
+    assert stipple_tiled(g, 700, tiling=tiling, **SHORT).certificate.valid   # released
+
+
+def test_the_folder_is_kept_until_the_outputs_are_written(tmp_path, monkeypatch):
+    """It was removed before the outputs were written: a signal while writing them left
+    nothing to resume, and the rerun computed every part again."""
+    g = seam_picture()
+    tiling = TileOptions(tiles="1x2", seam_band=1, halo=2, work_dir=str(tmp_path / "w"))
+
+    def interrupted(result):
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        stipple_tiled(g, 700, tiling=tiling, finish=interrupted, **SHORT)
+    ran, written = _spy_parts(monkeypatch), []
+    stipple_tiled(g, 700, tiling=tiling, finish=written.append, **SHORT)
+    assert ran == [] and len(written) == 1
+    assert not os.path.exists(tmp_path / "w")   # made by a run: removed at the clean end
+
+
+def test_nothing_is_left_behind_after_a_clean_end(tmp_path, monkeypatch):
+    """A temporary work folder (no work_dir) was left in the temporary folder every run."""
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    stipple_tiled(seam_picture(), 500, tiling=TileOptions(tiles="1x2", seam_band=1, halo=2),
+                  **SHORT)
+    with pytest.raises(ValueError, match="white"):
+        stipple_tiled(np.ones((40, 60)), 50, **SHORT)
+    assert os.listdir(tmp_path) == []

@@ -216,17 +216,26 @@ def _run_stipple_tiled(args, options, tone, write, separation):
         tiling = tiling.replace(work_dir=outputs[0] + ".tiles")
     run = _batch_run(args)
     bar = _bar(args, "tiles", "part", None)
+    done = {}
+
+    def write_outputs(res):   # before the work folder goes: a signal here leaves it to resume
+        if bar is not None:
+            bar.close()
+        done["summary"] = summary = dict(
+            res.summary(), image=image, tone_n=None, parts=res.history,
+            iterations=max(h["steps"] for h in res.history),
+            peak_rss_mib=max(h["peak_rss_mib"] or 0 for h in res.history))
+        done["tail"] = _write_and_report(args, write, res, None, outputs, summary, t0)
+
     try:
         res = stipple_tiled(image, args.n, options, tiling, tone=tone, jobs=run["jobs"],
                             client=run["client"], devices=run["devices"],
-                            allow_large=args.allow_large, progress=_tile_progress(bar))
+                            allow_large=args.allow_large, progress=_tile_progress(bar),
+                            finish=write_outputs, note=_note)
     finally:
         if bar is not None:
             bar.close()
-    summary = dict(res.summary(), image=image, tone_n=None, parts=res.history,
-                   iterations=max(h["steps"] for h in res.history),
-                   peak_rss_mib=max(h["peak_rss_mib"] or 0 for h in res.history))
-    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
+    summary, tail = done["summary"], done["tail"]
     if not args.quiet:
         print(f"{PROG}: {_result_text(res, summary)}, {res.params['tiles']} tiles "
               f"({len(res.history)} parts, largest part {summary['peak_rss_mib'] / 1024:.2f} GiB) "
