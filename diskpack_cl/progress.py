@@ -276,6 +276,7 @@ class StageBars:
                 self._bar.update(done - self._bar.n)
         except (OSError, ValueError):   # ValueError: the file was closed
             self._live = False
+            self.close()   # tqdm keeps every open bar: one left open misplaces the next
 
     def _open_bar(self, stage, done, total):
         from tqdm import tqdm  # not loaded at start-up

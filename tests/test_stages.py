@@ -116,7 +116,7 @@ def test_stipple_line_and_json_name_the_engine_and_device(ctx, tmp_path, capsys)
     where = describe(ctx)
     assert s["stages"]["engine"]["backend"] == "opencl" and s["stages"]["engine"]["device"] == where
     name = where.rpartition(" (")[0]
-    assert f" s on OpenCL ({name}); wrote " in err
+    assert f" s in all on OpenCL ({name}); wrote " in err
     assert _notes(err) == ([] if has_fp64(ctx) else
                            [f"diskpack: note: blur ran on the host: {where} has no float64 "
                             f"(cl_khr_fp64)"])
@@ -126,7 +126,7 @@ def test_stipple_without_opencl_says_the_exact_engine_and_the_fix(no_opencl, tmp
     s, err = _main(["stipple", "sample", "-n", "100", "--schedule", "pack", "--json",
                     "-o", str(tmp_path / "s.npz")], capsys)
     assert s["stages"]["engine"]["backend"] == "exact" and FIX in s["stages"]["engine"]["fallback"]
-    assert " s on the host (exact engine); wrote " in err
+    assert " s in all on the host (exact engine); wrote " in err
     (note,) = _notes(err)
     assert note.startswith("diskpack: note: engine ran on the host: no OpenCL device (") and FIX in note
 
