@@ -240,6 +240,24 @@ def test_closed_stdout_ends_quietly(tmp_path):
     assert err == ""
 
 
+@pytest.mark.parametrize("closed", ["2>&-", ">&-"])
+@pytest.mark.parametrize("argv", [["stipple", "sample", "-n", "2000", "-o", "x.png"],
+                                  ["poisson", "-n", "200", "--count", "2", "--jobs", "2",
+                                   "-o", "p{i}.npz"]], ids=["stipple", "batch"])
+def test_a_closed_standard_stream_does_not_stop_the_run(tmp_path, argv, closed):
+    """With stderr closed a stippling died in the progress bar (AttributeError on None)."""
+    import shlex
+
+    command = shlex.join([sys.executable, "-m", "diskpack_cl.cli", *argv])
+    done = subprocess.run(f"{command} {closed}", shell=True, cwd=tmp_path, capture_output=True,
+                          text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "Traceback" not in done.stdout + done.stderr
+    assert os.path.exists(tmp_path / argv[-1].format(i=1))
+    if closed == "2>&-":   # nothing meant for stderr on stdout
+        assert done.stdout == ""
+
+
 # ------------------------------------------------------------ image on a pipe
 
 @pytest.mark.parametrize("name", ["-", "/dev/stdin"])

@@ -30,7 +30,8 @@ import signal
 import threading
 
 from ._batches import _raise_terminated, _Terminated
-from ._common import PROG, _HelpFormatter, _Parser, _UsageError, show_device_notes
+from ._common import (PROG, _HelpFormatter, _Parser, _UsageError, open_closed_streams,
+                      show_device_notes)
 from .analyze import _add_analyze
 from .devices import _add_devices
 from .export import _add_export
@@ -119,6 +120,7 @@ def main(argv=None):
     >>> main(["poisson", "-n", "1"])
     2
     """
+    open_closed_streams()
     try:
         return _main(argv)
     except KeyboardInterrupt:   # before _main's own handlers, or inside them

@@ -330,3 +330,21 @@ def _checked_outputs(args, inputs):
         seen.add(key)
     check_not_inputs(outputs, inputs)
     return outputs
+
+
+def open_closed_streams():
+    """Point the standard streams that were closed at start (``2>&-``, some daemons) at the
+    null device.
+
+    Python makes a closed stream's ``sys.stderr`` None: the progress bar died on it with
+    an AttributeError, and ``print`` to it wrote on stdout. The descriptor left free
+    was also taken by the first file opened, which then received whatever C code (a
+    driver) wrote to that stream.
+    """
+    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
+        try:
+            os.fstat(fd)
+        except OSError:   # closed: the lower ones are open, so os.open gives this one
+            os.open(os.devnull, os.O_RDONLY if fd == 0 else os.O_WRONLY)
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(fd, "r" if fd == 0 else "w", closefd=False))
