@@ -133,3 +133,40 @@ def test_a_signal_while_writing_keeps_every_earlier_file(ctx, tmp_path, sig, sta
     assert (tmp_path / "a.svg").read_text() == "OLD svg"
     assert (tmp_path / "a.png").read_text() == "OLD png"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "a.svg", "g.png"]
+
+
+# A tiled run or a --jobs 2 batch whose process group gets Ctrl-C just as the worker pool
+# starts its manager thread, or a moment after, while the first worker imports.
+POOL_START_CHILD = textwrap.dedent("""
+    import os, signal, sys, time
+    from concurrent.futures import process
+
+    real = process._ExecutorManagerThread.start
+    delay = float(sys.argv.pop(1))
+
+    def start(self):
+        if delay:
+            real(self)
+            time.sleep(delay)
+        os.killpg(0, signal.SIGINT)   # the terminal's Ctrl-C reaches the whole group
+        if not delay:
+            real(self)
+
+    process._ExecutorManagerThread.start = start
+    from diskpack_cl.cli import main
+    sys.exit(main(sys.argv[1:]))
+""")
+
+
+@pytest.mark.parametrize("argv", [
+    ["stipple", "sample", "-n", "3000", "--tiles", "2x2", "--jobs", "2", "-o", "t.npz"],
+    ["poisson", "--count", "4", "-n", "500", "--backend", "exact", "--jobs", "2",
+     "-o", "{i}.npz"]], ids=["tiles", "batch"])
+@pytest.mark.parametrize("delay", ["0", "0.4"])
+def test_ctrl_c_as_the_pool_starts_is_one_line_and_130(tmp_path, argv, delay):
+    """It ended in 'RuntimeError: cannot join thread before it is started', status 1, and
+    the starting workers printed KeyboardInterrupt tracebacks."""
+    done = subprocess.run([sys.executable, "-c", POOL_START_CHILD, delay, *argv], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300, start_new_session=True)
+    assert done.returncode == 130, done.stderr
+    assert len(done.stderr.splitlines()) == 1 and "interrupted" in done.stderr, done.stderr
