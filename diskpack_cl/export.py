@@ -22,6 +22,7 @@ from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, FRAME_INK, PAPERS, PEN_LIFT_
                                   page_frame, paper_size, place_dots, plot_time, save_png, svg_dots,
                                   svg_head, svg_layout, svg_meta, svg_size)
 from diskpack_cl.io import atomic_write, check_writable
+from diskpack_cl.memory import check_png_memory
 from diskpack_cl.options import OptionConflict, check_fields, option
 from diskpack_cl.overlap import cap_radii, ink_figures
 from diskpack_cl.pen_path import PEN_PATHS, TWO_OPT_WORK, path_travel, pen_path_order
@@ -31,6 +32,7 @@ __all__ = [
     "WRITERS",
     "WriteOptions",
     "check_output_path",
+    "check_preview_memory",
     "check_size",
     "mm_per_px",
     "tone_dot_size",
@@ -121,6 +123,27 @@ def preview_scale(width, height, scale=None):
     (2.0, 0.6826666666666666, 1.0)
     """
     return float(scale) if scale is not None else min(2.0, PREVIEW_MAX_PX / max(width, height))
+
+
+def check_preview_memory(write, width, height, outputs, *, free=None):
+    """Refuse, before the work, a PNG among `outputs` of a `width` x `height` picture drawn
+    as `write` (:class:`WriteOptions`) draws it that memory cannot hold.
+
+    Raises
+    ------
+    diskpack_cl.memory.MemoryLimit
+        As :func:`diskpack_cl.memory.check_png_memory`.
+
+    Examples
+    --------
+    >>> check_preview_memory(WriteOptions(), 4000, 3000, ["a.png"], free=8 * 2**30)
+    >>> check_preview_memory(WriteOptions(png_scale=100), 4000, 3000, ["a.png"], free=8 * 2**30)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.memory.MemoryLimit: png_scale 100 makes a 400000x300000 PNG needing 3.58e+03 GiB, more than the memory available (8 GiB): lower png_scale (at most 4.7 here)
+    """
+    area = write.preview_area(width, height)
+    check_png_memory(*area, preview_scale(*area, write.png_scale), outputs, free=free)
 
 
 def tone_dot_count(darkness, scale, dot_mm):

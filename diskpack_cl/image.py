@@ -29,7 +29,8 @@ import numpy as np
 
 from .options import OptionConflict, check_fields, option
 
-__all__ = ["adjust_tone", "ToneOptions", "load_gray", "to_gray", "gray_strips", "sample_image_path", "LUMA_601"]
+__all__ = ["adjust_tone", "ToneOptions", "load_gray", "to_gray", "gray_strips", "image_size",
+           "sample_image_path", "LUMA_601"]
 
 #: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
 LUMA_601 = (0.299, 0.587, 0.114)
@@ -157,6 +158,34 @@ def gray_strips(image, *, rows=256, allow_large=False):
         image = _pil_to_gray(im, name=name)
     g = to_gray(image)
     return g.shape, ((y0, g[y0:y0 + rows]) for y0 in range(0, g.shape[0], rows))
+
+
+def image_size(path, *, allow_large=False):
+    """``(width, height)`` of an image file upright (EXIF), read from its header; None for
+    standard input (``"-"``, which it would consume) and where Pillow cannot read it
+    (:func:`load_gray` then says why).
+
+    Examples
+    --------
+    >>> image_size(sample_image_path())
+    (512, 512)
+    """
+    from PIL import Image  # not loaded at start-up
+
+    if os.fspath(path) == "-":
+        return None
+    try:
+        with _bomb_limit(allow_large), Image.open(_image_source(path)[1]) as im:
+            width, height = im.size
+            turned = im.getexif().get(_ORIENTATION) in (5, 6, 7, 8)   # a quarter turn
+    except (ValueError, OSError, SyntaxError, Image.DecompressionBombError,
+            Image.DecompressionBombWarning):
+        return None
+    return (height, width) if turned else (width, height)
+
+
+#: The EXIF tag of the image's orientation.
+_ORIENTATION = 0x0112
 
 
 def _open_image(path, allow_large):

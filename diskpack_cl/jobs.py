@@ -32,8 +32,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .color import load_rgb
-from .export import (WriteOptions, check_output_path, preview_scale, svg_layout, tone_dot_count,
-                     tone_dot_size, write_page_png, write_stipple)
+from .export import (WriteOptions, check_output_path, check_preview_memory, preview_scale,
+                     svg_layout, tone_dot_count, tone_dot_size, write_page_png, write_stipple)
 from .image import ToneOptions, load_gray
 from .io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
@@ -386,6 +386,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     dots = o.dots or "tone"
     scale = o.scale(result.width, result.height)
     png_scale = preview_scale(result.width, result.height, o.png_scale)
+    check_preview_memory(o, result.width, result.height, outputs)   # before any file
     dot_mm = o.dot_mm
     color = getattr(result, "pen", None) is not None   # one tone dot size per pen
     if dot_mm is None and dots == "tone" and not color:

@@ -19,7 +19,8 @@ from contextlib import contextmanager
 from .options import NamedOptionError
 
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
-           "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_poisson_memory",
+           "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_png_memory",
+           "check_poisson_memory",
            "check_stipple_memory", "freed_memory_kept", "PageReserve"]
 
 # Peak bytes per unit of a stippling run (default schedule; PNG writer)
@@ -225,17 +226,54 @@ def check_stipple_memory(width, height, n, *, supersample=None, png_scale=None, 
             raise MemoryLimit(f"supersample {s} makes a {s * width}x{s * height} raster "
                               f"needing {_gib(cells * per_cell)}, more than {what} "
                               f"({_gib(have)}): {lower}", "supersample")
-    if free is None or png_scale is None or not any(
-            str(o).lower().endswith(".png") for o in outputs):
+    if png_scale is not None:
+        check_png_memory(*(png_area or (width, height)), png_scale, outputs, free=free)
+
+
+def check_png_memory(width, height, png_scale, outputs, *, free=None):
+    """Refuse, before the work, a PNG among `outputs` that memory cannot hold.
+
+    Parameters
+    ----------
+    width, height : float
+        What the PNG shows, in image pixels (the picture, or a whole page).
+    png_scale : float
+        PNG pixels per image pixel.
+    outputs : iterable of str
+        The run's output paths; only a ``.png`` among them is checked.
+    free : int, optional
+        Bytes available (default :func:`available_memory`).
+
+    Raises
+    ------
+    MemoryLimit
+        Naming ``png_scale``, the PNG's size and the largest scale that fits.
+
+    Examples
+    --------
+    >>> check_png_memory(512, 512, 2.0, ["out.png"], free=8 * 2**30)
+    >>> check_png_memory(512, 512, 1e6, ["out.png"], free=8 * 2**30)
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.memory.MemoryLimit: png_scale 1e+06 makes a 512000000x512000000 PNG needing 7.81e+09 GiB, more than the memory available (8 GiB): lower png_scale (at most 32 here)
+    """
+    free = available_memory() if free is None else free
+    if free is None or not any(str(o).lower().endswith(".png") for o in outputs):
         return
-    aw, ah = (width, height) if png_area is None else png_area
-    pw, ph = max(1, round(aw * png_scale)), max(1, round(ah * png_scale))
+    pw, ph = _png_size(width, height, png_scale)
     if pw * ph * HOST_BYTES_PER_PNG_PIXEL > free:
-        fit = math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (aw * ah))
+        fit = math.floor(math.sqrt(free / HOST_BYTES_PER_PNG_PIXEL / (width * height)) * 10) / 10
+        while fit > 0 and math.prod(_png_size(width, height, fit)) * HOST_BYTES_PER_PNG_PIXEL > free:
+            fit = round(fit - 0.1, 1)   # the PNG's sides are rounded up to whole pixels
         raise MemoryLimit(f"{{}} {png_scale:g} makes a {pw}x{ph} PNG needing "
                           f"{_gib(pw * ph * HOST_BYTES_PER_PNG_PIXEL)}, more than the memory "
-                          f"available ({_gib(free)}): lower {{}} (at most "
-                          f"{math.floor(fit * 10) / 10:g} here)", "png_scale", "png_scale")
+                          f"available ({_gib(free)}): lower {{}} (at most {fit:g} here)",
+                          "png_scale", "png_scale")
+
+
+def _png_size(width, height, png_scale):
+    """The PNG's pixels, as the writers round them."""
+    return max(1, round(width * png_scale)), max(1, round(height * png_scale))
 
 
 #: Peak host bytes per point of a 2D Poisson disk set (start set, relaxation, KD-tree
@@ -251,8 +289,9 @@ def check_poisson_memory(n, *, free=None, names=("n", "min_distance")):
     n : int
     free : int, optional
         Bytes available (default :func:`available_memory`).
-    names : (str, str), optional
-        The options that ask for the count: the count itself and the distance.
+    names : tuple of str, optional
+        The options that ask for the count: the count and the distance, or the
+        distance alone (a count it chooses itself).
 
     Raises
     ------
@@ -267,10 +306,14 @@ def check_poisson_memory(n, *, free=None, names=("n", "min_distance")):
     Traceback (most recent call last):
     ...
     diskpack_cl.memory.MemoryLimit: 1000000000 points need about 931 GiB, more than the memory available (8 GiB): ask for at most 8589934 points (a smaller n or a larger min_distance)
+    >>> check_poisson_memory(10**9, free=8 * 2**30, names=("radius",))
+    Traceback (most recent call last):
+    ...
+    diskpack_cl.memory.MemoryLimit: 1000000000 points need about 931 GiB, more than the memory available (8 GiB): ask for at most 8589934 points (a larger radius)
     """
     free = available_memory() if free is None else free
     if free is not None and n * HOST_BYTES_PER_POINT > free:
+        change = "a smaller {} or a larger {}" if len(names) == 2 else "a larger {}"
         raise MemoryLimit(f"{n} points need about {_gib(n * HOST_BYTES_PER_POINT)}, more than "
                           f"the memory available ({_gib(free)}): ask for at most "
-                          f"{free // HOST_BYTES_PER_POINT} points (a smaller {{}} or a larger "
-                          f"{{}})", *names)
+                          f"{free // HOST_BYTES_PER_POINT} points ({change})", *names)

@@ -19,6 +19,7 @@ import numpy as np
 from .domain import Domain
 from .engine import BACKENDS, check_backend, make_engine, stage_record
 from .options import check_fields, option
+from .memory import check_poisson_memory
 from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
                        min_distance, min_distance_at_most, min_distance_since,
                        nearest_neighbor_distances, normalized_radius)
@@ -587,6 +588,8 @@ def max_points_for_radius(radius, options=None, *, start="dart", eps_margin=1e-9
     t_start = time.perf_counter()
     trials = _RadiusTrials(radius, _start_sets(start), seed, eps_margin, rho_limit, callback,
                            relax, device)
+    # the search relaxes sets of up to n_at(rho_limit) points: refused before the first
+    check_poisson_memory(trials.n_at(rho_limit), names=("radius",))
     lo = _largest_success(trials, max(2, trials.n_at(rho_start)), trials.n_at(rho_limit) + 1)
     pts = trials.done[lo][1]
     d = min_distance(pts) / 2.0

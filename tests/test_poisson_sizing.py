@@ -1,5 +1,7 @@
 """Poisson sets whose cost follows the number of points, and requests refused before the work."""
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -58,3 +60,20 @@ def test_a_box_narrower_than_the_spacing_is_refused():
 def test_a_set_that_memory_cannot_hold_is_refused_before_the_work():
     with pytest.raises(MemoryLimit, match="points need about"):
         poisson_disk(min_distance=1e-7, backend="exact")
+
+
+def test_a_radius_search_that_memory_cannot_hold_is_refused_before_the_first_trial():
+    from diskpack_cl import max_points_for_radius
+
+    with pytest.raises(MemoryLimit, match=r"points need about [0-9.e+]+ GiB.*\(a larger radius\)"):
+        max_points_for_radius(1e-7, backend="exact")
+
+
+def test_poisson_radius_names_the_size_and_the_flag(tmp_path, capsys):
+    from diskpack_cl import cli
+
+    out = tmp_path / "p.npz"
+    assert cli.main(["poisson", "--radius", "1e-6", "-o", str(out)]) == 1
+    assert re.search(r"points need about [0-9.e+]+ GiB.*\(a larger --radius\)",
+                     capsys.readouterr().err)
+    assert not out.exists()

@@ -9,11 +9,14 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings, strategies as st
 
 from diskpack_cl import cli
 from diskpack_cl.color_export import write_color_svg
 from diskpack_cl.drawing import CROWDED_RATIO, svg_layout
 from diskpack_cl.export import write_stipple, write_svg
+from diskpack_cl.memory import (HOST_BYTES_PER_CELL, HOST_BYTES_PER_PNG_PIXEL, MemoryLimit,
+                                check_png_memory, check_stipple_memory)
 
 SVG = "{http://www.w3.org/2000/svg}"
 
@@ -124,3 +127,70 @@ def test_no_ink_leaves_the_usable_area(tmp_path, writer, drawing, page):
     writer(path, res, **drawing, **page)
     area = svg_layout(60, 40, **page)["area"]
     assert _inside(_ink_boxes(path), area)
+
+
+# ------------------------------------------------------------ sizes refused before the work
+
+NO_DEVICE = "no-such-device"   # the host's memory alone limits the raster
+
+
+def _largest_named(exc):
+    return float(re.search(r"at most ([0-9.]+) here", str(exc)).group(1))
+
+
+@settings(max_examples=60, deadline=None)
+@given(width=st.integers(1, 5000), height=st.integers(1, 5000), supersample=st.integers(2, 64),
+       free=st.integers(2 ** 20, 2 ** 36))
+def test_the_supersample_named_as_fitting_fits_and_one_more_does_not(width, height, supersample,
+                                                                     free):
+    def check(s):
+        check_stipple_memory(width, height, 1000, supersample=s, free=free, device=NO_DEVICE)
+
+    assume(width * height * supersample ** 2 * HOST_BYTES_PER_CELL > free)
+    with pytest.raises(MemoryLimit, match="supersample") as refused:
+        check(supersample)
+    assume("at most" in str(refused.value))   # else: downscale the image
+    fit = int(_largest_named(refused.value))
+    check(fit)
+    with pytest.raises(MemoryLimit):
+        check(fit + 1)
+
+
+@settings(max_examples=60, deadline=None)
+@given(width=st.integers(1, 5000), height=st.integers(1, 5000), scale=st.floats(1, 1e4),
+       free=st.integers(2 ** 20, 2 ** 36))
+def test_the_png_scale_named_as_fitting_fits(width, height, scale, free):
+    def check(s):
+        check_png_memory(width, height, s, ["a.png"], free=free)
+
+    assume(width * height * scale ** 2 * HOST_BYTES_PER_PNG_PIXEL > 2 * free)
+    with pytest.raises(MemoryLimit, match="png_scale") as refused:
+        check(scale)
+    fit = _largest_named(refused.value)
+    assume(fit > 0)
+    check(fit)
+
+
+def test_export_names_a_png_too_large_before_writing_anything(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write_stipple("dots.npz", _grid())
+    assert cli.main(["export", "dots.npz", "-o", "a.svg", "-o", "a.png",
+                     "--png-scale", "1e6"]) == 1
+    assert re.search(r"--png-scale 1e\+06 makes a 60000000x40000000 PNG needing [0-9.e+]+ GiB"
+                     r".*lower --png-scale", capsys.readouterr().err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dots.npz"]
+
+
+def test_a_tiled_run_names_a_png_too_large_before_the_tiles(tmp_path, capsys, monkeypatch):
+    import diskpack_cl.tiles
+
+    def no_tiles(*args, **kwargs):
+        raise AssertionError("the tiles ran")
+
+    monkeypatch.setattr(diskpack_cl.tiles, "stipple_tiled", no_tiles)
+    out = tmp_path / "t.png"
+    assert cli.main(["stipple", "sample", "-n", "2000", "--tiles", "2x2", "--png-scale", "1e4",
+                     "-o", str(out)]) == 1
+    assert re.search(r"--png-scale 10000 makes a 5120000x5120000 PNG needing [0-9.e+]+ GiB",
+                     capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []

@@ -202,7 +202,9 @@ def _run_stipple_one(args, options, tone, write, separation):
 def _run_stipple_tiled(args, options, tone, write, separation):
     """One large input in tiles (:func:`diskpack_cl.tiles.stipple_tiled`), on --jobs workers
     or a Dask cluster; the outputs as for one input."""
-    from diskpack_cl.tiles import TileOptions, stipple_tiled  # not loaded at start-up
+    from diskpack_cl.export import check_preview_memory  # not loaded at start-up
+    from diskpack_cl.image import image_size
+    from diskpack_cl.tiles import TileOptions, stipple_tiled
 
     if separation is not None or len(args.images) > 1 or not isinstance(args.n, int) \
             or any(getattr(args, k) for k in ("verify", "profile", "manifest", "collect")):
@@ -211,6 +213,9 @@ def _run_stipple_tiled(args, options, tone, write, separation):
     t0 = time.perf_counter()
     image = _image_path(args.images[0])
     outputs = _checked_outputs(args, [image])
+    size = image_size(image, allow_large=args.allow_large)
+    if size is not None:   # the whole picture's PNG is made after the tiles: refused before
+        check_preview_memory(write, *size, outputs)
     tiling = from_namespace(TileOptions, args)
     if tiling.work_dir is None:
         tiling = tiling.replace(work_dir=outputs[0] + ".tiles")
