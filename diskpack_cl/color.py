@@ -68,7 +68,8 @@ from .image import load_gray
 __all__ = ["ColorOptions", "PALETTES", "Separation", "parse_pens", "parse_pen_dots", "separate", "load_rgb", "srgb_to_linear",
            "linear_to_srgb", "srgb_to_lab", "area_mix", "delta_e", "render_pens", "pen_tone_radii",
            "pen_ink_radii", "linear_negative", "check_paper",
-           "pen_spacing", "color_measures", "palette_of", "auto_palette", "parse_auto"]
+           "pen_spacing", "color_measures", "palette_of", "auto_palette", "parse_auto",
+           "NO_HUE", "has_hue", "grey_note"]
 
 #: Named palettes: (name, sRGB hex) per pen, lightest first.
 PALETTES = {
@@ -287,6 +288,49 @@ def _full_colours(lin):
     return (lin - lin.min(axis=1, keepdims=True)) / np.where(span > 1e-3, span, np.nan)[:, None]
 
 
+def _hue_weights(pixels):
+    """``(full colours, weights)`` of sRGB `pixels` (n, 3): each one's hue at full strength
+    and its chroma, 0 for a grey (it has no hue to give)."""
+    lab = srgb_to_lab(pixels)
+    full = _full_colours(srgb_to_linear(pixels))
+    return full, np.where(np.isnan(full[:, 0]), 0.0, np.hypot(lab[:, 1], lab[:, 2]))
+
+
+#: What every palette route says of an image without colour.
+NO_HUE = "the image has no hue besides grey"
+
+
+def has_hue(image):
+    """Whether any pixel of the colour `image` (:func:`load_rgb`) has a hue besides grey.
+
+    Examples
+    --------
+    >>> has_hue(np.full((2, 2, 3), 0.4)), has_hue(np.array([[[0.4, 0.4, 0.5]]]))
+    (False, True)
+    """
+    return bool(_hue_weights(load_rgb(image).reshape(-1, 3))[1].any())
+
+
+def grey_note(image, names, pen):
+    """The note of a colour stippling of an `image` without hue (cmyk, cmy, pens: every dot
+    goes to the pens that mix its grey), else None; `names` the pens, `pen` each dot's.
+
+    Examples
+    --------
+    >>> grey_note(np.full((2, 2, 3), 0.4), ("cyan", "black"), np.array([1, 1, 1]))
+    'the image has no hue besides grey: black draws all 3 dots (cyan none); one pen draws it alike (without --colors/--pens)'
+    """
+    if has_hue(image):
+        return None
+    counts = np.bincount(np.asarray(pen), minlength=len(names))
+    drawn = [f"{name} {c}" for name, c in zip(names, counts) if c]
+    unused = [name for name, c in zip(names, counts) if not c]
+    what = (f"{drawn[0].rpartition(' ')[0]} draws all {len(pen)} dots" if len(drawn) == 1
+            else "the dots are " + ", ".join(drawn))
+    return (f"{NO_HUE}: {what}" + (f" ({', '.join(unused)} none)" if unused else "")
+            + "; one pen draws it alike (without --colors/--pens)")
+
+
 def _hue_candidates(rgb, k, seed, m=4000):
     """Up to `k` candidate pens (linear, (c, 3)): the image's hues at full strength, the
     sample's full colour nearest to each centre of a k-means in CIELAB of the full colours
@@ -294,9 +338,7 @@ def _hue_candidates(rgb, k, seed, m=4000):
     from scipy.cluster.vq import kmeans2  # not loaded at start-up
 
     pixels = rgb.reshape(-1, 3)
-    lab = srgb_to_lab(pixels)
-    full = _full_colours(srgb_to_linear(pixels))
-    weight = np.where(np.isnan(full[:, 0]), 0.0, np.hypot(lab[:, 1], lab[:, 2]))
+    full, weight = _hue_weights(pixels)
     if not weight.sum() > 0:
         return np.zeros((0, 3))
     rng = np.random.default_rng(seed)
@@ -377,7 +419,7 @@ def auto_palette(image, n, *, seed=0, invert=False):
     if len(cand) < n - 1:
         raise ValueError(f"the image has {len(cand)} hue(s) besides grey, auto:{n} needs {n - 1}: "
                          f"give auto:{len(cand) + 1} or fewer" if len(cand) else
-                         "the image has no hue besides grey: give the pens or draw it with one pen")
+                         f"{NO_HUE}: give the pens or draw it with one pen")
     lin = _linear_sample(rgb)
     lab = srgb_to_lab(linear_to_srgb(lin))
     chosen = [None] * (n - 1)

@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .color import load_rgb
+from .color import grey_note, load_rgb
 from .export import (WriteOptions, check_output_path, check_preview_memory, preview_scale,
                      svg_layout, tone_dot_count, tone_dot_size, write_page_png, write_stipple)
 from .image import ToneOptions, load_gray
@@ -532,7 +532,7 @@ def stipple_item(item, *, device=None, callback=None, progress=None, verify=Fals
         As for :func:`diskpack_cl.stipple` (one pen).
     note : callable, optional
         ``note(text)`` for advice that is no error (a dot count far from the
-        one whose ink is the image's).
+        one whose ink is the image's, pens for an image without hue).
 
     Returns
     -------
@@ -563,6 +563,9 @@ def _stipple_item_run(item, device, callback, verify, profile, note):
     with stage("load"):
         loaded = _stipple_item_load(item, device, note)
     res = _stipple_item_stipple(item, loaded, device, callback, verify, profile)
+    grey = loaded.gray is None and note is not None and grey_note(loaded.image, res.names, res.pen)
+    if grey:
+        note(grey)
     return res, loaded.gray, dict(res.summary(), image=item.input, tone_n=loaded.tone_n)
 
 

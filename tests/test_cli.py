@@ -876,3 +876,21 @@ def test_ink_note_is_computed_from_the_drawn_dots(ctx, tmp_path, capsys, pen, no
                         "--schedule", "pack", "--json", "-o", str(tmp_path / "o.svg")], capsys)
     assert ("will look" in err) == (note is not None)
     assert note is None or note in err
+
+
+@pytest.mark.parametrize("palette", [["--colors", "cmyk"], ["--colors", "cmy"],
+                                     ["--pens", "black=#000,red=#c00"], ["--colors", "auto:3"]])
+def test_every_palette_route_says_the_image_has_no_hue(ctx, tmp_path, capsys, palette):
+    """A grey image in colour: cmyk, cmy and pens say so as auto:N does (its error)."""
+    from PIL import Image
+
+    from diskpack_cl.color import NO_HUE
+
+    image = tmp_path / "g.png"
+    grey = np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)
+    Image.fromarray(np.dstack([grey] * 3)).save(image)
+    rc = cli.main(["stipple", str(image), "-n", "60", *palette, "--beta", "2", "--lloyd", "1",
+                   "--rounds", "1", "-o", str(tmp_path / "o.npz")])
+    err = capsys.readouterr().err
+    assert rc == (1 if palette[1].startswith("auto") else 0), err
+    assert f"diskpack: {'error' if rc else 'note'}: {NO_HUE}" in err
