@@ -610,3 +610,60 @@ def test_workers_end_when_the_coordinator_is_killed(tmp_path, argv):
         proc.stderr.close()
         for pid in _group(proc.pid):
             os.kill(pid, signal.SIGKILL)
+
+
+NO_MAIN_GUARD = """
+import sys
+from diskpack_cl.batch import poisson_many
+
+for rec in poisson_many(2, 64, [sys.argv[1] + "/{i}.npz"], seed=1, backend="exact", jobs=2):
+    print(rec["status"], rec.get("error"), flush=True)
+"""
+
+
+def test_a_script_without_the_main_guard_is_named_with_the_fix(tmp_path):
+    """Spawned workers import the user's script again; without the guard each worker
+    starts the batch again and dies, reported only as 'worker process died'."""
+    script = tmp_path / "user_script.py"
+    script.write_text(NO_MAIN_GUARD)
+    done = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True,
+                          text=True, timeout=300)
+    lines = done.stdout.splitlines()
+    assert len(lines) == 2 and all(line.startswith("failed ") for line in lines), done.stdout
+    assert all("if __name__ == \"__main__\":" in line and str(script) in line for line in lines)
+
+
+def test_overwrite_redoes_the_items_done(tmp_path, capsys):
+    """--overwrite redoes items whose manifest line matches (the same command again)."""
+    argv = ["poisson", "--count", 2, "-n", 64, "--seed", 3, "--backend", "exact",
+            "-o", f"{tmp_path}/{{i}}.npz", "--json", "-q"]
+    counts = []
+    for extra in ([], [], ["--overwrite"]):
+        rc, out, _ = _cli(argv + extra, capsys)
+        summary = json.loads(out.splitlines()[-1])
+        counts.append((rc, summary["ok"], summary["skipped"]))
+    assert counts == [(0, 2, 0), (0, 0, 2), (0, 2, 0)]
+    assert len(_manifest_lines(tmp_path / "manifest.jsonl")) == 4
+
+
+def _fails_at_first(task):
+    """Raise at the first `fails` calls for the `path` of ``task = (path, fails)``; then the
+    number of calls before (a file counts them: calls run in other processes)."""
+    path, fails = task
+    with open(path, "a+") as fh:
+        fh.seek(0)
+        calls = len(fh.read())
+        fh.write("x")
+    if calls < fails:
+        raise RuntimeError(f"call {calls + 1} fails")
+    return calls
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_a_task_is_tried_retries_more_times(tmp_path, jobs):
+    tasks = [(str(tmp_path / "a"), 2), (str(tmp_path / "b"), 0)]
+    assert sorted(executors.map_tasks(_fails_at_first, tasks, jobs=jobs, retries=2)) == \
+        [(0, 2), (1, 0)]
+    tasks = [(str(tmp_path / "c"), 3), (str(tmp_path / "d"), 0)]
+    with pytest.raises(RuntimeError, match="call 3 fails"):
+        list(executors.map_tasks(_fails_at_first, tasks, jobs=jobs, retries=2))
