@@ -30,6 +30,7 @@ _PUBLIC = {
     "export": ["WriteOptions", "read_stipple", "write_stipple"],
     "image": ["ToneOptions", "load_gray", "sample_image_path"],
     "multipen": ["ColorStippleResult", "stipple_colors"],
+    "preview": ["preview"],
 }
 _HOMES = {name: module for module, names in _PUBLIC.items() for name in names}
 __all__ = list(_HOMES)

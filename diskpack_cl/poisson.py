@@ -32,6 +32,7 @@ from .domain import Domain, box_sizes
 from .memory import check_poisson_memory
 from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
 from .options import check_fields, option
+from .preview import Previewable
 from .relax import RelaxOptions, relax_poisson
 
 __all__ = ["PoissonDiskResult", "PoissonOptions", "PoissonSetOptions", "as_box", "count_for_distance",
@@ -143,8 +144,9 @@ class PoissonSetOptions:
 
 
 @dataclass
-class PoissonDiskResult:
-    """Outcome of :func:`poisson_disk`.
+class PoissonDiskResult(Previewable):
+    """Outcome of :func:`poisson_disk`. A notebook shows its points as dots
+    (``_repr_png_``), as :meth:`preview` returns them.
 
     Attributes
     ----------

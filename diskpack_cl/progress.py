@@ -48,7 +48,13 @@ STAGES = ("load", "start", "device", "setup", "iterations", "certificate", "writ
 
 
 def in_stage_order(seconds):
-    """The dict `seconds` (per stage) in the order of :data:`STAGES`, other stages after them."""
+    """The dict `seconds` (per stage) in the order of :data:`STAGES`, other stages after them.
+
+    Examples
+    --------
+    >>> list(in_stage_order({"pen path": 2.0, "mine": 0.1, "load": 0.5}))
+    ['load', 'pen path', 'mine']
+    """
     rank = {name: i for i, name in enumerate(STAGES)}
     return dict(sorted(seconds.items(), key=lambda kv: rank.get(kv[0], len(rank))))
 
@@ -90,9 +96,10 @@ class RunProgress:
         Examples
         --------
         >>> run = RunProgress()
-        >>> run.seconds = {"writing": 1.0, "pen path": 2.0, "load": 0.5, "mine": 0.1}
+        >>> with run.stage("writing"), run.stage("pen path"):
+        ...     pass
         >>> list(run.by_stage())
-        ['load', 'writing', 'pen path', 'mine']
+        ['writing', 'pen path']
         """
         return in_stage_order(self.seconds)
 

@@ -20,6 +20,7 @@ from .domain import Domain
 from .engine import BACKENDS, check_backend, make_engine, stage_record
 from .options import check_fields, option
 from .memory import check_poisson_memory
+from .preview import Previewable
 from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
                        min_distance, min_distance_at_most, min_distance_since,
                        nearest_neighbor_distances, normalized_radius)
@@ -123,8 +124,9 @@ STALL_GAIN = 1e-3
 
 
 @dataclass
-class RelaxResult:
-    """Outcome of :func:`relax_poisson`.
+class RelaxResult(Previewable):
+    """Outcome of :func:`relax_poisson`. A notebook shows its points as dots
+    (``_repr_png_``), as :meth:`preview` returns them (a 3D set: a slice of it).
 
     Attributes
     ----------

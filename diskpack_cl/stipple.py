@@ -87,6 +87,7 @@ from .blur import DeviceBlur
 from .device_checks import UntrustedProgram, warn_fallback
 from .device_stage import has_fp64
 from .picture_measures import tone_radius
+from .preview import Previewable
 from .progress import running, stage as run_stage
 from .dithering import _least, error_diffusion
 from .domain import Domain
@@ -101,8 +102,9 @@ __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_ste
 
 
 @dataclass
-class StippleResult:
-    """Result of :func:`stipple`.
+class StippleResult(Previewable):
+    """Result of :func:`stipple`. A notebook shows its picture (``_repr_png_``), as
+    :meth:`preview` returns it: the dots as the writers draw them, 400 px wide.
 
     Attributes
     ----------
