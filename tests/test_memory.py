@@ -61,3 +61,26 @@ def test_a_page_reserve_outside_the_block_reserves_nothing():
     reserve = memory.PageReserve(256 * MIB)
     reserve.release()
     assert _rss() - before < 32 * MIB
+
+
+class _Mallopt:
+    """A C library that records the thresholds set through mallopt."""
+
+    def __init__(self):
+        self.set = {}
+
+    def mallopt(self, param, value):
+        self.set[param] = value.value
+
+    def malloc_trim(self, pad):
+        pass
+
+
+def test_leaving_the_block_restores_each_threshold(monkeypatch):
+    """glibc's mmap threshold 32 MiB and trim threshold 64 MiB, not the other way round."""
+    libc = _Mallopt()
+    monkeypatch.setitem(memory._kept, "libc", libc)
+    with memory.freed_memory_kept():
+        assert libc.set == {memory._M_MMAP_THRESHOLD: memory._KEEP,
+                            memory._M_TRIM_THRESHOLD: memory._KEEP}
+    assert libc.set == {-3: 32 * MIB, -1: 64 * MIB}   # M_MMAP_THRESHOLD, M_TRIM_THRESHOLD
