@@ -1,6 +1,7 @@
 """Tiled stippling (diskpack_cl.tiles): one certified packing across seams, the same bytes
 wherever the parts ran, resumed and retried parts, fields of a window equal to the picture's."""
 
+import math
 import os
 import subprocess
 import sys
@@ -8,6 +9,8 @@ import tempfile
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from diskpack_cl import tiles
@@ -358,3 +361,52 @@ def test_nothing_is_left_behind_after_a_clean_end(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="white"):
         stipple_tiled(np.ones((40, 60)), 50, **SHORT)
     assert os.listdir(tmp_path) == []
+
+
+# ------------------------------------------------------------------ the seams
+
+
+def test_a_seam_moves_its_band_and_holds_the_rest(monkeypatch):
+    """In every seam's run the held dots end where they were and the band's dots move."""
+    runs, parts = [], []
+    real_run, real_part = tiles._run, tiles.run_part
+
+    def spy_run(state, *args, **kwargs):
+        out = real_run(state, *args, **kwargs)
+        runs.append((state.points.copy(), out[0].points))
+        return out
+    monkeypatch.setattr(tiles, "_run", spy_run)
+    monkeypatch.setattr(tiles, "run_part", lambda part: parts.append(part) or real_part(part))
+    stipple_tiled(seam_picture(), 1200, tiling=TileOptions(tiles="2x2", seam_band=1, halo=2),
+                  **SHORT)
+    seams = [(p, r) for p, r in zip(parts, runs) if p.points is not None]
+    assert len(seams) == 2
+    for part, (start, end) in seams:
+        held = ~part.moving
+        assert held.sum() > 50 and part.moving.sum() > 50
+        np.testing.assert_array_equal(end[held], start[held])
+        assert np.mean(np.any(end[part.moving] != start[part.moving], axis=1)) > 0.5
+
+
+@given(width=st.integers(60, 400), height=st.integers(60, 400), axis=st.integers(0, 1),
+       at=st.floats(0.2, 0.8), reach=st.floats(1, 40), seed=st.integers(0, 2**16))
+@settings(max_examples=60, deadline=None)
+def test_a_seams_window_spans_the_picture_across_it(width, height, axis, at, reach, seed):
+    """A seam between columns (axis 0) spans the picture's height, one between rows its
+    width; along the seam's axis the window reaches band + halo each side, inside the picture."""
+    size = (width, height)
+    edge = round(at * size[axis])
+    assume(0 < edge - reach and edge + reach < size[axis])
+    rng = np.random.default_rng(seed)
+    points = rng.random((400, 2)) * size
+    base = tiles.Part("raster.npy", (0, 0, width, height), 0,
+                      StippleOptions().plan(400, width, height))
+    parts, index = tiles._seam_parts(points, np.ones(400), 1.0, [0, edge, size[axis]], axis,
+                                     size, reach / 2, reach / 2, base)
+    assume(parts)
+    x0, y0, x1, y1 = parts[0].rect
+    lo, hi = (x0, x1) if axis == 0 else (y0, y1)
+    assert (lo, hi) == (max(0, math.floor(edge - reach)), min(size[axis], math.ceil(edge + reach)))
+    assert ((y0, y1) if axis == 0 else (x0, x1)) == (0, size[1 - axis])
+    inside = (points[:, axis] > lo) & (points[:, axis] < hi)
+    np.testing.assert_array_equal(parts[0].points, points[inside])
