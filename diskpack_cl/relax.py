@@ -21,6 +21,7 @@ from .engine import BACKENDS, check_backend, make_engine, stage_record
 from .options import check_fields, option
 from .memory import check_poisson_memory
 from .preview import Previewable
+from .progress import stage
 from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
                        min_distance, min_distance_at_most, min_distance_since,
                        nearest_neighbor_distances, normalized_radius)
@@ -237,7 +238,10 @@ def relax_poisson(points, eps=None, options=None, *, device=None, callback=None,
     device : str or pyopencl.Context, optional
         OpenCL device (see :func:`diskpack_cl.get_context`).
     callback : callable, optional
-        ``callback(iteration, rho)`` after each iteration.
+        ``callback(iteration, rho)`` after each iteration. Inside a run of
+        :mod:`diskpack_cl.progress` (``with running(hook):``, around this or
+        :func:`diskpack_cl.poisson_disk`) the iterations are also its stage
+        ``iterations``, out of `max_iter`.
     route : {"auto", "cells", "raster"}
         OpenCL route: the float64 per-cell kernel (default where the device
         has float64) or the float32 raster estimate refined on the host.
@@ -298,7 +302,8 @@ def relax_poisson(points, eps=None, options=None, *, device=None, callback=None,
                          profile=profile, verify=verify)
     stats = {"engine": engine.name, **({"fallback": engine.fallback} if engine.fallback else {})}
     t_start = time.perf_counter()
-    with ThreadPoolExecutor(1) as pool:
+    with stage("iterations", int(max_iter)) as advance, ThreadPoolExecutor(1) as pool:
+        callback = _told(callback, advance)   # and the run's progress (diskpack_cl.progress)
         # the local route measures its last rho on the host itself, from the pairs that
         # hold it, searched on the other core meanwhile (from the set it will go local with)
         reach = FINAL_REACH * eps * hexagonal_radius(len(X), dom.area)
@@ -316,6 +321,15 @@ def relax_poisson(points, eps=None, options=None, *, device=None, callback=None,
         _certify_rho(X, rho[-1], dom)
     return RelaxResult(X, np.array(rho), it, reason, seconds, engine.timings.seconds,
                        engine.backend, engine.device, stats)
+
+
+def _told(callback, advance):
+    """``callback(iteration, rho)`` that first advances the run's ``iterations`` stage."""
+    def told(iteration, rho):
+        advance(iteration)
+        if callback is not None:
+            callback(iteration, rho)
+    return told
 
 
 def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, pairs):

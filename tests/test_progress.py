@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from diskpack_cl import cli, stipple
+from diskpack_cl import cli, poisson_disk, relax_poisson, stipple
 from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs
 from diskpack_cl.progress import STAGES, RunProgress, StageBars, running, stage, stage_text
 
@@ -69,6 +69,18 @@ def test_job_reports_every_stage_of_the_run(ctx, tmp_path):
     writing = [e for e in events if e[0] == "writing"]
     assert writing[-1][1:] == (1 + 150, 1 + 150)   # the SVG, then the PNG's dots
     assert list(run.by_stage()) == list(STAGES)
+
+
+def test_point_sets_report_their_iterations():
+    events = Events()
+    with running(events):
+        res = relax_poisson(np.random.default_rng(0).random((256, 2)), eps=0.75, backend="exact",
+                            max_iter=50)
+        poisson_disk(200, backend="exact", seed=1, options=None)
+    relax = [e for e in events if e[0] == "iterations"][:res.iterations + 2]
+    assert relax[0] == ("iterations", 0, 50) and relax[res.iterations][1] == res.iterations
+    assert events.order() == ["iterations"]
+    events.check_counts()   # the second run's iterations count on after the first's
 
 
 def test_stage_outside_a_run_reports_nothing():
