@@ -16,7 +16,7 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from diskpack_cl.options import OptionConflict
+from diskpack_cl.options import NamedOptionError, OptionConflict
 
 __all__ = [
     "DEFAULT_MARGIN_MM", "EDGE_MM", "FRAME_INK", "MM_PER_INCH", "PAPERS", "PEN_LIFT_S", "PLOT_SPEED_MM_S",
@@ -186,14 +186,20 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     pw, ph = paper_size(page, landscape=landscape)
     margin = DEFAULT_MARGIN_MM if margin_mm is None else float(margin_mm)
     if not 0 <= margin < 0.5 * min(pw, ph):
-        raise ValueError(f"margin_mm must be in [0, {0.5 * min(pw, ph):g}) on a "
-                         f"{pw:g}x{ph:g} mm page, got {margin_mm}")
+        given = "the default" if margin_mm is None else "given"
+        raise NamedOptionError(f"{{}} must be in [0, {0.5 * min(pw, ph):g}) on a {pw:g}x{ph:g} "
+                               f"mm page, got {margin:g} ({given})", "margin_mm")
     x0, y0, x1, y1 = margin, margin, pw - margin, ph - margin
+    reach = ""
     if plotter is not None:
-        from diskpack_cl.plotters import plotting_area
+        from diskpack_cl.plotters import area_text, plotting_area
 
         ax0, ay0, ax1, ay1 = plotting_area(plotter, (pw, ph))
+        reach = f" and the plotting area of {plotter} ({area_text((ax0, ay0, ax1, ay1))})"
         x0, y0, x1, y1 = max(x0, ax0), max(y0, ay0), min(x1, ax1), min(y1, ay1)
+        if x0 >= x1 or y0 >= y1:
+            raise ValueError(f"the {margin:g} mm margins{reach} leave no room on the "
+                             f"{pw:g}x{ph:g} mm page")
     if width_mm is None and height_mm is None and dpi is None:
         s = mm_per_px(width, height, x1 - x0, y1 - y0)
     else:
@@ -201,8 +207,7 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     w, h = width * s, height * s
     if w > x1 - x0 + 1e-9 or h > y1 - y0 + 1e-9:
         raise ValueError(f"the picture ({w:.1f}x{h:.1f} mm) does not fit inside the "
-                         f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page"
-                         + ("" if plotter is None else f" and the plotting area of {plotter}"))
+                         f"{margin:g} mm margins of the {pw:g}x{ph:g} mm page{reach}")
     return {"scale": s, "picture": (w, h), "page": (pw, ph),
             "offset": (0.5 * (x0 + x1 - w), 0.5 * (y0 + y1 - h)), "area": (x0, y0, x1, y1)}
 

@@ -12,9 +12,13 @@ The profiles are vpype's (its bundled ``vpype_config.toml`` and the user's
 
 from __future__ import annotations
 
+import math
+import os
+from pathlib import Path
+
 from .extras import install_command
 
-__all__ = ["plotter_config", "plotting_area"]
+__all__ = ["area_text", "plotter_config", "plotting_area"]
 
 MM_PER_PX = 25.4 / 96   # vpype's unit is the CSS pixel
 # a page and a paper of one size, printed in mm and read back in vpype's pixels
@@ -27,7 +31,9 @@ def plotter_config(name):
     Raises
     ------
     ValueError
-        vpype is not installed, or knows no device ``name`` (the message
+        vpype is not installed, its profiles are not TOML, the profile of
+        ``name`` lacks a field or holds one vpype cannot read (the message
+        names the file), or vpype knows no device ``name`` (the message
         lists those it knows).
 
     Examples
@@ -40,14 +46,50 @@ def plotter_config(name):
     except ImportError:
         raise ValueError("--plotter reads vpype's device profiles: "
                          + install_command("vpype")) from None
+    except ValueError as exc:   # vpype reads the user's profiles as it is imported
+        raise ValueError(f"vpype's profiles in {_user_profiles()} are not valid TOML: "
+                         f"{exc}") from None
     try:
         config = vpype.config_manager.get_plotter_config(name)
-    except ValueError as exc:
-        raise ValueError(f"vpype's profile of the plotter {name!r} is unreadable: {exc}") from None
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        what = f"it has no {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise ValueError(f"vpype's profile of the plotter {name!r} in {_profile_file(name)} is "
+                         f"unreadable: {what}") from None
     if config is None:
         known = ", ".join(sorted(vpype.config_manager.get_plotter_list()))
         raise ValueError(f"plotter must be a device of vpype's profiles ({known}), got {name!r}")
     return config
+
+
+def _user_profiles():
+    """The user's vpype profiles, which vpype reads over its own."""
+    return os.path.expanduser("~/.vpype.toml")
+
+
+def _profile_file(name):
+    """The file vpype read the plotter `name`'s profile from: the user's where it has one."""
+    import tomli  # vpype's TOML reader
+    import vpype.config
+
+    try:
+        with open(_user_profiles(), "rb") as fh:
+            if name in tomli.load(fh).get("device", {}):
+                return _user_profiles()
+    except (OSError, ValueError):
+        pass
+    return str(Path(vpype.config.__file__).parent / "vpype_config.toml")
+
+
+def area_text(area):
+    """A rectangle ``(x0, y0, x1, y1)`` of the page, in words.
+
+    Examples
+    --------
+    >>> area_text((4.0, 10.0, 196.14, 284.7))
+    'x 4 to 196.1 mm, y 10 to 284.7 mm'
+    """
+    x0, y0, x1, y1 = (round(v, 1) for v in area)
+    return f"x {x0:g} to {x1:g} mm, y {y0:g} to {y1:g} mm"
 
 
 def _paper(config, page_mm):
@@ -97,6 +139,25 @@ def plotting_area(plotter, page_mm):
     """
     config = plotter_config(plotter)
     pc = _paper(config, page_mm)
+    try:
+        area = _area(config, pc, page_mm)
+    except TypeError as exc:
+        raise ValueError(f"vpype's profile of the plotter {plotter!r} in "
+                         f"{_profile_file(plotter)} is unreadable: its paper {pc.name!r} has "
+                         f"x_range {pc.x_range!r}, y_range {pc.y_range!r} ({exc})") from None
+    x0, y0, x1, y1 = area
+    if not (config.plotter_unit_length > 0 and x0 < x1 and y0 < y1
+            and all(math.isfinite(v) for v in area)):
+        raise ValueError(f"vpype's profile of the plotter {plotter!r} in {_profile_file(plotter)} "
+                         f"leaves no plotting area on a {page_mm[0]:g}x{page_mm[1]:g} mm page "
+                         f"({area_text(area)}; its paper {pc.name!r}: x_range {pc.x_range}, "
+                         f"y_range {pc.y_range}, plotter_unit_length "
+                         f"{config.plotter_unit_length:g} px)")
+    return area
+
+
+def _area(config, pc, page_mm):
+    """:func:`plotting_area` of the device's paper `pc`, unchecked."""
     page_w, page_h = page_mm
     paper_w, paper_h = ((v * MM_PER_PX for v in pc.paper_size) if pc.paper_size is not None
                         else page_mm)

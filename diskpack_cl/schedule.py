@@ -10,6 +10,7 @@ resolved from the schedule's defaults and checked, before any device work.
 from __future__ import annotations
 
 import dataclasses
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -167,22 +168,41 @@ def make_schedule(schedule="default", *, beta=None, lloyd=None, rounds=None, met
             raise ValueError(f"unknown schedule {schedule!r}; choose from {list(SCHEDULE_NAMES)}")
         phases = list(SCHEDULES[schedule])
     else:
-        phases = []
-        for ph in schedule:
-            kind, it = str(ph[0]), int(ph[1])
-            if kind not in ("pack", "lloyd", "mix") or it < 0:
-                raise ValueError(
-                    f"bad schedule phase ({kind!r}, {it}): kind must be 'pack', 'mix' or 'lloyd'")
-            if len(ph) == 3 and kind == "mix":
-                a = float(ph[2])
-                if not 0.0 <= a <= 1.0:
-                    raise ValueError(f"blend must be in [0, 1], got {a}")
-                phases.append((kind, it, a))
-            elif len(ph) == 2:
-                phases.append((kind, it))
-            else:
-                raise ValueError(f"bad schedule phase {tuple(ph)!r}: (kind, iterations) or ('mix', iterations, blend)")
+        phases = [_phase(ph) for ph in schedule]
     return [tuple(p) for p in phases if p[1] > 0]
+
+
+def _phase(ph):
+    """One phase of an explicit schedule, checked; the message names the part that is wrong.
+
+    Examples
+    --------
+    >>> _phase(["mix", 3, 0.25])
+    ('mix', 3, 0.25)
+    >>> _phase(("pack", -5))
+    Traceback (most recent call last):
+    ...
+    ValueError: bad schedule phase ('pack', -5): iterations must be an integer >= 0, got -5
+    """
+    shape = "(kind, iterations) or ('mix', iterations, blend)"
+    if isinstance(ph, str) or not isinstance(ph, (tuple, list)) or len(ph) not in (2, 3):
+        raise ValueError(f"bad schedule phase {ph!r}: {shape}")
+    kind, it, *blend = ph
+    if kind not in ("pack", "lloyd", "mix"):
+        raise ValueError(f"bad schedule phase {tuple(ph)!r}: kind must be 'pack', 'mix' or "
+                         f"'lloyd', got {kind!r}")
+    if not (isinstance(it, numbers.Real) and not isinstance(it, bool) and it >= 0
+            and float(it).is_integer()):
+        raise ValueError(f"bad schedule phase {tuple(ph)!r}: iterations must be an integer "
+                         f">= 0, got {it!r}")
+    if not blend:
+        return kind, int(it)
+    if kind != "mix":
+        raise ValueError(f"bad schedule phase {tuple(ph)!r}: only 'mix' takes a blend; {shape}")
+    if not (isinstance(blend[0], numbers.Real) and 0.0 <= blend[0] <= 1.0):
+        raise ValueError(f"bad schedule phase {tuple(ph)!r}: blend must be in [0, 1], "
+                         f"got {blend[0]!r}")
+    return kind, int(it), float(blend[0])
 
 
 #: Grid cells per dot that the automatic supersampling aims at: about

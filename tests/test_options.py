@@ -206,3 +206,17 @@ def test_conflicts_are_refused_once_with_the_flag_names(argv, message, cls, kwar
     assert message in capsys.readouterr().err
     with pytest.raises(OptionConflict):   # the library refuses them the same way
         cls(**kwargs)
+
+
+@pytest.mark.parametrize("phase, message", [
+    (("pack", -5), "iterations must be an integer >= 0, got -5"),
+    (("pack", 2.5), "iterations must be an integer >= 0, got 2.5"),
+    (("pack", "3"), "iterations must be an integer >= 0, got '3'"),
+    (("jump", 3), "kind must be 'pack', 'mix' or 'lloyd', got 'jump'"),
+    (("lloyd", 3, 0.5), "only 'mix' takes a blend"),
+    (("mix", 3, 1.5), r"blend must be in \[0, 1\], got 1.5"),
+    ("pack", r"bad schedule phase 'pack': \(kind, iterations\)"),
+])
+def test_a_bad_schedule_phase_names_the_part_that_is_wrong(phase, message):
+    with pytest.raises(ValueError, match=message):
+        StippleOptions(schedule=[phase])

@@ -2,7 +2,11 @@
 
 import io
 import json
+import os
 import re
+import subprocess
+import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -70,3 +74,67 @@ def test_each_pen_has_its_plot_time_and_they_add_up(tmp_path, capsys):
     assert sum(layer["plot_seconds"] for layer in plot["layers"]) == pytest.approx(
         plot["plot_seconds"], rel=1e-12)
     assert all(f"{layer['name']} " in err.split("plot about")[1] for layer in plot["layers"])
+
+
+PROFILE = """
+[device.foo]
+name = "foo"
+plotter_unit_length = "{unit}"
+{pens}
+[[device.foo.paper]]
+name = "a4"
+paper_size = ["210mm", "297mm"]
+y_axis_up = false
+origin_location = ["0mm", "0mm"]
+x_range = {x_range}
+y_range = [0, 11000]
+"""
+
+
+@pytest.mark.parametrize("profile, message", [
+    ("[device.foo\n", r"vpype's profiles in \S+/\.vpype\.toml are not valid TOML: Expected ']'"),
+    (PROFILE.format(unit="0.025mm", pens="", x_range="[0, 8000]"),
+     r"profile of the plotter 'foo' in \S+/\.vpype\.toml is unreadable: it has no 'pen_count'"),
+    (PROFILE.format(unit="0.025mm", pens="pen_count = 1", x_range='["a", 8000]'),
+     r"profile of the plotter 'foo' in \S+/\.vpype\.toml is unreadable: its paper 'a4' has "
+     r"x_range \('a', 8000\)"),
+    (PROFILE.format(unit="-0.025mm", pens="pen_count = 1", x_range="[0, 8000]"),
+     r"profile of the plotter 'foo' in \S+/\.vpype\.toml leaves no plotting area on a 210x297 "
+     r"mm page \(x 0 to 0 mm.*plotter_unit_length -0.0944882 px\)"),
+    (PROFILE.format(unit="0.025mm", pens="pen_count = 1", x_range="[0, 10]"),
+     r"the 10 mm margins and the plotting area of foo \(x 0 to 0.3 mm, y 0 to 275 mm\) leave "
+     r"no room on the 210x297 mm page"),
+])
+def test_a_bad_profile_is_named_with_its_file_and_area(tmp_path, profile, message):
+    (tmp_path / ".vpype.toml").write_text(profile)
+    done = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", "export",
+                           str(_stippling(tmp_path)), "--page", "a4", "--plotter", "foo",
+                           "-o", str(tmp_path / "x.svg")],
+                          env={**os.environ, "HOME": str(tmp_path)}, capture_output=True, text=True)
+    assert done.returncode in (1, 2) and re.search(message, done.stderr), done.stderr
+    assert not (tmp_path / "x.svg").exists()
+
+
+def test_a_picture_too_large_names_the_plotting_area(tmp_path, capsys):
+    assert main(["export", str(_stippling(tmp_path)), "--page", "a4", "--plotter", "hp7475a",
+                 "--width-mm", "300", "-o", str(tmp_path / "x.svg")]) == 1
+    assert ("does not fit inside the 10 mm margins of the 210x297 mm page and the plotting area "
+            "of hp7475a (x 4 to 196.1 mm, y 10 to 284.7 mm)") in capsys.readouterr().err
+
+
+def _stippling(folder):
+    from diskpack_cl.export import write_stipple
+
+    path = folder / "dots.npz"
+    write_stipple(path, SimpleNamespace(points=np.array([[10.0, 10.0], [30.0, 20.0]]),
+                                        radii=np.array([2.0, 2.0]), width=40, height=30,
+                                        k=0.5, tone_radius=1.0))
+    return path
+
+
+@pytest.mark.parametrize("margin, shown", [([], "got 10 (the default)"),
+                                           (["--margin-mm", "7"], "got 7 (given)")])
+def test_a_margin_too_wide_for_the_page_shows_the_margin_used(tmp_path, capsys, margin, shown):
+    assert main(["export", str(_stippling(tmp_path)), "--page", "10x10mm", *margin,
+                 "-o", str(tmp_path / "x.svg")]) == 1
+    assert f"--margin-mm must be in [0, 5) on a 10x10 mm page, {shown}" in capsys.readouterr().err
