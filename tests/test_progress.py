@@ -168,14 +168,12 @@ def test_stage_text_orders_the_stages():
     assert text == "25 iterations 2.4 s, writing 0.8 s, pen path 11 s; 14.9 s in all"
 
 
-def _main(argv, stderr):
-    out, old = io.StringIO(), (sys.stdout, sys.stderr)
-    sys.stdout, sys.stderr = out, stderr
-    try:
-        rc = cli.main(argv)
-    finally:
-        sys.stdout, sys.stderr = old
-    assert rc == 0, stderr.getvalue()
+def _main(argv, stderr, monkeypatch):
+    """Run the command with `stderr`; its stdout."""
+    out = io.StringIO()
+    monkeypatch.setattr(sys, "stdout", out)
+    monkeypatch.setattr(sys, "stderr", stderr)
+    assert cli.main(argv) == 0, stderr.getvalue()
     return out.getvalue()
 
 
@@ -184,27 +182,27 @@ def image(tmp_path_factory):
     return _gradient_png(tmp_path_factory.mktemp("progress") / "g.png")
 
 
-def test_cli_draws_a_bar_per_stage(ctx, image, tmp_path):
+def test_cli_draws_a_bar_per_stage(ctx, image, tmp_path, monkeypatch):
     err = _Terminal()
     _main(["stipple", image, "-n", "150", "--schedule", "classic", "-o", str(tmp_path / "a.svg")],
-          err)
+          err, monkeypatch)
     text = err.getvalue()
     shown = [name for name in STAGES if f"{name}:" in text]
     assert shown == list(STAGES), text
 
 
 @pytest.mark.parametrize("flag", ["--quiet", "--json"])
-def test_cli_bars_quiet(ctx, image, tmp_path, flag):
+def test_cli_bars_quiet(ctx, image, tmp_path, flag, monkeypatch):
     err = _Terminal()
     _main(["stipple", image, "-n", "150", "--schedule", "classic", "-o", str(tmp_path / "a.svg"),
-           flag], err)
+           flag], err, monkeypatch)
     assert not any(f"{name}:" in err.getvalue() for name in STAGES)
 
 
-def test_summary_gives_each_stage(ctx, image, tmp_path):
+def test_summary_gives_each_stage(ctx, image, tmp_path, monkeypatch):
     err = io.StringIO()
     out = _main(["stipple", image, "-n", "150", "--schedule", "classic", "--json",
-                 "-o", str(tmp_path / "a.svg"), "-o", str(tmp_path / "a.png")], err)
+                 "-o", str(tmp_path / "a.svg"), "-o", str(tmp_path / "a.png")], err, monkeypatch)
     summary = json.loads(out.strip().splitlines()[-1])
     seconds = summary["stage_seconds"]
     assert list(seconds) == list(STAGES)
