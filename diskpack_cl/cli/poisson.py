@@ -160,7 +160,10 @@ def _run_poisson_set(args):
     rho = ("variable spacing" if summary["rho_final"] is None
            else f"rho {res.rho_start:.4f} -> {res.rho:.4f}")
     where = where_ran(res.stages)
-    _report(args, f"{summary['n']} points, min distance {res.min_distance:.6g}, {rho} in "
+    if args.mask:   # a set of the box cut by the mask: n is the count it aims at
+        summary["n_asked"] = n
+    inside = f" inside the mask (-n {n}: about that many)" if args.mask else ""
+    _report(args, f"{summary['n']} points{inside}, min distance {res.min_distance:.6g}, {rho} in "
                   f"{res.iterations} iterations ({res.seconds:.3g} s{' ' + where if where else ''}, "
                   f"stop: {res.stop_reason}); wrote {args.output}", summary)
     note_fallbacks(args, res.stages)
