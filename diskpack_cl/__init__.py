@@ -18,7 +18,7 @@ _PUBLIC = {
     "domain": ["Domain"],
     "geometry": ["CertificateError", "certify_disks", "exact_mic"],
     "measures": ["normalized_radius"],
-    "_device": ["NoOpenCLError", "describe", "get_context", "list_devices"],
+    "_device": ["NoOpenCLError", "describe", "get_context", "list_devices", "list_platforms"],
     "relax": ["RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult",
               "max_points_for_radius"],
     "sampling": ["dart_throwing", "random_points"],

@@ -19,8 +19,10 @@ import os
 import threading
 import warnings
 
-__all__ = ["NoOpenCLError", "get_context", "context_unchecked", "list_devices", "describe", "wait_for", "device_kind",
-           "kernel_group_limit", "group_size", "preferred_multiple", "padded"]
+__all__ = ["NoOpenCLError", "get_context", "context_unchecked", "list_devices", "list_platforms",
+           "platform_origin", "library_origin", "icd_files", "describe", "wait_for", "device_kind",
+           "kernel_group_limit", "group_size", "preferred_multiple", "padded",
+           "requested_device", "check_requested_device"]
 
 _CONTEXTS: dict = {}
 _KINDS = ("GPU", "CPU", "ACCELERATOR")
@@ -131,6 +133,120 @@ def list_devices():
     return rows
 
 
+def list_platforms():
+    """Return ``[(index, name, version, origin), ...]``: each OpenCL platform, its version
+    string and where its driver comes from (:func:`platform_origin`).
+
+    Raises
+    ------
+    NoOpenCLError
+        When there is no OpenCL platform.
+
+    Examples
+    --------
+    >>> try:
+    ...     rows = list_platforms()
+    ... except NoOpenCLError:
+    ...     rows = []
+    >>> all(row[2].startswith("OpenCL") for row in rows)
+    True
+    """
+    return [(str(i), p.name.strip(), p.version.strip(), platform_origin(p))
+            for i, p in enumerate(_platforms())]
+
+
+def platform_origin(platform):
+    """Where the driver of an OpenCL `platform` comes from: ``"pip: LIBRARY"`` (a library
+    inside this Python's environment, as pip's PoCL), ``"system: ICD -> LIBRARY"`` (a
+    library an ICD file of the system's loader names), or ``"LIBRARY"`` / ``"unknown"``.
+
+    The library is the shared object the platform's object lives in (its address, or that
+    of its ICD dispatch table, in ``/proc/self/maps``; Linux only).
+
+    Examples
+    --------
+    >>> platform_origin(object())   # no driver's platform
+    'unknown'
+    """
+    import ctypes  # not loaded at start-up
+
+    # a vendor's platform object is in its library, or else (on the heap) starts with a
+    # pointer to its ICD dispatch table, which is; read only where memory is readable
+    address = int(getattr(platform, "int_ptr", 0) or 0)
+    perms, library = _mapping(address)
+    if library is None and "r" in perms:
+        library = _mapping(ctypes.c_void_p.from_address(address).value or 0)[1]
+    return library_origin(library) if library else "unknown"
+
+
+def _mapping(address):
+    """``(permissions, file or None)`` of the memory at `address` in this process:
+    ``("", None)`` where nothing is mapped there or /proc cannot tell."""
+    try:
+        with open("/proc/self/maps", encoding="utf-8") as fh:
+            for line in fh:
+                fields = line.split(maxsplit=5)
+                lo, _, hi = fields[0].partition("-")
+                if int(lo, 16) <= address < int(hi, 16):
+                    path = fields[5].strip() if len(fields) == 6 else ""
+                    return fields[1], path if path.startswith("/") else None
+    except OSError:
+        pass
+    return "", None
+
+
+def icd_files():
+    """The ICD files the OpenCL loader reads: those of ``OCL_ICD_VENDORS`` (a file or a
+    folder) and of ``/etc/OpenCL/vendors``.
+
+    Examples
+    --------
+    >>> all(str(path).endswith(".icd") for path in icd_files())
+    True
+    """
+    from pathlib import Path  # not loaded at start-up
+
+    found = []
+    for where in (os.environ.get("OCL_ICD_VENDORS"), "/etc/OpenCL/vendors"):
+        path = Path(where) if where else None
+        if path is not None and path.is_dir():
+            found += sorted(path.glob("*.icd"))
+        elif path is not None and path.suffix == ".icd" and path.is_file():
+            found.append(path)
+    return found
+
+
+def library_origin(library, *, prefix=None, icds=None):
+    """Where the driver `library` (a path) comes from: ``"pip: LIBRARY"`` inside the
+    environment `prefix` (default ``sys.prefix``), else ``"system: ICD -> LIBRARY"``
+    with the ICD file of `icds` (default :func:`icd_files`) that names it, else the path.
+
+    Examples
+    --------
+    >>> library_origin("/venv/lib/site-packages/pyopencl/.libs/libpocl.so", prefix="/venv")
+    'pip: /venv/lib/site-packages/pyopencl/.libs/libpocl.so'
+    >>> library_origin("/opt/x/libx.so", prefix="/venv", icds=[])
+    '/opt/x/libx.so'
+    """
+    import sys  # not loaded at start-up
+    from pathlib import Path  # not loaded at start-up
+
+    prefix = os.path.realpath(sys.prefix if prefix is None else prefix)
+    real = os.path.realpath(library)
+    if os.path.commonpath([prefix, real]) == prefix:
+        return f"pip: {library}"
+    for icd in icd_files() if icds is None else icds:
+        try:
+            named = Path(icd).read_text(encoding="utf-8").strip()
+        except OSError:
+            continue
+        if named and (os.path.realpath(named) == real if os.path.isabs(named)
+                      else os.path.basename(real).startswith(named)
+                      or os.path.basename(library) == named):
+            return f"system: {icd} -> {library}"
+    return library
+
+
 def _available(pairs):
     return ", ".join(f"{a}:{b} {d.name.strip()}" for a, b, _, d in pairs)
 
@@ -235,7 +351,7 @@ def get_context(device=None):
 
     if isinstance(device, cl.Context):
         return device
-    spec = _spec(device)
+    spec = requested_device(device)
     if spec not in _CONTEXTS:
         refused = []
         for ctx, why in _contexts(spec):
@@ -260,15 +376,45 @@ def context_unchecked(device=None):
     if isinstance(device, cl.Context):
         return device
     refused = []
-    for ctx, why in _contexts(_spec(device)):
+    for ctx, why in _contexts(requested_device(device)):
         if ctx is not None:
             return ctx
         refused.append(why)
     raise NoOpenCLError(f"{'; '.join(refused)}; {_FIX}")
 
 
-def _spec(device):
+def requested_device(device=None):
+    """The device string a run asks for: `device`, else ``DISKPACK_DEVICE``, else
+    ``PYOPENCL_CTX``; ``""`` where none is asked for (the best available).
+
+    Examples
+    --------
+    >>> requested_device("pocl")
+    'pocl'
+    """
     return device or os.environ.get("DISKPACK_DEVICE") or os.environ.get("PYOPENCL_CTX") or ""
+
+
+def check_requested_device(device=None):
+    """Refuse, before the work, a device asked for (:func:`requested_device`) that does not
+    exist or fails its checks; nothing asked for, or a list for several workers
+    (``"0:0,0:1"``, each checked where it runs), passes.
+
+    Raises
+    ------
+    NoOpenCLError
+        With the message of :func:`get_context`, whichever way the device was asked for.
+
+    Examples
+    --------
+    >>> check_requested_device("no-such-device")
+    Traceback (most recent call last):
+    ...
+    diskpack_cl._device.NoOpenCLError: no OpenCL device matches 'no-such-device'; ...
+    """
+    spec = requested_device(device)
+    if spec and "," not in spec:
+        get_context(spec)
 
 
 def _contexts(spec):

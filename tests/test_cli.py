@@ -116,6 +116,9 @@ def test_devices(ctx, capsys):
     assert cli.main(["devices"]) == 0
     out = capsys.readouterr().out
     assert "using:" in out and "0:0" in out
+    # each platform with its version and where its driver comes from
+    assert out.startswith("platforms:\n    0  ") and "  |  OpenCL " in out
+    assert "\n         from pip: " in out or "\n         from system: " in out
 
 
 # ------------------------------------------------------- with a fake relax

@@ -18,6 +18,7 @@ class _Dev:
 class _Plat:
     def __init__(self, name, vendor, devices):
         self.name, self.vendor, self._devices = name, vendor, devices
+        self.version = f"OpenCL 3.0 {name} 1.0"
 
     def get_devices(self):
         return self._devices
@@ -144,12 +145,47 @@ def test_devices_command_names_kinds(monkeypatch, capsys):
     from diskpack_cl import cli
 
     monkeypatch.setattr(_device, "_platforms", lambda: [SIM] + PLATFORMS)
-    monkeypatch.setattr(diskpack_cl, "get_context", lambda device=None: None)
+    monkeypatch.setattr(diskpack_cl, "get_context", lambda device=None: SimpleNamespace(
+        devices=[SimpleNamespace(platform=PLATFORMS[1])]))
     monkeypatch.setattr(diskpack_cl, "describe", lambda ctx: "NVIDIA H200 (NVIDIA CUDA)")
     assert cli.main(["devices"]) == 0
     out = capsys.readouterr().out
     assert "Oclgrind Simulator  [GPU | CPU | ACCELERATOR]" in out
     assert "pthread-AMD EPYC  [CPU]" in out and "ALL" not in out
+    # each platform's version, and no origin for a platform that is no driver's object
+    assert "    2  NVIDIA CUDA  |  OpenCL 3.0 NVIDIA CUDA 1.0\n         from unknown" in out
+    assert out.endswith("using: NVIDIA H200 (NVIDIA CUDA), OpenCL 3.0 NVIDIA CUDA 1.0\n")
+
+
+def test_library_origin_names_pip_or_the_system_s_icd_file(tmp_path):
+    """A driver inside the environment is pip's; outside, the ICD file that names it
+    (by its file name, or its path through a link) is the system's."""
+    venv, lib = tmp_path / "venv", tmp_path / "usr" / "lib"
+    (venv / "site").mkdir(parents=True)
+    lib.mkdir(parents=True)
+    (lib / "libpocl.so.2.10.0").touch()
+    (lib / "libpocl.so.2").symlink_to(lib / "libpocl.so.2.10.0")
+    by_name, by_path, other = (tmp_path / f"{k}.icd" for k in ("pocl", "linked", "other"))
+    by_name.write_text("libpocl.so.2.10.0\n")
+    by_path.write_text(f"{lib / 'libpocl.so.2'}\n")
+    other.write_text("libnvidia-opencl.so.1\n")
+    pip = venv / "site" / "libpocl-21062cec.so"
+    assert _device.library_origin(str(pip), prefix=venv, icds=[by_name]) == f"pip: {pip}"
+    system = str(lib / "libpocl.so.2.10.0")
+    for icd in (by_name, by_path):
+        assert _device.library_origin(system, prefix=venv, icds=[other, icd]) == \
+            f"system: {icd} -> {system}"
+    assert _device.library_origin(system, prefix=venv, icds=[other]) == system
+
+
+def test_every_real_platform_has_its_version_and_origin(ctx):
+    import os
+
+    for _, _, version, origin in _device.list_platforms():
+        assert version.startswith("OpenCL ")
+        kind, _, where = origin.partition(": ")
+        assert kind in ("pip", "system"), origin
+        assert os.path.isfile(where.rpartition(" -> ")[2]), origin
 
 
 def test_hypothesis_is_derandomized_in_ci():

@@ -28,9 +28,13 @@ def _add_devices(subparsers):
 
 
 def _run_devices(args):
-    from diskpack_cl import describe, get_context, list_devices  # not loaded at start-up
+    from diskpack_cl import describe, get_context, list_devices, list_platforms  # not loaded at start-up
 
+    print("platforms:")
+    for index, name, version, origin in list_platforms():
+        print(f"{index:>5}  {name}  |  {version}\n         from {origin}")
     rows = list_devices()
+    print("devices:")
     for index, platform, device, kind in rows:
         print(f"{index:>5}  {platform}  |  {device}  [{kind}]")
     if not rows:
@@ -40,5 +44,6 @@ def _run_devices(args):
         from diskpack_cl.known_answers import check_device  # not loaded at start-up
 
         print("\n".join(check_table(check_device(args.device, refresh=args.recheck))))
-    print(f"using: {describe(get_context(args.device))}")
+    ctx = get_context(args.device)
+    print(f"using: {describe(ctx)}, {ctx.devices[0].platform.version.strip()}")
     return 0
