@@ -414,7 +414,13 @@ def check_requested_device(device=None):
     """
     spec = requested_device(device)
     if spec and "," not in spec:
-        get_context(spec)
+        try:
+            get_context(spec)
+        except NoOpenCLError as exc:
+            if device:
+                raise
+            asked = "DISKPACK_DEVICE" if os.environ.get("DISKPACK_DEVICE") else "PYOPENCL_CTX"
+            raise NoOpenCLError(f"{asked}={spec}: {exc}") from None
 
 
 def _contexts(spec):

@@ -25,6 +25,7 @@ import click
 import vpype
 import vpype_cli
 
+from diskpack_cl._device import NoOpenCLError, check_requested_device
 from diskpack_cl.cli.help import LEADING, one_line_help
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions
@@ -219,10 +220,11 @@ def diskpack(document, image, n, **kw):
           --pen-mm 0.5 write colour.svg
     """
     try:
+        check_requested_device()   # DISKPACK_DEVICE, PYOPENCL_CTX: as diskpack stipple does
         document.extend(_stippling_document(image, n, kw))
     except NamedOptionError as exc:
         raise click.UsageError(exc.render(flag_name)) from None
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, NoOpenCLError) as exc:
         raise click.UsageError(str(exc)) from None
     return document
 

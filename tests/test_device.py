@@ -202,3 +202,28 @@ def test_hypothesis_is_derandomized_in_ci():
     out = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True,
                          text=True, check=True).stdout.split()
     assert out == ["True", "None"]
+
+
+@pytest.mark.parametrize("variable", ["DISKPACK_DEVICE", "PYOPENCL_CTX"])
+def test_a_device_asked_for_in_the_environment_that_does_not_exist_is_an_error(
+        tmp_path, capsys, monkeypatch, variable):
+    from diskpack_cl import cli
+
+    monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
+    monkeypatch.setenv(variable, "no-such-device")
+    out = tmp_path / "x.svg"
+    assert cli.main(["stipple", "sample", "-n", "200", "-o", str(out)]) == 1
+    assert (f"diskpack: error: {variable}=no-such-device: no OpenCL device matches "
+            f"'no-such-device'; available: ") in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_device_given_as_an_argument_is_named_as_given(tmp_path, capsys, monkeypatch):
+    from diskpack_cl import cli
+
+    monkeypatch.setenv("PYOPENCL_CTX", "0")
+    out = tmp_path / "x.svg"
+    assert cli.main(["stipple", "sample", "-n", "200", "--device", "no-such-device",
+                     "-o", str(out)]) == 1
+    assert ("diskpack: error: no OpenCL device matches 'no-such-device'"
+            in capsys.readouterr().err)

@@ -107,7 +107,7 @@ def test_help_leads_with_the_everyday_options_and_examples():
     """The options of diskpack stipple's first groups come first, in their order."""
     import click
 
-    from diskpack_cl.cli.help import LEADING
+    from diskpack_cl.cli import LEADING
 
     leading = [d for _, group in LEADING for d, _ in group]
     names = [p.name for p in diskpack.params if isinstance(p, click.Option)]
@@ -143,3 +143,16 @@ def test_a_note_is_diskpack_s_not_the_root_logger_s(tmp_path):
                          capture_output=True, text=True, check=True)
     assert "diskpack: note: " in run.stderr and "will look darker" in run.stderr
     assert "WARNING:root" not in run.stderr
+
+
+@pytest.mark.parametrize("variable", ["DISKPACK_DEVICE", "PYOPENCL_CTX"])
+def test_a_device_asked_for_that_does_not_exist_is_an_error(tmp_path, monkeypatch, variable):
+    monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
+    monkeypatch.setenv(variable, "no-such-device")
+    out = tmp_path / "x.svg"
+    result = CliRunner().invoke(vpype_cli.cli, ["diskpack", "sample", "-n", "100", "write",
+                                                str(out)])
+    assert result.exit_code == 2
+    assert (f"{variable}=no-such-device: no OpenCL device matches 'no-such-device'"
+            in result.output)
+    assert not out.exists()

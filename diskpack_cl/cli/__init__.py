@@ -156,13 +156,12 @@ def _main(argv):
     handlers = _terminate_handlers()
     show_device_notes(getattr(args, "quiet", False))
     try:
-        # an explicit device (--device, DISKPACK_DEVICE) must exist, on every command that has one
-        device = getattr(args, "device", None) or (
-            os.environ.get("DISKPACK_DEVICE") if hasattr(args, "device") else None)
-        if device and "," not in device:
-            from diskpack_cl import get_context  # not loaded at start-up
+        # a device asked for (--device, DISKPACK_DEVICE, PYOPENCL_CTX) must exist, on every
+        # command that has one
+        if hasattr(args, "device"):
+            from diskpack_cl._device import check_requested_device  # not loaded at start-up
 
-            get_context(device)
+            check_requested_device(args.device)
         return int(args.run(args) or 0)
     except NamedOptionError as exc:   # the options named as flags
         usage = isinstance(exc, OptionConflict)
