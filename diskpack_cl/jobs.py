@@ -524,7 +524,9 @@ def stipple_item(item, *, device=None, callback=None, progress=None, verify=Fals
     progress : callable or RunProgress, optional
         ``progress(stage, done, total)`` as each stage starts, advances and
         ends (:mod:`diskpack_cl.progress`): ``load`` (the image read, the dot
-        count, the memory check), then those of :func:`diskpack_cl.stipple`;
+        count) and within it ``device`` (the memory check: the OpenCL device
+        found, and checked on its first run), then those of
+        :func:`diskpack_cl.stipple`;
         with a :class:`~diskpack_cl.progress.RunProgress` the caller reads
         each stage's seconds (:attr:`~diskpack_cl.progress.RunProgress.seconds`)
         and goes on with the writers (:func:`write_stipple_outputs`).
@@ -593,9 +595,11 @@ def _stipple_item_load(item, device, note):
     # (for the memory check alone: summed without a second whole image)
     ink = None if gray is None else float(gray.sum()) if options.invert else gray.size - float(gray.sum())
     area = write.preview_area(W, H)
-    check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
-                         png_scale=preview_scale(*area, write.png_scale), png_area=area,
-                         device=device, outputs=item.outputs)
+    # the device's first use in the job: found, and on its first run checked (known answers)
+    with stage("device"):
+        check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
+                             png_scale=preview_scale(*area, write.png_scale), png_area=area,
+                             device=device, outputs=item.outputs)
     return _Loaded(gray, image, run, tone_n, n, options)
 
 

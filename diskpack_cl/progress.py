@@ -38,13 +38,15 @@ from contextvars import ContextVar
 __all__ = ["STAGES", "RunProgress", "running", "current", "stage", "stage_text", "StageBars",
            "with_bars", "in_stage_order"]
 
-#: The stages of a stippling run, in the order they start: reading the image and planning
-#: the run (``load``), the error-diffusion start (``start``), finding the OpenCL device
-#: and, on its first run, its known-answer checks, and building its programs (``device``),
-#: the radius, density and ink fields (``setup``), the schedule's steps (``iterations``),
-#: the certified radii (``certificate``), the files (``writing``) and, within the writing
-#: of an SVG, its dot order (``pen path``).
-STAGES = ("load", "start", "device", "setup", "iterations", "certificate", "writing", "pen path")
+#: The stages of a stippling run, in the order a job (:func:`diskpack_cl.jobs.stipple_item`)
+#: starts them: reading the image and planning the run (``load``), finding the OpenCL
+#: device, its known-answer checks on its first run, and building its programs
+#: (``device``), the error-diffusion start (``start``), the radius, density and ink fields
+#: (``setup``), the schedule's steps (``iterations``), the certified radii
+#: (``certificate``), the files (``writing``) and, within an SVG's writing, its dot order
+#: (``pen path``). :func:`diskpack_cl.stipple` alone makes the engine, and so meets the
+#: device, after the start.
+STAGES = ("load", "device", "start", "setup", "iterations", "certificate", "writing", "pen path")
 
 
 def in_stage_order(seconds):
