@@ -212,3 +212,13 @@ def test_summary_gives_each_stage(ctx, image, tmp_path, monkeypatch):
     line = err.getvalue()
     assert f"{summary['iterations']} iterations " in line and " s in all " in line
     assert all(f" {name} " in line for name in STAGES if name != "iterations")
+
+
+def test_vpype_draws_a_bar_per_stage(ctx, image, monkeypatch):
+    import vpype_cli
+
+    err = _Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    vpype_cli.execute(f"diskpack {image} -n 150 --schedule classic")
+    shown = [name for name in STAGES if f"{name}:" in err.getvalue()]
+    assert shown == list(STAGES), err.getvalue()
