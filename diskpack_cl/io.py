@@ -286,8 +286,7 @@ def check_not_inputs(outputs, inputs):
         ident = _file_identity(x)
         if ident is not None:
             known.setdefault(ident, x)
-    for out in outputs:
-        out = os.fspath(out)
+    for out in (os.fspath(x) for x in outputs if x is not None):
         ident = _file_identity(out)
         hit = known.get(os.path.realpath(out)) or (ident and known.get(ident))
         if hit is not None:

@@ -7,7 +7,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from diskpack_cl.domain import Domain
-from diskpack_cl.io import (POINT_FORMATS, atomic_write, check_points_path, read_points,
+from diskpack_cl.io import (POINT_FORMATS, OutputIsInputError, atomic_write, check_not_inputs,
+                            check_points_path, read_points,
                             validate_points, write_points)
 
 FORMATS = [".npz", ".npy", ".csv", ".txt", ".xy"]
@@ -299,3 +300,47 @@ def test_atomic_writes_replace_all_files_together_or_none(tmp_path):
                 fh.write("new")
         assert a.read_text() == "old a" and not b.exists()   # renamed at the end, together
     assert a.read_text() == b.read_text() == "new" and len(os.listdir(tmp_path)) == 2
+
+
+def _ways_to_the_file(folder):
+    """Paths that all reach one file, ``folder/target.png``: itself, a symlink, a symlink
+    to the symlink, a hard link, a path through ``..``."""
+    target = folder / "target.png"
+    target.write_bytes(b"photo")
+    (folder / "sub").mkdir()
+    (folder / "link.png").symlink_to(target)
+    (folder / "link2.png").symlink_to(folder / "link.png")
+    os.link(target, folder / "hard.png")
+    return {"target": target, "link": folder / "link.png", "link2": folder / "link2.png",
+            "hard": folder / "hard.png", "dotted": folder / "sub" / ".." / "target.png"}
+
+
+WAYS = ["target", "link", "link2", "hard", "dotted"]
+
+
+@pytest.mark.parametrize("output", WAYS)
+@pytest.mark.parametrize("given", WAYS)
+def test_an_output_reaching_an_input_by_any_way_is_refused(tmp_path, given, output):
+    """An input given as a symlink with an output hard-linked to its target too: the
+    guard compares the files the paths reach (device and inode), not the paths."""
+    ways = _ways_to_the_file(tmp_path)
+    with pytest.raises(OutputIsInputError, match=f"output {ways[output]} would replace the "
+                                                 f"input {ways[given]}"):
+        check_not_inputs([tmp_path / "other.svg", ways[output]], [ways[given]])
+    assert ways["target"].read_bytes() == b"photo"
+
+
+def test_a_copy_of_an_input_or_a_new_file_is_no_input(tmp_path):
+    ways = _ways_to_the_file(tmp_path)
+    (tmp_path / "copy.png").write_bytes(b"photo")   # same bytes, another file
+    check_not_inputs([tmp_path / "copy.png", tmp_path / "new.svg", None], [ways["link"], None])
+
+
+def test_an_output_reaching_a_missing_input_through_a_symlinked_folder_is_refused(tmp_path):
+    """No file to compare yet: the paths are compared with their symlinks resolved."""
+    (tmp_path / "real").mkdir()
+    (tmp_path / "alias").symlink_to(tmp_path / "real")
+    with pytest.raises(OutputIsInputError, match="alias/x.png"):
+        check_not_inputs([tmp_path / "alias" / "x.png"], [tmp_path / "real" / "x.png"])
+    with pytest.raises(OutputIsInputError, match="real/x.png"):
+        check_not_inputs([tmp_path / "real" / "x.png"], [tmp_path / "alias" / "x.png"])
