@@ -137,7 +137,7 @@ class PoissonSetOptions:
                        check=check_seed, cli_type=seed_text)
     mask: str = option(None, "points only where the image is light (> 0.5 gray; the image spans "
                        "--box, default: the image's aspect, longer side 1): a set of the box cut "
-                       "by the mask, so -n N gives about N inside it (within about 1 %)",
+                       "by the mask, so -n N gives about N inside it (within about 1 in 100)",
                        metavar="IMAGE")
     density: str = option(None, "variable spacing: more points where the image is dark (unequal "
                           "disk packing; needs -n)", metavar="IMAGE")
@@ -409,7 +409,7 @@ def poisson_disk(n=None, *, min_distance=None, box=None, mask=None, polygon=None
     ----------
     n : int, optional
         Number of points (for a mask or polygon: about n land inside it,
-        within about 1 %: the set is made in the box and cut).
+        within about 1 in 100: the set is made in the box and cut).
     min_distance : float, optional
         Instead of `n`: the smallest distance between points (scipy's
         ``radius``; twice the paper's Poisson disk radius).  The set holds

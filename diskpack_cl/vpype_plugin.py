@@ -26,7 +26,7 @@ import vpype
 import vpype_cli
 
 from diskpack_cl._device import NoOpenCLError, check_requested_device
-from diskpack_cl.cli.help import LEADING, one_line_help
+from diskpack_cl.cli import LEADING, one_line_help
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions
 from diskpack_cl.image import ToneOptions, sample_image_path
@@ -88,7 +88,7 @@ def click_options(*classes, skip=()):
     The options are those :func:`diskpack_cl.options.add_arguments` gives
     ``diskpack stipple``: same flags, defaults, choices, checks and help. A
     field of two classes is added once. The options of
-    :data:`diskpack_cl.cli.help.LEADING` come first, in its order and with
+    :data:`diskpack_cl.cli.LEADING` come first, in its order and with
     its one-line helps, as ``diskpack stipple --help`` shows them.
 
     Examples

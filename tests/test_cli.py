@@ -849,7 +849,7 @@ def test_stipple_help_leads_with_what_users_came_for(capsys):
 @pytest.mark.parametrize("command", ["stipple", "export"])
 def test_leading_options_have_one_line_helps(command):
     """Each help of the leading groups fits beside its option on an 80-column terminal."""
-    from diskpack_cl.cli.help import EVERYDAY, PLOTTER
+    from diskpack_cl.cli._help import EVERYDAY, PLOTTER
 
     parser = cli.build_parser(command)._subparsers._group_actions[0].choices[command]
     formatter = parser._get_formatter()

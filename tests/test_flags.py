@@ -13,7 +13,7 @@ import pytest
 import diskpack_cl
 from diskpack_cl.cli import build_parser
 from diskpack_cl.cli._common import RUN_FLAGS
-from diskpack_cl.cli.help import one_line_help
+from diskpack_cl.cli import one_line_help
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.domain import DomainOptions
 from diskpack_cl.export import WriteOptions
@@ -75,7 +75,7 @@ def test_every_flag_comes_from_an_options_field_or_is_a_run_flag(command):
         if action.dest == "help" or action.dest in RUN_FLAGS:
             continue
         field = generated.get(action.dest)
-        # a leading option's --help is one line of its own (diskpack_cl.cli.help.LEADING)
+        # a leading option's --help is one line of its own (diskpack_cl.cli.LEADING)
         shown = field.help if field and action.help == one_line_help(action.dest) else None
         if field and _signature(action, shown) == _signature(field):
             continue

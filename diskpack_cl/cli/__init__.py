@@ -32,6 +32,7 @@ import threading
 from ._batches import _raise_terminated, _Terminated
 from ._common import (PROG, _HelpFormatter, _Parser, _UsageError, open_closed_streams,
                       show_device_notes)
+from ._help import LEADING, one_line_help
 from .analyze import _add_analyze
 from .devices import _add_devices
 from .export import _add_export
@@ -41,7 +42,7 @@ from .stipple import _add_stipple
 from diskpack_cl.io import OutputIsInputError
 from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "LEADING", "one_line_help"]
 
 
 #: The subcommands, in the order of ``diskpack --help``.

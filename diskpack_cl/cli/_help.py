@@ -1,10 +1,11 @@
 """What ``--help`` shows first: the everyday options, with one-line helps, and examples.
 
 ``diskpack stipple --help`` and ``export --help`` (:func:`lead_with`) and
-``vpype diskpack --help`` (:func:`diskpack_cl.vpype_plugin.click_options`)
-list the options of :data:`LEADING` first, in its order and with its
-one-line helps; the algorithm's parameters come last. An option's whole
-help stays in its dataclass (the options reference of the docs shows it).
+``vpype diskpack --help`` (:func:`diskpack_cl.vpype_plugin.click_options`,
+which reads :data:`LEADING` from :mod:`diskpack_cl.cli`) list the options
+of :data:`LEADING` first, in its order and with its one-line helps; the
+algorithm's parameters come last. An option's whole help stays in its
+dataclass (the options reference of the docs shows it).
 """
 
 from __future__ import annotations

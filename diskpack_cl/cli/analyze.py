@@ -12,7 +12,7 @@ from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.reports import AnalyzeOptions, PLOT_HINT, analyze, have_matplotlib
 
 from ._common import PROG, _GivenOnce, _image_path
-from .help import with_examples
+from ._help import with_examples
 
 
 def _add_analyze(subparsers):

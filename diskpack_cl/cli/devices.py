@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ._common import _device_options
-from .help import with_examples
+from ._help import with_examples
 
 
 def _add_devices(subparsers):

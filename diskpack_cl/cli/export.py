@@ -8,7 +8,7 @@ import time
 
 from ._common import PROG, _checked_outputs
 from ._drawing import _drawing_options, _write_and_report
-from .help import lead_with, with_examples
+from ._help import lead_with, with_examples
 from diskpack_cl.options import from_namespace
 
 

@@ -16,7 +16,7 @@ from diskpack_cl.relax import TRIAL_RELAX, max_points_for_radius
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import (PROG, _bar, _image_path, _output_options, _positive_int, note_fallbacks,
                       where_ran)
-from .help import with_examples
+from ._help import with_examples
 from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
 
 

@@ -8,7 +8,7 @@ import argparse
 
 from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
 from ._common import PROG, _bar, _device_options, _output_options, note_fallbacks, where_ran
-from .help import with_examples
+from ._help import with_examples
 from diskpack_cl.domain import DomainOptions
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.relax import RelaxOptions, relax_summary

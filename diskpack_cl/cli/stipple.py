@@ -11,7 +11,7 @@ from ._common import (PROG, _UsageError, _bar, _checked_outputs, _device_options
                       command_run, note_fallbacks, where_ran)
 from ._drawing import _drawing_options, _write_and_report
 from diskpack_cl.image import ToneOptions
-from .help import lead_with, with_examples
+from ._help import lead_with, with_examples
 from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
 
 #: The examples of ``diskpack stipple --help``, a plotter's first.
