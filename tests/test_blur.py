@@ -35,6 +35,35 @@ def test_device_blur_is_scipys(device_blur, h, w, sigma, seed):
     assert got is not a
 
 
+@pytest.fixture(scope="module")
+def blur_256(ctx, device_blur):
+    """The device blur of the 256-bit build (``WIDE_BUILTINS=0``), where the device is
+    trusted with the blur: its sums round as scipy's, bit for bit."""
+    from diskpack_cl.blur import DeviceBlur
+    from diskpack_cl.device_checks import Verdict, use_verdict, verdict_of
+
+    if verdict_of(ctx).refused("gaussian_blur"):
+        pytest.skip("the device's checks did not trust the blur")
+    use_verdict(Verdict.trusting(ctx.devices[0], False, ["gaussian_blur"]))
+    try:
+        return DeviceBlur(ctx)
+    finally:
+        use_verdict(None)
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(1, 40), w=st.integers(1, 40), sigma=st.sampled_from([0.3, 0.5, 1.0, 2.0, 3.7, 9.0]),
+       seed=st.integers(0, 2**32 - 1))
+def test_the_256_bit_build_is_scipys_bit_for_bit(blur_256, h, w, sigma, seed):
+    """Every output, the edges' reflected taps too, summed in scipy's order: the same
+    float64 values, not merely close ones (a sum in another order differs in the last
+    bits)."""
+    a = np.random.default_rng(seed).random((h, w))
+    got, want = blur_256(a, sigma), ndimage.gaussian_filter(a, sigma, mode="reflect")
+    differ = np.argwhere(got != want)
+    assert len(differ) == 0, f"{len(differ)} outputs differ from scipy's, first at {differ[0]}"
+
+
 def test_device_blur_of_a_band_of_a_large_picture_and_bad_shapes(device_blur):
     a = np.random.default_rng(1).random((70, 1030))
     np.testing.assert_allclose(device_blur(a, 4.2), gaussian_blur(a, 4.2), rtol=0, atol=1e-12)
