@@ -58,6 +58,7 @@ from .stipple import (StippleResult, StippleState, _centroid_density, _make_stag
                       dot_radii, result_summary)
 from .engine import engine_record, make_engine
 from .pen_path import pen_path_order
+from .progress import stage as run_stage, unreported
 
 __all__ = ["ColorStippleResult", "assign_pens", "dot_density", "dots_per_pen", "pen_counts",
            "stipple_colors"]
@@ -290,7 +291,8 @@ def assign_pens(points, share, counts):
     k = min(DIFFUSE, n - 1)
     dist, nbr = cKDTree(x).query(x, k=list(range(2, k + 2)))   # without the dot itself
     rank = np.empty(n, dtype=np.int64)
-    rank[pen_path_order(x, method="hilbert")[0]] = np.arange(n)
+    with unreported():   # an order that ranks the dots, no pen path of the run's
+        rank[pen_path_order(x, method="hilbert")[0]] = np.arange(n)
     return _diffuse(nbr, dist, q, left, rank)
 
 
@@ -540,31 +542,37 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     """
     t_start = time.perf_counter()
     watch = Stopwatch()   # the run's one collector: its stages, the main engine's and "pens"
-    with watch("separate"):
+    with watch("separate"), run_stage("load"):   # the run's stages (diskpack_cl.progress)
         color, options = _objects(colors, options, overrides)
         sep, opt, counts, density, weight = _separate(image, n, color, counts, joint, pen_pull,
                                                       options)
     P, H, W = sep.layers.shape
     gray = 1.0 - density
-    engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                         grid=opt.grid_shape(W, H), timings=watch)
-    stage = _make_stage(gray, opt, engine)
+    with run_stage("setup" if backend == "exact" else "device"):
+        engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                             grid=opt.grid_shape(W, H), timings=watch)
+    with run_stage("setup"):
+        stage = _make_stage(gray, opt, engine)
     head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
-    start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))
+    with run_stage("start"):
+        start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))
     state, history = _run(start, _phases(stage, head), callback)
-    with watch("assign"):
+    with watch("assign"), run_stage("iterations", 0):   # between the phases: their time
         pen = assign_pens(state.points,
                           _pen_share(sep.layers, weight, state.points, 0.5 * np.sqrt(W * H / opt.n)),
                           counts)
     coarse = replace(opt, supersample=max(1, opt.supersample // PEN_COARSEN))
-    pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
-                        grid=coarse.grid_shape(W, H), timings=Stopwatch()),
-            [_centroid_density(a, coarse) for a in sep.layers])
+    with run_stage("setup", 0):   # the pens' engine and densities: more setup
+        pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
+                            grid=coarse.grid_shape(W, H), timings=Stopwatch()),
+                [_centroid_density(a, coarse) for a in sep.layers])
     state, more = _run(state, _phases(stage, tail), callback, first=len(history),
                        before=_pen_pull(stage.engine.timings, pen, pens, pen_pull))
-    with watch("certify"):
+    with watch("certify"), run_stage("certificate"):
         r = dot_radii(state, stage, state.points)
         k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
+    with run_stage("certificate", 0):   # the drawn radii, beside the certified ones
+        pen_radius = pen_ink_radii(state.points, pen, sep.layers)
     watch.add("total", time.perf_counter() - t_start)
     params = dict(opt.params(), colors=list(sep.names), black_generation=color.black_generation,
                   clean_black=color.clean_black, clean_white=color.clean_white,
@@ -573,7 +581,7 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     return ColorStippleResult(
         points=state.points, radii=radii, pen=pen, names=sep.names, colors=sep.colors, k=float(k),
         base_radii=r, certificate=cert, layers=sep.layers,
-        pen_radius=pen_ink_radii(state.points, pen, sep.layers), width=W, height=H,
+        pen_radius=pen_radius, width=W, height=H,
         history=history + more,
         timings=watch.seconds, params=params, engine=engine.backend,
         tone_radius=tone_radius(opt.n, sep.darkness),

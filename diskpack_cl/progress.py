@@ -36,7 +36,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 
 __all__ = ["STAGES", "RunProgress", "running", "current", "stage", "stage_text", "StageBars",
-           "with_bars", "in_stage_order"]
+           "with_bars", "in_stage_order", "unreported"]
 
 #: The stages of a stippling run, in the order a job (:func:`diskpack_cl.jobs.stipple_item`)
 #: starts them: reading the image and planning the run (``load``), finding the OpenCL
@@ -192,6 +192,26 @@ def running(progress=None):
     token = _CURRENT.set(run)
     try:
         yield run
+    finally:
+        _CURRENT.reset(token)
+
+
+@contextmanager
+def unreported():
+    """A block whose stages report to no run: work inside one of the run's stages that is
+    none of its own (an order that ranks dots is no pen path); its time stays the
+    enclosing stage's.
+
+    Examples
+    --------
+    >>> with running() as run, stage("iterations"), unreported(), stage("pen path"):
+    ...     pass
+    >>> list(run.seconds)
+    ['iterations']
+    """
+    token = _CURRENT.set(None)
+    try:
+        yield
     finally:
         _CURRENT.reset(token)
 

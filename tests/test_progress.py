@@ -83,6 +83,28 @@ def test_point_sets_report_their_iterations():
     events.check_counts()   # the second run's iterations count on after the first's
 
 
+def test_colour_job_reports_every_stage_of_the_run(ctx, tmp_path):
+    """A colour stippling's stages: the same, and its pen path only where the SVG is written."""
+    from PIL import Image
+
+    y, x = np.mgrid[0:48, 0:64] / 64.0
+    rgb = (np.dstack([x, y, 1 - x]) * 255).astype(np.uint8)
+    Image.fromarray(rgb).save(tmp_path / "c.png")
+    out = str(tmp_path / "c.svg")
+    (item,) = plan_stipple([str(tmp_path / "c.png")], [out], n=300, color={"colors": "cmyk"},
+                           schedule=SHORT, make_folders=False)
+    events = Events()
+    with running(events):
+        res, gray, _ = stipple_item(item, device=ctx)
+        write_stipple_outputs(res, gray, [out])
+    order = events.order()   # the fields come before the start here
+    assert set(order) == set(STAGES) and order[:2] == ["load", "device"]
+    assert order[4:] == ["iterations", "certificate", "writing", "pen path"]
+    events.check_counts()
+    first_write = events.index(("writing", 0, 1))
+    assert all(i > first_write for i, e in enumerate(events) if e[0] == "pen path")
+
+
 def test_stage_outside_a_run_reports_nothing():
     with stage("writing", 3) as advance:
         advance(2)
