@@ -1,0 +1,47 @@
+"""Drawing rules shared by the writers: what fits the picture (:func:`check_fit`)."""
+
+import numpy as np
+import pytest
+
+from diskpack_cl import stipple, write_stipple
+from diskpack_cl.drawing import check_fit
+
+PEN_TOO_WIDE = "the pen .* is as wide as the"
+DOTS_TOO_WIDE = "wide do not fit the"
+
+
+@pytest.mark.parametrize("picture", [(30.0, 40.0), (40.0, 30.0)])
+def test_a_pen_as_wide_as_the_pictures_smaller_side_is_refused_one_ulp_less_is_not(picture):
+    side = min(picture)
+    with pytest.raises(ValueError, match=PEN_TOO_WIDE):
+        check_fit(np.array([1.0]), picture, side)
+    with pytest.raises(ValueError, match=PEN_TOO_WIDE):
+        check_fit(np.array([1.0]), picture, np.nextafter(side, np.inf))
+    check_fit(np.array([1.0]), picture, np.nextafter(side, 0.0))
+
+
+@pytest.mark.parametrize("picture", [(30.0, 40.0), (40.0, 30.0)])
+def test_dots_as_wide_as_the_pictures_smaller_side_fit_one_ulp_more_do_not(picture):
+    side = min(picture)
+    check_fit(np.array([1.0, side / 2]), picture)
+    with pytest.raises(ValueError, match=DOTS_TOO_WIDE):
+        check_fit(np.array([np.nextafter(side / 2, np.inf), 1.0]), picture)
+
+
+def test_no_dots_and_no_pen_fit():
+    check_fit(np.zeros(0), (1.0, 1.0))
+
+
+@pytest.fixture(scope="module")
+def result():
+    return stipple(np.tile(np.linspace(0.0, 1.0, 32), (32, 1)), 40)
+
+
+@pytest.mark.parametrize("suffix, options", [
+    (".svg", {"width_mm": 20.0, "pen_mm": 20.0}),   # the 32 x 32 px picture 20 mm wide
+    (".png", {"scale": 2.0, "pen_px": 64.0}),       # 64 x 64 output pixels
+])
+def test_writers_refuse_a_pen_as_wide_as_the_picture(tmp_path, result, suffix, options):
+    with pytest.raises(ValueError, match=PEN_TOO_WIDE):
+        write_stipple(tmp_path / f"a{suffix}", result, **options)
+    assert list(tmp_path.iterdir()) == []
