@@ -671,8 +671,10 @@ def _relaxed3(n, distance, box, seed, opt, options):
         if n < 2:
             raise ValueError(f"min_distance {distance:g} leaves {n} point(s) at rho <= {rho_max:g}")
         eps = min(0.5 * distance / fcc_radius(n, domain.volume) * (1 + 1e-9), rho_max)
+    n = check_count(n, 2)
+    check_poisson_memory(n)   # as a 2D set's: named before the darts
     t0 = time.perf_counter()
-    start = dart_throwing3(check_count(n, 2), domain, seed=seed)
+    start = dart_throwing3(n, domain, seed=seed)
     t_start = time.perf_counter() - t0
     res = relax_poisson3(start, eps, domain=domain, **options)
     d_min = float(2 * res.rho[-1] * fcc_radius(n, domain.volume))

@@ -77,3 +77,9 @@ def test_poisson_radius_names_the_size_and_the_flag(tmp_path, capsys):
     assert re.search(r"points need about [0-9.e+]+ GiB.*\(a larger --radius\)",
                      capsys.readouterr().err)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("asked", [dict(n=10**10), dict(min_distance=1e-4)])
+def test_a_3d_set_that_memory_cannot_hold_is_refused_before_the_work(asked):
+    with pytest.raises(MemoryLimit, match="points need about"):
+        poisson_disk(**asked, dim=3, backend="exact")
