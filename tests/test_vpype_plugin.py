@@ -12,7 +12,7 @@ import vpype_cli
 from click.testing import CliRunner
 from PIL import Image
 
-from diskpack_cl import sample_image_path
+from diskpack_cl import load_gray, sample_image_path, stipple, write_stipple
 from diskpack_cl.color import ColorOptions
 from diskpack_cl.export import WriteOptions
 from diskpack_cl.image import ToneOptions
@@ -156,3 +156,20 @@ def test_a_device_asked_for_that_does_not_exist_is_an_error(tmp_path, monkeypatc
     assert (f"{variable}=no-such-device: no OpenCL device matches 'no-such-device'"
             in result.output)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("field, value", [("black_point", 0.3), ("white_point", 0.6),
+                                          ("tone_gamma", 2.5)])
+def test_each_tone_option_reaches_the_stippling(tmp_path, field, value):
+    """The drawing of ``vpype diskpack`` with a tone option is that of the Python API's
+    stippling of the image with that tone, and not the default tone's."""
+    gray = load_gray(sample_image_path())
+    api = tmp_path / "api.svg"
+    write_stipple(api, stipple(ToneOptions(**{field: value}).adjust(gray), 150), width_mm=100)
+    expected = vpype.read_multilayer_svg(str(api), vpype.convert_length("0.1mm"))
+    doc = vpype_cli.execute(f"diskpack sample -n 150 --width-mm 100 {flag_name(field)} {value}")
+    plain = vpype_cli.execute("diskpack sample -n 150 --width-mm 100")
+    lines = [list(d.layers[1]) for d in (doc, expected, plain)]
+    assert len(lines[0]) == len(lines[1])
+    assert all(np.allclose(a, b) for a, b in zip(lines[0], lines[1]))
+    assert not all(a.shape == b.shape and np.allclose(a, b) for a, b in zip(lines[0], lines[2]))
