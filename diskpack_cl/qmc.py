@@ -131,18 +131,21 @@ class PoissonDisk(qmc.QMCEngine):
     def __init__(self, d, *, radius=0.05, hypersphere="volume", ncandidates=30, optimization=None,
                  rng=None, l_bounds=None, u_bounds=None, seed=None):
         seeding = _seeding(rng, seed)
+        # checked first in every dimension: scipy's engine fails on some of them later,
+        # with messages that name nothing ("negative dimensions are not allowed")
+        _check(d, radius, hypersphere, ncandidates)
+        lower, upper = _bounds(l_bounds, u_bounds, int(d))
         bridson = dict(radius=radius, hypersphere=hypersphere, ncandidates=ncandidates,
                        l_bounds=l_bounds, u_bounds=u_bounds, **seeding)
         # scipy's engine before the base class, so that it spawns from a Generator what a
-        # scipy engine made from it would (and checks the arguments as scipy does)
+        # scipy engine made from it would
         self._bridson = None if d in PACKED_DIMS else _scipy_engine(d, bridson)
         super().__init__(d=d, optimization=optimization, **seeding)
         # what scipy.integrate.qmc_quad passes to make more engines like this one
         self._init_quad = {"d": d, "radius": radius, "hypersphere": hypersphere,
                            "ncandidates": ncandidates, "optimization": optimization}
-        _check(radius, hypersphere, ncandidates)
         self.radius, self.hypersphere, self.ncandidates = radius, hypersphere, ncandidates
-        self.l_bounds, self.u_bounds = _bounds(l_bounds, u_bounds, int(d))
+        self.l_bounds, self.u_bounds = lower, upper
         # the disks of radius/2 lie in the box grown by radius/2 on every side
         grown = float(np.prod(self.u_bounds - self.l_bounds + radius))
         self.capacity = count_for_distance(radius, grown, dim=d) if d in PACKED_DIMS else 0
@@ -278,8 +281,11 @@ class PoissonDisk(qmc.QMCEngine):
         return 8 * np.sqrt(self.d) * np.spacing(largest)
 
 
-def _check(radius, hypersphere, ncandidates):
-    """scipy's message for a bad `hypersphere`; the other two fail only later in scipy."""
+def _check(d, radius, hypersphere, ncandidates):
+    """scipy's messages for a bad `d` and `hypersphere`; the other two fail only later in
+    scipy, or not at all."""
+    if not (np.issubdtype(type(d), np.integer) and d >= 0):
+        raise ValueError(f"d must be a non-negative integer value, got {d!r}")
     if hypersphere not in HYPERSPHERES:
         raise ValueError(f"{hypersphere!r} is not a valid hypersphere sampling method. "
                          f"It must be one of {set(HYPERSPHERES)!r}")

@@ -221,3 +221,16 @@ def test_filling_a_box_that_memory_cannot_hold_names_the_size(monkeypatch):
     assert len(eng.random(10)) == 10
     with pytest.raises(MemoryLimit, match=r"points need about 6\d.\d GiB.*a larger radius"):
         eng.fill_space()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(d=4, l_bounds=[-np.inf, 0, 0, 0]), "must be finite, got l_bounds"),
+    (dict(d=1, radius=np.nan), "radius must be positive and finite, got nan"),
+    (dict(d=4, radius=-1.0), "radius must be positive and finite, got -1.0"),
+    (dict(d=2.0), "d must be a non-negative integer value, got 2.0"),
+])
+def test_other_dimensions_are_checked_as_the_packed_ones(kwargs, match):
+    """scipy's engine, which draws them, failed on these with 'negative dimensions are not
+    allowed'."""
+    with pytest.raises(ValueError, match=match):
+        PoissonDisk(**kwargs)
