@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .color import linear_negative, linear_to_srgb, srgb_to_linear
+from .color import check_paper, linear_negative, linear_to_srgb, palette_of, srgb_to_linear
 from .drawing import (FRAME_INK, MM_PER_INCH, PEN_LIFT_S, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
                       place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
                       svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
 from .io import atomic_write
-from .overlap import cap_radii, ink_figures
+from .overlap import cap_radii, check_apart, ink_figures
+from .readers import check_stippling
 
 __all__ = ["layer_order", "on_black", "write_color_svg", "write_color_png", "write_color_page_png"]
 
@@ -65,21 +66,28 @@ def on_black(result, invert=False):
     Raises
     ------
     ValueError
-        `invert` for pens separated for white paper.
+        `invert` for pens separated for white paper, or black paper for the pens of a
+        white-paper palette (``cmyk``, ``cmy``: :func:`~diskpack_cl.color.check_paper`).
 
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> on_black(SimpleNamespace(params={"invert": True})), on_black(SimpleNamespace(params={}), True)
+    >>> light = dict(names=("white",), colors=np.ones((1, 3)))
+    >>> on_black(SimpleNamespace(params={"invert": True}, **light)), on_black(SimpleNamespace(params={}, **light), True)
     (True, True)
     """
     made = (getattr(result, "params", None) or {}).get("invert")
-    if made is None:
-        return bool(invert)
-    if invert and not made:
+    if invert and made is not None and not made:
         raise ValueError("invert: this colour stippling's pens were separated for white paper; "
                          "stipple it with invert for light pens on black paper")
-    return bool(made)
+    black = bool(invert if made is None else made)
+    if black:   # a file that does not say its paper: its pens may
+        try:
+            check_paper(palette_of(result.names, result.colors), True)
+        except ValueError as exc:
+            raise ValueError(f"invert: black paper for pens {', '.join(result.names)}: "
+                             f"{exc}") from None
+    return black
 
 
 def _radii(result, scale, dots, dot_mm, radius_scale):
@@ -150,14 +158,16 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     """
     from .multipen import hex_color
 
+    check_stippling(result, path, packing=False)
     black = on_black(result, invert)
     W, H = float(result.width), float(result.height)
     lay, pm, rad, drawn, moved = _drawn_dots(
         result, width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
         radius_scale=radius_scale, dots=dots, page=page, landscape=landscape,
         margin_mm=margin_mm, plotter=plotter, pen_mm=pen_mm, no_overlap=no_overlap)
-    ink = ink_figures(pm, rad, np.asarray(result.radii) * lay["scale"], pen=pen_mm,
-                      no_overlap=no_overlap)
+    # the figures of the dots drawn (their radii on the SVG's grid), or of those capped
+    ink = ink_figures(pm, rad if no_overlap else drawn, np.asarray(result.radii) * lay["scale"],
+                      pen=pen_mm, no_overlap=no_overlap)
     rad = drawn
     order = layer_order(result.names, result.colors, pen_order, black)
     meta = dict(svg_meta(result, lay, rad, pen_mm, black, result.names[order[0]]),
@@ -213,6 +223,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     ...     im.mode, im.size
     ('RGB', (64, 48))
     """
+    check_stippling(result, path, packing=False)
     black = on_black(result, invert)
     ow, oh = max(1, round(result.width * scale)), max(1, round(result.height * scale))
     p = np.asarray(result.points) * scale
@@ -220,6 +231,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
            else _radii(result, scale, dots, None, radius_scale))
     if no_overlap:
         rad = cap_radii(rad, np.asarray(result.radii) * scale)
+        check_apart(p, rad, np.asarray(result.radii) * scale, pen=pen_px, unit="px")
     if pen_px is not None:   # what the pen draws: at least a touch a pen wide
         rad = np.maximum(rad, 0.5 * pen_px)
     check_fit(rad, (ow, oh), pen_px, unit="px")
@@ -265,6 +277,7 @@ def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert
     >>> info["width"], info["height"], round(info["dpi"], 1)
     (296, 420, 50.8)
     """
+    check_stippling(result, path, packing=False)
     black = on_black(result, invert)
     lay, pm, _, rad, _ = _drawn_dots(result, **drawing)
     line = page_frame(lay, px_per_mm)

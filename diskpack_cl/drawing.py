@@ -22,7 +22,7 @@ __all__ = [
     "DEFAULT_MARGIN_MM", "EDGE_MM", "FRAME_INK", "MM_PER_INCH", "PAPERS", "PEN_LIFT_S", "PLOT_SPEED_MM_S",
     "LONG_PLOT_S", "TOUCH_MM", "CROWDED_RATIO", "check_fit", "check_size", "crowded_dots",
     "long_plot", "ink_coverage", "inside_page", "mm_per_px", "paper_size",
-    "page_frame", "pen_rings", "place_dots", "plot_time", "save_png", "svg_dots", "svg_head", "svg_layout", "svg_meta", "svg_size",
+    "on_grid", "page_frame", "pen_rings", "place_dots", "plot_time", "save_png", "svg_dots", "svg_head", "svg_layout", "svg_meta", "svg_size",
     "xml_attr", "xml_text",
 ]
 
@@ -111,6 +111,72 @@ def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
     if not dpi > 0:
         raise ValueError(f"dpi must be > 0, got {dpi}")
     return MM_PER_INCH / dpi
+
+
+# float noise of a value read back and written again (mm): within it, a radius already on the
+# 4-decimal grid stays there, so that an SVG read back writes again identically
+_NOISE_MM = 1e-12
+
+
+def on_grid(centres, rad):
+    """Centres and radii (mm) as the SVG writes them: what is drawn, and read back.
+
+    The centres rounded to the grid, each radius rounded inward by what its
+    centre moved (:func:`svg_radii`); dots of one size keep one size (they
+    read back at the metadata's ``dot_mm``, not at the radius written).
+
+    Examples
+    --------
+    >>> c, r = on_grid(np.array([[1.00003, 2.0], [3.0, 2.0]]), np.array([0.5, 0.7]))
+    >>> c.tolist(), r.tolist()
+    ([[1.0, 2.0], [3.0, 2.0]], [0.4999, 0.7])
+    """
+    c = np.asarray(centres, np.float64)
+    grid = _grid(c).reshape(c.shape)
+    moved = np.hypot(*(grid - c).T)
+    if len(rad) and np.all(rad == rad[0]):
+        moved = np.zeros(len(rad))
+    return grid, svg_radii(rad, moved)
+
+
+def svg_radii(rad, moved=0.0):
+    """Radii (mm) as the SVG writes them: rounded inward on its 4-decimal grid.
+
+    Each is less than `rad` by at least `moved` (how far rounding its centre
+    to the grid moved it), so that dots apart stay apart and inside the
+    picture once read back (:func:`diskpack_cl.read_stipple`): a packing
+    drawn with its disks reads back certified. A value on the grid (an SVG
+    read back) stays as it is.
+
+    Raises
+    ------
+    ValueError
+        A radius this leaves at or below 0: the dots are finer than the SVG draws.
+
+    Examples
+    --------
+    >>> svg_radii(np.array([0.25, 1.23456])).tolist(), svg_radii(np.array([0.25]), 3e-5).tolist()
+    ([0.25, 1.2345], [0.2499])
+    """
+    out = _inward(rad, moved)
+    if not np.all(out > 0):
+        raise ValueError(f"dots {2 * float(np.min(rad)):.3g} mm wide are finer than the SVG's "
+                         f"0.0001 mm: give larger dots (--dot-mm, --radius-scale) or a larger "
+                         f"picture (--width-mm, --height-mm, --dpi)")
+    return out
+
+
+def _inward(rad, moved=0.0):
+    """`rad` - `moved` on the grid, rounded down (to the nearest, then one step in if that
+    went out)."""
+    want = np.asarray(rad, np.float64) - moved
+    out = _grid(want)
+    return np.where(out > want + _NOISE_MM, _grid(out - 1e-4), out)
+
+
+def _grid(v):
+    """`v` (mm) as the SVG writes it and a reader reads it back."""
+    return _fmt(v).astype(np.float64)
 
 
 def _fmt(v):
@@ -234,15 +300,16 @@ def plot_time(pen_downs, draw_mm, travel_mm, *, speed_mm_s=PLOT_SPEED_MM_S,
     return (draw_mm + travel_mm) / speed_mm_s + pen_downs * pen_lift_s
 
 
-def pen_rings(rad, pen):
+def pen_rings(rad, pen, moved=0.0):
     """Ring radii (mm) that fill dots of radius ``rad`` with a pen ``pen`` wide.
 
     A ring of radius rho inks [rho - pen/2, rho + pen/2]: the outermost is
     at ``rad - pen/2``, each next one a pen width further in, the innermost
     at least ``pen/2`` (it inks the centre; an outermost ring below ``pen/2``
     inks it already, and stays where it is: raised, it would ink past
-    ``rad``). Returns an (n, m) array, nan where a dot has fewer rings; a dot
-    not wider than the pen has none (it is one pen touch).
+    ``rad``). The outermost is rounded inward as the SVG writes it
+    (:func:`svg_radii`, `moved` as there). Returns an (n, m) array, nan where a dot has fewer
+    rings; a dot not wider than the pen has none (it is one pen touch).
 
     Examples
     --------
@@ -251,7 +318,7 @@ def pen_rings(rad, pen):
     """
     m = np.where(2 * rad <= pen, 0, np.ceil(rad / pen - 1e-9)).astype(np.int64)
     j = np.arange(max(int(m.max(initial=0)), 1))
-    outer = np.round(rad - 0.5 * pen, 4)  # as written: the rings follow from it when read back
+    outer = _inward(rad - 0.5 * pen, moved)  # as written: the rings follow from it when read back
     # the inner rings at least pen/2; the outermost at least what 4 decimals write
     least = np.where(j == 0, 1e-4, 0.5 * pen)
     rho = np.maximum(outer[:, None] - j[None, :] * pen, least[None, :])
@@ -274,6 +341,7 @@ def svg_dots(c, rad, pen):
     """
     x, y = c[:, 0], c[:, 1]
     if pen is None:
+        rad = svg_radii(rad)
         circles = _join('    <circle cx="', _fmt(x), '" cy="', _fmt(y), '" r="', _fmt(rad), '"/>\n')
         return "".join(circles.tolist()), float(2 * np.pi * rad.sum())
     rho = pen_rings(rad, pen)
@@ -394,20 +462,28 @@ def inside_page(c, rad, wmm, hmm, pen=None):
 
     A dot's ink reaches its radius, or with a `pen` wider than the dot
     (one pen touch) half the pen: such a dot keeps half the pen from the
-    edge, so that no ink crosses it.
+    edge, and the touch's length and the rounding of its start besides, so
+    that no ink crosses it. A dot drawn by its outline needs no more: it is
+    written inward (:func:`svg_radii`), so a dot inside stays inside and in
+    place (a certified packing reads back certified).
 
     Examples
     --------
     >>> centres, radii, moved = inside_page(np.array([[0.0, 1.0]]), np.array([0.5]), 4.0, 2.0)
     >>> centres.tolist(), moved
-    ([[0.5052, 1.0]], 1)
+    ([[0.5, 1.0]], 1)
     >>> inside_page(np.array([[0.2, 1.0]]), np.array([0.1]), 4.0, 2.0, pen=1.0)[0].tolist()
     [[0.5052, 1.0]]
     """
     most = 0.5 * min(wmm, hmm) - 2 * EDGE_MM - TOUCH_MM
+    if not most > 0:
+        raise ValueError(f"the picture ({wmm:.3g} x {hmm:.3g} mm) is too small to draw: its "
+                         f"sides must be more than {2 * (2 * EDGE_MM + TOUCH_MM):g} mm "
+                         f"(--width-mm, --height-mm, --dpi)")
     rad = np.minimum(rad, most)
+    touch = np.zeros(len(rad), bool) if pen is None else 2 * rad <= pen
     ink = rad if pen is None else np.minimum(np.maximum(rad, 0.5 * pen), most)
-    ext = ink + EDGE_MM + 0.5 * TOUCH_MM
+    ext = ink + np.where(touch, EDGE_MM + 0.5 * TOUCH_MM, 0.0)
     inside = np.column_stack([np.clip(c[:, 0], ext, wmm - ext), np.clip(c[:, 1], ext, hmm - ext)])
     moved = int(np.count_nonzero(np.any(inside != c, axis=1)))
     return inside, rad, moved
@@ -419,7 +495,9 @@ def place_dots(points, rad, packing, lay, *, no_overlap=False, pen=None):
     ``points`` are in image pixels, ``rad`` and ``packing`` (the drawn and
     the packing radii) in mm, ``lay`` is :func:`svg_layout`'s; with
     ``no_overlap`` each drawn radius is at most its packing radius
-    (:func:`diskpack_cl.overlap.cap_radii`). Dots whose ink (with a `pen`
+    (:func:`diskpack_cl.overlap.cap_radii`), and dots that would still touch
+    (a pen wider than the disks) are refused
+    (:func:`diskpack_cl.overlap.check_apart`). Dots whose ink (with a `pen`
     wider than the dot, half the pen's width around its centre) would stick
     out of the picture move inward (:func:`inside_page`): the ink stays in
     the picture, and so inside the margins and the plotter's area.
@@ -427,8 +505,9 @@ def place_dots(points, rad, packing, lay, *, no_overlap=False, pen=None):
     Returns
     -------
     centres : (n, 2) array
-        On the page, mm.
+        On the page, mm, as the SVG writes them (:func:`on_grid`).
     radii : (n,) array
+        As the SVG writes them.
     moved : int
         How many dots moved inward.
 
@@ -439,12 +518,15 @@ def place_dots(points, rad, packing, lay, *, no_overlap=False, pen=None):
     >>> centres.tolist(), moved
     ([[74.0, 105.0]], 0)
     """
-    from .overlap import cap_radii  # its KD-tree is not loaded at start-up
+    from .overlap import cap_radii, check_apart  # its KD-tree is not loaded at start-up
 
     pm, drawn, moved = inside_page(points * lay["scale"],
                                    cap_radii(rad, packing) if no_overlap else rad,
                                    *lay["picture"], pen)
-    return pm + lay["offset"], drawn, moved
+    pm, drawn = on_grid(pm + lay["offset"], drawn)
+    if no_overlap:
+        check_apart(pm, drawn, packing, pen=pen)
+    return pm, drawn, moved
 
 
 #: How dark (as ink coverage) the margin line of :func:`page_frame` is.

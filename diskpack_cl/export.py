@@ -24,9 +24,9 @@ from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, FRAME_INK, PAPERS, PEN_LIFT_
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.memory import check_png_memory
 from diskpack_cl.options import OptionConflict, check_fields, option
-from diskpack_cl.overlap import cap_radii, ink_figures
+from diskpack_cl.overlap import cap_radii, check_apart, ink_figures
 from diskpack_cl.pen_path import PEN_PATHS, TWO_OPT_WORK, path_travel, pen_path_order
-from diskpack_cl.readers import CSV_TAG, csv_name, read_stipple
+from diskpack_cl.readers import CSV_TAG, check_stippling, csv_name, read_stipple
 
 __all__ = [
     "WRITERS",
@@ -378,14 +378,17 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     >>> info["moved_inside"], info["pen_touches"]
     (1, 0)
     >>> [line.split()[:5] for line in Path(out).read_text().splitlines() if "<path" in line][0]
-    ['<path', 'd="M', '1.7552,8.0000', 'a', '0.7500,0.7500']
+    ['<path', 'd="M', '1.7500,8.0000', 'a', '0.7500,0.7500']
     """
+    check_stippling(result, path, packing=False)
     p, r, W, H = _arrays(result)
     lay, pm, rad, drawn, moved = _drawn_dots(
         result, width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
         radius_scale=radius_scale, dots=dots, page=page, landscape=landscape,
         margin_mm=margin_mm, plotter=plotter, pen_mm=pen_mm, no_overlap=no_overlap)
-    ink = ink_figures(pm, rad, r * lay["scale"], pen=pen_mm, no_overlap=no_overlap)
+    # the figures of the dots drawn (their radii on the SVG's grid), or of those capped
+    ink = ink_figures(pm, rad if no_overlap else drawn, r * lay["scale"], pen=pen_mm,
+                      no_overlap=no_overlap)
     rad = drawn
     order, before, after = pen_path_order(pm, method=pen_path)
     meta = svg_meta(result, lay, rad, pen_mm, invert, layer)
@@ -503,6 +506,7 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
     ...     im.size
     (16, 8)
     """
+    check_stippling(result, path, packing=False)
     p, r, W, H = _arrays(result)
     if not scale > 0:
         raise ValueError(f"scale must be > 0, got {scale}")
@@ -518,6 +522,7 @@ def write_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, invert=
         rad = _dot_radii(result, r, scale, dots, radius_scale)
     if no_overlap:
         rad = cap_radii(rad, r * scale)
+        check_apart(p * scale, rad, r * scale, pen=pen_px, unit="px")
     if pen_px is not None:
         if not pen_px > 0:
             raise ValueError(f"pen_px must be > 0, got {pen_px}")
@@ -568,6 +573,7 @@ def write_page_png(path, result, *, scale=None, aa=4, progress=None, invert=Fals
     >>> info["width"], info["height"], round(info["dpi"], 1)
     (80, 40, 101.6)
     """
+    check_stippling(result, path, packing=False)
     lay = svg_layout(float(result.width), float(result.height),
                      **{k: v for k, v in drawing.items() if k in LAYOUT})
     ppm = _page_px_per_mm(lay, scale)
@@ -630,6 +636,7 @@ def write_npz(path, result):
     >>> np.load(path)["radii"].tolist()
     [0.5, 0.5]
     """
+    check_stippling(result, path, packing=True)
     p, r, W, H = _arrays(result)
     data = {
         "points": p,
@@ -655,9 +662,11 @@ def _pen_fields(result):
     """A colour stippling's ``pen``, ``pen_names``, ``pen_colors``, ``pen_radius`` (else none)."""
     if getattr(result, "pen", None) is None:
         return {}
-    return {"pen": np.asarray(result.pen, np.int64), "pen_names": np.asarray(result.names, str),
-            "pen_colors": np.asarray(result.colors, np.float64),
-            "pen_radius": np.asarray(result.pen_radius, np.float64)}
+    fields = {"pen": np.asarray(result.pen, np.int64), "pen_names": np.asarray(result.names, str),
+              "pen_colors": np.asarray(result.colors, np.float64)}
+    if getattr(result, "pen_radius", None) is not None:   # not in a stippling read from an .svg
+        fields["pen_radius"] = np.asarray(result.pen_radius, np.float64)
+    return fields
 
 
 def write_csv(path, result):
@@ -680,12 +689,16 @@ def write_csv(path, result):
     >>> path.read_text().splitlines()[1:]
     ['x,y,r', '1,1,0.5', '3,1,0.5']
     """
+    check_stippling(result, path, packing=True)
     p, r, W, H = _arrays(result)
     tone = getattr(result, "tone_radius", None)
+    color = getattr(result, "pen", None) is not None
+    invert = bool((getattr(result, "params", None) or {}).get("invert"))
     meta = {"width": int(W), "height": int(H), "k": float(getattr(result, "k", np.nan)),
             "tone_radius": None if tone is None else float(tone),
-            # the paper it was made for: an export of the file draws on it (as of an .npz)
-            "invert": 1 if (getattr(result, "params", None) or {}).get("invert") else None}
+            # the paper it was made for: an export of the file draws on it (as of an .npz);
+            # a colour stippling's pens were separated for one paper, so it always says
+            "invert": int(invert) if color or invert else None}
     tag = " ".join(f"{key}={v!r}" for key, v in meta.items() if v is not None and v == v)
     with atomic_write(path, "w") as fh:
         if getattr(result, "pen", None) is not None:
@@ -703,6 +716,8 @@ def _write_pen_csv(fh, tag, p, r, result):
 
     coded = [csv_name(name) for name in result.names]
     pens = ";".join(f"{name}:{hex_color(c)}" for name, c in zip(coded, result.colors))
+    if getattr(result, "pen_radius", None) is not None:   # each pen's tone dots' size
+        pens += " pen_radius=" + ";".join(f"{v:.17g}" for v in result.pen_radius)
     rows = np.char.mod("%.17g", np.column_stack([p, r])).tolist()
     names = np.asarray(coded)[np.asarray(result.pen)].tolist()
     fh.write(f"{tag} pens={pens}\nx,y,r,pen\n"

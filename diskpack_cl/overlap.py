@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["touching", "cap_radii", "ink_figures", "median_spacing"]
+__all__ = ["touching", "cap_radii", "check_apart", "ink_figures", "median_spacing"]
 
 # the SVG's coordinates have 4 decimals (mm): a capped dot keeps this far inside its disk
 _ROUNDING_MM = 2e-4
@@ -73,6 +73,54 @@ def cap_radii(radii, packing):
     """
     packing = np.asarray(packing, np.float64)
     return np.minimum(radii, np.maximum(packing - _ROUNDING_MM, 0.5 * packing))
+
+
+def check_apart(centres, radii, packing, *, pen=None, unit="mm"):
+    """Refuse drawn dots that touch where ``no_overlap`` promised they do not.
+
+    What is checked is what is drawn: each dot's ink reaches its drawn
+    radius (already capped, :func:`cap_radii`), and at least half the pen;
+    dots whose inks touch exactly count as touching.
+
+    Parameters
+    ----------
+    centres : (n, 2) array
+    radii : (n,) array
+        Drawn radii after the cap, in `unit`.
+    packing : (n,) array
+        The radii they were capped at, in `unit`.
+    pen : float, optional
+        Pen width, in `unit`.
+
+    Raises
+    ------
+    ValueError
+        Two dots touch: the message says why (a pen wider than the packing
+        disks, or disks that overlap: not a packing) and what to change.
+
+    Examples
+    --------
+    >>> c = np.array([[0.0, 0.0], [1.0, 0.0]])
+    >>> check_apart(c, np.full(2, 0.4), np.full(2, 0.5), pen=0.5)
+    >>> check_apart(c, np.full(2, 0.4), np.full(2, 0.5), pen=1.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: no_overlap (--no-overlap) cannot hold: the pen (1 mm) is wider than the smallest packing disk (1 mm across), and 2 of the 2 drawn dots would touch: give a pen narrower than the packing disks, a larger picture (--width-mm) or fewer dots
+    """
+    radii = np.asarray(radii, np.float64)
+    ink = radii if pen is None else np.maximum(radii, 0.5 * float(pen))
+    count = int(np.count_nonzero(touching(centres, ink)))
+    if not count:
+        return
+    head = "no_overlap (--no-overlap) cannot hold: "
+    if pen is None or not np.any(0.5 * float(pen) > radii):   # the disks: not a packing
+        raise ValueError(f"{head}{count} of the {len(radii)} drawn dots would touch although each "
+                         f"is at most its disk: the disks overlap (an .svg holds the drawn "
+                         f"dots, not the packing disks: export the .npz or .csv)")
+    raise ValueError(f"{head}the pen ({float(pen):.3g} {unit}) is wider than the smallest packing "
+                     f"disk ({2 * float(np.min(packing)):.3g} {unit} across), and {count} of the "
+                     f"{len(radii)} drawn dots would touch: give a pen narrower than the packing "
+                     f"disks, a larger picture (--width-mm) or fewer dots")
 
 
 def ink_figures(centres, radii, packing, *, pen=None, no_overlap=False):

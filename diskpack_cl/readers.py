@@ -30,11 +30,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from diskpack_cl.io import load_npz
-from diskpack_cl.color import parse_pens
+from diskpack_cl.color import check_paper, parse_pens, palette_of
 from diskpack_cl.domain import Domain
-from diskpack_cl.geometry import certify_disks
+from diskpack_cl.geometry import Certificate, certify_disks
 
-__all__ = ["CSV_TAG", "csv_name", "read_stipple"]
+__all__ = ["CSV_TAG", "check_stippling", "csv_name", "read_stipple"]
 
 #: The first line of a stippling CSV starts with this (then ``key=value`` fields).
 CSV_TAG = "# diskpack_cl stippling "
@@ -142,6 +142,48 @@ def read_stipple(path):
         raise ValueError(_one_line(text)) from None
 
 
+def check_stippling(result, path, *, packing):
+    """Refuse to write what :func:`read_stipple` would refuse to read: the writers' check.
+
+    The rules of the module docstring, on a result about to be written to
+    `path`; with `packing` (a format that holds the packing: ``.npz``,
+    ``.csv``) the disks are certified too, unless the result carries its own
+    valid :class:`~diskpack_cl.geometry.Certificate` (what
+    :func:`~diskpack_cl.stipple` returns: certified as it was made).
+
+    Raises
+    ------
+    ValueError
+        One line: `path`, that it is not written, the row or field and the rule.
+
+    Examples
+    --------
+    >>> res = SimpleNamespace(points=np.array([[2.0, 3.0]]), radii=np.array([-1.0]),
+    ...                       width=8, height=6)
+    >>> check_stippling(res, "s.svg", packing=False)
+    Traceback (most recent call last):
+    ...
+    ValueError: s.svg: not written (read_stipple would refuse it): row 0: the radius must be > 0, got -1
+    """
+    cert = getattr(result, "certificate", None)
+    trusted = isinstance(cert, Certificate) and cert.valid
+    pens = {} if getattr(result, "pen", None) is None else {
+        "pen": np.asarray(result.pen), "names": tuple(result.names), "colors": result.colors,
+        "pen_radius": getattr(result, "pen_radius", None)}
+    tone, base = getattr(result, "tone_radius", None), getattr(result, "base_radii", None)
+    try:
+        with np.errstate(all="ignore"):
+            _checked(_stippling(result.points, result.radii, result.width, result.height,
+                                k=float(getattr(result, "k", math.nan)),
+                                tone_radius=None if tone is None else float(tone),
+                                base_radii=None if base is None else np.asarray(base),
+                                params=getattr(result, "params", None) or {}, **pens),
+                     packing=packing and not trusted)
+    except _Refused as exc:
+        raise ValueError(_one_line(f"{path}: not written (read_stipple would refuse it): "
+                                   f"{exc}")) from None
+
+
 def _one_line(text):
     return " ".join(str(text).split())
 
@@ -149,7 +191,9 @@ def _one_line(text):
 def _stippling(points, radii, width, height, **extra):
     """The namespace :func:`read_stipple` returns (checked by :func:`_checked`)."""
     fields = dict(k=float("nan"), tone_radius=None, base_radii=None, certificate=None, params={})
-    fields.update({key: v for key, v in extra.items() if v is not None})
+    # None keeps a default; a field without one (a colour stippling's pen_radius) stays None,
+    # so that every colour stippling has the same attributes whatever file it came from
+    fields.update({key: v for key, v in extra.items() if v is not None or key not in fields})
     return SimpleNamespace(points=_numbers(points, "points"), radii=_numbers(radii, "radii"),
                            width=_side(width, "width"), height=_side(height, "height"), **fields)
 
@@ -213,8 +257,9 @@ def _check_pens(res):
     if len(set(res.names)) != m:
         raise _Refused(f"pen names must differ, got {', '.join(res.names)}")
     colors = np.asarray(res.colors)
-    if colors.shape != (m, 3) or not np.all((colors >= 0) & (colors <= 1)):
-        raise _Refused(f"pen_colors must be {m} sRGB colours in [0, 1], got shape {colors.shape}")
+    if colors.shape != (m, 3):
+        raise _Refused(f"pen_colors must be {m} sRGB colours, got shape {colors.shape}")
+    _first(~((colors >= 0) & (colors <= 1)).all(axis=1), "pen colour must be in [0, 1]", colors)
     pen = np.asarray(res.pen)
     if pen.shape != res.radii.shape:
         raise _Refused(f"pen must hold one index a dot ({len(res.radii)}), got {pen.shape}")
@@ -223,7 +268,14 @@ def _check_pens(res):
     if pen_radius is not None:
         pr = np.asarray(pen_radius)
         if pr.shape != (m,) or not np.all(np.isfinite(pr) & (pr > 0)):
-            raise _Refused(f"pen_radius must be {m} finite numbers > 0")
+            raise _Refused(f"pen_radius must be {m} finite numbers > 0, got "
+                           f"{', '.join(f'{v:g}' for v in np.ravel(pr)[:8])}")
+    if res.params.get("invert"):
+        try:   # a named palette's pens were separated for white paper, not for black
+            check_paper(palette_of(res.names, colors), True)
+        except ValueError as exc:
+            raise _Refused(f"made for black paper (invert) with pens {', '.join(res.names)}, "
+                           f"but {exc}") from None
 
 
 def _certify(p, r, width, height):
@@ -283,11 +335,14 @@ def _read_pens(z):
     pen = np.asarray(z["pen"])
     if pen.dtype.kind not in "iu":
         raise _Refused(f"pen must hold integer indices, got {pen.dtype}")
-    names = np.asarray(z.get("pen_names", np.array([], str)))
+    missing = [key for key in ("pen_names", "pen_colors") if key not in z]
+    if missing:
+        raise _Refused(f"pen is given without {' and '.join(missing)}")
+    names = np.asarray(z["pen_names"])
     if names.dtype.kind != "U" or names.ndim != 1:
         raise _Refused("pen_names must be a list of names")
     return {"pen": pen.astype(np.int64), "names": tuple(str(v) for v in names),
-            "colors": _numbers(z.get("pen_colors", np.zeros((0, 3))), "pen_colors"),
+            "colors": _numbers(z["pen_colors"], "pen_colors"),
             "pen_radius": _numbers(z["pen_radius"], "pen_radius") if "pen_radius" in z else None}
 
 
@@ -298,7 +353,8 @@ def _read_csv(path):
     meta = _csv_tag(lines.pop(0)[len(CSV_TAG):]) if lines and lines[0].startswith(CSV_TAG) else {}
     if meta.get("invert", 0) not in (0, 1):
         raise _Refused(f"first line: invert must be 0 or 1, got {meta['invert']:g}")
-    meta["params"] = {"invert": True} if meta.pop("invert", 0) == 1 else {}
+    # the paper it was made for, when it says (a colour stippling always does)
+    meta["params"] = {"invert": meta.pop("invert") == 1} if "invert" in meta else {}
     pens = meta.pop("pens", None)
     if pens is not None:
         return _read_pen_csv(lines, pens, meta)
@@ -320,7 +376,7 @@ def _csv_tag(tag):
         key, sep, value = field.partition("=")
         if not sep:
             raise _Refused(f"first line: field {field[:40]!r} is not key=value")
-        if key == "pens":
+        if key in ("pens", "pen_radius"):   # lists, read with the pens
             meta[key] = value
             continue
         try:
@@ -359,12 +415,26 @@ def _read_pen_csv(lines, pens, meta):
     index = {name: i for i, name in enumerate(names)}
     data = _csv_table([row[0] for row in rows], 3, "x,y,r,pen")
     pen = np.array([index.get(unquote(row[1].strip()), -1) for row in rows], np.int64)
-    _first(pen < 0, "the pen is not one of the first line's pens", data[:, 2])
+    if np.any(pen < 0):
+        i = int(np.argmax(pen < 0))
+        raise _Refused(f"row {i}: the pen must be one of the first line's pens "
+                       f"({', '.join(coded)}), got {rows[i][1].strip()[:40]!r}")
     if "width" not in meta or "height" not in meta:
         raise _Refused("the first line must give width= and height=")
     return _stippling(data[:, :2], data[:, 2], meta["width"], meta["height"], k=meta.get("k"),
                       tone_radius=meta.get("tone_radius"), params=meta["params"], pen=pen, names=names,
-                      colors=colors)
+                      colors=colors, pen_radius=_pen_radius_field(meta.get("pen_radius")))
+
+
+def _pen_radius_field(text):
+    """The first line's ``pen_radius=R;...`` (each pen's tone radius), None when absent."""
+    if text is None:
+        return None
+    try:
+        return np.array([float(v) for v in text.split(";")])
+    except ValueError:
+        raise _Refused(f"first line: pen_radius must be numbers separated by ';', got "
+                       f"{text[:40]!r}") from None
 
 
 # ------------------------------------------------------------------------------ .svg

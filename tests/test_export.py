@@ -372,3 +372,91 @@ def test_the_size_conflict_is_one_rule():
     assert str(by_options.value) == str(by_layout.value)
     assert by_options.value.render(lambda n: "--" + n.replace("_", "-")) == \
         "give the SVG size either by --width-mm/--height-mm or by --dpi, not both"
+
+
+# -- every route reads back (issue 48) ---------------------------------------
+
+def _colour(result, names=("cyan", "black"), colors=((0, 1, 1), (0, 0, 0)), invert=False):
+    res = SimpleNamespace(**vars(result))
+    res.pen = np.arange(len(result.points)) % 2
+    res.names, res.colors = names, np.array(colors, float)
+    res.pen_radius = np.array([0.5, 0.6])
+    res.params = {"invert": invert}
+    return res
+
+
+@pytest.mark.parametrize("ext", ["csv", "svg"])
+def test_a_colour_stippling_read_back_writes_to_npz(tmp_path, result, ext):
+    """A colour .csv or .svg exported to .npz (it failed: AttributeError 'pen_radius')."""
+    src = tmp_path / f"a.{ext}"
+    write_stipple(src, _colour(result), **({"dots": "packing"} if ext == "svg" else {}))
+    write_npz(tmp_path / "b.npz", read_stipple(src))
+    back = read_stipple(tmp_path / "b.npz")
+    assert back.names and sorted(back.names) == ["black", "cyan"] and len(back.pen) == 200
+    assert (back.pen_radius is None) == (ext == "svg")   # an .svg does not hold it
+
+
+@pytest.mark.parametrize("ext", ["csv", "svg", "npz"])
+def test_white_paper_pens_are_not_drawn_on_black_from_any_file(tmp_path, result, ext):
+    """export cmyk.csv --invert drew the white-paper pens on black with exit 0, where the
+    same stippling as .npz or .svg was refused: every route refuses it."""
+    from diskpack_cl.cli import main
+
+    src = tmp_path / f"cmyk.{ext}"
+    cmyk = _colour(result, ("yellow", "cyan", "magenta", "black"),
+                   ((1, 1, 0), (0, 1, 1), (1, 0, 1), (0, 0, 0)))
+    cmyk.pen, cmyk.pen_radius = np.arange(200) % 4, np.full(4, 0.5)
+    write_stipple(src, cmyk, **({"dots": "packing"} if ext == "svg" else {}))
+    for out in ("x.svg", "x.png"):
+        assert main(["export", str(src), "-o", str(tmp_path / out), "--invert", "-q"]) == 1
+        assert not (tmp_path / out).exists()
+    with pytest.raises(ValueError, match="white paper"):
+        write_stipple(tmp_path / "y.svg", read_stipple(src), invert=True)
+
+
+def test_an_old_colour_csv_on_black_paper_is_refused_by_its_pens(tmp_path, result):
+    """A CSV that does not say its paper (written before it did): CMYK pens are for white."""
+    from diskpack_cl.color_export import on_black
+
+    cmyk = _colour(result, ("yellow", "cyan", "magenta", "black"),
+                   ((1, 1, 0), (0, 1, 1), (1, 0, 1), (0, 0, 0)))
+    cmyk.params = {}
+    with pytest.raises(ValueError, match="cmyk is for white paper"):
+        on_black(cmyk, True)
+    assert on_black(cmyk, False) is False
+    light = _colour(result, ("white", "red"), ((1, 1, 1), (1, 0, 0)))
+    light.params = {}
+    assert on_black(light, True) is True
+
+
+def test_a_packing_svg_reads_back_certified(tmp_path):
+    """Rounding to the SVG's 4 decimals never makes dots overlap: two disks that touch,
+    whose centres round towards each other and whose radii round up to the nearest, were
+    read back overlapping by 1e-4 mm; the radii are now rounded inward."""
+    r = 0.999959999
+    res = SimpleNamespace(points=np.array([[1.00006, 1.5], [1.00006 + 2 * r, 1.5]]),
+                          radii=np.array([r, r * (1 - 1e-12)]), width=5, height=3)
+    assert certify_disks(res.points, res.radii, Domain.rect(5, 3)).valid
+    svg = tmp_path / "a.svg"
+    write_stipple(svg, res, dpi=25.4, dots="packing")   # 1 px = 1 mm
+    back = read_stipple(svg)
+    assert np.all(back.radii <= res.radii)
+    write_npz(tmp_path / "a.npz", back)
+    assert len(read_stipple(tmp_path / "a.npz").points) == 2   # certified again as it is read
+
+
+def test_a_picture_too_small_to_draw_is_refused(tmp_path, result):
+    """--width-mm 1e-9 wrote circles with negative radii."""
+    with pytest.raises(ValueError, match=r"the picture \(1e-09 x 7.5e-10 mm\) is too small"):
+        write_svg(tmp_path / "a.svg", result, width_mm=1e-9)
+    with pytest.raises(ValueError, match="finer than the SVG's 0.0001 mm"):
+        write_svg(tmp_path / "a.svg", result, width_mm=1, dots="packing", radius_scale=1e-3)
+    assert not (tmp_path / "a.svg").exists()
+
+
+def test_a_pen_as_wide_as_the_picture_is_refused(tmp_path, result):
+    """A pen exactly as wide as the picture's smaller side puts its ink off the picture."""
+    with pytest.raises(ValueError, match=r"the pen \(60 mm\) is as wide as the 80 x 60 mm"):
+        write_svg(tmp_path / "a.svg", result, dpi=25.4, pen_mm=60.0)
+    with pytest.raises(ValueError, match=r"the pen \(120 px\) is as wide as the 160 x 120 px"):
+        write_png(tmp_path / "a.png", result, scale=2.0, pen_px=120.0)

@@ -60,3 +60,42 @@ def test_with_no_overlap_no_two_drawn_dots_touch(stippling, capsys):
     assert len(centres) == 3000
     assert _touching_share(centres, ink) == 0
     assert plot["touching_share"] == 0 and plot["touching_share_uncapped"] > 0.2
+
+
+def test_dots_that_exactly_touch_count_as_touching():
+    """A gap of exactly 0 is touching: for the share reported and for --no-overlap."""
+    from diskpack_cl.overlap import check_apart, touching
+
+    centres = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])
+    assert touching(centres, np.full(3, 0.5)).tolist() == [True, True, False]
+    # capped below their disks, but the pen inks each dot 0.5 around its centre
+    with pytest.raises(ValueError, match=r"2 of the 3 drawn dots would touch"):
+        check_apart(centres, np.full(3, 0.4), np.full(3, 0.5), pen=1.0)
+    check_apart(centres, np.full(3, 0.4), np.full(3, 0.5), pen=0.999)
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--width-mm", "70", "--pen-mm", "5"], ["is wider than the smallest packing disk",
+                                             "of the 3000 drawn dots would touch"]),
+    (["--width-mm", "20", "--pen-mm", "0.5"], ["is wider than the smallest packing disk"]),
+])
+@pytest.mark.parametrize("ext", ["svg", "png"])
+def test_no_overlap_that_cannot_hold_is_refused(stippling, capsys, options, words, ext):
+    """A pen wider than the packing disks inks them past their disks whatever their radius:
+    refused with the figures (it exited 0 with 1608 to 4429 touching dots)."""
+    out = stippling.with_name(f"refused.{ext}")
+    assert main(["export", str(stippling), "-o", str(out), "--no-overlap", "-q", *options]) == 1
+    err = capsys.readouterr().err
+    assert all(word in err for word in words) and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()
+
+
+def test_no_overlap_of_an_svg_input_is_refused(stippling, capsys):
+    """An .svg holds the drawn dots (the tone radii), not the packing disks: capped at
+    themselves they still touch, so --no-overlap is refused, saying why."""
+    svg, _ = _export(stippling, capsys)
+    out = svg.with_name("again.svg")
+    assert main(["export", str(svg), "-o", str(out), "--no-overlap", "-q"]) == 1
+    err = capsys.readouterr().err
+    assert "an .svg holds the drawn dots, not the packing disks" in err, err
+    assert not out.exists()
