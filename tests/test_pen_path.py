@@ -99,3 +99,71 @@ def test_brute_force_finds_the_moves_it_should():
     stray = np.array([[0.0, 0.0], [5.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])
     assert _best_relocation(stray, 64) > 0
     assert _best_reversal(np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])) == 0.0
+
+
+def _greedy(p, start):
+    """Nearest unvisited dot next, from `start`: every distance computed."""
+    left, cur, order = list(range(len(p))), np.asarray(start, np.float64), []
+    while left:
+        nxt = left[int(np.argmin(np.hypot(*(p[left] - cur).T)))]
+        order.append(nxt)
+        left.remove(nxt)
+        cur = p[nxt]
+    return np.array(order)
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(2, 80), seed=st.integers(0, 2**16))
+def test_greedy_is_the_nearest_unvisited_dot_next_unless_the_given_order_is_as_short(n, seed):
+    """The travel before is the given order's and after the returned order's, from the start."""
+    rng = np.random.default_rng(seed)
+    p, start = rng.random((n, 2)) * 100, rng.random(2) * 100
+    order, before, after = pen_path.pen_path_order(p, method="greedy", start=start)
+    expected = _greedy(p, start)
+    if path_travel(p, expected, start=start) >= path_travel(p, start=start):
+        expected = np.arange(n)
+    np.testing.assert_array_equal(order, expected)
+    assert before == path_travel(p, start=start)
+    assert after == path_travel(p, order, start=start)
+
+
+def _grid(scale, offset, extra=()):
+    """A 16 x 16 grid of `scale` spacing from `offset`, shuffled, then the `extra` dots."""
+    x, y = np.meshgrid(np.arange(16.0), np.arange(16.0))
+    p = np.column_stack([x.ravel(), y.ravel()])[np.random.default_rng(1).permutation(256)]
+    return np.vstack([p * scale + offset, np.reshape(extra, (-1, 2))])
+
+
+@pytest.mark.parametrize("scale, offset", [(1.0, (0.0, 0.0)), (3.0, (10.0, -7.0))])
+def test_hilbert_visits_a_grid_one_step_at_a_time(scale, offset):
+    """From its corner at the start the Hilbert curve goes to a neighbouring dot each step:
+    255 steps of one spacing."""
+    p = _grid(scale, offset)
+    order, _, after = pen_path.pen_path_order(p, method="hilbert", start=offset)
+    np.testing.assert_allclose(np.hypot(*np.diff(p[order], axis=0).T), scale)
+    assert after == pytest.approx(255 * scale)
+
+
+def test_hilbert_visits_a_grid_of_whole_quadrants_one_step_at_a_time():
+    """The grid's dots each on the first cell of a quadrant of the curve's 65535 x 65535
+    cells (a dot on the last cell sets the span): no cell below a quadrant's first tells
+    the quadrants' turns apart."""
+    p = _grid(4096.0, (0.0, 0.0), extra=(65535.0, 65535.0))
+    order, _, _ = pen_path.pen_path_order(p, method="hilbert")
+    grid = p[order[order < 256]]
+    np.testing.assert_array_equal(np.abs(np.diff(grid, axis=0)).sum(axis=1), 4096.0)
+
+
+@pytest.mark.parametrize("method", ["auto", "hilbert", "greedy"])
+def test_two_dots_given_the_long_way_round_are_turned(method):
+    order, before, after = pen_path.pen_path_order([[10.0, 10.0], [1.0, 1.0]], method=method)
+    np.testing.assert_array_equal(order, [1, 0])
+    assert (before, after) == (pytest.approx(np.hypot(10, 10) + np.hypot(9, 9)),
+                               pytest.approx(np.hypot(10, 10)))
+
+
+def test_none_keeps_the_given_order():
+    p = np.random.default_rng(2).random((50, 2))
+    order, before, after = pen_path.pen_path_order(p, method="none")
+    np.testing.assert_array_equal(order, np.arange(50))
+    assert before == after == path_travel(p)
