@@ -265,7 +265,9 @@ class WriteOptions:
     no_overlap: bool = option(False, "drawn dots never touch, the pen's width included: each "
                               "dot at most its packing disk (lighter where the tone dots "
                               "are wider than the packing allows; the summary says how much "
-                              "ink it keeps and which share of the dots touch without it)",
+                              "ink it keeps and which share of the dots touch without it); "
+                              "refused where it cannot hold: a pen wider than the packing "
+                              "disks, or an .svg input (its dots are the drawn ones)",
                               group=_OUTPUT)
     pen_order: object = option(None, "SVG layer order of a colour stippling (--colors, "
                                "--pens; first drawn first; default: lightest pen first)",
@@ -356,7 +358,8 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
         Speed and pen lift of the plot-time estimate (:func:`plot_time`).
     no_overlap : bool
         No two drawn dots touch: each at most its packing disk
-        (:func:`diskpack_cl.overlap.cap_radii`).
+        (:func:`diskpack_cl.overlap.cap_radii`); dots that still touch (a pen
+        wider than the disks) are refused (:func:`diskpack_cl.overlap.check_apart`).
 
     Returns
     -------
