@@ -20,7 +20,7 @@ Measures (:func:`diskpack_cl.color.color_measures`): mean CIELAB Delta E
 after a blur of one dot spacing, tone SSIM per layer, spacing P01 per pen
 and of all dots; the seconds of each run and of a mono run of the same
 total n on the joint density (and that run's P01) (both after a mono run of that size, so that
-neither pays for allocating the OpenCL buffers). Rows go to ``docs/color_quality.jsonl``; crops
+neither pays for allocating the OpenCL buffers). Rows go to ``docs/perf/color_quality.jsonl``; crops
 (photograph, naive overlays, multi-class) to ``docs/figures/color_crop_*.png``;
 ``--table FILE`` prints the markdown table of ``docs/color.md``.
 
@@ -335,7 +335,7 @@ def main(argv=None):
     ap.add_argument("--n", type=int, nargs="+", default=[5000, 15000])
     ap.add_argument("--images", nargs="+", help="photographs of tests/data/color (default: "
                     f"{', '.join(IMAGES)}; with --black-generation or --palettes also {', '.join(DARK)})")
-    ap.add_argument("--out", help="results file (default docs/color_quality.jsonl; none with "
+    ap.add_argument("--out", help="results file (default docs/perf/color_quality.jsonl; none with "
                     "--black-generation)")
     ap.add_argument("--black-generation", type=float, nargs="+", metavar="G",
                     help="measure CMYK at these black generations on bright and dark photographs")
@@ -387,7 +387,7 @@ def main(argv=None):
     images = args.images or IMAGES
     jobs = [(name, "cmyk", n) for name in images for n in args.n]
     jobs += [("astronaut", PENS, n) for n in args.n if "astronaut" in images]
-    with open(args.out or ROOT / "docs/color_quality.jsonl", "w") as fh:
+    with open(args.out or ROOT / "docs/perf/color_quality.jsonl", "w") as fh:
         for (name, palette, n), seed in itertools.product(jobs, args.seeds):
             figures = not args.no_figures and palette == "cmyk" and n == max(args.n) and seed == args.seeds[0]
             for row in run(name, palette, n, figures, seed, not args.multi_only):

@@ -20,7 +20,7 @@ tone edges.
     python benchmarks/stipple_tradeoff.py astronaut:5000 camera:5000 astronaut:50000 \\
         --jsonl rows.jsonl -o docs/figures/stipple_tradeoff.png
     python benchmarks/stipple_tradeoff.py --rows rows.jsonl -o plot.png   # plot only
-    python benchmarks/stipple_tradeoff.py --rows docs/stipple_frontier.jsonl --table \\
+    python benchmarks/stipple_tradeoff.py --rows benchmarks/data/stipple_blend_frontier.jsonl --table \\
         --map docs/figures/stipple_frontier_map.png
 """
 

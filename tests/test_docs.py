@@ -2,7 +2,7 @@
 
 ``docs/_ext/diskpack_docs.py`` builds the CLI reference from the parser, the
 option tables from the option dataclasses and the results tables from the
-benchmark rows in ``docs/``; these tests catch a table that drops an option
+benchmark rows in ``docs/perf/``; these tests catch a table that drops an option
 or a benchmark file the summary can no longer read, without a Sphinx build.
 """
 
@@ -113,10 +113,15 @@ def test_performance_tables_build_from_their_rows(name):
     assert "load average" in ext._benchmark("perf_rows").provenance(stored)
 
 
-def test_performance_tables_are_all_registered():
-    assert set(PERF_COLUMNS) == set(_ext().PERF_TABLES)
-    assert {p.name for p in (ROOT / "docs" / "perf").glob("*.jsonl")} == \
-        {f for _, f, _, _ in _ext().PERF_TABLES.values()}
+def test_every_stored_table_is_registered():
+    ext = _ext()
+    assert set(PERF_COLUMNS) == set(ext.PERF_TABLES)
+    assert {p.name for p in ext.ROWS.glob("*.jsonl")} == {ext.rows_file(name) for name in ext.TABLES}
+
+
+def test_docs_keeps_no_rows_at_its_root():
+    # rows the build reads live in docs/perf/, the others in benchmarks/data/
+    assert not [p.name for p in (ROOT / "docs").glob("*.json*")]
 
 
 def test_summary_takes_the_median_of_the_repeats():

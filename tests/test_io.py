@@ -344,3 +344,23 @@ def test_an_output_reaching_a_missing_input_through_a_symlinked_folder_is_refuse
         check_not_inputs([tmp_path / "alias" / "x.png"], [tmp_path / "real" / "x.png"])
     with pytest.raises(OutputIsInputError, match="real/x.png"):
         check_not_inputs([tmp_path / "real" / "x.png"], [tmp_path / "alias" / "x.png"])
+
+
+@pytest.mark.parametrize("suffix", FORMATS)
+def test_columns_pick_two_of_three_in_the_order_given(tmp_path, suffix):
+    """By index in every format (and by name in a .csv with a header): (2, 0) is z, x."""
+    xyz = np.random.default_rng(9).random((5, 3))
+    path = tmp_path / f"a{suffix}"
+    write_points(path, xyz)
+    np.testing.assert_array_equal(read_points(path, columns=(2, 0)), xyz[:, [2, 0]])
+    np.testing.assert_array_equal(read_points(path, columns=(0, 1)), xyz[:, :2])
+    if suffix == ".csv":
+        np.testing.assert_array_equal(read_points(path, columns=("Z", "x")), xyz[:, [2, 0]])
+        with pytest.raises(ValueError, match=r"a\.csv: has a z column"):
+            read_points(path)
+
+
+def test_a_csv_header_under_comment_and_blank_lines_is_skipped_with_them(tmp_path):
+    path = tmp_path / "a.csv"
+    path.write_text("# one\n\n# two\ny,x\n0.2,0.1\n0.4,0.3\n")
+    np.testing.assert_array_equal(read_points(path), [[0.1, 0.2], [0.3, 0.4]])

@@ -8,9 +8,9 @@
     flags, argument, default, help.
 ``diskpack-table NAME``
     A results table computed at build time from a benchmark's ``.jsonl`` file
-    in ``docs/`` by the benchmark's own summary code (see :data:`TABLES`); the
-    performance tables (:data:`PERF_TABLES`, rows in ``docs/perf/``) are
-    followed by the date, commit, load and device their rows carry.
+    in ``docs/perf/`` (:data:`ROWS`) by the benchmark's own summary code (see
+    :data:`TABLES`); the performance tables (:data:`PERF_TABLES`) are followed
+    by the date, commit, load and device their rows carry.
 
 The tables are docutils nodes made here (plain text in every cell), so they
 read the same from reStructuredText and from MyST Markdown, and no help text
@@ -172,9 +172,17 @@ def _markdown_rows(text):
     return split[0], split[2:]
 
 
+#: Where the stored rows that the docs build reads live (one folder: performance and quality alike).
+ROWS = ROOT / "docs" / "perf"
+
+#: The quality tables: name -> their rows in :data:`ROWS`.
+RESULT_ROWS = {"stipple-tally": "stipple_quality.jsonl", "color-quality": "color_quality.jsonl",
+               "color-summary": "color_quality.jsonl"}
+
+
 def _stipple_tally():
     q = _benchmark("stipple_quality")
-    summary = q.summarize(q.read_rows([ROOT / "docs" / "stipple_quality_issue17.jsonl"]))
+    summary = q.summarize(q.read_rows([ROWS / RESULT_ROWS["stipple-tally"]]))
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         q.print_tally(summary, ["before", "default"])
@@ -182,7 +190,7 @@ def _stipple_tally():
 
 
 def _color_table():
-    return _markdown_rows(_benchmark("color_quality").table(ROOT / "docs" / "color_quality.jsonl"))
+    return _markdown_rows(_benchmark("color_quality").table(ROWS / RESULT_ROWS["color-quality"]))
 
 
 def _pen_range(row):
@@ -193,7 +201,7 @@ def _pen_range(row):
 def _color_summary():
     """Per image, pens and n: Delta E and P01 of the naive overlay, its overprint and the multi-class packing."""
     groups = {}
-    for line in (ROOT / "docs" / "color_quality.jsonl").read_text().splitlines():
+    for line in (ROWS / RESULT_ROWS["color-summary"]).read_text().splitlines():
         if line.strip():
             r = json.loads(line)
             groups.setdefault((r["image"], r["palette"], r["n"]), {})[r["method"]] = r
@@ -229,9 +237,14 @@ PERF_TABLES = {
 }
 
 
+def rows_file(name):
+    """The name of the file in :data:`ROWS` that the table ``name`` is made from."""
+    return PERF_TABLES[name][1] if name in PERF_TABLES else RESULT_ROWS[name]
+
+
 def perf_rows(name):
     """The stored rows of the performance table ``name``."""
-    return _benchmark("perf_rows").read(ROOT / "docs" / "perf" / PERF_TABLES[name][1])
+    return _benchmark("perf_rows").read(ROWS / PERF_TABLES[name][1])
 
 
 def perf_table(name):
@@ -253,12 +266,13 @@ class BenchmarkTableDirective(Directive):
     def run(self):
         name = self.arguments[0]
         out = [table_node(*TABLES[name]())]
+        env = self.state.document.settings.env
+        env.note_dependency(str(ROWS / rows_file(name)))   # changed rows rebuild the page
         if name in PERF_TABLES:
-            # changed rows or summary code rebuild the page
-            bench, rows_file = PERF_TABLES[name][:2]
-            for path in (ROOT / "docs" / "perf" / rows_file, ROOT / "benchmarks" / f"{bench}.py",
+            # and so does changed summary code
+            for path in (ROOT / "benchmarks" / f"{PERF_TABLES[name][0]}.py",
                          ROOT / "benchmarks" / "perf_rows.py"):
-                self.state.document.settings.env.note_dependency(str(path))
+                env.note_dependency(str(path))
             note = _benchmark("perf_rows").provenance(perf_rows(name))
             out.append(nodes.paragraph("", "", nodes.emphasis(text=note)))
         return out
