@@ -333,3 +333,15 @@ def test_bucket_order_is_the_stable_argsort(ids, top):
     order, for ids on both sides of 2^16 (and the plain sort from 2^32)."""
     bid = np.array(ids, dtype=np.int64) % top
     np.testing.assert_array_equal(bucket_order(bid), np.argsort(bid, kind="stable"))
+
+
+def test_pairs_exactly_the_reach_apart_are_within_it():
+    """An 8 x 8 lattice of spacing 1/8 on the torus, reach 1/8: its 128 lattice pairs, each
+    at exactly the reach; a point moved to exactly the reach of one that stayed counts."""
+    x, y = np.meshgrid(np.arange(8) / 8, np.arange(8) / 8)
+    found = measures.close_pairs(np.column_stack([x.ravel(), y.ravel()]), 0.125)
+    assert len(found.i) == 128 and np.all(found.d == 0.125)
+    p = np.array([[0.125, 0.125], [0.625, 0.625], [0.125, 0.625], [0.625, 0.125]])
+    q = p.copy()
+    q[2] = [0.125, 0.375]                  # 0.25 from (0.125, 0.125), which stayed
+    assert measures.min_distance_since(q, p, measures.close_pairs(p, 0.25)) == 0.25
