@@ -545,3 +545,24 @@ def test_stipple_measures_and_errors():
         P.tone_ssim(pts, np.full((48, 48), 1.5))
     with pytest.raises(ValueError, match="darkness must be a non-empty 2-D array"):
         P.spacing(pts, np.ones(10))
+
+
+@settings(max_examples=20, deadline=None)
+@given(kmax=st.integers(1, 12), seed=st.integers(0, 2**32 - 1))
+def test_radial_power_and_anisotropy_against_a_loop_over_the_frequencies(kmax, seed):
+    """Annulus i: the frequencies with i - 1/2 <= |k| < i + 1/2, i = 1 .. kmax; its mean
+    power, and the sample variance (ddof 1) over the squared mean in dB."""
+    freqs = np.arange(-kmax, kmax + 1)
+    power = np.random.default_rng(seed).exponential(size=(freqs.size, freqs.size))
+    rings = {i: [] for i in range(1, kmax + 1)}
+    for row, ky in enumerate(freqs):
+        for col, kx in enumerate(freqs):
+            for i in rings:
+                if i - 0.5 <= math.hypot(kx, ky) < i + 0.5:
+                    rings[i].append(power[row, col])
+    centres, mean = A.radial_power(power, freqs)
+    np.testing.assert_array_equal(centres, np.arange(1, kmax + 1))
+    np.testing.assert_allclose(mean, [np.mean(rings[i]) for i in rings], rtol=1e-12)
+    _, db = A.anisotropy(power, freqs)
+    want = [10 * np.log10(np.var(rings[i], ddof=1) / np.mean(rings[i]) ** 2) for i in rings]
+    np.testing.assert_allclose(db, want, rtol=1e-9)
