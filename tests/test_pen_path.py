@@ -167,3 +167,9 @@ def test_none_keeps_the_given_order():
     order, before, after = pen_path.pen_path_order(p, method="none")
     np.testing.assert_array_equal(order, np.arange(50))
     assert before == after == path_travel(p)
+
+
+@pytest.mark.parametrize("n, rounds", [(1, 1_000_000), (3000, 334), (999_999, 2),
+                                       (1_000_000, 1), (1_000_001, 1), (0, 1_000_000)])
+def test_two_opt_rounds_are_the_work_over_the_dots_rounded_up(n, rounds):
+    assert pen_path.two_opt_rounds(n) == rounds
