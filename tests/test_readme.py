@@ -2,17 +2,14 @@
 
 Its option tables moved to the docs, where they are generated from the
 parser and the option dataclasses (``docs/_ext/diskpack_docs.py``, checked in
-``tests/test_docs.py``); what stays in the README is run here: every Python
-block, every ``diskpack`` command parsed by the real parser, and the set-up
-command (a) and the plotter quickstart run end to end on the bundled sample.
+``tests/test_docs.py``). Its code blocks run as written in
+``tests/test_docs_commands.py``; here every ``diskpack`` command, inline ones
+too, is parsed by the real parser, and command (a), whose install
+``.ci/run`` runs, runs without the install on the bundled sample.
 """
 
-import os
 import re
 import shlex
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -86,13 +83,6 @@ def test_readme_diskpack_commands_parse():
             pytest.fail(f"README command does not parse (status {exc.code}): diskpack {shlex.join(argv)}")
 
 
-@pytest.mark.parametrize("index", range(len(_blocks("python"))))
-def test_readme_python_block_runs(index, ctx, tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    code = _blocks("python")[index]
-    exec(compile(code, f"README.md python block {index}", "exec"), {"__name__": "__readme__"})
-
-
 def test_readme_setup_command_a_runs(ctx, tmp_path, monkeypatch):
     """Command (a) without the install: the stippling and the point set it promises."""
     monkeypatch.chdir(tmp_path)
@@ -105,27 +95,3 @@ def test_readme_setup_command_a_runs(ctx, tmp_path, monkeypatch):
         assert main([*argv, "--quiet"]) == 0, argv
     for name in ("out/stipple.svg", "out/stipple.png", "out/points.npz"):
         assert (tmp_path / name).stat().st_size > 0, name
-
-
-def test_readme_plotter_quickstart_runs(ctx, tmp_path, monkeypatch):
-    """The plotter quickstart on the sample at 300 dots (the README's 20 000 take longer), then its
-    vpype lines, the vpype plugin's at 300 dots too."""
-    monkeypatch.chdir(tmp_path)
-    block = next(b for b in _blocks("bash") if "vpype" in b)
-    commands = _commands(block)
-    (stipple,) = [argv[1:] for argv in commands if Path(argv[0]).name == "diskpack"]
-    argv = ["sample" if a == "photo.jpg" else a for a in stipple]
-    argv[argv.index("-n") + 1] = "300"
-    (tmp_path / "out").mkdir()
-    assert main([*argv, "--quiet"]) == 0
-    vpype = shutil.which("vpype", path=os.pathsep.join([str(Path(sys.executable).parent),
-                                                         os.environ.get("PATH", "")]))
-    assert vpype is not None, "vpype is in the test extra: pip install -e '.[test]'"
-    lines = [c for c in commands if c[0] == "vpype"]
-    assert len(lines) == 3
-    for c in lines:
-        c = ["sample" if a == "photo.jpg" else "300" if a == "20000" else a for a in c]
-        done = subprocess.run([vpype, *c[1:]], capture_output=True, text=True, timeout=300)
-        assert done.returncode == 0, (c, done.stderr)
-        if "write" in c:   # the plotter's HPGL keeps every dot: one pen-down each
-            assert (tmp_path / "out" / "photo.hpgl").read_text().count("PD") == 300, c
