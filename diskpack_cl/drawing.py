@@ -462,16 +462,18 @@ def inside_page(c, rad, wmm, hmm, pen=None):
 
     A dot's ink reaches its radius, or with a `pen` wider than the dot
     (one pen touch) half the pen: such a dot keeps half the pen from the
-    edge, and the touch's length and the rounding of its start besides, so
-    that no ink crosses it. A dot drawn by its outline needs no more: it is
-    written inward (:func:`svg_radii`), so a dot inside stays inside and in
-    place (a certified packing reads back certified).
+    edge, and the touch's length besides, so that no ink crosses it. Every
+    dot keeps :data:`EDGE_MM` from the edge (vpype crops what touches it); a
+    dot out by no more than that shrinks to it in place (a certified packing
+    reads back certified), one out by more moves.
 
     Examples
     --------
     >>> centres, radii, moved = inside_page(np.array([[0.0, 1.0]]), np.array([0.5]), 4.0, 2.0)
     >>> centres.tolist(), moved
-    ([[0.5, 1.0]], 1)
+    ([[0.5002, 1.0]], 1)
+    >>> inside_page(np.array([[0.5, 1.0]]), np.array([0.5]), 4.0, 2.0)[1].tolist()
+    [0.4998]
     >>> inside_page(np.array([[0.2, 1.0]]), np.array([0.1]), 4.0, 2.0, pen=1.0)[0].tolist()
     [[0.5052, 1.0]]
     """
@@ -482,9 +484,15 @@ def inside_page(c, rad, wmm, hmm, pen=None):
                          f"(--width-mm, --height-mm, --dpi)")
     rad = np.minimum(rad, most)
     touch = np.zeros(len(rad), bool) if pen is None else 2 * rad <= pen
+    # a dot drawn by its outline that is out by no more than the margin shrinks to it instead
+    # of moving: a packing's disks (inside the picture) stay where they are, and apart
+    room = np.minimum.reduce([c[:, 0], wmm - c[:, 0], c[:, 1], hmm - c[:, 1]]) - EDGE_MM
+    shrink = ~touch & (rad > room) & (rad <= room + EDGE_MM) & (room > 0)
+    rad = np.where(shrink, room, rad)
     ink = rad if pen is None else np.minimum(np.maximum(rad, 0.5 * pen), most)
-    ext = ink + np.where(touch, EDGE_MM + 0.5 * TOUCH_MM, 0.0)
+    ext = ink + EDGE_MM + np.where(touch, 0.5 * TOUCH_MM, 0.0)
     inside = np.column_stack([np.clip(c[:, 0], ext, wmm - ext), np.clip(c[:, 1], ext, hmm - ext)])
+    inside[shrink] = c[shrink]
     moved = int(np.count_nonzero(np.any(inside != c, axis=1)))
     return inside, rad, moved
 

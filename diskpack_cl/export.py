@@ -381,7 +381,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     >>> info["moved_inside"], info["pen_touches"]
     (1, 0)
     >>> [line.split()[:5] for line in Path(out).read_text().splitlines() if "<path" in line][0]
-    ['<path', 'd="M', '1.7500,8.0000', 'a', '0.7500,0.7500']
+    ['<path', 'd="M', '1.7502,8.0000', 'a', '0.7500,0.7500']
     """
     check_stippling(result, path, packing=False)
     p, r, W, H = _arrays(result)

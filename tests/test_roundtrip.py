@@ -22,8 +22,9 @@ from diskpack_cl.export import read_stipple, write_npz, write_stipple
 from diskpack_cl.geometry import certify_disks
 
 # the SVG writes mm with 4 decimals: a centre moves by up to 0.5e-4 mm an axis, a radius
-# is written up to 2e-4 mm smaller (rounded inward), never larger
-SVG_MM = 2e-4
+# is written up to 2e-4 mm smaller (rounded inward), never larger, and a dot at the edge
+# shrinks by up to 2e-4 mm more to keep that far from it (drawing.EDGE_MM)
+SVG_MM = 4e-4
 
 
 @st.composite
