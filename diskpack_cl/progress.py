@@ -294,18 +294,29 @@ class StageBars:
         self._live = _is_terminal(self.file)
 
     def __call__(self, stage, done, total):
-        if not self._live:
-            return
+        if self._live:
+            self._drawn(self._draw, stage, done, total)
+
+    def note(self, text):
+        """Write `text` beside the bar drawn now (the iterations' kind and k)."""
+        if self._live and self._bar is not None:
+            self._drawn(self._bar.set_postfix_str, text)
+
+    def _drawn(self, draw, *args):
+        """``draw(*args)``; a file that fails ends the drawing."""
         try:
-            if stage != self._stage:
-                self._close_bar()
-                self._open_bar(stage, done, total)
-            else:
-                self._bar.total = total
-                self._bar.update(done - self._bar.n)
+            draw(*args)
         except (OSError, ValueError):   # ValueError: the file was closed
             self._live = False
             self.close()   # tqdm keeps every open bar: one left open misplaces the next
+
+    def _draw(self, stage, done, total):
+        if stage != self._stage:
+            self._close_bar()
+            self._open_bar(stage, done, total)
+        else:
+            self._bar.total = total
+            self._bar.update(done - self._bar.n)
 
     def _open_bar(self, stage, done, total):
         from tqdm import tqdm  # not loaded at start-up

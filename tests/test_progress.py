@@ -179,7 +179,9 @@ def test_bars_need_a_terminal_and_survive_a_closed_one():
     bars("iterations", 0, 3)
     bars("iterations", 2, 3)
     bars("pen path", 0, 5)
+    bars.note("2-opt")
     assert "iterations" in term.getvalue() and "pen path" in term.getvalue()
+    assert "2-opt" in term.getvalue()
     term.close()
     bars("pen path", 3, 5)   # the closed stream ends the bars, not the run
     bars.close()

@@ -180,23 +180,36 @@ def _run_stipple_one(args, options, tone, write, separation):
     """One input: a one-item plan, run here (:func:`diskpack_cl.jobs.stipple_item`)
     without a manifest; every refusal comes before the computation."""
     from diskpack_cl.jobs import plan_stipple, stipple_item  # not loaded at start-up
-
     from diskpack_cl.progress import stage, stage_text  # not loaded at start-up
 
     t0 = time.perf_counter()
-    with command_run(args):   # one bar per stage, and their seconds in the summary
+    with command_run(args) as run:   # one bar per stage, and their seconds in the summary
         with stage("load"):
             (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
                                    options, **_count(args), allow_large=args.allow_large,
                                    write=write, tone=tone, color=separation, make_folders=False)
         res, gray, summary = stipple_item(item, device=args.device, verify=args.verify,
-                                          profile=args.profile, note=None if args.quiet else _note)
+                                          profile=args.profile, note=None if args.quiet else _note,
+                                          callback=_step_note(run.hook))
         tail = _write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
     if not args.quiet:
         times = stage_text(summary["stage_seconds"], summary["iterations"], summary["seconds"])
         print(f"{PROG}: {_result_text(res, summary)}; {times}{_where(res)}{tail}", file=sys.stderr)
     note_fallbacks(args, res.stages)
     return 0
+
+
+def _step_note(bars):
+    """``callback(entry, total)`` writing each step's kind, k and empty cells beside the
+    iterations' bar (:meth:`~diskpack_cl.progress.StageBars.note`); None without bars."""
+    if bars is None:
+        return None
+
+    def callback(entry, total):
+        text = f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}"
+        bars.note(text + (f" empty={entry['empty']}" if entry.get("empty") else ""))
+
+    return callback
 
 
 def _run_stipple_tiled(args, options, tone, write, separation):
