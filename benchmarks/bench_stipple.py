@@ -206,7 +206,7 @@ def color_against_mono(a):
 
 def end_to_end(n, device, json_path):
     """Whole stipplings of the sample: the default schedule, without support and capacity, classic and the paper's Fig. 8."""
-    runs = (("default", {}), ("default before issue 17 (no support, no capacity)",
+    runs = (("default", {}), ("default without support and capacity",
                               dict(support=0.0, capacity=0.0)),
             ("classic (the former default)", dict(schedule="classic")),
             ("paper Fig. 8 (3 x (60 pack + 10 Lloyd))", dict(schedule=[("pack", 60), ("lloyd", 10)] * 3)))

@@ -317,7 +317,7 @@ def _cells(values):
 
 def table(path):
     """Markdown rows of a results file: per image, palette and n, each method's measures."""
-    rows = [json.loads(line) for line in open(path)]
+    rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
     out = ["| image | pens | n | method | Delta E | P01 all dots | P01 per pen | SSIM per layer | seconds |",
            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in rows:

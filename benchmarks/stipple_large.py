@@ -176,7 +176,7 @@ def main():
         parts = ", ".join(f"{k} {np.median([r.get(k, 0.0) for r in rows]):.2f}" for k in keys)
         print(f"  {kind}: {len(rows)} iterations, median seconds: {parts}")
     print(f"  timings: { {k: round(v, 2) for k, v in res.timings.items()} }")
-    schedule = ("default" if args.full else f"{args.mix} mix steps") + (" before issue 17" if args.before else "")
+    schedule = ("default" if args.full else f"{args.mix} mix steps") + (" without support and capacity" if args.before else "")
     per_iter = float(np.median([h["seconds"] for h in res.history]))
     append(args.json, {"size": args.size, "n": args.n, "schedule": schedule, "seconds": total,
                        "iterations": len(res.history), "s_per_iter": per_iter,

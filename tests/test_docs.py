@@ -124,6 +124,15 @@ def test_docs_keeps_no_rows_at_its_root():
     assert not [p.name for p in (ROOT / "docs").glob("*.json*")]
 
 
+def test_tables_name_no_issue():
+    # the tables are read by users of the guides: their rows say what they measure, not which ticket
+    import re
+
+    ext = _ext()
+    cells = [str(c) for name in ext.TABLES for row in ext.TABLES[name]()[1] for c in row]
+    assert not [c for c in cells if re.search(r"\bissue\s*\d", c, flags=re.I)]
+
+
 def test_summary_takes_the_median_of_the_repeats():
     # first row, mean and median differ for every measured value
     bench = _ext()._benchmark("bench_relax")
