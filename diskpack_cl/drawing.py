@@ -122,8 +122,9 @@ def on_grid(centres, rad):
     """Centres and radii (mm) as the SVG writes them: what is drawn, and read back.
 
     The centres rounded to the grid, each radius rounded inward by what its
-    centre moved (:func:`svg_radii`); dots of one size keep one size (they
-    read back at the metadata's ``dot_mm``, not at the radius written).
+    centre moved (:func:`svg_radii`); dots of one size keep one size, rounded
+    inward (they read back at the metadata's ``dot_mm``, not at the radius
+    written).
 
     Examples
     --------
@@ -133,10 +134,9 @@ def on_grid(centres, rad):
     """
     c = np.asarray(centres, np.float64)
     grid = _grid(c).reshape(c.shape)
-    moved = np.hypot(*(grid - c).T)
     if len(rad) and np.all(rad == rad[0]):
-        moved = np.zeros(len(rad))
-    return grid, svg_radii(rad, moved)
+        return grid, svg_radii(rad)
+    return grid, svg_radii(rad, np.hypot(*(grid - c).T))
 
 
 def svg_radii(rad, moved=0.0):
@@ -175,8 +175,9 @@ def _inward(rad, moved=0.0):
 
 
 def _grid(v):
-    """`v` (mm) as the SVG writes it and a reader reads it back."""
-    return _fmt(v).astype(np.float64)
+    """`v` (mm) on the SVG's grid: the double nearest a whole number of 0.0001 mm, which
+    ``%.4f`` writes as that number and a reader reads back as this double."""
+    return np.round(np.asarray(v, np.float64) * 1e4) / 1e4
 
 
 def _fmt(v):
