@@ -47,6 +47,10 @@ class _Refused(ValueError):
     """A rule the file breaks: the message names the row or field and the rule."""
 
 
+class _Overlap(_Refused):
+    """Two disks overlap: not a packing."""
+
+
 def csv_name(name):
     """A pen name as a stippling ``.csv`` stores it: percent-encoded (no ``,;:=`` or space).
 
@@ -180,8 +184,11 @@ def check_stippling(result, path, *, packing):
                                 params=getattr(result, "params", None) or {}, **pens),
                      packing=packing and not trusted)
     except _Refused as exc:
+        hint = ("; these are not packing disks (an .svg holds the dots as drawn, which may "
+                "overlap): write the .npz or .csv from the stippling's own .npz or .csv"
+                if isinstance(exc, _Overlap) else "")
         raise ValueError(_one_line(f"{path}: not written (read_stipple would refuse it): "
-                                   f"{exc}")) from None
+                                   f"{exc}{hint}")) from None
 
 
 def _one_line(text):
@@ -287,7 +294,7 @@ def _certify(p, r, width, height):
                          f"(certificate: inside)", p)
     if not cert.disjoint:
         i, j, gap = _overlap(p, r)
-        raise _Refused(f"rows {i} and {j}: the dots overlap by {-gap:.6g} px (certificate: "
+        raise _Overlap(f"rows {i} and {j}: the dots overlap by {-gap:.6g} px (certificate: "
                        f"disjoint)")
 
 
