@@ -328,13 +328,26 @@ class _WorkerPool(ProcessPoolExecutor):
                          initargs=(slots, devices, threads, os.getpid(), self.ready))
 
     def _spawn_process(self):
-        if threading.current_thread() is not threading.main_thread():
+        if threading.current_thread() is not threading.main_thread() \
+                or not hasattr(signal, "pthread_sigmask"):
             return super()._spawn_process()   # signal handlers belong to the main thread
+        # While SIGINT is ignored (the worker inherits that) it is blocked too, so that a
+        # Ctrl-C then waits instead of being dropped; one already waiting is taken and sent
+        # again after, as ignoring a waiting signal drops it. SIGTERM is let through: the
+        # worker inherits the mask, and the pool stops it with SIGTERM.
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        waiting = signal.SIGINT in signal.sigpending()
+        if waiting:
+            signal.sigwait({signal.SIGINT})
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM, signal.SIGHUP})
         old = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
             super()._spawn_process()
         finally:
             signal.signal(signal.SIGINT, old)
+            if waiting:
+                signal.pthread_kill(threading.get_ident(), signal.SIGINT)
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
     def died_starting(self):
         """Whether the workers died before any of them was ready (their start failed)."""
@@ -354,7 +367,12 @@ class _WorkerPool(ProcessPoolExecutor):
 
 @contextlib.contextmanager
 def _signals_deferred():
-    """SIGINT, SIGTERM and SIGHUP that arrive in the block are answered after it."""
+    """SIGINT, SIGTERM and SIGHUP that arrive in the block are answered after it.
+
+    They are blocked in this thread and in the threads it starts (the pool's),
+    and recorded where another thread takes them: while a worker is spawned
+    SIGINT is ignored, and a Ctrl-C taken then was lost.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -362,11 +380,15 @@ def _signals_deferred():
     sigs = [s for s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None))
             if s is not None and callable(signal.getsignal(s))]
     old = {s: signal.signal(s, lambda num, frame: got.append(num)) for s in sigs}
+    posix = hasattr(signal, "pthread_sigmask")
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, sigs) if posix else None
     try:
         yield
     finally:
-        for s, handler in old.items():
-            signal.signal(s, handler)
+        for s in reversed(sigs):   # SIGINT last: one answered now finds the others restored
+            signal.signal(s, old[s])
+        if posix:   # a pending one is answered here
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         if got:
             old[got[0]](got[0], None)
 
@@ -402,20 +424,59 @@ def _local_pool(todo, jobs, devices, collect):
                 yield fut.result()
             except BrokenProcessPool as exc:
                 yield _failed(todo[futures[fut]], _death_text(pool, exc))
-    finally:  # stop the workers first: shutdown() forgets them
-        _stop_workers(pool)
-        pool.shutdown(wait=True, cancel_futures=True)
+    finally:
+        _close(pool)
+
+
+#: Seconds the stopped workers get to remove their partial files before they are killed.
+STOP_GRACE_S = 5.0
 
 
 def _stop_workers(pool):
-    """Send SIGTERM to the pool's workers (they remove their partial files and exit)."""
-    stop = getattr(pool, "terminate_workers", None)  # Python >= 3.14
-    if stop is not None:
-        stop()
-        return
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    """Send SIGTERM to the pool's workers (they remove their partial files and exit), and
+    SIGKILL to those still there after :data:`STOP_GRACE_S`: a worker can hang in its exit,
+    joining a queue thread that writes to a pipe nobody reads, and the pool's shutdown
+    waits for every worker."""
+    procs = list((pool._processes or {}).values())
+    for proc in procs:
         with contextlib.suppress(Exception):
             proc.terminate()
+    end = time.monotonic() + STOP_GRACE_S
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.join(max(0.0, end - time.monotonic()))
+            if proc.is_alive():
+                proc.kill()
+
+
+def _close(pool):
+    """Stop the workers of `pool` (:func:`_stop_workers`; first: shutdown forgets them), then
+    shut it down, its manager thread released if a worker died halfway through a result."""
+    _stop_workers(pool)
+    manager, results = pool._executor_manager_thread, pool._result_queue
+    pool.shutdown(wait=False, cancel_futures=True)
+    if manager is not None:
+        _release(manager, results)
+
+
+def _release(manager, results):
+    """Wait for the pool's `manager` thread; if a stopped worker died halfway through
+    sending its result, send it bytes that complete the message and do not unpickle.
+
+    The manager waits for the rest of that message, which no live process can
+    send; the pool's shutdown and the interpreter's exit both wait for the
+    manager (a tiled run interrupted with Ctrl-C hung there). A message that
+    does not unpickle makes it mark the pool broken and end.
+    """
+    manager.join(STOP_GRACE_S)
+    if manager.is_alive():
+        fd = results._writer.fileno()
+        os.set_blocking(fd, False)   # no process reads what the manager does not take
+        while manager.is_alive():
+            with contextlib.suppress(BlockingIOError, BrokenPipeError):
+                os.write(fd, b"\0" * 65536)
+            manager.join(0.05)
+    results.close()
 
 
 def _dask_client(client):
@@ -528,8 +589,7 @@ def _pool_map(fn, tasks, jobs, devices, retries):
                     left.discard(i)
                     yield i, result
         finally:
-            _stop_workers(pool)
-            pool.shutdown(wait=True, cancel_futures=True)
+            _close(pool)
 
 
 def _dask_map(fn, tasks, client, retries):

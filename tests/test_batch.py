@@ -667,3 +667,28 @@ def test_a_task_is_tried_retries_more_times(tmp_path, jobs):
     tasks = [(str(tmp_path / "c"), 3), (str(tmp_path / "d"), 0)]
     with pytest.raises(RuntimeError, match="call 3 fails"):
         list(executors.map_tasks(_fails_at_first, tasks, jobs=jobs, retries=2))
+
+
+def test_a_manager_waiting_for_the_rest_of_a_killed_workers_result_is_released():
+    """A worker stopped halfway through sending its result left the pool's manager thread
+    waiting for the rest: the pool's shutdown, then the interpreter's exit, hung (a tiled run
+    interrupted with Ctrl-C never ended)."""
+    import multiprocessing
+    import struct
+    import threading
+
+    results = multiprocessing.get_context("spawn").SimpleQueue()
+    os.write(results._writer.fileno(), struct.pack("!i", 100000) + b"x" * 10)   # a torn message
+    errors = []
+
+    def manager():
+        try:
+            results._reader.recv()
+        except Exception as exc:   # what the pool's manager takes for a broken pool
+            errors.append(exc)
+    thread = threading.Thread(target=manager, daemon=True)
+    thread.start()
+    thread.join(0.2)
+    assert thread.is_alive()   # waiting for bytes no process will send
+    executors._release(thread, results)
+    assert not thread.is_alive() and errors

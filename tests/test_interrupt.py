@@ -169,4 +169,6 @@ def test_ctrl_c_as_the_pool_starts_is_one_line_and_130(tmp_path, argv, delay):
     done = subprocess.run([sys.executable, "-c", POOL_START_CHILD, delay, *argv], cwd=tmp_path,
                           capture_output=True, text=True, timeout=300, start_new_session=True)
     assert done.returncode == 130, done.stderr
-    assert len(done.stderr.splitlines()) == 1 and "interrupted" in done.stderr, done.stderr
+    # (a worker stopped while PoCL builds a kernel may add clang's '1 error generated.')
+    ours = [line for line in done.stderr.splitlines() if "error generated" not in line]
+    assert len(ours) == 1 and "interrupted" in ours[0], done.stderr
