@@ -388,7 +388,20 @@ def _job_key(image, n, options, tiling, tone, backend):
 
 
 class WorkFolderBusy(ValueError):
-    """Another run holds the work folder (its lock names that run)."""
+    """Another run holds the work folder (its lock names that run).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = tempfile.mkdtemp()
+    >>> with _WorkFolder(folder, {"job": 1}):
+    ...     try:
+    ...         _WorkFolder(folder, {"job": 1})
+    ...     except WorkFolderBusy as exc:
+    ...         print(str(exc).split(" (")[0].endswith("is in use by another run"))
+    True
+    >>> import shutil; shutil.rmtree(folder)
+    """
 
 
 class _WorkFolder:
@@ -710,7 +723,17 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
 
 
 class WorkFolderWarning(UserWarning):
-    """A broken part of a tiled run's work folder, computed again."""
+    """A broken part of a tiled run's work folder, computed again (when no ``note`` is given).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     _warn("diskpack-tile-0.npz: unreadable; computing that part again")
+    >>> caught[0].category.__name__
+    'WorkFolderWarning'
+    """
 
 
 def _warn(text):
