@@ -474,8 +474,7 @@ class _WorkFolder:
     def remove(self):
         """Remove this job's files, and the folder where a run made it and it is empty."""
         made = os.path.exists(self.file(MADE))
-        self._clear(keep=(LOCK,))
-        os.remove(self.file(LOCK))   # while held: a run that opened it before finds it taken
+        self._clear()   # the lock file too, while held: a run that opened it finds it taken
         if made and not os.listdir(self.path):
             os.rmdir(self.path)
 
