@@ -22,8 +22,6 @@ tells, and the engines fall back to the raster estimate refined by
 
 from __future__ import annotations
 
-import ctypes.util
-import sys
 
 import numpy as np
 from scipy.ndimage import maximum_filter
@@ -34,7 +32,7 @@ from ._checks import check_sites
 from ._device import group_size, padded, preferred_multiple
 from .device_stage import DeviceStage
 from .domain import Domain
-from .geometry import MIC, _centres, _checked_cells, _cramer, _vertex, exact_mic
+from .geometry import MIC, mic_centres, checked_cells, cramer_inverse, power_vertex, exact_mic
 
 __all__ = ["CellMIC", "FLAGS"]
 
@@ -56,28 +54,6 @@ FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full
 _NN = FLAGS["nn"]
 
 _EDGE_NORMALS = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
-
-
-def _keep_freed_memory():
-    """Let glibc keep freed large blocks instead of unmapping them.
-
-    Every iteration allocates the same large numpy temporaries (tens of MB
-    at a million sites).  By default glibc unmaps blocks above its mmap
-    threshold when they are freed, so the next iteration faults every page
-    in again; on the development VM those page faults took more time than
-    the arithmetic (1M sites: 1.3-1.7 s a call, 0.9 s with this).  Peak
-    memory is unchanged; freed memory stays with the process for reuse.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        mallopt = libc.mallopt
-    except (OSError, AttributeError):   # not glibc
-        return
-    M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
-    mallopt(M_MMAP_THRESHOLD, 1 << 30)
-    mallopt(M_TRIM_THRESHOLD, (1 << 31) - 1)
 
 
 class CellMIC(DeviceStage):
@@ -131,7 +107,6 @@ class CellMIC(DeviceStage):
         # whole groups per enqueue: the last group of one must not reach into the next
         self.chunk = CHUNK - CHUNK % self.group
         self._order = None
-        _keep_freed_memory()
         self._warm()
 
     def _warm(self):
@@ -252,7 +227,7 @@ class CellMIC(DeviceStage):
             order, start, bwmax, grid = self._buckets(X, w, density)
             # np.take: numpy's row gather X[order] is several times slower (40 against 5 ms at 1M)
             Xs, ws = np.take(X, order, axis=0), w[order]
-            pos, rows = _positions(order, None if cells is None else _checked_cells(cells, len(X)))
+            pos, rows = _positions(order, None if cells is None else checked_cells(cells, len(X)))
         with self.timings("device"):
             out = self._run(Xs, ws, start, bwmax, grid, pos, rows, certify)
         return self._finish(Xs, ws, out, pos, rows)
@@ -394,7 +369,7 @@ class CellMIC(DeviceStage):
         proved and the host refused."""
         q, R, accepted = self._refine(X, w, out, pos)
         refused = np.flatnonzero(~accepted & ((out["flags"] & ~_NN) == 0))
-        centers, _ = _centres(np.take(X, pos, axis=0), q, R, self.domain)
+        centers, _ = mic_centres(np.take(X, pos, axis=0), q, R, self.domain)
         return _scatter(centers, rows), _scatter(R, rows), refused
 
 
@@ -494,8 +469,8 @@ def refine_active(X, w, domain, active, near, cells=None):
     cells = np.arange(len(X)) if cells is None else cells
     tol = 1e-11 * max(domain.width, domain.height)
     N, B = _code_constraints(X, w, cells, active, domain)
-    R, inv, ok = _cramer(N[..., 0], N[..., 1], B)
-    q = np.stack(_vertex(N[..., 0], N[..., 1], B, inv), 1)
+    R, inv, ok = cramer_inverse(N[..., 0], N[..., 1], B)
+    q = np.stack(power_vertex(N[..., 0], N[..., 1], B, inv), 1)
     ok &= np.all((active >= 0) | ((active <= -1) & (active >= -4)), axis=1)
     rows, cols = np.nonzero(near != NO_CODE)
     if len(rows):

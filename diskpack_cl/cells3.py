@@ -27,7 +27,6 @@ from scipy.spatial import cKDTree
 import pyopencl as cl
 
 from ._device import group_size, padded
-from .cells import _keep_freed_memory
 from .device_stage import DeviceStage
 
 __all__ = ["Domain3", "CellMIC3", "MIS", "exact_mis", "certify_mis", "inscribed_sphere_linprog",
@@ -394,7 +393,6 @@ class CellMIC3(DeviceStage):
         self.sites_per_bucket = float(sites_per_bucket)
         self._kernel = self.program("cell_mic3", {"PERIODIC": int(domain.periodic)})["cell_mic3"]
         self.group = group_size(self._kernel, self.ctx.devices[0], GROUP)
-        _keep_freed_memory()
 
     def _buckets(self, X):
         dom = self.domain

@@ -56,13 +56,13 @@ def _fs_wavefront(v):
     return counts, resid
 
 
-def _least(values, k):
+def least_k(values, k):
     """Indices of the `k` least `values`, least first, ties to the lower index (the
     first `k` of a stable argsort, without sorting all of them).
 
     Examples
     --------
-    >>> _least(np.array([3.0, 1.0, 2.0, 1.0]), 3).tolist()
+    >>> least_k(np.array([3.0, 1.0, 2.0, 1.0]), 3).tolist()
     [1, 3, 2]
     """
     if k < values.size:
@@ -80,14 +80,14 @@ def _fix_count(counts, resid, n):
     diff = n - int(counts.sum())
     if diff > 0:
         # most owed first; ties go to the lower pixel index
-        order = _least(-resid, diff)
+        order = least_k(-resid, diff)
         while diff > 0:
             take = order[: min(diff, order.size)]
             counts[take] += 1
             diff -= take.size
     while diff < 0:
         have = np.flatnonzero(counts > 0)
-        take = have[_least(resid[have], min(-diff, have.size))]
+        take = have[least_k(resid[have], min(-diff, have.size))]
         counts[take] -= 1
         diff += take.size
     return counts

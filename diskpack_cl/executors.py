@@ -152,7 +152,7 @@ def default_jobs(devices=None):
                else os.cpu_count() or 1)
 
 
-def _peak_rss_mib():
+def peak_rss_mib():
     try:
         import resource  # POSIX only: elsewhere no peak RSS
     except ImportError:  # pragma: no cover - not POSIX
@@ -215,7 +215,7 @@ def run_item(item, *, device=None, collect=False, progress=None):
         except Exception as exc:  # recorded, the batch goes on
             record["error"] = _error_text(item, exc)
     record.update(seconds=time.perf_counter() - t0, finished=time.time(),
-                  worker=f"{platform.node()}:{os.getpid()}", peak_rss_mib=_peak_rss_mib(),
+                  worker=f"{platform.node()}:{os.getpid()}", peak_rss_mib=peak_rss_mib(),
                   worker_env={k: os.environ[k] for k in (*POCL_THREAD_VARS, "DISKPACK_DEVICE")
                               if k in os.environ})
     return record

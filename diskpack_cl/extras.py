@@ -24,5 +24,10 @@ def install_command(extra):
     -------
     str
         The command, to run in the repository's folder.
+
+    Examples
+    --------
+    >>> install_command("dask")
+    '.venv/bin/pip install ".[dask]"'
     """
     return f'.venv/bin/pip install ".[{extra}]"'

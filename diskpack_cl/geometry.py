@@ -32,7 +32,7 @@ def _triples(m):
     return np.array(list(combinations(range(m), 3)), dtype=np.intp).reshape(-1, 3)
 
 
-def _cramer(a, b, beta):
+def cramer_inverse(a, b, beta):
     """Dual side of the vertices of constraint triples ``(a_k, b_k) . q + R <= beta_k``.
 
     The last axis holds the three constraints.  Cofactors of the last column
@@ -53,8 +53,8 @@ def _cramer(a, b, beta):
     return R, inv, good
 
 
-def _vertex(a, b, beta, inv):
-    """Centre ``(qx, qy)`` of the vertex of constraint triples (see :func:`_cramer`)."""
+def power_vertex(a, b, beta, inv):
+    """Centre ``(qx, qy)`` of the vertex of constraint triples (see :func:`cramer_inverse`)."""
     qx = ((b[..., 1] - b[..., 2]) * beta[..., 0] + (b[..., 2] - b[..., 0]) * beta[..., 1]
           + (b[..., 0] - b[..., 1]) * beta[..., 2]) * inv
     qy = ((a[..., 2] - a[..., 1]) * beta[..., 0] + (a[..., 0] - a[..., 2]) * beta[..., 1]
@@ -84,11 +84,11 @@ def _solve_subsets(N, B, tol, lead=None):
     a = N[:, T, 0]                                         # (nc, t, 3)
     b = N[:, T, 1]
     beta = B[:, T]
-    R, inv, good = _cramer(a, b, beta)
+    R, inv, good = cramer_inverse(a, b, beta)
     rows = np.arange(nc)
 
     def vertex(pick):
-        return np.stack(_vertex(a[rows, pick], b[rows, pick], beta[rows, pick], inv[rows, pick]), 1)
+        return np.stack(power_vertex(a[rows, pick], b[rows, pick], beta[rows, pick], inv[rows, pick]), 1)
 
     best = np.argmin(np.where(good, R, np.inf), axis=1)
     q = vertex(best)
@@ -98,7 +98,7 @@ def _solve_subsets(N, B, tol, lead=None):
     tie = np.nonzero(~ok & np.any(good, axis=1))[0]
     if len(tie):
         # degenerate ties among dual-feasible vertices: check them all
-        qx, qy = _vertex(a[tie], b[tie], beta[tie], inv[tie])
+        qx, qy = power_vertex(a[tie], b[tie], beta[tie], inv[tie])
         Nt, Bt = N[tie], B[tie]
         sl = (Bt[:, None, :] - qx[..., None] * Nt[:, None, :, 0] - qy[..., None] * Nt[:, None, :, 1]
               - R[tie][..., None])
@@ -277,19 +277,19 @@ def exact_mic(points, weights=None, domain=Domain.torus(), *, estimate=None, k=1
     """
     X, w = _checked_sites(points, weights, domain)
     n = len(X)
-    todo = _checked_cells(cells, n)
+    todo = checked_cells(cells, n)
     c_est, r_est = _start_estimate(X, estimate)
     q0 = domain.shortest(c_est - X)
     q, R, stats = _solve_with_margin(X, w, q0, r_est, domain, todo, k)
     R, c_est, r_est = R[todo], c_est[todo], r_est[todo]
-    centers, empty = _centres(X[todo], q[todo], R, domain)
+    centers, empty = mic_centres(X[todo], q[todo], R, domain)
     if estimate is not None:
         stats.update(_estimate_errors(centers, R, c_est, r_est, domain))
     stats["empty"] = int(empty.sum())
     return MIC(centers, R, empty, stats)
 
 
-def _centres(X, q, R, domain):
+def mic_centres(X, q, R, domain):
     """MIC centres ``X + q`` (the site itself for an empty cell, ``R < 0``), wrapped."""
     empty = R < 0
     centers = X + q
@@ -327,7 +327,7 @@ def _checked_sites(points, weights, domain):
     return X, w
 
 
-def _checked_cells(cells, n):
+def checked_cells(cells, n):
     """The cell indices to solve: all n, or `cells` checked to be indices of sites."""
     if cells is None:
         return np.arange(n)

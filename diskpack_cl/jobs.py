@@ -256,6 +256,23 @@ def check_outputs(items, check_path, *, make_folders=True):
             check_path(out)
 
 
+def absolute_path(path):
+    """``path`` made absolute against this process's working folder.
+
+    An item may run where the working folder is another one (a Dask worker
+    on another machine, or started elsewhere), so the plans resolve every
+    input and output before the items leave this process. ``"-"`` (standard
+    input, :func:`diskpack_cl.image.load_gray`) stays as it is.
+
+    Examples
+    --------
+    >>> os.path.isabs(absolute_path("photos/face.png")), absolute_path("-")
+    (True, '-')
+    """
+    path = os.fspath(path)
+    return path if path == "-" else os.path.abspath(path)
+
+
 def _item_inputs(item):
     """The files an item reads: its input and a start set's file (``init``)."""
     init = item.params.get("init")
@@ -448,26 +465,6 @@ def _item_image(path, params):
     return None, load_rgb(path), run
 
 
-def _item_dots(params, write, gray, width, height, note):
-    """``(n, tone_n)`` of an item: its dot count, and with a dot or pen size (one pen) the
-    count whose ink is the image's on paper (``-n tone``), a note when n is far from it."""
-    n, tone_n = params.get("n"), None
-    dot = write.dot_mm or write.pen_mm
-    if gray is not None and dot is not None:
-        darkness, scale = gray if write.invert else 1.0 - gray, write.scale(width, height)
-        tone = tone_dot_count(darkness, scale, dot)
-        text = isinstance(n, int) and _ink_note(n, _drawn_dot_mm(write, n, darkness, scale),
-                                                darkness, scale, tone)
-        if text and note is not None:
-            note(text)
-        n, tone_n = (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
-    elif n == "tone":
-        raise ValueError("n='tone' needs the dot size: give dot_mm or pen_mm")
-    n = dots_for_image(width, height, n=n, density=params.get("density"),
-                       dots_per_cm2=params.get("dots_per_cm2"), **write.layout())
-    return n, tone_n
-
-
 def _drawn_dot_mm(write, n, darkness, scale):
     """Diameter (mm) of the ink of each of `n` dots as `write` draws them: its dot size, or
     the tone size of n dots times its radius scale, and at least the pen's width (a
@@ -501,6 +498,26 @@ def _ink_note(n, drawn_mm, darkness, scale, tone):
     return (f"{like} dots of {drawn_mm:.3g} mm give the image's ink on this paper; -n {n} will "
             f"look {'darker' if n > like else 'lighter'}"
             + (f" (-n tone uses {tone})" if like == tone else ""))
+
+
+def _item_dots(params, write, gray, width, height, note):
+    """``(n, tone_n)`` of an item: its dot count, and with a dot or pen size (one pen) the
+    count whose ink is the image's on paper (``-n tone``), a note when n is far from it."""
+    n, tone_n = params.get("n"), None
+    dot = write.dot_mm or write.pen_mm
+    if gray is not None and dot is not None:
+        darkness, scale = gray if write.invert else 1.0 - gray, write.scale(width, height)
+        tone = tone_dot_count(darkness, scale, dot)
+        text = isinstance(n, int) and _ink_note(n, _drawn_dot_mm(write, n, darkness, scale),
+                                                darkness, scale, tone)
+        if text and note is not None:
+            note(text)
+        n, tone_n = (tone if n == "tone" else n), {"n": tone, "dot_mm": dot}
+    elif n == "tone":
+        raise ValueError("n='tone' needs the dot size: give dot_mm or pen_mm")
+    n = dots_for_image(width, height, n=n, density=params.get("density"),
+                       dots_per_cm2=params.get("dots_per_cm2"), **write.layout())
+    return n, tone_n
 
 
 def stipple_item(item, *, device=None, callback=None, progress=None, verify=False, profile=False,
@@ -832,7 +849,7 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
         params["backend"] = backend
     uses_n = any("{n" in t for t in outputs)
     items = []
-    for i, path in enumerate(expand_inputs(inputs, recursive=recursive)):
+    for i, path in enumerate(map(absolute_path, expand_inputs(inputs, recursive=recursive))):
         error = None
         dots = n
         if uses_n and n is None:
@@ -840,8 +857,8 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
                 dots = _image_dots(path, count, write)
             except Exception as exc:  # the item fails, the batch goes on
                 error = f"{path}: cannot read the image size for {{n}}: {exc}"
-        rendered = [render_template(t, input=path, n=dots if dots is not None else 0,
-                                    seed=seed, i=i) for t in outputs]
+        rendered = [absolute_path(render_template(t, input=path, n=dots if dots is not None else 0,
+                                                  seed=seed, i=i)) for t in outputs]
         items.append(Item("stipple", i, path, seed, json.loads(json.dumps(params)),
                           tuple(rendered), changed(write), error))
     check_outputs(items, _paths_check("stipple"), make_folders=make_folders)
@@ -876,7 +893,7 @@ def plan_poisson(count, n, outputs, options=None, *, seed=None, make_folders=Tru
         seed = int(np.random.SeedSequence().entropy % 2**31)
     params = {"n": n, "options": changed(options), "base_seed": seed}
     items = [Item("poisson", i, None, s, params,
-                  tuple(render_template(t, n=n, seed=s, i=i) for t in outputs))
+                  tuple(absolute_path(render_template(t, n=n, seed=s, i=i)) for t in outputs))
              for i, s in enumerate(derive_seeds(seed, count))]
     check_outputs(items, _paths_check("poisson"), make_folders=make_folders)
     return items
@@ -905,8 +922,8 @@ def plan_relax(inputs, outputs, relax=None, *, box=None, columns=None, make_fold
         params["box"] = box
     if columns is not None:
         params["columns"] = list(columns)
-    items = [Item("relax", i, os.fspath(path), None, params,
-                  tuple(render_template(t, input=path, i=i) for t in outputs))
-             for i, path in enumerate(inputs)]
+    items = [Item("relax", i, path, None, params,
+                  tuple(absolute_path(render_template(t, input=path, i=i)) for t in outputs))
+             for i, path in enumerate(map(absolute_path, inputs))]
     check_outputs(items, _paths_check("relax"), make_folders=make_folders)
     return items

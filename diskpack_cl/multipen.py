@@ -54,7 +54,7 @@ from .domain import Domain
 from .radii import certified_k, field_at
 from .schedule import StippleOptions
 from ._checks import check_count
-from .stipple import (StippleResult, StippleState, _centroid_density, _make_stage, _run,
+from .stipple import (StippleResult, StippleState, centroid_density, make_stage, run_schedule,
                       dot_radii, result_summary)
 from .engine import engine_record, make_engine
 from .pen_path import pen_path_order
@@ -310,7 +310,7 @@ def _pen_centroids(engine, dens, x, pen):
 
 
 def _pen_pull(timings, pen, pens, pull):
-    """The class-aware steps (``before`` of :func:`~diskpack_cl.stipple._run`): after
+    """The class-aware steps (``before`` of :func:`~diskpack_cl.stipple.run_schedule`): after
     every step of the schedule on all dots, each dot moves a share of the way to
     its own pen's centroid (:func:`_pen_centroids` with `pens`, its engine and
     the pens' densities on that engine's raster, timed as one stage ``pens`` in
@@ -552,11 +552,11 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
         engine = make_engine(Domain.rect(W, H), opt.n, backend, device=device,
                              grid=opt.grid_shape(W, H), timings=watch)
     with run_stage("setup"):
-        stage = _make_stage(gray, opt, engine)
+        stage = make_stage(gray, opt, engine)
     head, tail = _split(opt.phases, round(joint * sum(ph[1] for ph in opt.phases)))
     with run_stage("start"):
         start = StippleState(error_diffusion(gray, opt.n, seed=opt.seed), float(opt.k0))
-    state, history = _run(start, _phases(stage, head), callback)
+    state, history = run_schedule(start, _phases(stage, head), callback)
     with watch("assign"), run_stage("iterations", 0):   # between the phases: their time
         pen = assign_pens(state.points,
                           _pen_share(sep.layers, weight, state.points, 0.5 * np.sqrt(W * H / opt.n)),
@@ -565,8 +565,8 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     with run_stage("setup", 0):   # the pens' engine and densities: more setup
         pens = (make_engine(Domain.rect(W, H), opt.n, backend, device=device,
                             grid=coarse.grid_shape(W, H), timings=Stopwatch()),
-                [_centroid_density(a, coarse) for a in sep.layers])
-    state, more = _run(state, _phases(stage, tail), callback, first=len(history),
+                [centroid_density(a, coarse) for a in sep.layers])
+    state, more = run_schedule(state, _phases(stage, tail), callback, first=len(history),
                        before=_pen_pull(stage.engine.timings, pen, pens, pen_pull))
     with watch("certify"), run_stage("certificate"):
         r = dot_radii(state, stage, state.points)

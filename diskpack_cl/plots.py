@@ -76,7 +76,7 @@ def _save(fig, path, fmt):
         fh.write(data)
 
 
-def _num(x):
+def format_number(x):
     """A JSON-ready Python number (None for nan/inf)."""
     if isinstance(x, (bool, np.bool_)):
         return bool(x)
@@ -87,11 +87,11 @@ def _num(x):
 
 
 def _nums(a):
-    return [_num(v) for v in np.asarray(a).ravel()]
+    return [format_number(v) for v in np.asarray(a).ravel()]
 
 
 def _real(x):
-    """A number of :func:`_num` back as a float (None is nan)."""
+    """A number of :func:`format_number` back as a float (None is nan)."""
     return float("nan") if x is None else x
 
 
@@ -100,7 +100,7 @@ def _point_set_measures(sets, kmax, box=None):
     (on the unit torus, or in the box ``(W, H)``: :mod:`diskpack_cl.box_analysis`)."""
     if box is not None:
         numbers, curves = box_measures(sets, box, kmax=kmax)
-        return {k: (_nums(v) if isinstance(v, list) else v if isinstance(v, str) else _num(v))
+        return {k: (_nums(v) if isinstance(v, list) else v if isinstance(v, str) else format_number(v))
                 for k, v in numbers.items()}, curves
     freqs, P = analysis.periodogram(sets, kmax=kmax)
     centres, power = analysis.radial_power(P, freqs)
@@ -114,15 +114,15 @@ def _point_set_measures(sets, kmax, box=None):
         "n": int(len(sets[0])),
         "realizations": len(sets),
         "kmax": int(freqs[-1]),
-        "rho": _num(rhos[0]),
-        "rho_min": _num(min(rhos)),
-        "rho_mean": _num(np.mean(rhos)),
-        "mean_rho": _num(np.mean(mean_rhos)),
-        "psi6_mean": _num(psi6),
-        "peak_frequency": _num(centres[peak]),
-        "peak_power": _num(power[peak]),
-        "anisotropy_mean_db": _num(aniso[finite].mean()) if finite.any() else None,
-        "anisotropy_reference_db": _num(-10.0 * math.log10(len(sets))),
+        "rho": format_number(rhos[0]),
+        "rho_min": format_number(min(rhos)),
+        "rho_mean": format_number(np.mean(rhos)),
+        "mean_rho": format_number(np.mean(mean_rhos)),
+        "psi6_mean": format_number(psi6),
+        "peak_frequency": format_number(centres[peak]),
+        "peak_power": format_number(power[peak]),
+        "anisotropy_mean_db": format_number(aniso[finite].mean()) if finite.any() else None,
+        "anisotropy_reference_db": format_number(-10.0 * math.log10(len(sets))),
         "radial_frequency": _nums(centres),
         "radial_power": _nums(power),
         "anisotropy_db": _nums(aniso),
@@ -273,7 +273,7 @@ def point_set_report(points_list, path, *, title=None, kmax=None, box=None):
     return numbers
 
 
-def _certificate_items(certificate):
+def certificate_items(certificate):
     if certificate is None:
         return None
     if dataclasses.is_dataclass(certificate) and not isinstance(certificate, type):
@@ -285,7 +285,7 @@ def _certificate_items(certificate):
     out = {}
     for key, value in items.items():
         if isinstance(value, (bool, np.bool_, int, np.integer, float, np.floating)):
-            out[key] = _num(value)
+            out[key] = format_number(value)
         elif isinstance(value, str) or value is None:
             out[key] = value
     return out
@@ -322,14 +322,14 @@ def stipple_numbers(points, radii, darkness, certificate=None, *, sigma=3.0):
     (50, 1.0, False)
     """
     p, d = picture_measures._stipple_inputs(points, darkness)
-    numbers = {key: _num(v) for key, v in picture_measures.stipple_measures(p, d, sigma=sigma).items()}
-    numbers["tone_radius"] = _num(picture_measures.tone_radius(len(p), d))
+    numbers = {key: format_number(v) for key, v in picture_measures.stipple_measures(p, d, sigma=sigma).items()}
+    numbers["tone_radius"] = format_number(picture_measures.tone_radius(len(p), d))
     if radii is not None:
         r = np.asarray(radii, dtype=np.float64).ravel()
         if r.shape != (len(p),):
             raise ValueError(f"radii must have shape ({len(p)},), got {np.shape(radii)}")
-        numbers.update(radius_min=_num(r.min()), radius_median=_num(np.median(r)), radius_max=_num(r.max()))
-    cert = _certificate_items(certificate)
+        numbers.update(radius_min=format_number(r.min()), radius_median=format_number(np.median(r)), radius_max=format_number(r.max()))
+    cert = certificate_items(certificate)
     if cert is not None:
         numbers["certificate"] = cert
     return numbers

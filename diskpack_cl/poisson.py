@@ -277,9 +277,9 @@ def start_points(n, domain, seed=None, device=None, *, init="dart", dart_radius=
     array([ True,  True])
     """
     from .parallel_darts import parallel_darts
-    from .sampling import _rng
+    from .sampling import make_rng
 
-    rng = _rng(seed)
+    rng = make_rng(seed)
     if init == "random":
         return rng.random((n, 2)) * domain.size
     if domain.periodic:

@@ -21,10 +21,11 @@ from scipy.spatial import cKDTree
 
 from .cells3 import CellMIC3, Domain3, exact_mis
 from .domain import box_sizes
+from .memory import freed_memory_kept
 from .engine import HOST_DEVICE
 from .relax import STALL_GAIN, RelaxResult
 from ._device import NoOpenCLError
-from .sampling import _first_come, _rng
+from .sampling import first_come, make_rng
 
 __all__ = ["FCC_DENSITY", "fcc_radius", "normalized_radius3", "relax_poisson3", "as_box3",
            "dart_throwing3"]
@@ -82,7 +83,7 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
 
     Darts come in batches checked against the kept points (a KD-tree,
     periodic on the torus) and, within a batch, in order
-    (:func:`diskpack_cl.sampling._first_come`).  Random sequential
+    (:func:`diskpack_cl.sampling.first_come`).  Random sequential
     adsorption saturates near rho 0.8 in 3D; the default 0.65 fills fast.
     In a box the darts keep half the distance from the walls, where the
     relaxation would push them (about 4x fewer iterations).  Returns fewer
@@ -94,7 +95,7 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     >>> p.shape, bool(normalized_radius3(p) >= 0.65)
     ((500, 3), True)
     """
-    rng = _rng(seed)
+    rng = make_rng(seed)
     d = 2.0 * rel_radius * fcc_radius(n, domain.volume)
     box = domain.size if domain.periodic else None
     # in a box, darts keep a radius from the walls, as relaxed points do
@@ -103,7 +104,7 @@ def dart_throwing3(n, domain=Domain3.torus(), *, rel_radius=0.65, seed=None, max
     for _ in range(max_batches):
         cand = rng.random((max(1024, 2 * (n - len(pts))), 3)) * (domain.size - 2 * inset) + inset
         cand = cand[kept.free(pts, cand)]
-        cand = cand[_first_come(cand, d, box)] if len(cand) else cand
+        cand = cand[first_come(cand, d, box)] if len(cand) else cand
         pts = np.vstack([pts, cand[: n - len(pts)]])
         if len(pts) == n:
             break
@@ -174,20 +175,21 @@ def relax_poisson3(points, eps=0.75, *, domain=None, max_iter=1000, patience=100
     t0 = time.perf_counter()
     rho, best_at, it, reason = [normalized_radius3(X, dom)], 0, 0, "max_iter"
     stats = {"fallback": fallback} if fallback else {}
-    while rho[-1] < eps and it < max_iter:
-        it += 1
-        step = solve(X)
-        for k, v in step.stats.items():
-            stats[k] = stats.get(k, 0) + v
-        X = dom.check(step.centers)
-        rho.append(normalized_radius3(X, dom))
-        if callback is not None:
-            callback(it, rho[-1])
-        if rho[-1] > rho[best_at] + max(1e-12, STALL_GAIN * min(rho[best_at], eps - rho[best_at])):
-            best_at = it
-        elif it - best_at >= patience:
-            reason = "stalled"
-            break
+    with freed_memory_kept():   # every step makes and drops the same large temporaries
+        while rho[-1] < eps and it < max_iter:
+            it += 1
+            step = solve(X)
+            for k, v in step.stats.items():
+                stats[k] = stats.get(k, 0) + v
+            X = dom.check(step.centers)
+            rho.append(normalized_radius3(X, dom))
+            if callback is not None:
+                callback(it, rho[-1])
+            if rho[-1] > rho[best_at] + max(1e-12, STALL_GAIN * min(rho[best_at], eps - rho[best_at])):
+                best_at = it
+            elif it - best_at >= patience:
+                reason = "stalled"
+                break
     if rho[-1] >= eps:
         reason = "eps"
     return RelaxResult(X, np.array(rho), it, reason, time.perf_counter() - t0, {},

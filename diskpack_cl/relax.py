@@ -19,7 +19,7 @@ import numpy as np
 from .domain import Domain
 from .engine import BACKENDS, check_backend, make_engine, stage_record
 from .options import check_fields, option
-from .memory import check_poisson_memory
+from .memory import check_poisson_memory, freed_memory_kept
 from .preview import Previewable
 from .progress import stage
 from .measures import (HEXAGONAL_CELL, close_pairs, coincident_pairs, hexagonal_radius,
@@ -302,7 +302,9 @@ def relax_poisson(points, eps=None, options=None, *, device=None, callback=None,
                          profile=profile, verify=verify)
     stats = {"engine": engine.name, **({"fallback": engine.fallback} if engine.fallback else {})}
     t_start = time.perf_counter()
-    with stage("iterations", int(max_iter)) as advance, ThreadPoolExecutor(1) as pool:
+    # freed_memory_kept: every iteration makes and drops the same large temporaries
+    with freed_memory_kept(), stage("iterations", int(max_iter)) as advance, \
+            ThreadPoolExecutor(1) as pool:
         callback = _told(callback, advance)   # and the run's progress (diskpack_cl.progress)
         # the local route measures its last rho on the host itself, from the pairs that
         # hold it, searched on the other core meanwhile (from the set it will go local with)

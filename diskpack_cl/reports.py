@@ -222,7 +222,7 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
     """
     from .color import color_measures, load_rgb, palette_of, pen_spacing, separate  # not loaded at start-up
     from .multipen import hex_color  # not loaded at start-up
-    from .plots import _certificate_items, _num  # not loaded at start-up
+    from .plots import certificate_items, format_number  # not loaded at start-up
 
     points, pen, names = np.asarray(st.points, np.float64), np.asarray(st.pen), tuple(st.names)
     W, H = int(st.width), int(st.height)
@@ -243,16 +243,16 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
         sep = separate(rgb, palette_of(names, st.colors), invert=black, **kw)
         measures = color_measures(points, pen, sep.layers, st.colors, rgb, tone_sigma=sigma,
                                   invert=black)
-        numbers.update(reference="image", delta_e=_num(measures["delta_e"]),
-                       delta_e_sigma=_num(measures["sigma"]))
+        numbers.update(reference="image", delta_e=format_number(measures["delta_e"]),
+                       delta_e_sigma=format_number(measures["sigma"]))
     counts = np.bincount(pen, minlength=len(names))
     numbers["pens"] = [dict(name=name, color=hex_color(c), n=int(m),
-                            p01=_num(p01) if p01 is not None else None)
+                            p01=format_number(p01) if p01 is not None else None)
                        for name, c, m, p01 in zip(names, st.colors, counts, measures["p01"])]
     for entry, ssim in zip(numbers["pens"], measures.get("ssim", [])):
-        entry["ssim"] = None if ssim is None else _num(ssim)
-    numbers["p01_joint"] = _num(measures["p01_joint"])
-    numbers["certificate"] = _certificate_items(certify_disks(points, st.radii, Domain.rect(W, H)))
+        entry["ssim"] = None if ssim is None else format_number(ssim)
+    numbers["p01_joint"] = format_number(measures["p01_joint"])
+    numbers["certificate"] = certificate_items(certify_disks(points, st.radii, Domain.rect(W, H)))
     return numbers
 
 

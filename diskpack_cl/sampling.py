@@ -49,7 +49,7 @@ class DartThrowingWarning(UserWarning):
 DART_SATURATION = 0.78
 
 
-def _rng(seed):
+def make_rng(seed):
     return seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
 
 
@@ -62,7 +62,7 @@ def random_points(n, seed=None):
     (3, 2)
     """
     n = check_count(n)
-    return _rng(seed).random((n, 2))
+    return make_rng(seed).random((n, 2))
 
 
 def _offsets(k):
@@ -148,7 +148,7 @@ class _Darts:
         return bad
 
 
-def _first_come(cand, d, boxsize=1.0):
+def first_come(cand, d, boxsize=1.0):
     """Sequential acceptance inside one batch: a dart is kept unless an earlier kept
     dart of the batch lies closer than `d` (vectorized rounds, no per-dart loop);
     `boxsize`: the torus (any dimension), or None in a box."""
@@ -195,7 +195,7 @@ def _throw(state, rng, live, batch, pts, m, remaining, r):
     ok = np.flatnonzero(~state.conflicts(cand, cx, cy))
     if not ok.size:
         return 0
-    ok = ok[_first_come(cand[ok], 2.0 * r)][:remaining]
+    ok = ok[first_come(cand[ok], 2.0 * r)][:remaining]
     pts[m:m + ok.size] = cand[ok]
     state.insert(cand[ok], np.arange(m, m + ok.size))
     return ok.size
@@ -266,7 +266,7 @@ def dart_throwing(n, *, rel_radius=0.74, seed=None, max_attempts=None, shrink=0.
     (True, 0, True)
     """
     n, max_attempts = _dart_arguments(n, rel_radius, shrink, max_attempts)
-    rng = _rng(seed)
+    rng = make_rng(seed)
     rel = float(rel_radius)
     r = rel * hexagonal_radius(n)
     warned = _beyond_saturation(rel, n, shrink)
@@ -325,7 +325,7 @@ def bridson(n=None, *, radius=None, k=30, seed=None, max_tries=8):
     """
     if (n is None) == (radius is None):
         raise ValueError("give exactly one of n or radius")
-    rng = _rng(seed)
+    rng = make_rng(seed)
     if radius is not None:
         if not 0.0 < radius < 0.25:
             raise ValueError(f"radius must be in (0, 0.25), got {radius}")

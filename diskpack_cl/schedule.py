@@ -251,7 +251,7 @@ def _schedule_defaults(schedule, beta, lloyd, rounds, method, spacing):
     return opts
 
 
-_STIPPLING = "stippling (the paper's parameters)"
+STIPPLING_GROUP = "stippling (the paper's parameters)"
 
 
 def _check_schedule(schedule):
@@ -338,75 +338,75 @@ class StippleOptions:
         None, "gamma: contrast exponent of the gray radius mapping, base radius "
         "r_i = max(gray, FLOOR)^(gamma/2) (default 3.0); only --radii gray has it (the "
         "paper, pack and lloyd schedules), so the default schedule's density radii refuse it",
-        lo=0, lo_open=True, group=_STIPPLING)
+        lo=0, lo_open=True, group=STIPPLING_GROUP)
     floor: float = option(
         None, "floor of the radius mapping, so that black (gray) or white (density) regions "
         "keep a finite radius (default: the schedule's, 0.1 for paper, pack and lloyd, 0.01 "
-        "for default)", lo=0, hi=1, lo_open=True, group=_STIPPLING, metavar="FLOOR")
+        "for default)", lo=0, hi=1, lo_open=True, group=STIPPLING_GROUP, metavar="FLOOR")
     radii: str = option(
         None, "radius mapping: gray = the paper's r_i = max(gray, FLOOR)^(gamma/2); density = "
         "r_i ~ darkness^(-1/2), the density Lloyd aims at (default: the schedule's, density "
-        "for default)", choices=("gray", "density"), group=_STIPPLING)
+        "for default)", choices=("gray", "density"), group=STIPPLING_GROUP)
     blend: float = option(
         None, "mix phases move to MIC + BLEND * (centroid - MIC) (default: the schedule's)",
-        lo=0, hi=1, group=_STIPPLING, metavar="BLEND")
+        lo=0, hi=1, group=STIPPLING_GROUP, metavar="BLEND")
     features: str = option(
         None, "detail: feature-aware mix steps, where the image holds detail finer than the "
         "dot spacing dots move further towards their cell's centroid and the radii follow "
         "the detail (more tone, slightly less even spacing); default: the schedule's (detail "
         "for --schedule detail, and for the default where the dot spacing is 3 px or more)",
-        choices=("none", "detail"), group=_STIPPLING)
+        choices=("none", "detail"), group=STIPPLING_GROUP)
     capacity: float = option(
         None, "equal ink per dot: after each step every dot's radius is scaled by (mean ink / "
         "its power cell's ink)^GAIN, as in capacity-constrained stippling; more tone, closer "
         "pairs across tone edges (default: the schedule's, 0.1 for default, 0 = off for the "
-        "others)", lo=0, hi=1, group=_STIPPLING, metavar="GAIN")
+        "others)", lo=0, hi=1, group=STIPPLING_GROUP, metavar="GAIN")
     support: float = option(
         None, "keep dots on the ink: a dot whose largest empty disk leaves its cell's ink "
         "moves towards the cell's centroid instead, by S times how far it left, at most all "
         "the way (default: the schedule's, for default 8, or 16 where dots are 6 px or more "
         "apart; 0 for the others; 0 lets edge dots "
-        "drift onto white paper and blurs edges)", lo=0, hi=16, group=_STIPPLING, metavar="S")
+        "drift onto white paper and blurs edges)", lo=0, hi=16, group=STIPPLING_GROUP, metavar="S")
     paper_tone: float = option(
         0.0, "darkness T added under the whole image, so that white paper gets sparse dots "
-        "too (default 0: white stays white)", lo=0, hi=1, hi_open=True, group=_STIPPLING,
+        "too (default 0: white stays white)", lo=0, hi=1, hi_open=True, group=STIPPLING_GROUP,
         metavar="T")
     k_quantile: float = option(
         None, "during iterations, k is this quantile of R_i/r_i (0 = the paper's minimum; the "
         "output always uses the largest certified k)", lo=0, hi=1, hi_open=True,
-        group=_STIPPLING, metavar="K_QUANTILE")
+        group=STIPPLING_GROUP, metavar="K_QUANTILE")
     schedule: object = option(
         None, "named schedule of disk-packing (pack) and Lloyd phases (default: default); "
         "the library also takes a list of phases, see make_schedule", check=_check_schedule,
-        cli_choices=SCHEDULE_NAMES, group=_STIPPLING)
+        cli_choices=SCHEDULE_NAMES, group=STIPPLING_GROUP)
     beta: int = option(
         None, "beta: disk-packing iterations per round; with --lloyd and --rounds it replaces "
         "--schedule (missing ones: the paper's beta 40, lloyd 10, rounds 3; the last round is "
-        "half as long)", integer=True, lo=0, group=_STIPPLING, metavar="BETA")
+        "half as long)", integer=True, lo=0, group=STIPPLING_GROUP, metavar="BETA")
     lloyd: int = option(
         None, "Lloyd iterations between rounds (paper: 10); with --method lloyd: the number "
-        "of Lloyd iterations (default 50)", integer=True, lo=0, group=_STIPPLING, metavar="L")
+        "of Lloyd iterations (default 50)", integer=True, lo=0, group=STIPPLING_GROUP, metavar="L")
     rounds: int = option(
         None, "number of disk-packing rounds (paper: 3)", integer=True, lo=1,
-        group=_STIPPLING, metavar="ROUNDS")
+        group=STIPPLING_GROUP, metavar="ROUNDS")
     method: str = option(
         "diskpack", "diskpack (default): the paper's disk packing; lloyd: weighted Voronoi "
         "stippling (Secord 2002), the baseline, from the same start",
-        choices=("diskpack", "lloyd"), group=_STIPPLING)
+        choices=("diskpack", "lloyd"), group=STIPPLING_GROUP)
     supersample: int = option(
         None, "raster cells per image pixel side (default: automatic, about 16 cells per dot "
-        "and at least 4 per dot on black, at most 8)", integer=True, lo=1, group=_STIPPLING, metavar="S")
+        "and at least 4 per dot on black, at most 8)", integer=True, lo=1, group=STIPPLING_GROUP, metavar="S")
     refine_every: int = option(
         1, "refine the raster MIC estimate exactly every R disk-packing iterations (default "
         "1 = always; 0 = never); the output is always certified", integer=True, lo=0,
-        group=_STIPPLING, metavar="R")
+        group=STIPPLING_GROUP, metavar="R")
     seed: object = option(
         0, "seed of the error-diffusion start (default 0; same seed, same result)",
-        check=check_seed, cli_type=seed_text, group=_STIPPLING, metavar="SEED")
+        check=check_seed, cli_type=seed_text, group=STIPPLING_GROUP, metavar="SEED")
     invert: bool = option(
         False, "stipple the light parts (light dots on a dark ground); with --colors/--pens, "
         "light pens on black paper (auto:N: white and N - 1 light pens; cmyk and cmy are for "
-        "white paper)", group=_STIPPLING)
+        "white paper)", group=STIPPLING_GROUP)
     k0: float = option(1e-6, "initial scale factor k (the paper: 1e-6, so that no disks "
                        "overlap)", lo=0, lo_open=True, cli=False)
     radius_sigma: float = option(None, "blur of the darkness in the density radius mapping",

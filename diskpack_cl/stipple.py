@@ -89,7 +89,7 @@ from .device_stage import has_fp64
 from .picture_measures import tone_radius
 from .preview import Previewable
 from .progress import running, stage as run_stage
-from .dithering import _least, error_diffusion
+from .dithering import least_k, error_diffusion
 from .domain import Domain
 from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
 from .schedule import StippleOptions, StipplePlan
@@ -228,7 +228,7 @@ class StippleState:
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
     >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
-    >>> stage = _make_stage(g, opt, engine)
+    >>> stage = make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
     >>> state.points.shape, state.packs
@@ -252,7 +252,7 @@ class StippleStage:
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
     >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
-    >>> stage = _make_stage(g, opt, engine)
+    >>> stage = make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
     >>> stage.size, stage.radius_field.shape == stage.density.shape == g.shape
@@ -395,7 +395,7 @@ def reseat_dead(points, mass, disk, ink, size):
     if not dead.size:
         return points, ink, 0
     live = np.flatnonzero(live)
-    order = live[_least(-mass[live], dead.size)]   # heaviest first, ties in index order
+    order = live[least_k(-mass[live], dead.size)]   # heaviest first, ties in index order
     heavy = order[np.arange(dead.size) % order.size]
     angle = _GOLDEN_ANGLE * np.arange(dead.size)
     step = 0.5 * disk[heavy, None] * np.column_stack([np.cos(angle), np.sin(angle)])
@@ -433,7 +433,7 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     >>> g = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
     >>> opt = StippleOptions().plan(60, 48, 32)
     >>> engine = make_engine(Domain.rect(48, 32), 60, "exact", grid=opt.grid_shape(48, 32))
-    >>> stage = _make_stage(g, opt, engine)
+    >>> stage = make_stage(g, opt, engine)
     >>> state = StippleState(_start_points(g, opt, None), float(opt.k0))
 
     >>> state, entry = pack_step(state, stage, blend=0.5)
@@ -487,7 +487,7 @@ def lloyd_step(state, stage, new_k=True):
     Examples
     --------
     >>> g, opt = np.tile(np.linspace(0.0, 1.0, 48), (32, 1)), StippleOptions().plan(60, 48, 32)
-    >>> stage = _make_stage(g, opt, make_engine(Domain.rect(48, 32), 60, "exact", grid=(32, 48)))
+    >>> stage = make_stage(g, opt, make_engine(Domain.rect(48, 32), 60, "exact", grid=(32, 48)))
     >>> new, entry = lloyd_step(StippleState(_start_points(g, opt, None), float(opt.k0)), stage)
     >>> new.packs, entry["empty"], bool(new.k > 0)
     (0, 0, True)
@@ -507,7 +507,7 @@ def lloyd_step(state, stage, new_k=True):
     return StippleState(newx, k, state.packs, state.ink), entry
 
 
-def _run(state, stage, callback, *, first=0, before=None):
+def run_schedule(state, stage, callback, *, first=0, before=None):
     """Every phase of the schedule; returns (final state, history).
 
     Each history entry holds the seconds of the engine stages that ran in
@@ -523,7 +523,7 @@ def _run(state, stage, callback, *, first=0, before=None):
 
 
 def _steps(state, stage, callback, first, before, watch, total, advance):
-    """The body of :func:`_run`; ``advance(done)`` after each step."""
+    """The body of :func:`run_schedule`; ``advance(done)`` after each step."""
     history = []
     for phase in stage.options.phases:
         kind, iters = phase[0], phase[1]
@@ -587,7 +587,7 @@ def _field_blur(engine):
     return blur, stage_record("opencl", blur.device_name)
 
 
-def _centroid_density(darkness, opt, blur=gaussian_blur):
+def centroid_density(darkness, opt, blur=gaussian_blur):
     """Density of the centroid integrals per grid cell: blurred darkness, upsampled; float32
     (half the memory and the reads of every step; the engines sum it in float64)."""
     blurred = _blurred(darkness, opt.density_sigma, blur)
@@ -610,7 +610,7 @@ def _toned(gray, paper_tone):
 #: weight, ink and density), reserved while the run starts (:class:`~diskpack_cl.memory.PageReserve`).
 STAGE_BYTES_PER_PIXEL = 16
 
-#: Rows of a large picture whose fields :func:`_make_stage` makes at once: its blurs and
+#: Rows of a large picture whose fields :func:`make_stage` makes at once: its blurs and
 #: dilation then hold a band's temporaries, not the picture's (the peak memory of a run).
 FIELD_BAND_ROWS = 512
 
@@ -633,7 +633,7 @@ def field_margin(plan, ell):
 
 
 def _banded_stage(gray, opt, engine, rows):
-    """:func:`_make_stage` of a whole picture, its fields made `rows` rows at a time, each
+    """:func:`make_stage` of a whole picture, its fields made `rows` rows at a time, each
     band from itself and the margin its blurs and dilation reach (the same values)."""
     H, W = gray.shape
     ell = detail_ell(gray, opt.n) if opt.features == "detail" else None
@@ -645,7 +645,7 @@ def _banded_stage(gray, opt, engine, rows):
     for y0 in range(0, H, rows):
         y1 = min(y0 + rows, H)
         lo, hi = max(0, y0 - m), min(H, y1 + m)
-        part = _make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), slice(0, W)),
+        part = make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), slice(0, W)),
                            ell=ell, blur=blur)
         stages = part.stages
         for name in names:
@@ -665,7 +665,7 @@ def _sampled(field):
     return None if field is None else field.astype(np.float32)
 
 
-def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None):
+def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None):
     """The :class:`StippleStage` of a gray image: radius field, centroid density, ink.
 
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
@@ -683,11 +683,11 @@ def _make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAN
     if opt.features == "detail":
         rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell, blur=blur)
     # the fields read at the dots alone are kept in float32 (half the memory: 7 digits are
-    # more than a radius or a blend needs); so is the density (_centroid_density)
+    # more than a radius or a blend needs); so is the density (centroid_density)
     rfield, weight = _sampled(rfield), _sampled(weight)
     darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
     ink = _sampled(_blurred(darkness, INK_SIGMA, blur)) if opt.support > 0 else None   # off_support's
-    density = _centroid_density(darkness, opt, blur)
+    density = centroid_density(darkness, opt, blur)
     if window is None:
         return StippleStage(engine, opt, rfield, density, weight, ink, stages)
     s = opt.supersample
@@ -823,7 +823,7 @@ def _stipple(image, n, options, start, callback, engine_args):
             engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
                                  **engine_args)
         with run_stage("setup", 0 if exact else 1):
-            stage = _make_stage(gray, opt, engine)
+            stage = make_stage(gray, opt, engine)
     del gray   # the stage holds every field the steps read
-    state, history = _run(StippleState(x, float(opt.k0)), stage, callback)
+    state, history = run_schedule(StippleState(x, float(opt.k0)), stage, callback)
     return _certified_result(state, stage, history, t_start, ink)

@@ -54,7 +54,7 @@ import numpy as np
 from ._timing import Stopwatch
 from .domain import Domain
 from .engine import make_engine
-from .executors import _peak_rss_mib, map_tasks
+from .executors import peak_rss_mib, map_tasks
 from .image import ToneOptions, gray_strips
 from .io import atomic_write
 from .jobs import derive_seeds
@@ -63,7 +63,7 @@ from .radii import certified_k, detail_scale
 from .schedule import StippleOptions
 from .dithering import error_diffusion
 from .memory import freed_memory_kept
-from .stipple import StippleResult, field_margin, StippleState, _make_stage, _run, dot_radii
+from .stipple import StippleResult, field_margin, StippleState, make_stage, run_schedule, dot_radii
 
 __all__ = ["TileOptions", "tile_grid", "stipple_tiled", "WorkFolderBusy", "WorkFolderWarning"]
 
@@ -300,7 +300,7 @@ def _run_part(part):
     plan = part.plan
     engine = make_engine(Domain.rect(x1 - x0, y1 - y0), plan.n, part.backend, device=part.device,
                          grid=plan.grid_shape(x1 - x0, y1 - y0))
-    stage = _make_stage(gray, plan, engine, window=window, ell=part.ell)
+    stage = make_stage(gray, plan, engine, window=window, ell=part.ell)
     offset = np.array([x0, y0], dtype=np.float64)
     before = None
     if part.points is None:
@@ -308,7 +308,7 @@ def _run_part(part):
     else:
         state = StippleState(part.points - offset, float(part.k), 0, part.ink)
         before = _holding(~part.moving, state)
-    state, history = _run(state, stage, None, before=before)
+    state, history = run_schedule(state, stage, None, before=before)
     keep = slice(None) if part.moving is None else part.moving
     ink = np.ones(len(state.points)) if state.ink is None else state.ink
     return {"points": state.points[keep] + offset,
@@ -316,7 +316,7 @@ def _run_part(part):
             "k": float(state.k), "steps": len(history), "engine": engine.backend,
             # a string: the work folder's .npz holds no dicts
             "stages": json.dumps(stage.stages),
-            "seconds": time.perf_counter() - t0, "peak_rss_mib": _peak_rss_mib()}
+            "seconds": time.perf_counter() - t0, "peak_rss_mib": peak_rss_mib()}
 
 
 def _tile_start(gray, window, n, seed):

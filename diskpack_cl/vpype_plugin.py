@@ -1,6 +1,6 @@
 """The ``diskpack`` command of vpype: a stippling as vpype geometry, one layer per pen.
 
-Installed with the ``vpype`` extra (``pip install "diskpack_cl[vpype]"``),
+Installed with the ``vpype`` extra (``.venv/bin/pip install ".[vpype]"`` in the repository),
 vpype finds it through its ``vpype.plugins`` entry point::
 
     vpype diskpack photo.jpg -n 20000 --pen-mm 0.5 layout a4 linesort write out.svg

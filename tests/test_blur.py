@@ -73,11 +73,11 @@ def test_device_blur_of_a_band_of_a_large_picture_and_bad_shapes(device_blur):
 
 def test_stage_fields_the_same_with_the_device_blur_or_scipys(ctx, device_blur):
     """The stage's fields (radius field, detail weight, ink, density) whichever blur makes them."""
-    from diskpack_cl.stipple import StippleOptions, _make_stage
+    from diskpack_cl.stipple import StippleOptions, make_stage
 
     g = np.clip(np.random.default_rng(3).random((60, 90)) * 1.4 - 0.2, 0.0, 1.0)
     opt = StippleOptions().plan(400, 90, 60)
     engine = make_engine(Domain.rect(90, 60), opt.n, device=ctx, grid=opt.grid_shape(90, 60))
-    host, dev = (_make_stage(g, opt, engine, blur=(b, None)) for b in (gaussian_blur, device_blur))
+    host, dev = (make_stage(g, opt, engine, blur=(b, None)) for b in (gaussian_blur, device_blur))
     for name in ("radius_field", "density", "blend_weight", "ink"):
         np.testing.assert_allclose(getattr(dev, name), getattr(host, name), rtol=1e-6, atol=1e-7)

@@ -263,17 +263,17 @@ def test_devices_without_opencl(monkeypatch, capsys):
 
 
 def test_every_command_module_is_registered():
-    """One module per subcommand, each with ``_add_NAME`` and ``_run_NAME``; all registered."""
+    """One module per subcommand, each with ``add_NAME`` and ``_run_NAME``; all registered."""
     import importlib
     import pkgutil
 
     modules = [m.name for m in pkgutil.iter_modules(cli.__path__) if not m.name.startswith("_")]
-    names = [f.__name__[5:] for f in cli._SUBCOMMANDS]
+    names = [f.__name__[4:] for f in cli._SUBCOMMANDS]
     assert sorted(names) == sorted(modules)
     assert names[:3] == ["devices", "poisson", "relax"]
     for name in names:
         module = importlib.import_module(f"diskpack_cl.cli.{name}")
-        assert callable(getattr(module, f"_add_{name}")) and callable(getattr(module, f"_run_{name}"))
+        assert callable(getattr(module, f"add_{name}")) and callable(getattr(module, f"_run_{name}"))
 
 
 # ------------------------------------------------------ README and .ci/run
@@ -592,11 +592,11 @@ def test_analyze_without_matplotlib(point_files, tmp_path, capsys, monkeypatch):
     assert cli.main(["analyze", *point_files, "-o", str(out), "--json"]) == 1
     captured = capsys.readouterr()
     assert _json_line(captured.out)["n"] == 200
-    assert 'pip install "diskpack_cl[plot]"' in captured.err
+    assert '.venv/bin/pip install ".[plot]"' in captured.err
     assert set(os.listdir(tmp_path)) == before
     # without --json it fails before any work
     assert cli.main(["analyze", *point_files, "-o", str(out)]) == 1
-    assert 'pip install "diskpack_cl[plot]"' in capsys.readouterr().err
+    assert '.venv/bin/pip install ".[plot]"' in capsys.readouterr().err
     assert set(os.listdir(tmp_path)) == before
 
 

@@ -120,3 +120,32 @@ def test_the_package_has_no_import_circle():
         f"{a} imports {b} (line {', '.join(map(str, graph[a][b]))})"
         for a in c for b in sorted(graph[a]) if b in c) for c in found]
     assert not found, "\n".join(described)
+
+
+def private_imports(module, path):
+    """``[(line, imported module, name)]``: the private names (``_x``) that `module` takes
+    from another module of the package; a private *module* (``from . import _device``) is
+    a module, not a name, and may be imported."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        for alias in node.names:
+            private = alias.name.startswith("_") and not alias.name.startswith("__")
+            targets = _targets(module, path, ast.ImportFrom(node.module, [alias], node.level))
+            if private and targets and not any(t.endswith("." + alias.name) for t in targets):
+                found.append((node.lineno, sorted(targets)[0], alias.name))
+    return found
+
+
+def test_private_imports_finds_a_private_name_and_passes_a_private_module(tmp_path):
+    path = tmp_path / "mod.py"
+    path.write_text("from .stipple import _run, run\nfrom . import _device\n")
+    assert private_imports("diskpack_cl.mod", path) == [(1, "diskpack_cl.stipple", "_run")]
+
+
+def test_no_private_name_crosses_a_module():
+    found = [f"{module}:{line} takes {name} from {target}"
+             for module, path in MODULES.items()
+             for line, target, name in private_imports(module, path)]
+    assert not found, "\n".join(found)

@@ -2,7 +2,7 @@
 
 Banded filters (:func:`diskpack_cl.radii.in_bands`), the flat field lookup
 (:func:`diskpack_cl.radii.field_at`) and the partial sort of the error
-diffusion's residual fix (``dithering._least``) are there for speed and
+diffusion's residual fix (``dithering.least_k``) are there for speed and
 memory at 8192 x 8192; here each is checked against scipy or numpy on
 pictures with several bands, odd shapes and ties.
 """
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from diskpack_cl.dithering import _least
+from diskpack_cl.dithering import least_k
 from diskpack_cl.radii import field_at, gaussian_blur, in_bands
 
 
@@ -44,4 +44,4 @@ def test_field_at_is_the_pixel_lookup():
 def test_least_is_a_stable_argsort(k):
     values = np.random.default_rng(4).integers(0, 7, 100).astype(float)   # many ties
     values[::9] = -0.0
-    assert np.array_equal(_least(values, k)[:k], np.argsort(values, kind="stable")[:k])
+    assert np.array_equal(least_k(values, k)[:k], np.argsort(values, kind="stable")[:k])

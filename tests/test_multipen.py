@@ -335,7 +335,7 @@ def test_dask_colour_batch_matches_one_process(tmp_path):
 
 
 def test_the_pen_steps_are_the_one_pen_loop():
-    """The class-aware steps run in the one schedule loop (stipple._run with a hook):
+    """The class-aware steps run in the one schedule loop (stipple.run_schedule with a hook):
     without a pull they move the dots as the joint steps do, and the history
     counts on across the two parts."""
     img = _image(32, 40)

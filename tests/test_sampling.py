@@ -137,7 +137,7 @@ def test_bridson_n_mode():
 
 
 def test_first_come_matches_sequential_loop():
-    from diskpack_cl.sampling import _first_come
+    from diskpack_cl.sampling import first_come
 
     rng = np.random.default_rng(0)
     cand = rng.random((400, 2))
@@ -148,5 +148,5 @@ def test_first_come_matches_sequential_loop():
         q -= np.round(q)
         if not kept or (np.sqrt((q ** 2).sum(1)) >= d).all():
             kept.append(i)
-    mask = _first_come(cand, d)
+    mask = first_come(cand, d)
     assert np.flatnonzero(mask).tolist() == kept

@@ -573,7 +573,7 @@ def test_one_collector_times_a_colour_stippling():
 def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
     """A large picture's stage fields come band by band (peak memory); every value is the same."""
     from diskpack_cl.engine import make_engine
-    from diskpack_cl.stipple import _make_stage
+    from diskpack_cl.stipple import make_stage
 
     H, W = shape
     rng = np.random.default_rng(3)
@@ -582,9 +582,9 @@ def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
     options = StippleOptions() if supersample is None else StippleOptions(supersample=supersample)
     plan = options.plan(n, W, H, ink=float((1 - g).sum()))
     engine = make_engine(Domain.rect(W, H), n, "exact")
-    whole = _make_stage(g, plan, engine, band_rows=H)
+    whole = make_stage(g, plan, engine, band_rows=H)
     for rows in (7, 16, 40):
-        part = _make_stage(g, plan, engine, band_rows=rows)
+        part = make_stage(g, plan, engine, band_rows=rows)
         for name in ("radius_field", "density", "blend_weight", "ink"):
             a, b = getattr(whole, name), getattr(part, name)
             assert (a is None) == (b is None), name

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl.picture_measures import stray_dots
-from diskpack_cl.dithering import _least
+from diskpack_cl.dithering import least_k
 from diskpack_cl.stipple import reseat_dead, stipple
 
 
@@ -55,7 +55,7 @@ def test_least_is_the_prefix_of_a_stable_sort(values, data):
     values = np.asarray(values, float)
     k = data.draw(st.integers(1, values.size + 3))
     full = np.argsort(values, kind="stable")
-    np.testing.assert_array_equal(_least(values, k), full[:k])
+    np.testing.assert_array_equal(least_k(values, k), full[:k])
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from diskpack_cl import tiles
 from diskpack_cl.domain import Domain
 from diskpack_cl.engine import make_engine
 from diskpack_cl.schedule import StippleOptions
-from diskpack_cl.stipple import _make_stage, field_margin
+from diskpack_cl.stipple import make_stage, field_margin
 from diskpack_cl.tiles import TileOptions, stipple_tiled, tile_grid
 
 SHORT = dict(schedule=[("mix", 3, 0.6), ("mix", 1, 0.75)])
@@ -94,11 +94,11 @@ def test_fields_of_a_window_are_the_pictures():
     from diskpack_cl.radii import detail_scale
     d = 1 - g
     ell = detail_scale(float(d.sum()), n, float(np.median(d[d > 0.05])))
-    whole = _make_stage(g, plan, make_engine(Domain.rect(110, 90), n, "exact"), ell=ell)
+    whole = make_stage(g, plan, make_engine(Domain.rect(110, 90), n, "exact"), ell=ell)
     m = field_margin(plan, ell)
     x0, y0, x1, y1 = 40, 30, 75, 60
     win = g[y0 - m:y1 + m, x0 - m:x1 + m]
-    part = _make_stage(win, plan, make_engine(Domain.rect(35, 30), n, "exact"),
+    part = make_stage(win, plan, make_engine(Domain.rect(35, 30), n, "exact"),
                        window=(slice(m, m + 30), slice(m, m + 35)), ell=ell)
     s = plan.supersample
     np.testing.assert_allclose(part.radius_field, whole.radius_field[y0:y1, x0:x1], rtol=1e-12)
@@ -369,13 +369,13 @@ def test_nothing_is_left_behind_after_a_clean_end(tmp_path, monkeypatch):
 def test_a_seam_moves_its_band_and_holds_the_rest(monkeypatch):
     """In every seam's run the held dots end where they were and the band's dots move."""
     runs, parts = [], []
-    real_run, real_part = tiles._run, tiles.run_part
+    real_run, real_part = tiles.run_schedule, tiles.run_part
 
     def spy_run(state, *args, **kwargs):
         out = real_run(state, *args, **kwargs)
         runs.append((state.points.copy(), out[0].points))
         return out
-    monkeypatch.setattr(tiles, "_run", spy_run)
+    monkeypatch.setattr(tiles, "run_schedule", spy_run)
     monkeypatch.setattr(tiles, "run_part", lambda part: parts.append(part) or real_part(part))
     stipple_tiled(seam_picture(), 1200, tiling=TileOptions(tiles="2x2", seam_band=1, halo=2),
                   **SHORT)

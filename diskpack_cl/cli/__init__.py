@@ -6,10 +6,10 @@ files and calls the public Python API. Heavy modules are imported inside the
 subcommand functions, so ``diskpack --help`` stays fast.
 
 Adding a subcommand means adding a module with two functions,
-``_add_NAME(subparsers)`` (creates the parser with
+``add_NAME(subparsers)`` (creates the parser with
 ``subparsers.add_parser("NAME", ...)`` and calls
 ``parser.set_defaults(run=_run_NAME)``) and ``_run_NAME(args) -> int``, and
-listing ``_add_NAME`` in :data:`_SUBCOMMANDS`.
+listing ``add_NAME`` in :data:`_SUBCOMMANDS`.
 
 Raise ``ValueError``/``OSError`` for user errors: :func:`main` prints
 ``diskpack: error: ...`` and returns 1 (2 for a usage error or an
@@ -29,16 +29,16 @@ from importlib.metadata import version
 import signal
 import threading
 
-from ._batches import _raise_terminated, _Terminated
-from ._common import (PROG, _HelpFormatter, _Parser, _UsageError, open_closed_streams,
+from ._batches import raise_terminated, Terminated
+from ._common import (PROG, HelpFormatter, Parser, UsageError, open_closed_streams,
                       show_device_notes)
 from ._help import LEADING, one_line_help
-from .analyze import _add_analyze
-from .devices import _add_devices
-from .export import _add_export
-from .poisson import _add_poisson
-from .relax import _add_relax
-from .stipple import _add_stipple
+from .analyze import add_analyze
+from .devices import add_devices
+from .export import add_export
+from .poisson import add_poisson
+from .relax import add_relax
+from .stipple import add_stipple
 from diskpack_cl.io import OutputIsInputError
 from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
 
@@ -46,8 +46,8 @@ __all__ = ["main", "build_parser", "LEADING", "one_line_help"]
 
 
 #: The subcommands, in the order of ``diskpack --help``.
-_SUBCOMMANDS = (_add_devices, _add_poisson, _add_relax, _add_stipple, _add_export,
-                _add_analyze)
+_SUBCOMMANDS = (add_devices, add_poisson, add_relax, add_stipple, add_export,
+                add_analyze)
 
 
 def build_parser(only=None):
@@ -63,24 +63,24 @@ def build_parser(only=None):
     >>> args.command, args.n
     ('poisson', 64)
     """
-    parser = _Parser(
+    parser = Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
         parser.add_argument("--version", action="version", version=f"%(prog)s {version('diskpack_cl')}")
     except Exception:  # pragma: no cover - not installed
         pass
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
-                                       parser_class=_Parser)
+                                       parser_class=Parser)
     for add in _SUBCOMMANDS:
-        if only is None or add.__name__ == f"_add_{only}":
+        if only is None or add.__name__ == f"add_{only}":
             add(subparsers)
     for sub in subparsers.choices.values():   # long paragraphs wrapped, examples kept
-        sub.formatter_class = _HelpFormatter
+        sub.formatter_class = HelpFormatter
     return parser
 
 
 def _terminate_handlers():
-    """Make SIGTERM and SIGHUP raise :class:`_Terminated`, as Ctrl-C raises
+    """Make SIGTERM and SIGHUP raise :class:`Terminated`, as Ctrl-C raises
     KeyboardInterrupt, so that a killed run cleans up like an interrupted
     one; return the handlers to restore (none off the main thread)."""
     if threading.current_thread() is not threading.main_thread():
@@ -88,7 +88,7 @@ def _terminate_handlers():
     handlers = {}
     for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
         if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
-            handlers[sig] = signal.signal(sig, _raise_terminated)
+            handlers[sig] = signal.signal(sig, raise_terminated)
     return handlers
 
 
@@ -148,7 +148,7 @@ def _main(argv):
     from diskpack_cl import NoOpenCLError  # not loaded at start-up
 
     argv = sys.argv[1:] if argv is None else list(argv)
-    named = argv[0] if argv and f"_add_{argv[0]}" in {a.__name__ for a in _SUBCOMMANDS} else None
+    named = argv[0] if argv and f"add_{argv[0]}" in {a.__name__ for a in _SUBCOMMANDS} else None
     parser = build_parser(named)
     try:
         args = parser.parse_args(argv)
@@ -169,14 +169,14 @@ def _main(argv):
         print(f"{PROG}{f' {args.command}' if usage else ''}: error: {exc.render(flag_name)}",
               file=sys.stderr)
         return 2 if usage else 1
-    except (_UsageError, OutputIsInputError) as exc:
+    except (UsageError, OutputIsInputError) as exc:
         print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        how = (signal.Signals(exc.args[0]).name if isinstance(exc, _Terminated)
+        how = (signal.Signals(exc.args[0]).name if isinstance(exc, Terminated)
                else "interrupted")
         print(f"{PROG}: error: {how}, nothing written", file=sys.stderr)
-        return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
+        return 128 + exc.args[0] if isinstance(exc, Terminated) else 130
     except BrokenPipeError:
         return _stdout_closed()
     except (ValueError, NoOpenCLError) as exc:

@@ -10,10 +10,10 @@ import time
 from diskpack_cl.extras import install_command
 from diskpack_cl.io import json_default
 
-from ._common import PROG, _UsageError, _bar, _positive_int
+from ._common import PROG, UsageError, terminal_bar, positive_int
 
 
-#: The options of the batch group (:func:`_batch_options`): any of them makes a batch.
+#: The options of the batch group (:func:`batch_options`): any of them makes a batch.
 BATCH_OPTIONS = ("jobs", "manifest", "overwrite", "scheduler", "collect", "count")
 
 #: The rule, as ``--help`` states it.
@@ -22,13 +22,13 @@ BATCH_RULE = ("A command is a batch when it has several inputs, a folder, an out
               "with no manifest.")
 
 
-def _batch_options(p):
+def batch_options(p):
     g = p.add_argument_group(
         "batch",
         BATCH_RULE + " Output templates: {stem} {name} {parent} (of the input), {n}, {seed}, "
         "{i} (item index, e.g. {i:04d}). Each item writes its outputs atomically, then one "
         "line of the manifest; a rerun of the same command skips the items done.")
-    g.add_argument("--jobs", "-j", type=_positive_int, default=None, metavar="N",
+    g.add_argument("--jobs", "-j", type=positive_int, default=None, metavar="N",
                    help="worker processes (spawned; PoCL threads per worker capped to "
                         "cores/N; default: one per --device listed (--device A,B), else one "
                         "per core)")
@@ -46,10 +46,10 @@ def _batch_options(p):
     return g
 
 
-def _batch_mode(args, inputs, outputs):
+def batch_mode(args, inputs, outputs):
     """Whether the command is a batch (:data:`BATCH_RULE`).
 
-    Raises _UsageError for a batch with --verify or --profile, which apply
+    Raises UsageError for a batch with --verify or --profile, which apply
     to one input, and for a device list (``--device A,B``, the workers'
     devices) without a batch.
     """
@@ -59,15 +59,15 @@ def _batch_mode(args, inputs, outputs):
     single = [f"--{k}" for k in ("verify", "profile") if getattr(args, k, False)]
     if batch and single:
         verb = "apply" if len(single) > 1 else "applies"
-        raise _UsageError(f"{' and '.join(single)} {verb} to one input; this command is a batch "
+        raise UsageError(f"{' and '.join(single)} {verb} to one input; this command is a batch "
                           "(several inputs, a folder, a template or a batch option)")
     if not batch and "," in (args.device or ""):
-        raise _UsageError(f"--device {args.device}: a device list is for the workers of a batch; "
+        raise UsageError(f"--device {args.device}: a device list is for the workers of a batch; "
                           "one input runs on one device")
     return batch
 
 
-def _batch_run(args):
+def batch_run(args):
     """Keyword arguments of the batch functions for where and how items run."""
     devices = [d.strip() for d in args.device.split(",") if d.strip()] if args.device else None
     scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
@@ -87,22 +87,22 @@ def _batch_run(args):
                 collect=args.collect)
 
 
-class _Terminated(KeyboardInterrupt):
+class Terminated(KeyboardInterrupt):
     """SIGTERM or SIGHUP during a batch."""
 
 
-def _raise_terminated(signum, frame):
-    raise _Terminated(signum)
+def raise_terminated(signum, frame):
+    raise Terminated(signum)
 
 
-def _report_batch(args, batch):
+def report_batch(args, batch):
     """Run a planned batch with a progress bar / log lines / JSON; the exit status.
 
-    :func:`main` turns SIGTERM and SIGHUP into :class:`_Terminated`; an
+    :func:`main` turns SIGTERM and SIGHUP into :class:`Terminated`; an
     interrupted batch says how far it came and how to resume.
     """
     total = len(batch)
-    bar = _bar(args, args.command, "item", total, leave=True)
+    bar = terminal_bar(args, args.command, "item", total, leave=True)
     counts = {"ok": 0, "failed": 0, "skipped": 0}
     failures = []
     t0 = time.perf_counter()
@@ -141,7 +141,7 @@ def _report_batch(args, batch):
                 and os.path.exists(batch.manifest) else "none had finished")
         print(f"{PROG}: error: interrupted after {done} of {total} items; {kept}: rerun the "
               f"same command to resume", file=sys.stderr)
-        return 128 + exc.args[0] if isinstance(exc, _Terminated) else 130
+        return 128 + exc.args[0] if isinstance(exc, Terminated) else 130
     if bar is not None:
         bar.close()
     seconds = time.perf_counter() - t0

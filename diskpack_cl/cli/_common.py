@@ -42,7 +42,7 @@ def _checked(convert, test, want):
     return parse
 
 
-_positive_int = _checked(int, lambda v: v >= 1, "at least 1")
+positive_int = _checked(int, lambda v: v >= 1, "at least 1")
 
 
 def _records(record):
@@ -162,14 +162,14 @@ def note_fallbacks(args, stages):
                 print(f"{PROG}: note: {text}", file=sys.stderr)
 
 
-def _device_options(p):
+def device_options(p):
     p.add_argument("--device", metavar="D", default=None,
                    help="OpenCL device: 'P' or 'P:D' indices (as in PYOPENCL_CTX) or a name "
                         "substring ('pocl', 'nvidia', 'gpu', 'cpu'); default: DISKPACK_DEVICE, "
                         "then PYOPENCL_CTX, then a GPU, else the first CPU device")
 
 
-class _GivenOnce(argparse.Action):
+class GivenOnce(argparse.Action):
     """An option that may be given once: a second one is a usage error (argparse would
     keep the last silently)."""
 
@@ -182,14 +182,14 @@ class _GivenOnce(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
-class _Once(_GivenOnce):
+class _Once(GivenOnce):
     """The one point file of ``poisson`` and ``relax``: a second ``-o`` is a usage error."""
 
     hint = (": this command writes one point file (several sets: --count K with a template "
             "such as -o sets/{i:04d}.npz)")
 
 
-def _output_options(p):
+def output_options(p):
     p.add_argument("-o", "--output", required=True, metavar="OUT", action=_Once,
                    help="output point file (.npz, .npy, .csv, .txt, .xy); written atomically; "
                         "given once")
@@ -199,7 +199,7 @@ def _output_options(p):
                    help="print one JSON summary line on stdout at the end")
 
 
-class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """Paragraphs of a description wrapped to the terminal; indented lines (examples) kept."""
 
     def _fill_text(self, text, width, indent):
@@ -209,7 +209,7 @@ class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
             for line in text.splitlines())
 
 
-class _Parser(argparse.ArgumentParser):
+class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line: the error, "did you mean" for a
     mistyped choice or option, and where the help is (no usage dump)."""
 
@@ -241,7 +241,7 @@ def _did_you_mean(parser, message):
 
     Examples
     --------
-    >>> p = _Parser(prog="x")
+    >>> p = Parser(prog="x")
     >>> for flag in ("--pen-mm", "--pen-path", "--page"):
     ...     _ = p.add_argument(flag)
     >>> _did_you_mean(p, "unrecognized arguments: --pen-width 3")
@@ -282,7 +282,7 @@ def _option_strings(parser):
     return out
 
 
-def _bar(args, desc, unit, total=None, *, leave=False):
+def terminal_bar(args, desc, unit, total=None, *, leave=False):
     """A tqdm bar on stderr when it is a terminal and not ``--quiet``, else None."""
     if args.quiet or not sys.stderr.isatty():
         return None
@@ -304,18 +304,18 @@ def command_run(args):
 SAMPLE = "sample"
 
 
-def _image_path(text):
+def image_path(text):
     """The word ``sample`` names the bundled sample photograph; anything else is a path."""
     if text == SAMPLE:
         return sample_image_path()
     return text
 
 
-class _UsageError(ValueError):
+class UsageError(ValueError):
     """Options that contradict each other: :func:`main` returns 2, as argparse does."""
 
 
-def _checked_outputs(args, inputs):
+def checked_outputs(args, inputs):
     """The ``-o`` paths, each checked (extension, folder), given once and none of the
     `inputs`, before any work."""
     from diskpack_cl.export import check_output_path  # not loaded at start-up

@@ -12,7 +12,7 @@ from ._common import PROG, command_run
 from diskpack_cl.options import add_arguments
 
 
-def _drawing_options(p, summary):
+def drawing_options(p, summary):
     """The options of how the dots are drawn (SVG, PNG), of ``stipple`` and ``export``."""
     from diskpack_cl.export import WriteOptions  # not loaded at start-up
 
@@ -72,7 +72,7 @@ def _warn_crowded(args, plot):
         print(f"{PROG}: warning: {crowded}", file=sys.stderr)
 
 
-def _write_and_report(args, write, res, gray, outputs, summary, t0):
+def write_and_report(args, write, res, gray, outputs, summary, t0):
     """Write the outputs in the command's run (:func:`~._common.command_run`), add their
     figures to ``summary`` (``seconds`` since ``t0``, and ``stage_seconds``: the run's seconds
     per stage), print it with --json; return the tail of the summary line."""

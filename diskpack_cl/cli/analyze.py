@@ -11,11 +11,11 @@ from diskpack_cl.io import check_not_inputs, check_writable, json_default
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.reports import AnalyzeOptions, PLOT_HINT, analyze, have_matplotlib
 
-from ._common import PROG, _GivenOnce, _image_path
+from ._common import PROG, GivenOnce, image_path
 from ._help import with_examples
 
 
-def _add_analyze(subparsers):
+def add_analyze(subparsers):
     p = subparsers.add_parser(
         "analyze", help="spectra and measures of point sets or of a stippling, as a figure",
         description=with_examples(
@@ -39,7 +39,7 @@ def _add_analyze(subparsers):
     p.add_argument("inputs", nargs="+", metavar="POINTS",
                    help="point files (realizations of one process), or one stippling .npz "
                         "(or a colour stippling's .csv)")
-    p.add_argument("-o", "--output", default=None, metavar="REPORT", action=_GivenOnce,
+    p.add_argument("-o", "--output", default=None, metavar="REPORT", action=GivenOnce,
                    help="figure file (.png, .pdf or .svg); written atomically")
     p.add_argument("--json", action="store_true",
                    help="print the numbers as one JSON line on stdout")
@@ -63,7 +63,7 @@ def _run_analyze(args):
         check_writable(args.output)
         if not have_matplotlib() and not args.json:
             raise ValueError(f"{PLOT_HINT} (the numbers print without it with --json)")
-    image = None if args.image is None else _image_path(args.image)
+    image = None if args.image is None else image_path(args.image)
     numbers = analyze(args.inputs, from_namespace(AnalyzeOptions, args), image=image,
                       output=args.output, allow_large=args.allow_large)
     if args.json:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import _device_options
+from ._common import device_options
 from ._help import with_examples
 
 
-def _add_devices(subparsers):
+def add_devices(subparsers):
     p = subparsers.add_parser(
         "devices", help="list OpenCL platforms and devices; --check: which programs each runs",
         description=with_examples(
@@ -19,7 +19,7 @@ def _add_devices(subparsers):
             ["diskpack devices", "diskpack devices --check",
              "diskpack devices --check --recheck --device cpu"]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    _device_options(p)
+    device_options(p)
     p.add_argument("--check", action="store_true",
                    help="print the device's known-answer verdicts (run now where none is cached)")
     p.add_argument("--recheck", action="store_true",

@@ -6,13 +6,13 @@ import argparse
 import sys
 import time
 
-from ._common import PROG, _checked_outputs
-from ._drawing import _drawing_options, _write_and_report
+from ._common import PROG, checked_outputs
+from ._drawing import drawing_options, write_and_report
 from ._help import lead_with, with_examples
 from diskpack_cl.options import from_namespace
 
 
-def _add_export(subparsers):
+def add_export(subparsers):
     p = subparsers.add_parser(
         "export", help="draw a finished stippling again, for another paper, pen or dot size",
         usage="%(prog)s STIPPLING -o OUT [options]",
@@ -29,7 +29,7 @@ def _add_export(subparsers):
                    help="a stippling written by diskpack stipple (.npz, .csv or .svg)")
     p.add_argument("-o", "--output", action="append", required=True, metavar="OUT",
                    help="output file; repeat for several: .svg, .png, .npz, .csv")
-    _drawing_options(p, "n, the input, ")
+    drawing_options(p, "n, the input, ")
     lead_with(p)
     p.set_defaults(run=_run_export)
 
@@ -39,7 +39,7 @@ def _run_export(args):
 
     write = from_namespace(WriteOptions, args)
     t0 = time.perf_counter()
-    outputs = _checked_outputs(args, [args.input])
+    outputs = checked_outputs(args, [args.input])
     res = read_stipple(args.input)
     if res is None:
         raise ValueError(f"{args.input} is a point set, not a stippling (no radii, width and "
@@ -47,7 +47,7 @@ def _run_export(args):
     write = write.replace(invert=write.invert or bool(res.params.get("invert", False)))
     summary = {"n": len(res.points), "width": res.width, "height": res.height,
                "input": str(args.input)}
-    tail = _write_and_report(args, write, res, None, outputs, summary, t0)
+    tail = write_and_report(args, write, res, None, outputs, summary, t0)
     if not args.quiet:
         print(f"{PROG}: {len(res.points)} dots of {args.input}{tail}", file=sys.stderr)
     return 0

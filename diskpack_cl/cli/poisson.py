@@ -13,14 +13,14 @@ from diskpack_cl.options import add_arguments, changed, from_namespace
 from diskpack_cl.poisson import SIZE, STARTS, PoissonOptions, PoissonSetOptions, poisson_job
 from diskpack_cl.relax import TRIAL_RELAX, max_points_for_radius
 
-from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import (PROG, _bar, _image_path, _output_options, _positive_int, note_fallbacks,
+from ._batches import batch_mode, batch_options, batch_run, report_batch
+from ._common import (PROG, terminal_bar, image_path, output_options, positive_int, note_fallbacks,
                       where_ran)
 from ._help import with_examples
-from .relax import _progress, _relax, _relax_and_write, _relax_options, _unreached
+from .relax import relax_progress, relax_options_of, relax_and_write, add_relax_options, unreached_status
 
 
-def _add_poisson(subparsers):
+def add_poisson(subparsers):
     p = subparsers.add_parser(
         "poisson", help="make a Poisson disk set on the unit torus, in a box, 2D or 3D",
         usage="%(prog)s -n N -o OUT [options]",
@@ -37,10 +37,10 @@ def _add_poisson(subparsers):
         formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p, PoissonSetOptions, groups={SIZE: p.add_mutually_exclusive_group()})
     add_arguments(p, PoissonOptions)
-    _output_options(p)
-    _relax_options(p)
-    g = _batch_options(p)
-    g.add_argument("--count", type=_positive_int, default=None, metavar="K",
+    output_options(p)
+    add_relax_options(p)
+    g = batch_options(p)
+    g.add_argument("--count", type=positive_int, default=None, metavar="K",
                    help="make K independent sets, seeds derived from --seed "
                         "(numpy SeedSequence.spawn; each set's seed is in the manifest and "
                         "recreates it alone), e.g. -o sets/{i:04d}.npz")
@@ -51,7 +51,7 @@ def _run_poisson_radius(args):
     """``poisson --radius R``: the most points that relaxation brings to radius R."""
     if args.init not in ("dart", "random"):
         raise ValueError("--radius chooses n itself: use --init dart or random, not a file")
-    bar = _bar(args, "radius search", "trial")
+    bar = terminal_bar(args, "radius search", "trial")
     callback = None
     if bar is not None:
         def callback(trial):
@@ -60,7 +60,7 @@ def _run_poisson_radius(args):
             bar.update(1)
     try:
         # each trial: the search's relaxation, with the relaxation's flags given
-        res = max_points_for_radius(args.radius, TRIAL_RELAX.replace(**changed(_relax(args))),
+        res = max_points_for_radius(args.radius, TRIAL_RELAX.replace(**changed(relax_options_of(args))),
                                     start=args.init, seed=0 if args.seed is None else args.seed,
                                     device=args.device, callback=callback)
     except RuntimeError as exc:
@@ -93,7 +93,7 @@ def _report(args, line, summary):
 
 
 def _run_poisson(args):
-    if _batch_mode(args, [], [args.output]):
+    if batch_mode(args, [], [args.output]):
         return _run_poisson_batch(args)
     check_points_path(args.output, for_writing=True)
     start_file = args.init not in STARTS
@@ -117,15 +117,15 @@ def _run_poisson_file(args):
                              f"leave -n out")
     from diskpack_cl.jobs import plan_relax   # the jobs load the stippling stack: not at start-up
 
-    (item,) = plan_relax([args.init], [args.output], _relax(args), box=args.box,
+    (item,) = plan_relax([args.init], [args.output], relax_options_of(args), box=args.box,
                          make_folders=False)
-    return _relax_and_write(item, args, extra_summary={"init": args.init, "seed": args.seed})
+    return relax_and_write(item, args, extra_summary={"init": args.init, "seed": args.seed})
 
 
 def _field_image(args, path):
     """``(array, box)`` of a --mask or --density image: light 1, dark 0; the box by default
     has the image's aspect, longer side 1."""
-    gray = load_gray(_image_path(path))
+    gray = load_gray(image_path(path))
     if args.box is not None:
         return gray, args.box
     h, w = gray.shape
@@ -149,7 +149,7 @@ def _run_poisson_set(args):
     :func:`~diskpack_cl.poisson.poisson_disk`)."""
     options = from_namespace(PoissonOptions, args)
     n = 1024 if args.n is None and args.min_distance is None else args.n
-    callback, close = _progress(args, "relax")
+    callback, close = relax_progress(args, "relax")
     try:
         res, summary = poisson_job(n, [args.output], options, seed=args.seed, device=args.device,
                                    callback=callback, verify=args.verify, profile=args.profile,
@@ -170,7 +170,7 @@ def _run_poisson_set(args):
     if not res.reached:
         goal = (f"--min-distance {args.min_distance:g}" if args.min_distance is not None
                 else f"--eps {args.eps:g}")
-        return _unreached(args, f"the set did not reach {goal} (stop: {res.stop_reason})")
+        return unreached_status(args, f"the set did not reach {goal} (stop: {res.stop_reason})")
     return 0
 
 
@@ -189,5 +189,5 @@ def _run_poisson_batch(args):
     from diskpack_cl.batch import poisson_many   # loads the stippling stack: not at start-up
 
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
-                         from_namespace(PoissonOptions, args), seed=args.seed, **_batch_run(args))
-    return _report_batch(args, batch)
+                         from_namespace(PoissonOptions, args), seed=args.seed, **batch_run(args))
+    return report_batch(args, batch)

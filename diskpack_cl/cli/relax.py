@@ -6,15 +6,15 @@ import json
 import sys
 import argparse
 
-from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import PROG, _bar, _device_options, _output_options, note_fallbacks, where_ran
+from ._batches import batch_mode, batch_options, batch_run, report_batch
+from ._common import PROG, terminal_bar, device_options, output_options, note_fallbacks, where_ran
 from ._help import with_examples
 from diskpack_cl.domain import DomainOptions
 from diskpack_cl.options import add_arguments, from_namespace
 from diskpack_cl.relax import RelaxOptions, relax_summary
 
 
-def _relax_options(p):
+def add_relax_options(p):
     add_arguments(p, RelaxOptions)
     p.add_argument("--verify", action="store_true",
                    help="check every iteration against scipy (exact MICs, KD-tree rho); slow")
@@ -24,14 +24,14 @@ def _relax_options(p):
                    help=f"exit 0 when rho stops short of EPS (default: the set is written and "
                         f"the exit status is {UNREACHED})")
     add_arguments(p, DomainOptions)
-    _device_options(p)
+    device_options(p)
 
 
 #: Exit status of a run whose rho (or distance) stopped short of its goal.
 UNREACHED = 3
 
 
-def _unreached(args, what):
+def unreached_status(args, what):
     """Exit status for a result short of its goal: UNREACHED, or 0 with --allow-unreached."""
     if args.allow_unreached:
         return 0
@@ -40,14 +40,14 @@ def _unreached(args, what):
     return UNREACHED
 
 
-def _relax(args):
+def relax_options_of(args):
     """The :class:`~diskpack_cl.relax.RelaxOptions` of the arguments."""
     return from_namespace(RelaxOptions, args)
 
 
-def _progress(args, label):
+def relax_progress(args, label):
     """Return (callback, close) feeding a tqdm bar on a terminal, or no-ops."""
-    bar = _bar(args, label, "it", _relax(args).kwargs()["max_iter"] or None)
+    bar = terminal_bar(args, label, "it", relax_options_of(args).kwargs()["max_iter"] or None)
     if bar is None:
         return None, lambda: None
 
@@ -58,12 +58,12 @@ def _progress(args, label):
     return callback, bar.close
 
 
-def _relax_and_write(item, args, points=None, *, extra_summary=None):
+def relax_and_write(item, args, points=None, *, extra_summary=None):
     """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
     return the exit status."""
     from diskpack_cl.jobs import relax_item  # not loaded at start-up
 
-    callback, close = _progress(args, "relax")
+    callback, close = relax_progress(args, "relax")
     try:
         res = relax_item(item, points, device=args.device, callback=callback,
                          verify=args.verify, profile=args.profile)
@@ -88,12 +88,12 @@ def _relax_and_write(item, args, points=None, *, extra_summary=None):
     if args.json:
         print(json.dumps(summary), flush=True)
     if res.stop_reason != "eps":
-        return _unreached(args, f"rho {res.rho[-1]:.4f} did not reach --eps {args.eps:g} "
+        return unreached_status(args, f"rho {res.rho[-1]:.4f} did not reach --eps {args.eps:g} "
                                 f"(stop: {res.stop_reason})")
     return 0
 
 
-def _add_relax(subparsers):
+def add_relax(subparsers):
     p = subparsers.add_parser(
         "relax", help="relax a point file on the unit torus",
         usage="%(prog)s IN -o OUT [options]",
@@ -110,9 +110,9 @@ def _add_relax(subparsers):
     p.add_argument("--columns", type=_columns, default=None, metavar="A,B",
                    help="the two columns to read: header names (x,y) or indices (0,1); needed "
                         "where a file has more coordinates (a z column)")
-    _output_options(p)
-    _relax_options(p)
-    _batch_options(p)
+    output_options(p)
+    add_relax_options(p)
+    batch_options(p)
     p.set_defaults(run=_run_relax)
 
 
@@ -129,9 +129,9 @@ def _run_relax(args):
     from diskpack_cl.jobs import plan_relax  # not loaded at start-up
 
     where = dict(box=args.box, columns=args.columns)
-    if _batch_mode(args, args.inputs, [args.output]):
-        return _report_batch(args, relax_many(args.inputs, [args.output], _relax(args), **where,
-                                              **_batch_run(args)))
-    (item,) = plan_relax(args.inputs[:1], [args.output], _relax(args), **where,
+    if batch_mode(args, args.inputs, [args.output]):
+        return report_batch(args, relax_many(args.inputs, [args.output], relax_options_of(args), **where,
+                                              **batch_run(args)))
+    (item,) = plan_relax(args.inputs[:1], [args.output], relax_options_of(args), **where,
                          make_folders=False)
-    return _relax_and_write(item, args, extra_summary={"input": str(args.inputs[0])})
+    return relax_and_write(item, args, extra_summary={"input": str(args.inputs[0])})

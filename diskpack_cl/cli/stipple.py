@@ -6,10 +6,10 @@ import argparse
 import sys
 import time
 
-from ._batches import _batch_mode, _batch_options, _batch_run, _report_batch
-from ._common import (PROG, _UsageError, _bar, _checked_outputs, _device_options, _image_path,
+from ._batches import batch_mode, batch_options, batch_run, report_batch
+from ._common import (PROG, UsageError, terminal_bar, checked_outputs, device_options, image_path,
                       command_run, note_fallbacks, where_ran)
-from ._drawing import _drawing_options, _write_and_report
+from ._drawing import drawing_options, write_and_report
 from diskpack_cl.image import ToneOptions
 from ._help import lead_with, with_examples
 from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
@@ -66,9 +66,9 @@ def _schedules_text():
                         for name, phases in sorted(SCHEDULES.items())))
 
 
-def _add_stipple(subparsers):
+def add_stipple(subparsers):
     from diskpack_cl.color import ColorOptions  # not loaded at start-up
-    from diskpack_cl.schedule import _STIPPLING, COUNT, StippleCount, StippleOptions  # not loaded at start-up
+    from diskpack_cl.schedule import STIPPLING_GROUP, COUNT, StippleCount, StippleOptions  # not loaded at start-up
     from diskpack_cl.tiles import TileOptions  # not loaded at start-up
 
     p = subparsers.add_parser(
@@ -98,14 +98,14 @@ def _add_stipple(subparsers):
                    help="lift Pillow's decompression-bomb limit (about 89 Mpixel) for trusted "
                         "large images")
     add_arguments(p, ToneOptions, groups=groups)
-    _device_options(g)
-    _drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
+    device_options(g)
+    drawing_options(p, "the result summary (n, k, radii, certificate, timings, params), ")
     add_arguments(p, ColorOptions)
     add_arguments(p, TileOptions)
-    _batch_options(p).add_argument("--recursive", "-r", action="store_true",
+    batch_options(p).add_argument("--recursive", "-r", action="store_true",
                                    help="a folder given as IMAGE contributes the images of "
                                         "its subfolders too")
-    lead_with(p, last=("device and checks", _STIPPLING))
+    lead_with(p, last=("device and checks", STIPPLING_GROUP))
     p.set_defaults(run=_run_stipple)
 
 
@@ -140,15 +140,15 @@ def _refuse_mixed(args, options, tone, write, separation):
         mono = [flag_name("paper_tone")] if options.paper_tone else []
         mono += [flag_name(k) for k in changed(tone)] + (["-n tone"] if args.n == "tone" else [])
         if mono:
-            raise _UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
+            raise UsageError(f"{', '.join(mono)}: for one pen, not with --colors/--pens")
         try:
             check_paper(separation["colors"], options.invert)
         except ValueError as exc:
-            raise _UsageError(f"--invert: {exc}") from None
+            raise UsageError(f"--invert: {exc}") from None
     elif write.pen_order is not None:
-        raise _UsageError("--pen-order orders the pens of --colors or --pens")
+        raise UsageError("--pen-order orders the pens of --colors or --pens")
     if args.n == "tone" and write.dot_mm is None and write.pen_mm is None:
-        raise _UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
+        raise UsageError("-n tone needs the dot size: give --dot-mm or --pen-mm")
 
 
 def _run_stipple(args):
@@ -160,9 +160,9 @@ def _run_stipple(args):
         _warn_long_plot(args)
     if args.tiles is not None:
         return _run_stipple_tiled(args, options, tone, write, separation)
-    if _batch_mode(args, args.images, args.output):
+    if batch_mode(args, args.images, args.output):
         if args.n == "tone":
-            raise _UsageError("-n tone is for one image; give -n N or --density for a batch")
+            raise UsageError("-n tone is for one image; give -n N or --density for a batch")
         return _run_stipple_batch(args, options, tone, write, separation)
     return _run_stipple_one(args, options, tone, write, separation)
 
@@ -185,13 +185,13 @@ def _run_stipple_one(args, options, tone, write, separation):
     t0 = time.perf_counter()
     with command_run(args) as run:   # one bar per stage, and their seconds in the summary
         with stage("load"):
-            (item,) = plan_stipple([_image_path(args.images[0])], [str(o) for o in args.output],
+            (item,) = plan_stipple([image_path(args.images[0])], [str(o) for o in args.output],
                                    options, **_count(args), allow_large=args.allow_large,
                                    write=write, tone=tone, color=separation, make_folders=False)
         res, gray, summary = stipple_item(item, device=args.device, verify=args.verify,
                                           profile=args.profile, note=None if args.quiet else _note,
                                           callback=_step_note(run.hook))
-        tail = _write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
+        tail = write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
     if not args.quiet:
         times = stage_text(summary["stage_seconds"], summary["iterations"], summary["seconds"])
         print(f"{PROG}: {_result_text(res, summary)}; {times}{_where(res)}{tail}", file=sys.stderr)
@@ -221,19 +221,19 @@ def _run_stipple_tiled(args, options, tone, write, separation):
 
     if separation is not None or len(args.images) > 1 or not isinstance(args.n, int) \
             or any(getattr(args, k) for k in ("verify", "profile", "manifest", "collect")):
-        raise _UsageError("--tiles stipples one image with one pen and -n N (no --colors/--pens, "
+        raise UsageError("--tiles stipples one image with one pen and -n N (no --colors/--pens, "
                           "-n tone, --density, --verify, --profile, --manifest or --collect)")
     t0 = time.perf_counter()
-    image = _image_path(args.images[0])
-    outputs = _checked_outputs(args, [image])
+    image = image_path(args.images[0])
+    outputs = checked_outputs(args, [image])
     size = image_size(image, allow_large=args.allow_large)
     if size is not None:   # the whole picture's PNG is made after the tiles: refused before
         check_preview_memory(write, *size, outputs)
     tiling = from_namespace(TileOptions, args)
     if tiling.work_dir is None:
         tiling = tiling.replace(work_dir=outputs[0] + ".tiles")
-    run = _batch_run(args)
-    bar = _bar(args, "tiles", "part", None)
+    run = batch_run(args)
+    bar = terminal_bar(args, "tiles", "part", None)
     done = {}
 
     def write_outputs(res):   # before the work folder goes: a signal here leaves it to resume
@@ -243,7 +243,7 @@ def _run_stipple_tiled(args, options, tone, write, separation):
             res.summary(), image=image, tone_n=None, parts=res.history,
             iterations=max(h["steps"] for h in res.history),
             peak_rss_mib=max(h["peak_rss_mib"] or 0 for h in res.history))
-        done["tail"] = _write_and_report(args, write, res, None, outputs, summary, t0)
+        done["tail"] = write_and_report(args, write, res, None, outputs, summary, t0)
 
     try:
         res = stipple_tiled(image, args.n, options, tiling, tone=tone, jobs=run["jobs"],
@@ -299,8 +299,8 @@ def _result_text(res, summary):
 def _run_stipple_batch(args, options, tone, write, color=None):
     from diskpack_cl.batch import stipple_many  # not loaded at start-up
 
-    batch = stipple_many([_image_path(x) for x in args.images], [str(o) for o in args.output],
+    batch = stipple_many([image_path(x) for x in args.images], [str(o) for o in args.output],
                          options, **_count(args), recursive=args.recursive,
                          allow_large=args.allow_large, write=write, tone=tone, color=color,
-                         **_batch_run(args))
-    return _report_batch(args, batch)
+                         **batch_run(args))
+    return report_batch(args, batch)
