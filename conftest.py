@@ -19,14 +19,21 @@ import os
 
 import pytest
 
-try:  # no per-example deadline: a 2-core CI machine has noisy timings
-    from hypothesis import settings
+try:
+    from hypothesis import HealthCheck, settings
 
-    settings.register_profile("diskpack", deadline=None)
+    # The one home of what every property test shares; a test states only a budget
+    # (max_examples) that differs from this one. No per-example deadline and no
+    # too_slow check: a 2-core CI machine has noisy timings, and a device test's
+    # example takes a kernel launch. Function-scoped fixtures (tmp_path, backend)
+    # are shared by a test's examples on purpose: each example overwrites its files.
+    settings.register_profile(
+        "diskpack", max_examples=100, deadline=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
     # CI: the same examples on every run (derandomized, a fixed seed) and no
     # example database, so that a run depends on the commit alone
-    settings.register_profile("ci", deadline=None, derandomize=True, database=None,
-                              print_blob=True)
+    settings.register_profile("ci", parent=settings.get_profile("diskpack"),
+                              derandomize=True, database=None, print_blob=True)
     settings.load_profile(os.environ.get(
         "HYPOTHESIS_PROFILE",
         "ci" if os.environ.get("CI", "").lower() in ("1", "true", "yes") else "diskpack"))

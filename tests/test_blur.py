@@ -22,7 +22,7 @@ def device_blur(ctx):
     return DeviceBlur(ctx)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(h=st.integers(1, 40), w=st.integers(1, 40), sigma=st.sampled_from([0.0, 0.3, 0.5, 1.0, 2.0, 3.7, 9.0]),
        seed=st.integers(0, 2**32 - 1))
 def test_device_blur_is_scipys(device_blur, h, w, sigma, seed):
@@ -51,7 +51,7 @@ def blur_256(ctx, device_blur):
         use_verdict(None)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(h=st.integers(1, 40), w=st.integers(1, 40), sigma=st.sampled_from([0.3, 0.5, 1.0, 2.0, 3.7, 9.0]),
        seed=st.integers(0, 2**32 - 1))
 def test_the_256_bit_build_is_scipys_bit_for_bit(blur_256, h, w, sigma, seed):

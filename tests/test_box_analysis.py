@@ -22,7 +22,7 @@ def _brute(u, w, kmax):
     return P
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25)
 @given(n=st.integers(1, 60), seed=st.integers(0, 2**32 - 1), kmax=st.integers(1, 7))
 def test_weighted_sums_direct_and_nufft_match_brute_force(n, seed, kmax):
     rng = np.random.default_rng(seed)

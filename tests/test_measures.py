@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
@@ -22,7 +22,7 @@ def test_hexagonal_radius():
         hexagonal_radius(0)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(n=st.integers(2, 25), seed=st.integers(0, 2**32 - 1), periodic=st.booleans())
 def test_min_distance_and_normalized_radius_brute_force(n, seed, periodic):
     rng = np.random.default_rng(seed)
@@ -59,7 +59,7 @@ def test_coincident_pairs():
     assert coincident_pairs([[0.5, 0.3], [0.1, 0.2], [0.5, 0.3]]).tolist() == [[0, 2]]
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.lists(st.tuples(st.integers(-8, 8), st.integers(-8, 8)), min_size=2, max_size=40),
        st.sampled_from([(1.0, 1.0), (2.0, 1.0)]), st.booleans())
 def test_coincident_pairs_against_brute_force(cells, size, periodic):
@@ -79,7 +79,7 @@ def test_coincident_pairs_against_brute_force(cells, size, periodic):
 _SPECIAL = [0.0, -0.0, -1e-300, -1e-17, 1.0, 2.0, 1.0 - 1e-17, -1.0, 3.5, np.nan, np.inf, -np.inf]
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=80)
 @given(st.lists(st.tuples(*[st.one_of(st.floats(-5, 5), st.sampled_from(_SPECIAL))] * 2),
                 min_size=1, max_size=30),
        st.sampled_from([(1.0, 1.0), (2.0, 0.5), (0.3, 7.0)]))
@@ -135,7 +135,7 @@ def test_nearest_neighbor_distances_plane_and_torus():
         nearest_neighbor_distances([[0.5, 0.5]])
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30)
 @given(seed=st.integers(0, 2**32 - 1), margin=st.sampled_from([0.05, 0.3, 1.0, 2.5]),
        size=st.sampled_from([(1.0, 1.0), (3.0, 0.5)]))
 def test_domain_images_are_exactly_the_shifts_within_the_margin(seed, margin, size):
@@ -200,7 +200,7 @@ def _all_pairs_min(points, domain):
     return float(measures._pair_distances(X, i, j, domain).min())
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(case=awkward_sets(), scale=st.sampled_from([1e-6, 0.3, 0.999, 1.0, 1.7, 40.0]),
        grow=st.booleans())
 def test_min_distance_at_most_is_the_kdtree_and_brute_force_answer(case, scale, grow):
@@ -215,7 +215,7 @@ def test_min_distance_at_most_is_the_kdtree_and_brute_force_answer(case, scale, 
         assert got == (best if best <= bound * (1 + 1e-9) else np.inf)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(case=awkward_sets(), reach=st.floats(1e-6, 0.4))
 def test_grid_finds_every_pair_closer_than_its_side(case, reach):
     pts, dom = case
@@ -227,7 +227,7 @@ def test_grid_finds_every_pair_closer_than_its_side(case, reach):
         assert dmin == best if best < side else dmin >= best
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(case=awkward_sets(), reach=st.floats(1e-6, 0.4), seed=st.integers(0, 2**32 - 1))
 def test_ball_candidates_hold_every_pair_within_reach_once(case, reach, seed):
     pts, dom = case
@@ -242,7 +242,7 @@ def test_ball_candidates_hold_every_pair_within_reach_once(case, reach, seed):
         assert set(zip(i[near].tolist(), j[near].tolist())) <= set(got)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(case=awkward_sets(), reach=st.floats(1e-6, 0.4))
 def test_close_pairs_are_the_brute_force_pairs_within_reach(case, reach):
     pts, dom = case
@@ -257,7 +257,9 @@ def test_close_pairs_are_the_brute_force_pairs_within_reach(case, reach):
         assert len(got) == len(found.i) and got == want
 
 
-@settings(max_examples=300, deadline=None)
+# a third of the sets are too clustered for the grid (close_pairs gives None): 200 kept
+# examples are the ~200 of 300 that were checked when those passed silently
+@settings(max_examples=200)
 @given(case=awkward_sets(), reach=st.floats(1e-6, 0.4), seed=st.integers(0, 2**32 - 1),
        how=st.sampled_from(["far", "near", "onto", "none"]))
 def test_min_distance_since_is_the_brute_force_minimum(case, reach, seed, how):
@@ -266,8 +268,7 @@ def test_min_distance_since_is_the_brute_force_minimum(case, reach, seed, how):
     pts, dom = case
     before = np.asarray(pts, np.float64)
     found = measures.close_pairs(before, reach, dom)
-    if found is None:
-        return
+    assume(found is not None)
     rng = np.random.default_rng(seed)
     after = before.copy()
     moved = rng.random(len(after)) < 0.3
@@ -326,7 +327,7 @@ def test_min_distance_at_most_tiny_sets():
     assert min_distance_at_most([[0.0, 0.5], [1.0, 0.5]], 0.1, Domain.rect(1, 1), grow=True) == 1.0
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(st.lists(st.integers(0, 2 ** 32 + 5), max_size=300), st.sampled_from([2 ** 8, 2 ** 17, 2 ** 33]))
 def test_bucket_order_is_the_stable_argsort(ids, top):
     """The two 16-bit radix passes give numpy's stable argsort, ties in index

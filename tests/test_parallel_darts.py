@@ -13,7 +13,7 @@ from diskpack_cl.measures import hexagonal_radius
 from diskpack_cl.parallel_darts import parallel_darts
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(n=st.integers(1, 400), rel=st.floats(0.2, 0.7), seed=st.integers(0, 2**32 - 1))
 def test_count_range_and_every_distance(n, rel, seed):
     p = parallel_darts(n, rel_radius=rel, seed=seed)
@@ -23,7 +23,7 @@ def test_count_range_and_every_distance(n, rel, seed):
         assert ref.min_distance_ref(p, Domain.torus()) >= 2 * rel * hexagonal_radius(n)
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20)
 @given(n=st.integers(500, 5000), rel=st.floats(0.2, 0.7), seed=st.integers(0, 2**32 - 1))
 def test_the_points_cover_the_torus_evenly(n, rel, seed):
     """The last round's surplus is dropped at random: keeping the first darts in row
@@ -66,7 +66,7 @@ def test_no_lattice_peaks_in_the_spectrum():
     assert power.max() < 3.0
 
 
-@settings(max_examples=6, deadline=None)
+@settings(max_examples=6)
 # from 1296 points every radius here makes a grid of at least 64 cells across, the device's
 @given(n=st.integers(1300, 6000), rel=st.floats(0.5, 0.74), seed=st.integers(0, 2**32 - 1))
 def test_the_device_kernels_give_the_numpy_points(ctx, n, rel, seed):
@@ -120,7 +120,7 @@ def _grid_case(ctx, g, seed, coarse, fill):
     return grid, pts, full, empty.astype(np.int32), inside(empty)
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20)
 @given(g=st.integers(5, 14), seed=st.integers(0, 2**32 - 1), coarse=st.booleans(),
        fill=st.floats(0.0, 0.6))
 def test_the_list_kernels_answer_as_every_pair_does(ctx, g, seed, coarse, fill):
@@ -150,7 +150,7 @@ def test_the_list_kernels_answer_as_every_pair_does(ctx, g, seed, coarse, fill):
     np.testing.assert_array_equal(grid.covered(cells), want)
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20)
 @given(g=st.integers(5, 8), cell=st.integers(0, 63), u=st.tuples(*[st.floats(0, 0.999)] * 2))
 def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
     """One point, and a dart in each of the 24 cells around its own (wrapping at the edges)
@@ -179,7 +179,7 @@ def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
     assert kept[-1] and not kept[:-1][near].any()
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20)
 @given(g=st.integers(5, 300), seed=st.integers(0, 2**32 - 1), key=st.integers(0, 2**64 - 1))
 def test_dart_place_computes_the_hosts_coordinates_bit_for_bit(ctx, g, seed, key):
     """dart_place puts ``((col + u) c, (row + v) c)`` into the dart grid as numpy rounds

@@ -43,7 +43,7 @@ _DOTS = st.integers(4, 24).flatmap(
     lambda n: st.lists(st.tuples(st.floats(0, 100), st.floats(0, 100)), min_size=n, max_size=n))
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(dots=_DOTS, chunk=st.sampled_from([1, 3, 1 << 16]), span=st.sampled_from([1, 3, 64]))
 # paths whose one gaining move, once the 2-opt is done, takes the last dot elsewhere
 @example(dots=[(25, 72), (50, 44), (48, 14), (4, 84), (63, 93)], chunk=1 << 16, span=64)
@@ -75,7 +75,7 @@ def test_two_opt_leaves_no_improving_move_of_any_chunking(dots, chunk, span):
     assert path_travel(p, order) <= path_travel(p) + tol
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25)
 @given(n=st.integers(4, 60), seed=st.integers(0, 2**16), rounds=st.integers(1, 4))
 def test_two_opt_rounds_compose_and_never_lengthen(n, seed, rounds):
     """``rounds + 1`` rounds are `rounds` rounds and then one more, each no longer than the
@@ -112,7 +112,7 @@ def _greedy(p, start):
     return np.array(order)
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30)
 @given(n=st.integers(2, 80), seed=st.integers(0, 2**16))
 def test_greedy_is_the_nearest_unvisited_dot_next_unless_the_given_order_is_as_short(n, seed):
     """The travel before is the given order's and after the returned order's, from the start."""

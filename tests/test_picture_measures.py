@@ -29,7 +29,7 @@ def brute_stray(points, darkness, threshold):
     return np.array(out)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.integers(0, 2**31 - 1), st.integers(2, 30), st.sampled_from([0.0, 0.02, 0.5]))
 def test_stray_dots_match_brute_force(seed, n, threshold):
     rng = np.random.default_rng(seed)
@@ -130,7 +130,7 @@ def brute_holes(points, dark, solid, sigma):
     return out
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25)
 @given(st.integers(0, 2**31 - 1), st.integers(1, 40))
 def test_holes_match_brute_force(seed, n):
     rng = np.random.default_rng(seed)

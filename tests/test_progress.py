@@ -137,7 +137,7 @@ def _run_plan(run, plans):
             _run_plan(run, inner)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(_stage_plans())
 def test_counts_never_go_back(plans):
     """However stages nest and repeat, each stage's ``done`` never decreases, ends at its

@@ -52,13 +52,13 @@ DRAWS = dict(data=st.data(), seed=st.integers(0, 2 ** 32 - 1),
              draws=st.lists(st.integers(0, 60), min_size=1, max_size=4))
 
 
-@settings(max_examples=8, deadline=None)
+@settings(max_examples=8)
 @given(**DRAWS)
 def test_draws_keep_the_radius_and_the_bounds_2d(data, seed, draws):
     _check_draws(2, data.draw(st.floats(0.12, 0.3)), data, seed, draws)
 
 
-@settings(max_examples=6, deadline=None)
+@settings(max_examples=6)
 @given(**DRAWS)
 def test_draws_keep_the_radius_and_the_bounds_3d(ctx, data, seed, draws):
     _check_draws(3, data.draw(st.floats(0.25, 0.5)), data, seed, draws)
@@ -164,7 +164,7 @@ def test_a_bad_count_is_refused_and_counts_nothing(n, error, match):
                           PoissonDisk(2, radius=0.1, rng=0).random(7))
 
 
-@settings(max_examples=12, deadline=None)
+@settings(max_examples=12)
 @given(exponent=st.integers(0, 15), negative=st.booleans(), radius=st.floats(0.08, 0.3),
        seed=st.integers(0, 2 ** 32 - 1))
 def test_the_radius_holds_far_from_the_origin(exponent, negative, radius, seed):
@@ -191,7 +191,7 @@ def test_a_few_points_of_a_huge_box_pack_nothing(monkeypatch):
     assert np.array_equal(eng.reset().random(10), pts[:10])
 
 
-@settings(max_examples=6, deadline=None)
+@settings(max_examples=6)
 @given(draws=st.lists(st.integers(1, 40), min_size=1, max_size=3),
        seed=st.integers(0, 2 ** 32 - 1), radius=st.floats(0.03, 0.06))
 def test_darts_then_the_packing_keep_the_radius(draws, seed, radius):

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import reference as ref
@@ -10,8 +10,7 @@ from diskpack_cl.domain import Domain
 
 pytest.importorskip("pyopencl")
 
-SETTINGS = settings(max_examples=25, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+SETTINGS = settings(max_examples=25)
 
 # float32 kernels: power distances carry a rounding error of about
 # 2^-24 * scale^2 (times a small constant), so labels may legitimately differ
@@ -185,7 +184,7 @@ def _voronoi_edges(pts, dom):
     return edges
 
 
-@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=10)
 @given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(5, 30))
 def test_adjacency_is_voronoi_adjacency(ctx, seed, periodic, n):
     rng = np.random.default_rng(seed)

@@ -3,7 +3,7 @@ brute force; a local step against exact_mic of the whole set; relax_poisson(loca
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
@@ -25,7 +25,7 @@ def _pair_distances(X):
     return D
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(n=st.integers(8, 120), seed=st.integers(0, 2**32 - 1), share=st.floats(0.05, 1.0),
        t=st.floats(0.3, 1.2))
 def test_a_partial_move_keeps_the_minimum_and_new_bad_pairs_hold_an_old_bad_point(n, seed, share,
@@ -56,7 +56,6 @@ def _awkward(kind, n, rng):
     return X
 
 
-@settings(max_examples=100, deadline=None)
 @given(n=st.integers(2, 400), seed=st.integers(0, 2**32 - 1), share=st.floats(0.0, 1.0),
        r=st.sampled_from([0.01, 1 / 16, 0.1, 2 / 16, 0.3]),
        kind=st.sampled_from(["uniform", "lattice", "coincident"]))
@@ -77,7 +76,7 @@ def test_the_grid_finds_the_kdtrees_neighbourhoods_and_the_brute_force_bad_pairs
         sorted(zip(C[i].tolist(), j.tolist(), D[C[i], j].tolist()))
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=15)
 @given(seed=st.integers(0, 2**32 - 1), eps=st.floats(0.6, 0.8))
 def test_a_local_step_moves_its_points_to_the_mics_of_the_whole_set(seed, eps):
     n = 600
@@ -98,7 +97,7 @@ def test_a_local_step_moves_its_points_to_the_mics_of_the_whole_set(seed, eps):
     assert d_min == (pytest.approx(D.min(), abs=1e-15) if len(B2) else np.inf)
 
 
-@settings(max_examples=8, deadline=None)
+@settings(max_examples=8)
 @given(seed=st.integers(0, 2**32 - 1), eps=st.floats(0.6, 0.8))
 def test_a_local_step_on_the_device_moves_as_on_the_host(ctx, seed, eps):
     """The step's cells solved by the per-cell kernel on a list (CellMIC.solve with
@@ -128,7 +127,7 @@ def test_relax_local_reaches_eps_and_its_rho_is_the_brute_force_one(seed):
     assert np.all(np.diff(rho) >= 0)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(seed=st.integers(0, 2**32 - 1), step=st.floats(0.01, 0.3))
 def test_kept_cells_find_every_point_near_after_moves(seed, step):
     """After points move (across cells too) and are reported, :meth:`near` still holds
@@ -230,7 +229,7 @@ def _over_relaxed_ref(X, mic, d_min, omega):
     return Y
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(n=st.integers(3, 60), seed=st.integers(0, 2**32 - 1), omega=st.floats(1.0, 3.0))
 def test_an_over_relaxed_move_keeps_the_minimum_distance(n, seed, omega):
     """The local route's over-relaxed global moves (relax._moved) against a point-by-point
@@ -275,7 +274,7 @@ def test_local_in_a_box_reaches_eps_certified(size):
     assert res.rho[-1] >= 0.8
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(n=st.integers(8, 150), seed=st.integers(0, 2**32 - 1), eps=st.floats(0.6, 0.85),
        size=st.sampled_from([(1.0, 1.0), (2.0, 0.5), (1.0, 0.1)]))
 def test_a_local_step_in_a_box_keeps_the_minimum_and_finds_every_bad_point(n, seed, eps, size):
@@ -285,8 +284,7 @@ def test_a_local_step_in_a_box_keeps_the_minimum_and_finds_every_bad_point(n, se
     X = np.random.default_rng(seed).random((n, 2)) * size
     D0 = _box_distances(X)
     B = bad_points(D0.min(axis=1), eps, box.area)
-    if not len(B):
-        return
+    assume(len(B))
     Y = X.copy()
     B2, d, held = local_step(Y, B, eps, box, d_min=float(D0.min()))
     D1 = _box_distances(Y)
@@ -319,7 +317,7 @@ def test_local_in_a_box_on_the_device_skips_the_host_resolve(ctx):
     assert fast.rho[-1] >= 0.8
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(n=st.integers(2, 60), seed=st.integers(0, 2**32 - 1), periodic=st.booleans(),
        scale=st.floats(0.3, 3.0))
 def test_min_distance_at_most_is_the_brute_force_minimum(n, seed, periodic, scale):

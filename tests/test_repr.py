@@ -29,7 +29,7 @@ def _dots(points, radii, width, height, **extra):
                          width=width, height=height, **extra)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.integers(20, 900), st.integers(20, 900), st.integers(1, 40), st.data())
 def test_dark_pixels_are_where_the_dots_are(width, height, n, data):
     scale = 400 / max(width, height)

@@ -13,7 +13,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
@@ -109,8 +109,7 @@ def _check_svg(res, tmp_path, dots, scale):
         assert len(read_stipple(tmp_path / "again.npz").points) == len(res.points)
 
 
-@settings(max_examples=30, suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                                  HealthCheck.too_slow])
+@settings(max_examples=30)
 @given(res=stipplings(), dots=st.sampled_from(["tone", "packing"]),
        scale=st.sampled_from([0.25, 1.0, 3.7]))
 def test_every_format_reads_back(tmp_path, res, dots, scale):

@@ -138,7 +138,7 @@ def _largest_named(exc):
     return float(re.search(r"at most ([0-9.]+) here", str(exc)).group(1))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(width=st.integers(1, 5000), height=st.integers(1, 5000), supersample=st.integers(2, 64),
        free=st.integers(2 ** 20, 2 ** 36))
 def test_the_supersample_named_as_fitting_fits_and_one_more_does_not(width, height, supersample,
@@ -156,7 +156,7 @@ def test_the_supersample_named_as_fitting_fits_and_one_more_does_not(width, heig
         check(fit + 1)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(width=st.integers(1, 5000), height=st.integers(1, 5000), scale=st.floats(1, 1e4),
        free=st.integers(2 ** 20, 2 ** 36))
 def test_the_png_scale_named_as_fitting_fits(width, height, scale, free):

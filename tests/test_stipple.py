@@ -399,7 +399,7 @@ def test_options_checked_before_any_work(kwargs, match):
         stipple(gradient(32, 32), 30, backend="no such backend", **kwargs)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(n=st.integers(1, 10**6), width=st.integers(8, 4096), height=st.integers(8, 4096),
        ink_share=st.one_of(st.none(), st.floats(1e-4, 1.0)))
 def test_auto_supersample_gives_enough_grid_cells_per_dot(n, width, height, ink_share):

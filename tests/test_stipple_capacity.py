@@ -23,7 +23,7 @@ def portrait(h=64, w=80):
     return np.clip(g + 0.1 * np.sin(xx / 4.0), 0, 1)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.lists(st.floats(0, 50), min_size=2, max_size=40),
        st.floats(0.01, 1.0), st.floats(1 / INK_RANGE, INK_RANGE))
 def test_equal_ink_bounded_normalized_and_monotone(masses, gain, start):

@@ -20,7 +20,7 @@ def _sites(seed, dom, n=40, heavy=0.5):
     return pts, (heavy * spacing * rng.random(n)) ** 2
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25)
 @given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), voronoi=st.booleans())
 def test_host_labels_are_the_brute_force_owners(seed, periodic, voronoi):
     dom = Domain.torus() if periodic else Domain.rect(30.0, 20.0)

@@ -46,7 +46,7 @@ def test_reseat_dead_puts_inkless_dots_beside_the_heaviest():
     assert none == 0 and same is p and same_ink is ink
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(values=st.lists(st.integers(0, 4), min_size=1, max_size=40), data=st.data())
 def test_least_is_the_prefix_of_a_stable_sort(values, data):
     """The k least values (reseat_dead's heaviest cells, the start's count fix), found

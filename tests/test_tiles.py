@@ -390,7 +390,7 @@ def test_a_seam_moves_its_band_and_holds_the_rest(monkeypatch):
 
 @given(width=st.integers(60, 400), height=st.integers(60, 400), axis=st.integers(0, 1),
        at=st.floats(0.2, 0.8), reach=st.floats(1, 40), seed=st.integers(0, 2**16))
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 def test_a_seams_window_spans_the_picture_across_it(width, height, axis, at, reach, seed):
     """A seam between columns (axis 0) spans the picture's height, one between rows its
     width; along the seam's axis the window reaches band + halo each side, inside the picture."""
