@@ -28,7 +28,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from .extras import install_command
-from .io import atomic_write, atomic_writes
+from .io import atomic_write, atomic_writes, remove_partial_files
 from .io import json_default
 from .jobs import run_job
 
@@ -416,16 +416,20 @@ def _death_text(pool, exc):
 
 def _local_pool(todo, jobs, devices, collect):
     """Yield records from ``jobs`` spawned worker processes."""
-    pool = _spawn_pool(jobs, devices)
+    pool, unfinished = _spawn_pool(jobs, devices), set(range(len(todo)))
     try:
         futures = pool.submit_all(_run_in_worker, [(item, collect) for item in todo])
         for fut in as_completed(futures):
+            unfinished.discard(futures[fut])
             try:
                 yield fut.result()
             except BrokenProcessPool as exc:
                 yield _failed(todo[futures[fut]], _death_text(pool, exc))
     finally:
-        _close(pool)
+        if _close(pool):   # a killed worker could not remove its partial files
+            for i in unfinished:
+                for out in todo[i].outputs:
+                    remove_partial_files(out)
 
 
 #: Seconds the stopped workers get to remove their partial files before they are killed.
@@ -436,27 +440,31 @@ def _stop_workers(pool):
     """Send SIGTERM to the pool's workers (they remove their partial files and exit), and
     SIGKILL to those still there after :data:`STOP_GRACE_S`: a worker can hang in its exit,
     joining a queue thread that writes to a pipe nobody reads, and the pool's shutdown
-    waits for every worker."""
+    waits for every worker. True if one had to be killed."""
     procs = list((pool._processes or {}).values())
     for proc in procs:
         with contextlib.suppress(Exception):
             proc.terminate()
-    end = time.monotonic() + STOP_GRACE_S
+    end, killed = time.monotonic() + STOP_GRACE_S, False
     for proc in procs:
         with contextlib.suppress(Exception):
             proc.join(max(0.0, end - time.monotonic()))
             if proc.is_alive():
                 proc.kill()
+                killed = True
+    return killed
 
 
 def _close(pool):
     """Stop the workers of `pool` (:func:`_stop_workers`; first: shutdown forgets them), then
-    shut it down, its manager thread released if a worker died halfway through a result."""
-    _stop_workers(pool)
+    shut it down, its manager thread released if a worker died halfway through a result.
+    True if a worker had to be killed."""
+    killed = _stop_workers(pool)
     manager, results = pool._executor_manager_thread, pool._result_queue
     pool.shutdown(wait=False, cancel_futures=True)
     if manager is not None:
         _release(manager, results)
+    return killed
 
 
 def _release(manager, results):

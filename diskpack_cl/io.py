@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+from glob import escape as glob_escape
 import io as _stdio
 import os
 import signal
@@ -40,6 +41,7 @@ __all__ = [
     "OutputIsInputError",
     "atomic_write",
     "atomic_writes",
+    "remove_partial_files",
     "check_not_inputs",
     "check_points_path",
     "check_writable",
@@ -114,6 +116,32 @@ def atomic_write(path, mode="wb"):
         if isinstance(exc, OSError) and exc.errno and exc.filename in (None, tmp):
             raise _named(exc, path) from exc
         raise
+
+
+def remove_partial_files(path):
+    """Remove the temporary files that :func:`atomic_write` left beside `path`.
+
+    A writer that ends normally, raises or takes SIGTERM removes its own; one
+    killed outright (SIGKILL, the out-of-memory killer) cannot, and whoever
+    stopped it calls this for the outputs it was writing. Returns the
+    number removed.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> open(os.path.join(d, ".a.npz.x1y2.part"), "w").close()
+    >>> remove_partial_files(os.path.join(d, "a.npz")), os.listdir(d)
+    (1, [])
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    removed = 0
+    for tmp in directory.glob(f".{glob_escape(path.name)}.*.part"):
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+            removed += 1
+    return removed
 
 
 @contextlib.contextmanager

@@ -692,3 +692,26 @@ def test_a_manager_waiting_for_the_rest_of_a_killed_workers_result_is_released()
     assert thread.is_alive()   # waiting for bytes no process will send
     executors._release(thread, results)
     assert not thread.is_alive() and errors
+
+
+def test_a_killed_worker_leaves_no_partial_file(tmp_path, monkeypatch):
+    """A worker that did not end within the grace after SIGTERM is killed and cannot remove
+    its partial file (a heavy C call defers the signal): the coordinator removes the partial
+    files of the items it had not finished, and only theirs."""
+    items = jobs.plan_poisson(3, 64, [str(tmp_path / "{i}.npz")], seed=3, eps=0.7)
+    left = [tmp_path / f".{i}.npz.abc{i}.part" for i in range(3)]
+    for p in left:
+        p.write_bytes(b"partial")
+
+    def killed(pool):   # as if every worker had to be SIGKILLed
+        for proc in (pool._processes or {}).values():
+            proc.kill()
+        return True
+
+    monkeypatch.setattr(executors, "_stop_workers", killed)
+    records = executors._local_pool(items, 1, None, False)
+    first = next(records)
+    records.close()
+    done = first["i"]
+    assert left[done].exists()   # a finished item's folder is not swept
+    assert [p.exists() for i, p in enumerate(left) if i != done] == [False, False]

@@ -120,6 +120,16 @@ def test_every_stipple_option_reaches_a_batch_item(f, monkeypatch, tmp_path):
     assert getattr(owner, f.name) == value
 
 
+class _OnePen:
+    """A mono result dressed as a colour one (``names``, ``pen``: one pen), for the fakes."""
+
+    def __init__(self, result):
+        self._result, self.names, self.pen = result, ("black",), np.zeros(result.n, dtype=int)
+
+    def __getattr__(self, name):
+        return getattr(self._result, name)
+
+
 @pytest.mark.parametrize("command", ["stipple", "export"])
 @pytest.mark.parametrize("f", _cases(WriteOptions))
 def test_every_write_option_reaches_the_writers(f, command, small_result, monkeypatch, tmp_path):
@@ -132,7 +142,7 @@ def test_every_write_option_reaches_the_writers(f, command, small_result, monkey
 
     monkeypatch.setattr(jobs, "write_stipple_outputs", fake)
     monkeypatch.setattr(jobs, "stipple", lambda *a, **k: small_result)
-    monkeypatch.setattr(jobs, "stipple_colors", lambda *a, **k: small_result)
+    monkeypatch.setattr(jobs, "stipple_colors", lambda *a, **k: _OnePen(small_result))
     src = tmp_path / "in.npz"
     write_npz(src, small_result)
     head = (["stipple", "sample", "-n", "20"] if command == "stipple" else ["export", str(src)])

@@ -101,6 +101,6 @@ def test_missing_matplotlib_says_how_to_install(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
     pts = np.random.default_rng(4).random((50, 2))
-    with pytest.raises(ImportError, match=r"plots need matplotlib: pip install 'diskpack_cl\[plot\]'"):
+    with pytest.raises(ImportError, match=r'plots need matplotlib: \.venv/bin/pip install "\.\[plot\]"'):
         plots.point_set_report(pts, tmp_path / "r.png")
     assert not (tmp_path / "r.png").exists()
