@@ -3,6 +3,7 @@ import importlib
 import io
 import json
 import os
+import re
 import sys
 import types
 from pathlib import Path
@@ -717,6 +718,9 @@ def test_export_draws_the_stippling_again_without_recomputing(stippled, tmp_path
     s, err = _run_json(["export", str(stippled.outs["npz"]), "-o", str(again), "--json"], capsys)
     assert again.read_bytes() == stippled.outs["svg"].read_bytes()
     assert s["n"] == 150 and s["plot"]["pen_downs"] == 150 and "150 dots of" in err
+    # the summary line gives each stage's seconds, as stipple's does
+    line = next(t for t in err.splitlines() if "150 dots of" in t)
+    assert re.search(r"; writing [0-9.e-]+ s, pen path [0-9.e-]+ s; [0-9.e-]+ s in all;", line), line
     # another paper, pen and speed; the .svg it wrote reads back too
     a4 = tmp_path / "a4.svg"
     s, _ = _run_json(["export", str(stippled.outs["svg"]), "-o", str(a4), "-o",

@@ -36,6 +36,7 @@ def add_export(subparsers):
 
 def _run_export(args):
     from diskpack_cl.export import WriteOptions, read_stipple  # not loaded at start-up
+    from diskpack_cl.progress import stage_text
 
     write = from_namespace(WriteOptions, args)
     t0 = time.perf_counter()
@@ -49,5 +50,6 @@ def _run_export(args):
                "input": str(args.input)}
     tail = write_and_report(args, write, res, None, outputs, summary, t0)
     if not args.quiet:
-        print(f"{PROG}: {len(res.points)} dots of {args.input}{tail}", file=sys.stderr)
+        times = stage_text(summary["stage_seconds"], whole=summary["seconds"])
+        print(f"{PROG}: {len(res.points)} dots of {args.input}; {times}{tail}", file=sys.stderr)
     return 0
