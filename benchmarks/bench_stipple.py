@@ -174,7 +174,7 @@ def color_image(name, size):
 
 def color_against_mono(a):
     """CMYK stipplings against mono ones of the same n, interleaved (see the module docstring)."""
-    from diskpack_cl.color import separate
+    from diskpack_cl.separation import separate
     from diskpack_cl.multipen import stipple_colors
 
     print(f"{'image':10s} {'size':>5s} {'n':>7s} {'mono s':>7s} {'cmyk s':>7s} {'ratio':>6s} "

@@ -16,7 +16,7 @@ two ways:
   so their inks multiply on average, and saturated secondaries such as red
   come from overlapping magenta and yellow dots).
 
-Measures (:func:`diskpack_cl.color.color_measures`): mean CIELAB Delta E
+Measures (:func:`diskpack_cl.color_measures.color_measures`): mean CIELAB Delta E
 after a blur of one dot spacing, tone SSIM per layer, spacing P01 per pen
 and of all dots; the seconds of each run and of a mono run of the same
 total n on the joint density (and that run's P01) (both after a mono run of that size, so that
@@ -34,7 +34,7 @@ photograph (:func:`preview_measures`), and the ink each pen's drawn dots
 keep (:func:`ink_kept`); rows to ``--out`` if given, the markdown table of
 ``docs/color.md`` to stdout. ``--palettes PENS [PENS ...]`` measures the
 same way other pens against CMYK (``cmyk``, ``auto:N``: black and N - 1 of
-the image's hues, :func:`diskpack_cl.color.auto_palette`, or
+the image's hues, :func:`diskpack_cl.palette.auto_palette`, or
 ``NAME=COLOR,...``; :func:`palette_table`). The photographs of ``DARK``
 (retina, hubble_deep_field) are dark already and are measured as they are
 (variant ``dark (photograph)``), without a synthetic dark version; these
@@ -60,9 +60,12 @@ import numpy as np
 
 from diskpack_cl import stipple
 from diskpack_cl.picture_measures import spacing
-from diskpack_cl.color import (PALETTES, PEN_SHARE_EXPONENT, check_paper, color_measures,
-                               linear_to_srgb, load_rgb, pen_ink_radii, render_pens, separate,
-                               srgb_to_linear)
+from diskpack_cl.color_measures import color_measures, render_pens
+from diskpack_cl.colorspace import linear_to_srgb, srgb_to_linear
+from diskpack_cl.image import load_rgb
+from diskpack_cl.pen_radii import pen_ink_radii
+from diskpack_cl.pens import PALETTES, PEN_SHARE_EXPONENT, check_paper
+from diskpack_cl.separation import separate
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.multipen import hex_color, stipple_colors
 
@@ -177,7 +180,7 @@ def channel_floor(rgb, n, seed=0, paper="white"):
 
     Each channel, in linear light, is stippled as a gray image with the mono default
     (:func:`diskpack_cl.stipple`, as :func:`naive` stipples a layer) and drawn at its ink
-    radius (:func:`diskpack_cl.color.pen_ink_radii`, :func:`diskpack_cl.color.render_pens`,
+    radius (:func:`diskpack_cl.pen_radii.pen_ink_radii`, :func:`diskpack_cl.color_measures.render_pens`,
     as the colour rows are drawn): on white paper, black dots where the channel is dark
     (what the area-mix pens do); on black paper, white dots where it is light.
 

@@ -8,13 +8,13 @@ writers with the pens added (a ``pen`` column, pen names and colours).
   inkscape:label="NAME">``, which vpype reads as one layer each), the pen's
   colour as stroke (and fill), lightest pen first (or ``pen_order``), each
   layer's dots along a short pen path.
-* PNG: the inks composited (:func:`diskpack_cl.color.render_pens`'s model:
+* PNG: the inks composited (:func:`diskpack_cl.color_measures.render_pens`'s model:
   coverages multiply in linear light), 8-bit sRGB.
 
 A stippling made with ``invert`` (light pens on black paper, its
 ``params["invert"]``) is drawn on black: the SVG's paper is a black image
 in a layer that plotters skip (as for one pen), the PNG's paper black,
-each pen's light added as :func:`diskpack_cl.color.render_pens` adds it.
+each pen's light added as :func:`diskpack_cl.color_measures.render_pens` adds it.
 The pens go darkest first and white last: as on white paper, the pen
 that stands out least from the paper first, so that where dots touch the
 one that carries the most light is on top.
@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .color import check_paper, linear_negative, linear_to_srgb, palette_of, srgb_to_linear
+from .colorspace import linear_negative, linear_to_srgb, srgb_to_linear
+from .pens import check_paper, palette_of
 from .drawing import (FRAME_INK, MM_PER_INCH, PEN_LIFT_S, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
                       place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
                       svg_size, xml_attr)
@@ -67,7 +68,7 @@ def on_black(result, invert=False):
     ------
     ValueError
         `invert` for pens separated for white paper, or black paper for the pens of a
-        white-paper palette (``cmyk``, ``cmy``: :func:`~diskpack_cl.color.check_paper`).
+        white-paper palette (``cmyk``, ``cmy``: :func:`~diskpack_cl.pens.check_paper`).
 
     Examples
     --------

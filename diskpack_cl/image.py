@@ -29,8 +29,8 @@ import numpy as np
 
 from .options import OptionConflict, check_fields, option
 
-__all__ = ["adjust_tone", "ToneOptions", "load_gray", "to_gray", "gray_strips", "image_size",
-           "sample_image_path", "LUMA_601"]
+__all__ = ["adjust_tone", "ToneOptions", "load_gray", "load_rgb", "to_gray", "gray_strips",
+           "image_size", "sample_image_path", "LUMA_601"]
 
 #: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
 LUMA_601 = (0.299, 0.587, 0.114)
@@ -131,6 +131,43 @@ def load_gray(path, *, invert=False, allow_large=False):
     """
     im, name = _open_image(path, allow_large)
     return _pil_to_gray(im, invert=invert, name=name)
+
+
+def load_rgb(image):
+    """Anything image-like to float64 sRGB (H, W, 3) in [0, 1] (a new array).
+
+    Paths and Pillow images are read with their EXIF orientation, transparency
+    composited on white; gray images give three equal channels. Arrays:
+    ``(H, W)`` or ``(H, W, 3|4)``, integers scaled by their bit depth (uint8
+    by 255, uint16 by 65535), floats in [0, 1].
+
+    Examples
+    --------
+    >>> load_rgb(np.array([[[255, 0, 0, 0]]], dtype=np.uint8)).tolist()
+    [[[1.0, 1.0, 1.0]]]
+    """
+    from PIL import Image, ImageOps  # not loaded at start-up
+
+    if isinstance(image, (str, os.PathLike)):
+        load_gray(image)   # the same checks and messages as for gray input
+        with Image.open(image) as im:
+            image = ImageOps.exif_transpose(im).convert("RGBA")
+    elif isinstance(image, Image.Image):
+        image = ImageOps.exif_transpose(image).convert("RGBA")
+    a = np.asarray(image)
+    if np.issubdtype(a.dtype, np.integer):
+        f = a.astype(np.float64) / (255.0 if a.max(initial=0) <= 255 else 65535.0)
+    else:
+        f = np.asarray(a, dtype=np.float64)
+    if f.ndim == 2:
+        f = np.repeat(f[..., None], 3, axis=2)
+    if f.ndim != 3 or f.shape[2] not in (3, 4) or not np.all(np.isfinite(f)) \
+            or f.min(initial=0) < 0 or f.max(initial=0) > 1:
+        raise ValueError(f"a colour image must be (H, W) or (H, W, 3|4) with values in [0, 1], "
+                         f"got shape {a.shape}")
+    if f.shape[2] == 4:
+        f = f[..., :3] * f[..., 3:] + (1.0 - f[..., 3:])
+    return np.ascontiguousarray(f)
 
 
 def gray_strips(image, *, rows=256, allow_large=False):

@@ -31,15 +31,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .color import grey_note, load_rgb
 from .export import (WriteOptions, check_output_path, check_preview_memory, preview_scale,
                      svg_layout, tone_dot_count, tone_dot_size, write_page_png, write_stipple)
-from .image import ToneOptions, load_gray
+from .image import ToneOptions, load_gray, load_rgb
 from .io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
 from .memory import check_stipple_memory
 from .multipen import stipple_colors
 from .options import changed
+from .palette import grey_note
 from .picture_measures import tone_radius
 from .poisson import PoissonOptions, as_box, poisson_job
 from .progress import RunProgress, running, stage
@@ -810,7 +810,7 @@ def plan_stipple(inputs, outputs, options=None, *, n=None, density=None, dots_pe
         The engine of every item (:func:`diskpack_cl.stipple`).
     color : ColorOptions or dict, optional
         Several pens: the separation of :func:`diskpack_cl.stipple_colors`
-        (:class:`diskpack_cl.color.ColorOptions`, or a dict of ``colors``,
+        (:class:`diskpack_cl.pens.ColorOptions`, or a dict of ``colors``,
         ``black_generation``, ``clean_black``, ``clean_white``) makes every
         item a colour stippling.
     make_folders : bool

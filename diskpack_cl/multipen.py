@@ -1,7 +1,7 @@
 """Colour stippling: one certified packing of the dots of every pen (multi-class stippling).
 
 :func:`stipple_colors` separates the image into pen layers
-(:func:`diskpack_cl.color.separate`) and places all dots together:
+(:func:`diskpack_cl.separation.separate`) and places all dots together:
 
 1. **Joint placement.** The mono stippling's steps (:func:`diskpack_cl.stipple`:
    error-diffusion start, the schedule of the dot spacing) run the first
@@ -22,7 +22,7 @@
    weighted by its dots per unit of ink, asks for them (:func:`dot_density`,
    the density of the joint placement), and each pen's dots are drawn at
    the size that holds its layer's ink
-   (:func:`diskpack_cl.color.pen_ink_radii`).
+   (:func:`diskpack_cl.pen_radii.pen_ink_radii`).
 3. **Class-aware moves.** The rest of the schedule runs on the power
    diagram over all dots with the joint radii (the packing keeps every pair
    apart); after each step every dot also moves towards the centroid of its
@@ -48,7 +48,10 @@ from scipy.spatial import cKDTree
 
 from ._timing import Stopwatch
 from .picture_measures import tone_radius
-from .color import PALETTES, ColorOptions, hex_color, parse_auto, pen_ink_radii, separate
+from .colorspace import hex_color
+from .pen_radii import pen_ink_radii
+from .pens import ColorOptions, PALETTES, parse_auto
+from .separation import separate
 from .dithering import error_diffusion
 from .domain import Domain
 from .radii import certified_k, field_at
@@ -104,10 +107,10 @@ class ColorStippleResult(StippleResult):
     colors : (P, 3) float64
         Pen colours, sRGB in [0, 1].
     layers : (P, H, W) float64
-        The separated layers (:class:`diskpack_cl.color.Separation`).
+        The separated layers (:class:`diskpack_cl.separation.Separation`).
     pen_radius : (P,) float64
         Drawn dot radius per pen (px): its dots then hold its layer's ink
-        (:func:`diskpack_cl.color.pen_ink_radii`); what the writers draw.
+        (:func:`diskpack_cl.pen_radii.pen_ink_radii`); what the writers draw.
 
     Examples
     --------
@@ -144,7 +147,7 @@ def pen_counts(layers, n, exponent=1.0):
 
     With ``exponent`` 1 every pen's dots are the same size; below 1 the pens
     with less ink get more, smaller dots (each keeps its ink through its own
-    dot size, :func:`diskpack_cl.color.pen_ink_radii`).
+    dot size, :func:`diskpack_cl.pen_radii.pen_ink_radii`).
 
     Examples
     --------
@@ -416,7 +419,7 @@ def dots_per_pen(names, layers, n, counts=None, exponent=1.0):
 
 
 def _objects(colors, options, overrides):
-    """The :class:`~diskpack_cl.color.ColorOptions` and
+    """The :class:`~diskpack_cl.pens.ColorOptions` and
     :class:`~diskpack_cl.schedule.StippleOptions` of :func:`stipple_colors`: `colors` (an
     object, or the pens; cmyk unless it names some) and `options`, each with the
     `overrides` of its fields on top."""
@@ -469,14 +472,14 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     Parameters
     ----------
     image : str, os.PathLike, PIL.Image.Image or array_like
-        A colour image (:func:`diskpack_cl.color.load_rgb`).
+        A colour image (:func:`diskpack_cl.image.load_rgb`).
     n : int
         Number of dots of all pens together.
     colors : ColorOptions, str or sequence of (name, colour), optional
-        The separation (:class:`diskpack_cl.color.ColorOptions`: the pens,
+        The separation (:class:`diskpack_cl.pens.ColorOptions`: the pens,
         black generation, cleaning, dots per pen), or the pens alone:
         ``"cmyk"``, ``"cmy"``, ``"auto:N"`` or ``"NAME=COLOR,..."``
-        (:func:`diskpack_cl.color.separate`); cmyk where none are named.
+        (:func:`diskpack_cl.separation.separate`); cmyk where none are named.
         Its ``pen_share_exponent`` sets the dots per pen unless given
         (:func:`pen_counts`): in proportion to each layer's ink to that
         power; below 1 the pens with less ink get more, smaller dots. The
@@ -487,14 +490,14 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
         The stippling options, as for :func:`diskpack_cl.stipple`, applied
         to the joint density; ``capacity`` defaults to
         :data:`COLOR_CAPACITY` (off). ``invert``: light pens on black
-        paper (:func:`diskpack_cl.color.separate`; ``auto:N`` chooses white
+        paper (:func:`diskpack_cl.separation.separate`; ``auto:N`` chooses white
         and N - 1 light pens, ``cmyk`` and ``cmy`` are refused);
         ``paper_tone`` is refused.
     counts : sequence of int or mapping of str to int, optional
         Dots per pen (:func:`dots_per_pen`): all (summing to n), or some by
         name, the others sharing the rest by their ink to the power of the
         pen share exponent; the
-        :class:`~diskpack_cl.color.ColorOptions`' ``pen_dots`` as numbers
+        :class:`~diskpack_cl.pens.ColorOptions`' ``pen_dots`` as numbers
         (give one of the two).
     joint : float in [0, 1]
         Share of the schedule's iterations run on all dots as one class
@@ -507,7 +510,7 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
     callback, device, backend
         As for :func:`diskpack_cl.stipple`.
     **overrides
-        Fields of :class:`~diskpack_cl.color.ColorOptions`
+        Fields of :class:`~diskpack_cl.pens.ColorOptions`
         (``black_generation``, ``clean_black``, ``clean_white``,
         ``pen_share_exponent``, ``pen_dots``) over those of `colors`, and of
         :class:`~diskpack_cl.schedule.StippleOptions` (``schedule``,
@@ -526,7 +529,7 @@ def stipple_colors(image, n, colors=None, options=None, *, counts=None, joint=0.
 
     The same with the options objects:
 
-    >>> from diskpack_cl.color import ColorOptions
+    >>> from diskpack_cl.pens import ColorOptions
     >>> from diskpack_cl.schedule import StippleOptions
     >>> again = stipple_colors(img, 120, ColorOptions(colors="cmy"),
     ...                        StippleOptions(schedule=[("mix", 4, 0.5)]), backend="exact")

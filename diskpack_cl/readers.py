@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from diskpack_cl.io import load_npz
-from diskpack_cl.color import check_paper, parse_pens, palette_of
+from diskpack_cl.pens import check_paper, palette_of, parse_pens
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import Certificate, certify_disks
 

@@ -205,8 +205,8 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
         ``n``, ``width``, ``height``; ``pens``: per pen its ``name``,
         ``color``, ``n`` and ``p01`` (and ``ssim`` with `image`); ``p01_joint``
         of all dots; ``reference``: ``"image"`` (P01 against the layers,
-        :func:`diskpack_cl.color.color_measures`, with ``delta_e``) or ``"dots"``
-        (against the dots' own density, :func:`diskpack_cl.color.pen_spacing`);
+        :func:`diskpack_cl.color_measures.color_measures`, with ``delta_e``) or ``"dots"``
+        (against the dots' own density, :func:`diskpack_cl.color_measures.pen_spacing`);
         ``certificate``: re-checked over all dots together.
 
     Examples
@@ -220,7 +220,10 @@ def analyze_color_stippling(path, st, image=None, *, sigma=3.0):
     >>> [p["n"] for p in out["pens"]], out["reference"], out["certificate"]["valid"]
     ([128, 128], 'dots', True)
     """
-    from .color import color_measures, load_rgb, palette_of, pen_spacing, separate  # not loaded at start-up
+    from .color_measures import color_measures, pen_spacing  # not loaded at start-up
+    from .image import load_rgb  # not loaded at start-up
+    from .pens import palette_of  # not loaded at start-up
+    from .separation import separate  # not loaded at start-up
     from .multipen import hex_color  # not loaded at start-up
     from .plots import certificate_items, format_number  # not loaded at start-up
 

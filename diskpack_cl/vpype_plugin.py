@@ -27,7 +27,7 @@ import vpype_cli
 
 from diskpack_cl._device import NoOpenCLError, check_requested_device
 from diskpack_cl.cli import LEADING, one_line_help
-from diskpack_cl.color import ColorOptions
+from diskpack_cl.pens import ColorOptions
 from diskpack_cl.export import WriteOptions
 from diskpack_cl.image import ToneOptions, sample_image_path
 from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs

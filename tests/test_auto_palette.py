@@ -1,4 +1,4 @@
-"""The automatic palette ``--colors auto:N`` (diskpack_cl.color.auto_palette)."""
+"""The automatic palette ``--colors auto:N`` (diskpack_cl.palette.auto_palette)."""
 
 import json
 import xml.etree.ElementTree as ET
@@ -10,7 +10,9 @@ from PIL import Image
 from skimage.color import deltaE_ciede2000, rgb2lab
 
 from diskpack_cl.cli import main
-from diskpack_cl.color import ColorOptions, auto_palette, parse_auto, separate
+from diskpack_cl.palette import auto_palette
+from diskpack_cl.pens import ColorOptions, parse_auto
+from diskpack_cl.separation import separate
 
 PHOTO = Path(__file__).parent / "data" / "color" / "chelsea.png"
 #: Three hues at full strength (a channel 0, a channel 255: what a pen of that hue can

@@ -4,7 +4,7 @@ computed here from its textbook definition (not with the library's helpers)."""
 import numpy as np
 import pytest
 
-from diskpack_cl.color import separate
+from diskpack_cl.separation import separate
 
 # 8-bit sRGB, as separate() quantizes its input
 COLOURS = {"grey": (128, 128, 128), "dark teal": (10, 64, 60), "orange": (255, 128, 0),

@@ -894,7 +894,7 @@ def test_every_palette_route_says_the_image_has_no_hue(ctx, tmp_path, capsys, pa
     """A grey image in colour: cmyk, cmy and pens say so as auto:N does (its error)."""
     from PIL import Image
 
-    from diskpack_cl.color import NO_HUE
+    from diskpack_cl.palette import NO_HUE
 
     image = tmp_path / "g.png"
     grey = np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)

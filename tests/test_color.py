@@ -1,4 +1,6 @@
-"""Colour separation, ink compositing and colour measures (diskpack_cl.color)."""
+"""Colour separation, ink compositing and colour measures (diskpack_cl.separation,\ncolorspace, color_measures), and the old diskpack_cl.color names."""
+
+import importlib
 
 import numpy as np
 import pytest
@@ -6,9 +8,13 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
-from diskpack_cl import color
-from diskpack_cl.color import (area_mix, delta_e, load_rgb, parse_pens, render_pens, separate,
-                               srgb_to_lab, srgb_to_linear)
+from diskpack_cl.color import MOVED
+from diskpack_cl.color_measures import color_measures, render_pens
+from diskpack_cl.colorspace import (area_mix, delta_e, linear_to_srgb, srgb_to_lab, srgb_to_linear,
+                                    unmix)
+from diskpack_cl.image import load_rgb
+from diskpack_cl.pens import palette_pens, parse_pens
+from diskpack_cl.separation import separate
 
 PENS3 = "black=#000,red=#c00,blue=#06c"
 
@@ -24,9 +30,9 @@ def _mix(coverage, pens_srgb):
 
 @given(st.lists(st.floats(0, 1), min_size=3, max_size=3), st.sampled_from(["cmy", PENS3]))
 def test_area_separation_reproduces_colours_in_the_gamut(raw, palette):
-    names, pens = color._palette(palette)
+    names, pens = palette_pens(palette)
     a = np.array(raw) / max(1.0, sum(raw))          # coverages of the pens, sum <= 1
-    target = color.linear_to_srgb(_mix(a, pens))
+    target = linear_to_srgb(_mix(a, pens))
     sep = separate(target[None, None, :], palette)
     got = sep.layers[:, 0, 0]
     assert got.min() >= 0 and got.sum() <= 1 + 1e-9
@@ -124,7 +130,7 @@ def test_color_measures_of_a_perfect_grey():
     iy, ix = np.mgrid[0:20, 0:20].reshape(2, -1)
     pts = np.column_stack([(3.0 * ix + 0.75 + 1.5 * (iy % 2)), 3.0 * iy + 1.5])
     pen = np.full(len(pts), sep.names.index("black"))
-    m = color.color_measures(pts, pen, sep.layers, sep.colors, rgb)
+    m = color_measures(pts, pen, sep.layers, sep.colors, rgb)
     assert m["delta_e"] < 1.5
     assert m["p01_joint"] > 0.95
     assert m["p01"][sep.names.index("cyan")] is None          # no cyan dots
@@ -142,7 +148,7 @@ def test_unmixing_is_as_near_as_nnls(seed, P):
 
     rng = np.random.default_rng(seed)
     pens, targets = rng.random((P, 3)), rng.random((20, 3))
-    a = color._unmix(targets, pens)
+    a = unmix(targets, pens)
     assert np.all(a >= 0) and np.all(a.sum(axis=1) <= 1 + 1e-9)
     A = np.vstack([np.column_stack([np.ones(3), pens.T]), np.full(P + 1, 1e4)])
     for t, got in zip(targets, a):
@@ -162,4 +168,23 @@ def test_unmixing_three_pens_gives_back_the_mix(seed):
     a = rng.dirichlet(np.ones(4), 50)[:, 1:]                 # paper's share first, dropped
     targets = (1 - a.sum(axis=1))[:, None] + a @ pens
     assume(abs(np.linalg.det(pens - 1.0)) >= 1e-3)           # nearly flat: mixes not unique
-    assert np.allclose(color._unmix(targets, pens), a, atol=1e-6)
+    assert np.allclose(unmix(targets, pens), a, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", sorted(MOVED))
+def test_old_color_names_forward_to_their_homes_with_a_warning(name):
+    """diskpack_cl.color keeps every public name for one release: the same object as in its
+    new home, with a DeprecationWarning that names that home."""
+    from diskpack_cl import color as old
+
+    home = importlib.import_module(f"diskpack_cl.{MOVED[name]}")
+    with pytest.warns(DeprecationWarning, match=rf"diskpack_cl\.{MOVED[name]}\.{name}\b"):
+        assert getattr(old, name) is getattr(home, name)
+    assert name in home.__all__
+
+
+def test_old_color_module_refuses_unknown_names():
+    from diskpack_cl import color as old
+
+    with pytest.raises(AttributeError, match="'diskpack_cl.color' has no attribute 'nothing'"):
+        old.nothing  # noqa: B018

@@ -7,8 +7,10 @@ import pytest
 from PIL import Image
 
 from diskpack_cl.cli import main
-from diskpack_cl.color import (auto_palette, color_measures, linear_negative, render_pens,
-                               separate, srgb_to_linear)
+from diskpack_cl.color_measures import color_measures, render_pens
+from diskpack_cl.colorspace import linear_negative, srgb_to_linear
+from diskpack_cl.palette import auto_palette
+from diskpack_cl.separation import separate
 from diskpack_cl.color_export import write_color_png
 from diskpack_cl.export import read_stipple
 from diskpack_cl.multipen import stipple_colors

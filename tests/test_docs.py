@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from diskpack_cl import RelaxOptions, StippleOptions, ToneOptions, WriteOptions
-from diskpack_cl.color import ColorOptions
+from diskpack_cl.pens import ColorOptions
 from diskpack_cl.options import describe
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -131,6 +131,9 @@ def test_tables_name_no_issue():
     ext = _ext()
     cells = [str(c) for name in ext.TABLES for row in ext.TABLES[name]()[1] for c in row]
     assert not [c for c in cells if re.search(r"\bissue\s*\d", c, flags=re.I)]
+    guides = sorted((Path(__file__).parents[1] / "docs" / "guide").glob("*.md"))
+    assert not [f"{g.name}: {line}" for g in guides for line in g.read_text().splitlines()
+                if re.search(r"\bissue\s*\d|_issue\d", line, flags=re.I)]
 
 
 def test_summary_takes_the_median_of_the_repeats():

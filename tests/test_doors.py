@@ -426,7 +426,7 @@ def _pens_of(path):
 
 
 def test_pens_with_markup_in_their_names_give_well_formed_svg(tmp_path, capsys):
-    from diskpack_cl.color import parse_pens
+    from diskpack_cl.pens import parse_pens
 
     res = _color_stippling()
     res.names, res.colors = parse_pens("a b=#000,c<d>=#f00")

@@ -16,7 +16,7 @@ from scipy.spatial.distance import pdist
 
 import diskpack_cl
 from diskpack_cl import stipple, stipple_colors
-from diskpack_cl.color import ColorOptions
+from diskpack_cl.pens import ColorOptions
 from diskpack_cl.relax import (TRIAL_RELAX, RelaxOptions, max_points_for_radius,
                                relax_poisson)
 from diskpack_cl.schedule import StippleOptions

@@ -14,7 +14,7 @@ import diskpack_cl
 from diskpack_cl.cli import build_parser
 from diskpack_cl.cli._common import RUN_FLAGS
 from diskpack_cl.cli import one_line_help
-from diskpack_cl.color import ColorOptions
+from diskpack_cl.pens import ColorOptions
 from diskpack_cl.domain import DomainOptions
 from diskpack_cl.export import WriteOptions
 from diskpack_cl.image import ToneOptions

@@ -12,7 +12,7 @@ from PIL import Image
 from diskpack_cl.cli import main
 from diskpack_cl.export import read_stipple, write_stipple
 from diskpack_cl import multipen
-from diskpack_cl.color import PEN_SHARE_EXPONENT
+from diskpack_cl.pens import PEN_SHARE_EXPONENT
 from diskpack_cl.multipen import assign_pens, dots_per_pen, pen_counts, stipple_colors
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -260,7 +260,9 @@ def test_cli_pen_dots_reach_the_result(tmp_path, capsys):
 def test_cli_analyze_colour_npz_and_csv(tmp_path, capsys):
     import json
 
-    from diskpack_cl.color import color_measures, load_rgb, separate
+    from diskpack_cl.color_measures import color_measures
+    from diskpack_cl.image import load_rgb
+    from diskpack_cl.separation import separate
 
     src = tmp_path / "in.png"
     Image.fromarray(np.round(_image() * 255).astype(np.uint8)).save(src)
@@ -418,7 +420,7 @@ def _drawn_ink(points, r, size, scale=4):
 def test_each_pens_drawn_ink_is_its_layers_ink():
     """Dark photographs: black's dots overlap, so drawn at the tone radius they would
     lose ink where they overlap; at the pen's radius each pen covers its layer's ink."""
-    from diskpack_cl.color import pen_tone_radii
+    from diskpack_cl.pen_radii import pen_tone_radii
 
     img = _image(64, 64) * 0.5   # black covers 0.86 of the paper
     for exponent in (1.0, 0.5):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from diskpack_cl import cli, jobs, poisson
-from diskpack_cl.color import ColorOptions
+from diskpack_cl.pens import ColorOptions
 from diskpack_cl.export import WriteOptions, write_npz
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import OptionConflict, describe, flag_name

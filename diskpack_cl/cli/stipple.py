@@ -67,7 +67,7 @@ def _schedules_text():
 
 
 def add_stipple(subparsers):
-    from diskpack_cl.color import ColorOptions  # not loaded at start-up
+    from diskpack_cl.pens import ColorOptions  # not loaded at start-up
     from diskpack_cl.schedule import STIPPLING_GROUP, COUNT, StippleCount, StippleOptions  # not loaded at start-up
     from diskpack_cl.tiles import TileOptions  # not loaded at start-up
 
@@ -115,7 +115,7 @@ def _stipple_objects(args):
     Raises :class:`~diskpack_cl.options.OptionConflict` (status 2) for options
     that contradict each other.
     """
-    from diskpack_cl.color import ColorOptions  # not loaded at start-up
+    from diskpack_cl.pens import ColorOptions  # not loaded at start-up
     from diskpack_cl.export import WriteOptions  # not loaded at start-up
     from diskpack_cl.schedule import StippleOptions  # not loaded at start-up
 
@@ -134,7 +134,7 @@ def _count(args):
 def _refuse_mixed(args, options, tone, write, separation):
     """Usage errors of options that do not go together: one pen's with several, a palette
     for white paper on black (--invert), a pen order without pens, -n tone without a dot size."""
-    from diskpack_cl.color import check_paper  # not loaded at start-up
+    from diskpack_cl.pens import check_paper  # not loaded at start-up
 
     if separation is not None:
         mono = [flag_name("paper_tone")] if options.paper_tone else []
