@@ -150,7 +150,8 @@ def unmix(targets, pens):
 
     >>> unmix(np.array([[0.5, 0.5, 0.5]]), np.array([[0.0, 0.0, 0.0]])).round(6).tolist()
     [[0.5]]
-    >>> unmix(np.array([[0.5, 0.5, 0.5]]), np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 1.0]])).round(6).tolist()
+    >>> red_and_cyan = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 1.0]])
+    >>> unmix(np.array([[0.5, 0.5, 0.5]]), red_and_cyan).round(6).tolist()
     [[0.5, 0.5]]
     """
     V = np.vstack([np.ones(3), pens])                                   # paper, then the pens

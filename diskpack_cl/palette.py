@@ -9,7 +9,8 @@ from itertools import product
 
 import numpy as np
 
-from .colorspace import hex_color, linear_negative, linear_to_srgb, srgb_to_lab, srgb_to_linear, unmix
+from .colorspace import (hex_color, linear_negative, linear_to_srgb, srgb_to_lab, srgb_to_linear,
+                         unmix)
 from .image import load_rgb
 from .pens import AUTO_MAX_PENS
 
