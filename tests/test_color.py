@@ -1,4 +1,5 @@
-"""Colour separation, ink compositing and colour measures (diskpack_cl.separation,\ncolorspace, color_measures), and the old diskpack_cl.color names."""
+"""Colour separation, ink compositing and colour measures (diskpack_cl.separation,
+colorspace, color_measures), and the old diskpack_cl.color names."""
 
 import importlib
 
