@@ -76,13 +76,20 @@ def make(folder):
             line = subprocess.run(cmd, check=True, capture_output=True, text=True,
                                   cwd=folder).stdout
             summary = json.loads(line)
-            for key in UNTIMED:
-                summary.pop(key, None)
             summary["image"] = os.path.basename(summary["image"])   # the tree's sample or not
-            with open(stem + ".json", "w") as fh:
-                json.dump(summary, fh, indent=1, sort_keys=True)
+            _write_summary(summary, folder, stem + ".json")
             print(stem, flush=True)
     make_points(folder)
+
+
+def _write_summary(summary, folder, path):
+    """`summary` without its timings, its paths relative to `folder` (the outputs are
+    reported absolute), so that two folders' summaries compare."""
+    for key in UNTIMED:
+        summary.pop(key, None)
+    text = json.dumps(summary, indent=1, sort_keys=True).replace(folder + os.sep, "")
+    with open(path, "w") as fh:
+        fh.write(text)
 
 
 def make_points(folder):
@@ -103,11 +110,7 @@ def make_points(folder):
             line = subprocess.run(cmd, check=True, capture_output=True, text=True,
                                   cwd=folder).stdout
             if k == 0:
-                summary = json.loads(line)
-                for key in UNTIMED:
-                    summary.pop(key, None)
-                with open(os.path.join(folder, f"{case}.json"), "w") as fh:
-                    json.dump(summary, fh, indent=1, sort_keys=True)
+                _write_summary(json.loads(line), folder, os.path.join(folder, f"{case}.json"))
         print(os.path.join(folder, case), flush=True)
 
 
