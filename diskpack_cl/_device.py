@@ -403,7 +403,10 @@ def check_requested_device(device=None):
     >>> check_requested_device("no-such-device")
     Traceback (most recent call last):
     ...
-    diskpack_cl._device.NoOpenCLError: no OpenCL device matches 'no-such-device'; ...
+    diskpack_cl._device.NoOpenCLError: no OpenCL ...
+
+    (``no OpenCL device matches 'no-such-device'; available: ...``, or where no
+    platform is installed ``no OpenCL platform found; ...``.)
     """
     spec = requested_device(device)
     if spec and "," not in spec:

@@ -206,7 +206,7 @@ def test_hypothesis_is_derandomized_in_ci():
 
 @pytest.mark.parametrize("variable", ["DISKPACK_DEVICE", "PYOPENCL_CTX"])
 def test_a_device_asked_for_in_the_environment_that_does_not_exist_is_an_error(
-        tmp_path, capsys, monkeypatch, variable):
+        ctx, tmp_path, capsys, monkeypatch, variable):   # ctx: the devices it lists exist
     from diskpack_cl import cli
 
     monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
@@ -218,7 +218,7 @@ def test_a_device_asked_for_in_the_environment_that_does_not_exist_is_an_error(
     assert not out.exists()
 
 
-def test_a_device_given_as_an_argument_is_named_as_given(tmp_path, capsys, monkeypatch):
+def test_a_device_given_as_an_argument_is_named_as_given(ctx, tmp_path, capsys, monkeypatch):
     from diskpack_cl import cli
 
     monkeypatch.setenv("PYOPENCL_CTX", "0")

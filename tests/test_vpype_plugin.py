@@ -146,7 +146,7 @@ def test_a_note_is_diskpack_s_not_the_root_logger_s(tmp_path):
 
 
 @pytest.mark.parametrize("variable", ["DISKPACK_DEVICE", "PYOPENCL_CTX"])
-def test_a_device_asked_for_that_does_not_exist_is_an_error(tmp_path, monkeypatch, variable):
+def test_a_device_asked_for_that_does_not_exist_is_an_error(ctx, tmp_path, monkeypatch, variable):
     monkeypatch.delenv("DISKPACK_DEVICE", raising=False)
     monkeypatch.setenv(variable, "no-such-device")
     out = tmp_path / "x.svg"
