@@ -259,6 +259,7 @@ def test_devices_without_opencl(monkeypatch, capsys):
         raise diskpack_cl.NoOpenCLError("no OpenCL platform found; install an OpenCL driver")
 
     monkeypatch.setattr(diskpack_cl, "list_devices", none)
+    monkeypatch.setattr(diskpack_cl, "list_platforms", none)   # listed first
     assert cli.main(["devices"]) == 1
     assert "diskpack: error: no OpenCL platform found; install" in capsys.readouterr().err
 
