@@ -43,19 +43,19 @@ except ImportError:  # pragma: no cover - hypothesis is in the test extra
 #: Doctests that run OpenCL kernels (they cannot ask for the ``ctx`` fixture);
 #: a class's entry also covers the doctests of its methods.
 OPENCL_DOCTESTS = {
-    "diskpack_cl._device.get_context",
-    "diskpack_cl._device.describe",
-    "diskpack_cl._device.group_size",
-    "diskpack_cl.blur.DeviceBlur",
-    "diskpack_cl.raster.PowerRaster",
-    "diskpack_cl.raster.RasterResult",
-    "diskpack_cl.device_stage.has_fp64",
-    "diskpack_cl.device_stage.DeviceStage",
-    "diskpack_cl.device_checks",
-    "diskpack_cl.known_answers",
+    "diskpack_cl.device.context.get_context",
+    "diskpack_cl.device.context.describe",
+    "diskpack_cl.device.context.group_size",
+    "diskpack_cl.device.blur.DeviceBlur",
+    "diskpack_cl.device.raster.PowerRaster",
+    "diskpack_cl.device.raster.RasterResult",
+    "diskpack_cl.device.stage.has_fp64",
+    "diskpack_cl.device.stage.DeviceStage",
+    "diskpack_cl.device.checks",
+    "diskpack_cl.device.known_answers",
     "diskpack_cl.engine.OpenCLEngine",
-    "diskpack_cl.cells.CellMIC",
-    "diskpack_cl.cells3.CellMIC3",
+    "diskpack_cl.device.cells.CellMIC",
+    "diskpack_cl.device.cells3.CellMIC3",
 }
 
 
@@ -90,7 +90,7 @@ def _context_or_skip():
     import warnings
 
     from diskpack_cl import NoOpenCLError, get_context
-    from diskpack_cl.device_checks import DeviceWarning
+    from diskpack_cl.device.checks import DeviceWarning
 
     try:
         # a device passed over for the next one (pip's PoCL on AMD Zen 5 beside the

@@ -2,7 +2,7 @@
 
 Builds 12 photographs from the three test photographs (each as is, resized
 to 384 and 640 px, and a 400 x 300 crop), stipples them at ``-n`` dots with
-the default schedule through :func:`diskpack_cl.batch.stipple_many` with
+the default schedule through :func:`diskpack_cl.jobs.batch.stipple_many` with
 ``jobs=1``, ``jobs=2`` and a ``distributed.LocalCluster`` (2 process
 workers, 1 thread each, PoCL capped like ``--jobs 2``), checks that the three
 runs wrote identical files, and reports images per minute and the Dask
@@ -34,8 +34,8 @@ from pathlib import Path
 
 from PIL import Image
 
-from diskpack_cl.batch import poisson_many, stipple_many
-from diskpack_cl.executors import POCL_THREAD_VARS, default_jobs
+from diskpack_cl.jobs.batch import poisson_many, stipple_many
+from diskpack_cl.jobs.executors import POCL_THREAD_VARS, default_jobs
 from perf_rows import append, count, medians, num
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
@@ -141,7 +141,7 @@ def bench_memory(work, sizes):
         img = folder / f"sample_{side}.png"
         Image.open(DATA / "astronaut.png").convert("L").resize((side, side), Image.LANCZOS) \
             .save(img)
-        code = ("import json, sys\nfrom diskpack_cl.executors import run_item\nfrom diskpack_cl.jobs import plan_stipple\n"
+        code = ("import json, sys\nfrom diskpack_cl.jobs.executors import run_item\nfrom diskpack_cl.jobs.items import plan_stipple\n"
                 f"item = plan_stipple([{str(img)!r}], [{str(folder / 'o.npz')!r}], n={n})[0]\n"
                 "rec = run_item(item)\n"
                 "print(json.dumps({k: rec.get(k) for k in ('status', 'error', 'seconds', "

@@ -66,7 +66,7 @@ from diskpack_cl.image import load_rgb
 from diskpack_cl.pen_radii import pen_ink_radii
 from diskpack_cl.pens import PALETTES, PEN_SHARE_EXPONENT, check_paper
 from diskpack_cl.separation import separate
-from diskpack_cl.color_export import write_color_png
+from diskpack_cl.drawing.color_writers import write_color_png
 from diskpack_cl.multipen import hex_color, stipple_colors
 
 ROOT = Path(__file__).resolve().parents[1]

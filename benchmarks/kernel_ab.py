@@ -3,8 +3,8 @@
     python benchmarks/kernel_ab.py OLD.cl NEW.cl [MORE.cl ...] [--n 1000000] [--rounds 8]
         [--box] [--include DIR]
 
-Each file is built as :class:`diskpack_cl.cells.CellMIC` builds
-``kernels/cell_mic.cl`` (with ``kernels/`` on the include path, or
+Each file is built as :class:`diskpack_cl.device.cells.CellMIC` builds
+``kernels/cells.cl`` (with ``kernels/`` on the include path, or
 ``--include``; a ``FILE.cl@DIR`` argument takes its own).  A dart-throwing
 start of ``--n`` points and that set moved once (over-relaxed, as the
 relaxation's first move) are solved with each version in turn, the order
@@ -24,11 +24,11 @@ import time
 
 import numpy as np
 
-from diskpack_cl.cells import MAXC, MAXNEAR, CellMIC
+from diskpack_cl.device.cells import MAXC, MAXNEAR, CellMIC
 from diskpack_cl.domain import Domain
 from diskpack_cl.parallel_darts import parallel_darts
 from diskpack_cl.relax import _moved
-from diskpack_cl._kernels import inline_math, kernel_dir
+from diskpack_cl.device.programs import inline_math, kernel_dir
 
 
 def build(solver, spec, include, periodic):

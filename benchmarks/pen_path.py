@@ -4,10 +4,10 @@ The dots are the error-diffusion start of the stippling of the sample
 photograph (:func:`diskpack_cl.error_diffusion`, dots spread like its
 darkness), on a 190 mm wide drawing, the pen starting at the origin as in
 the SVG. Orders: Hilbert curve, greedy nearest neighbour, each improved by
-:func:`diskpack_cl.pen_path.two_opt` for the default's rounds
-(:func:`diskpack_cl.pen_path.two_opt_rounds`, or ``--rounds``), and the default
+:func:`diskpack_cl.drawing.pen_path.two_opt` for the default's rounds
+(:func:`diskpack_cl.drawing.pen_path.two_opt_rounds`, or ``--rounds``), and the default
 (``method="auto"``). Each row: travel in mm, its ratio to Hilbert, seconds,
-and the plot time (:func:`diskpack_cl.export.plot_time`, every dot one pen
+and the plot time (:func:`diskpack_cl.drawing.writers.plot_time`, every dot one pen
 touch). ``--markdown`` prints the table rows of docs/guide/plotters.md.
 
     python benchmarks/pen_path.py [-n 2000 20000 100000] [--rounds R] [--json out.json]
@@ -22,8 +22,8 @@ import time
 
 
 from diskpack_cl import error_diffusion, load_gray, sample_image_path
-from diskpack_cl.export import plot_time
-from diskpack_cl.pen_path import (_greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt,
+from diskpack_cl.drawing.writers import plot_time
+from diskpack_cl.drawing.pen_path import (_greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt,
                                   two_opt_rounds)
 
 WIDTH_MM = 190.0

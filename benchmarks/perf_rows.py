@@ -30,7 +30,7 @@ def device_name():
     A child, because creating an OpenCL context in a benchmark's parent
     before it forks workers (bench_peers, bench_batch) is unsafe with PoCL.
     """
-    code = "from diskpack_cl._device import get_context; print(get_context().devices[0].name)"
+    code = "from diskpack_cl.device.context import get_context; print(get_context().devices[0].name)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     return done.stdout.strip() or "no OpenCL device"
 

@@ -38,7 +38,7 @@ from scipy.spatial import cKDTree
 from diskpack_cl.image import load_gray, sample_image_path
 from diskpack_cl.memory import HOST_BYTES_PER_CELL
 from diskpack_cl.schedule import StippleOptions
-from diskpack_cl.tiles import tile_grid
+from diskpack_cl.jobs.tiles import tile_grid
 from perf_rows import append, count, medians, num
 
 CACHE = os.path.join(tempfile.gettempdir(), "diskpack-bench")

@@ -18,7 +18,7 @@ _PUBLIC = {
     "domain": ["Domain"],
     "geometry": ["CertificateError", "certify_disks", "exact_mic"],
     "measures": ["normalized_radius"],
-    "_device": ["NoOpenCLError", "describe", "get_context", "list_devices", "list_platforms"],
+    "device.context": ["NoOpenCLError", "describe", "get_context", "list_devices", "list_platforms"],
     "relax": ["RelaxOptions", "RelaxResult", "relax_poisson", "RadiusResult",
               "max_points_for_radius"],
     "sampling": ["dart_throwing", "random_points"],
@@ -27,7 +27,7 @@ _PUBLIC = {
     "schedule": ["StippleOptions"],
     "stipple": ["StippleResult", "stipple"],
     "dithering": ["error_diffusion"],
-    "export": ["WriteOptions", "read_stipple", "write_stipple"],
+    "drawing.writers": ["WriteOptions", "read_stipple", "write_stipple"],
     "image": ["ToneOptions", "load_gray", "sample_image_path"],
     "multipen": ["ColorStippleResult", "stipple_colors"],
     "preview": ["preview"],
@@ -46,6 +46,7 @@ class _Package(types.ModuleType):
 
 
 sys.modules[__name__].__class__ = _Package
+importlib.import_module(".moved", __name__).install()
 
 
 def __getattr__(name):

@@ -1,8 +1,8 @@
 """The one timing collector: seconds per named stage, summed over calls.
 
 An engine owns one :class:`Stopwatch` and hands it to the processing
-objects it drives (:class:`~diskpack_cl.cells.CellMIC`,
-:class:`~diskpack_cl.raster.PowerRaster`), so that every stage and every
+objects it drives (:class:`~diskpack_cl.device.cells.CellMIC`,
+:class:`~diskpack_cl.device.raster.PowerRaster`), so that every stage and every
 profiled kernel lands in one place. A caller that wants one step's share
 takes a :meth:`Stopwatch.mark` before the step and :meth:`Stopwatch.since`
 after it; the totals are :attr:`Stopwatch.seconds`.

@@ -22,10 +22,10 @@ makes them all.
 ==========  ==============================================================
 route       how
 ==========  ==============================================================
-``cells``   OpenCL float64 per-cell kernel (:class:`diskpack_cl.cells.CellMIC`),
+``cells``   OpenCL float64 per-cell kernel (:class:`diskpack_cl.device.cells.CellMIC`),
             re-solved and checked on the host; the default on devices with
             ``cl_khr_fp64``
-``raster``  OpenCL float32 raster estimate (:class:`diskpack_cl.raster.PowerRaster`)
+``raster``  OpenCL float32 raster estimate (:class:`diskpack_cl.device.raster.PowerRaster`)
             refined by :func:`diskpack_cl.geometry.exact_mic`; the route for
             devices without float64
 ``exact``   :func:`diskpack_cl.geometry.exact_mic` alone and exact float64
@@ -241,7 +241,7 @@ class OpenCLEngine(_Engine):
         raster estimate refined by :func:`exact_mic`.
     grid : tuple of int, optional
         Raster ``(ny, nx)``: the grid of :meth:`centroids` and of the raster
-        route (default: :func:`diskpack_cl.raster.auto_grid` of `n`).
+        route (default: :func:`diskpack_cl.device.raster.auto_grid` of `n`).
     n : int, optional
         Number of sites, for the default grid.
     profile : bool
@@ -266,8 +266,8 @@ class OpenCLEngine(_Engine):
 
     def __init__(self, domain, ctx, route, *, grid=None, n=None, profile=False, verify=False,
                  timings=None):
-        from ._device import describe  # not loaded at start-up
-        from .cells import CellMIC  # not loaded at start-up
+        from .device.context import describe  # not loaded at start-up
+        from .device.cells import CellMIC  # not loaded at start-up
 
         super().__init__(domain, verify=verify, timings=timings)
         self.ctx, self.name, self.profile = ctx, route, profile
@@ -283,7 +283,7 @@ class OpenCLEngine(_Engine):
             self._build_raster()
 
     def _build_raster(self):
-        from .raster import PowerRaster  # not loaded at start-up
+        from .device.raster import PowerRaster  # not loaded at start-up
 
         if self._grid is None:
             raise ValueError("this engine has no grid: make it with grid=(ny, nx) or n")
@@ -292,7 +292,7 @@ class OpenCLEngine(_Engine):
 
     @property
     def raster(self):
-        """The :class:`~diskpack_cl.raster.PowerRaster` of the grid, built on first use."""
+        """The :class:`~diskpack_cl.device.raster.PowerRaster` of the grid, built on first use."""
         if self._raster is None:
             self._build_raster()
         return self._raster
@@ -325,7 +325,7 @@ class OpenCLEngine(_Engine):
 
 
 def _auto_grid(n, domain):
-    from .raster import auto_grid  # not loaded at start-up
+    from .device.raster import auto_grid  # not loaded at start-up
 
     return auto_grid(n, domain)
 
@@ -368,7 +368,7 @@ def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route
     >>> make_engine(Domain.torus(), 100, "exact").name
     'exact'
     """
-    from ._device import NoOpenCLError, get_context  # not loaded at start-up
+    from .device.context import NoOpenCLError, get_context  # not loaded at start-up
 
     check_backend(backend)
     if route not in ROUTES:
@@ -394,7 +394,7 @@ def _route(ctx, backend, route):
     raster route on GPUs (and whenever OpenCL was asked for), the exact engine on CPUs."""
     import pyopencl as cl  # not loaded at start-up
 
-    from .device_stage import has_fp64  # not loaded at start-up
+    from .device.stage import has_fp64  # not loaded at start-up
 
     if route == "cells" or (route == "auto" and has_fp64(ctx)):
         return "cells"

@@ -175,7 +175,7 @@ _COVER_RTOL = 1e-12
 class MIC:
     """Certified maximal inscribed circles of power cells: the one answer of every engine.
 
-    :func:`exact_mic`, :meth:`diskpack_cl.cells.CellMIC.solve` and every
+    :func:`exact_mic`, :meth:`diskpack_cl.device.cells.CellMIC.solve` and every
     engine's ``mic`` (:mod:`diskpack_cl.engine`) return it.
 
     Attributes

@@ -176,7 +176,7 @@ def gray_strips(image, *, rows=256, allow_large=False):
     Returns ``(shape, strips)``: the gray image's ``(H, W)`` and an iterator
     of ``(y0, strip)``, float64 rows ``y0 ..`` of it. A file is decoded
     once and converted strip by strip, so that no float copy of the whole
-    picture is made (a tiled stippling, :func:`diskpack_cl.tiles.stipple_tiled`).
+    picture is made (a tiled stippling, :func:`diskpack_cl.jobs.tiles.stipple_tiled`).
 
     Examples
     --------

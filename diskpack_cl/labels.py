@@ -1,7 +1,7 @@
 """Power-diagram labels of a grid and density-weighted cell centroids, on the host.
 
 :func:`grid_power_labels` is the exact float64 counterpart of the OpenCL
-``power_labels`` kernel (:class:`diskpack_cl.raster.PowerRaster`): the owner of
+``power_labels`` kernel (:class:`diskpack_cl.device.raster.PowerRaster`): the owner of
 each grid-cell centre.  It is a nearest-neighbour query in lifted
 coordinates: with ``C >= max w``,
 ``|p - x|^2 - w = |(p, 0) - (x, sqrt(C - w))|^2 - C``, so the site of least

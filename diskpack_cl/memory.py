@@ -170,7 +170,7 @@ def _gib(b):
 
 def _raster_limits(free, device):
     """``(bytes per raster cell, bytes available, what)`` of the machine and the device."""
-    from ._device import NoOpenCLError, get_context  # not loaded at start-up
+    from .device.context import NoOpenCLError, get_context  # not loaded at start-up
 
     limits = []
     if free is not None:

@@ -60,7 +60,7 @@ from ._checks import check_count
 from .stipple import (StippleResult, StippleState, centroid_density, make_stage, run_schedule,
                       dot_radii, result_summary)
 from .engine import engine_record, make_engine
-from .pen_path import pen_path_order
+from .drawing.pen_path import pen_path_order
 from .progress import stage as run_stage, unreported
 
 __all__ = ["ColorStippleResult", "assign_pens", "dot_density", "dots_per_pen", "pen_counts",

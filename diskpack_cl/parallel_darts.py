@@ -35,9 +35,9 @@ import pyopencl as cl
 
 from ._checks import check_count
 from .measures import hexagonal_radius
-from ._device import NoOpenCLError, get_context, group_size, padded
-from .device_checks import UntrustedProgram, warn_fallback
-from .device_stage import DeviceStage
+from .device.context import NoOpenCLError, get_context, group_size, padded
+from .device.checks import UntrustedProgram, warn_fallback
+from .device.stage import DeviceStage
 
 __all__ = ["parallel_darts"]
 
@@ -137,7 +137,7 @@ def _keys(rng):
 def _uniform(key, cells):
     """Uniforms in [0, 1), one per cell of `cells`: the top 53 bits of splitmix64's
     output number ``cell + 1`` of the stream `key`, as ``uniform`` in
-    ``kernels/dart_round.cl``: the device draws its darts itself, and nothing but
+    ``kernels/parallel_darts.cl``: the device draws its darts itself, and nothing but
     lists of cells goes up to it.
 
     Examples
@@ -183,7 +183,7 @@ def _round(grid, live, rng, room, empty):
 
 
 class _DeviceGrid(DeviceStage):
-    """The grid of :class:`_Grid` on an OpenCL device (``kernels/dart_round.cl``).
+    """The grid of :class:`_Grid` on an OpenCL device (``kernels/parallel_darts.cl``).
 
     The host draws a round's keys with the same generator calls and keeps a
     copy of the points; the kernels hash the darts' uniforms and priorities
@@ -202,7 +202,7 @@ class _DeviceGrid(DeviceStage):
         self.g = g = max(1, int(np.ceil(np.sqrt(2.0) / d)))
         self.c = 1.0 / g
         super().__init__(ctx, fp64=True)
-        self.k = self.program("dart_round")
+        self.k = self.program("parallel_darts")
         # explicit groups: left to itself, PoCL takes a divisor of the global size (1 for a prime)
         self.group = {name: group_size(k, ctx.devices[0], 64) for name, k in self.k.items()}
         # the host keeps the points it placed, by round (a full grid of 3.5M cells at 1M
@@ -378,7 +378,7 @@ def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16, device=None):
         Rounds at one radius before it shrinks.
     device : str, pyopencl.Context, bool or None, optional
         Where the distance tests run: an OpenCL device with float64
-        (``kernels/dart_round.cl``; None: the default one, if any), or
+        (``kernels/parallel_darts.cl``; None: the default one, if any), or
         numpy (False, or without a device, or for grids under 64 x 64).
         Both give the same points for a seed.
 

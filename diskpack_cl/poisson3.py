@@ -2,8 +2,8 @@
 
 The 3D form of Algorithm 1: every iteration moves each point to the centre
 of the largest sphere inside its Voronoi cell (on the 3-torus, or in a box
-whose walls clip the cells), from :class:`diskpack_cl.cells3.CellMIC3` on
-the device or :func:`diskpack_cl.cells3.exact_mis` without one.  On the
+whose walls clip the cells), from :class:`diskpack_cl.device.cells3.CellMIC3` on
+the device or :func:`diskpack_cl.device.cells3.exact_mis` without one.  On the
 torus the new spheres lie in the old cells, so the minimum distance never
 drops, as in 2D.
 
@@ -19,12 +19,12 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .cells3 import CellMIC3, Domain3, exact_mis
+from .device.cells3 import CellMIC3, Domain3, exact_mis
 from .domain import box_sizes
 from .memory import freed_memory_kept
 from .engine import HOST_DEVICE
 from .relax import STALL_GAIN, RelaxResult
-from ._device import NoOpenCLError
+from .device.context import NoOpenCLError
 from .sampling import first_come, make_rng
 
 __all__ = ["FCC_DENSITY", "fcc_radius", "normalized_radius3", "relax_poisson3", "as_box3",

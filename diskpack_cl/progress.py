@@ -1,7 +1,7 @@
 """Progress of a whole run, stage by stage, and the seconds each stage took.
 
 A run (``diskpack stipple``, :func:`diskpack_cl.stipple`,
-:func:`diskpack_cl.jobs.stipple_item` with its writers, ``vpype diskpack``)
+:func:`diskpack_cl.jobs.items.stipple_item` with its writers, ``vpype diskpack``)
 goes through named stages (:data:`STAGES`). The caller gives a hook,
 ``hook(stage, done, total)``, called when a stage starts (``done`` 0), as it
 advances and when it ends (``done == total``); ``done`` never decreases
@@ -38,7 +38,7 @@ from contextvars import ContextVar
 __all__ = ["STAGES", "RunProgress", "running", "current", "stage", "stage_text", "StageBars",
            "with_bars", "in_stage_order", "unreported"]
 
-#: The stages of a stippling run, in the order a job (:func:`diskpack_cl.jobs.stipple_item`)
+#: The stages of a stippling run, in the order a job (:func:`diskpack_cl.jobs.items.stipple_item`)
 #: starts them: reading the image and planning the run (``load``), finding the OpenCL
 #: device, its known-answer checks on its first run, and building its programs
 #: (``device``), the error-diffusion start (``start``), the radius, density and ink fields

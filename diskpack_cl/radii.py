@@ -146,7 +146,7 @@ def radius_field(gray, *, radii="gray", gamma=3.0, floor=0.1, sigma=2.0, blur=No
         Blur of the darkness for ``"density"`` (pixels; 0 = none).
     blur : callable, optional
         ``blur(image, sigma)`` with the values of :func:`gaussian_blur` (the
-        default), such as a :class:`~diskpack_cl.blur.DeviceBlur`.
+        default), such as a :class:`~diskpack_cl.device.blur.DeviceBlur`.
 
     Returns
     -------
@@ -244,7 +244,7 @@ def detail_fields(gray, n, field, *, gain=1.5, fine=0.5, ell=None, blur=None):
         of a larger picture whose scale it is.
     blur : callable, optional
         ``blur(image, sigma)`` with the values of :func:`gaussian_blur` (the
-        default), such as a :class:`~diskpack_cl.blur.DeviceBlur`.
+        default), such as a :class:`~diskpack_cl.device.blur.DeviceBlur`.
 
     Returns
     -------

@@ -425,7 +425,7 @@ def _after_move(engine, X, stats, certify, soon):
 def _local_solver(engine, dom):
     """The per-cell kernel for the local steps' cells (its own, so that its seconds stay
     out of the global iterations' stages) where the engine has one, else None (exact_mic)."""
-    from .cells import CellMIC  # not loaded at start-up
+    from .device.cells import CellMIC  # not loaded at start-up
 
     cells = getattr(engine, "cells", None)
     return None if cells is None else CellMIC(dom, device=cells.ctx)
@@ -434,7 +434,7 @@ def _local_solver(engine, dom):
 def _go_local(X, nn, rho, it, eps, dom, max_iter, patience, callback, stats, solver=None,
               before=None):
     """Local iterations after `it` global ones (their cells solved by `solver`, a
-    :class:`~diskpack_cl.cells.CellMIC`, or by exact_mic); the last rho measured on the
+    :class:`~diskpack_cl.device.cells.CellMIC`, or by exact_mic); the last rho measured on the
     host, from `before` where given: X then, and a future of its
     :func:`~diskpack_cl.measures.close_pairs` within :data:`FINAL_REACH`."""
     from .relax_local import relax_local  # not loaded at start-up

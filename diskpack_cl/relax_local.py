@@ -59,7 +59,7 @@ FINE = 4
 LOCAL_SHARE = 0.04
 #: From at most this share of bad points the next iterate probably goes
 #: local: :func:`diskpack_cl.relax_poisson` measures its nearest neighbours
-#: alone first (:meth:`diskpack_cl.cells.CellMIC.nearest`, about a tenth of
+#: alone first (:meth:`diskpack_cl.device.cells.CellMIC.nearest`, about a tenth of
 #: the MICs' cost), and solves its MICs only if it does not.
 LOCAL_SOON = 0.45
 
@@ -203,7 +203,7 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None
         Spacings of sites kept around the moving points.
     solver : CellMIC, optional
         Solves the moving cells on the device (:meth:`CellMIC.solve
-        <diskpack_cl.cells.CellMIC.solve>` with `cells`, certified as by
+        <diskpack_cl.device.cells.CellMIC.solve>` with `cells`, certified as by
         :func:`exact_mic`); None: :func:`exact_mic` on the host.
     cells : _Neighbourhoods, optional
         The points' cells from the last step (:func:`relax_local` keeps them;

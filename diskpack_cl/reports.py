@@ -107,7 +107,7 @@ def analyze(paths, options=None, *, image=None, output=None, allow_large=False, 
     >>> analyze([path], kmax=8)["n"]
     50
     """
-    from .export import read_stipple  # not loaded at start-up
+    from .drawing.writers import read_stipple  # not loaded at start-up
 
     o = replace(options or AnalyzeOptions(), **overrides)
     stipplings = [read_stipple(p) if str(p).lower().endswith(".npz") or _pen_csv(p) else None
@@ -171,7 +171,7 @@ def analyze_stippling(path, st, image, *, output=None, invert=False, allow_large
 
 def _pen_csv(path):
     """Whether `path` is a colour stippling's CSV (its first line names the pens)."""
-    from .readers import CSV_TAG  # not loaded at start-up
+    from .drawing.readers import CSV_TAG  # not loaded at start-up
 
     if not str(path).lower().endswith(".csv"):
         return False

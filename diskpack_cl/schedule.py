@@ -278,7 +278,7 @@ COUNT = "count"
 
 @dataclass(frozen=True)
 class StippleCount:
-    """How many dots a stippling has (:func:`diskpack_cl.jobs.plan_stipple`,
+    """How many dots a stippling has (:func:`diskpack_cl.jobs.items.plan_stipple`,
     :func:`diskpack_cl.stipple_many`, ``diskpack stipple``): ``n``, or a density
     per megapixel of each image or per cm^2 of the print.
 
@@ -305,7 +305,7 @@ class StippleCount:
         check_fields(self)
 
     def kwargs(self):
-        """The keyword arguments of :func:`diskpack_cl.jobs.plan_stipple`."""
+        """The keyword arguments of :func:`diskpack_cl.jobs.items.plan_stipple`."""
         return {"n": self.n, "density": self.density, "dots_per_cm2": self.dots_per_cm2}
 
 

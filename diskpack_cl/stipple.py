@@ -83,9 +83,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._timing import Stopwatch
-from .blur import DeviceBlur
-from .device_checks import UntrustedProgram, warn_fallback
-from .device_stage import has_fp64
+from .device.blur import DeviceBlur
+from .device.checks import UntrustedProgram, warn_fallback
+from .device.stage import has_fp64
 from .picture_measures import tone_radius
 from .preview import Previewable
 from .progress import running, stage as run_stage
@@ -570,7 +570,7 @@ def _blurred(darkness, sigma, blur):
 def _field_blur(engine):
     """``(blur, record)``: the fields' Gaussian blur and where it runs (a
     :func:`~diskpack_cl.engine.stage_record`). On the engine's OpenCL device where it has
-    float64 (:class:`~diskpack_cl.blur.DeviceBlur`, scipy's values, a few times faster on
+    float64 (:class:`~diskpack_cl.device.blur.DeviceBlur`, scipy's values, a few times faster on
     a large picture), else scipy's on the host (:func:`~diskpack_cl.radii.gaussian_blur`);
     the record says why where the engine's device could not take it."""
     ctx = getattr(engine, "ctx", None)
@@ -670,7 +670,7 @@ def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND
 
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
     of that part of `gray`, computed with the margin around it, and `ell`
-    is the detail scale of the whole picture (:func:`~diskpack_cl.tiles.stipple_tiled`).
+    is the detail scale of the whole picture (:func:`~diskpack_cl.jobs.tiles.stipple_tiled`).
     Without it, a picture of more than twice `band_rows` rows has its fields made in bands.
     `blur`: the ``(blur, record)`` of :func:`_field_blur` (default: the engine's)."""
     if window is None and gray.shape[0] > 2 * band_rows:

@@ -6,7 +6,7 @@ vpype finds it through its ``vpype.plugins`` entry point::
     vpype diskpack photo.jpg -n 20000 --pen-mm 0.5 layout a4 linesort write out.svg
 
 The command stipples the image as ``diskpack stipple`` does, draws the
-dots as its SVG draws them (:func:`diskpack_cl.jobs.write_stipple_outputs`:
+dots as its SVG draws them (:func:`diskpack_cl.jobs.items.write_stipple_outputs`:
 a filled dot's outline, or with ``--pen-mm`` a pen touch or concentric
 rings) and adds that drawing to vpype's document: one layer per pen, the
 page the SVG's page. Its stippling options are generated from the same
@@ -25,12 +25,12 @@ import click
 import vpype
 import vpype_cli
 
-from diskpack_cl._device import NoOpenCLError, check_requested_device
+from diskpack_cl.device.context import NoOpenCLError, check_requested_device
 from diskpack_cl.cli import LEADING, one_line_help
 from diskpack_cl.pens import ColorOptions
-from diskpack_cl.export import WriteOptions
+from diskpack_cl.drawing.writers import WriteOptions
 from diskpack_cl.image import ToneOptions, sample_image_path
-from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs
+from diskpack_cl.jobs.items import plan_stipple, stipple_item, write_stipple_outputs
 from diskpack_cl.options import NamedOptionError, cli_fields, flag_name
 from diskpack_cl.progress import stage_text, with_bars
 from diskpack_cl.schedule import StippleOptions

@@ -30,7 +30,7 @@ from diskpack_cl import analysis, picture_measures
 from diskpack_cl.domain import Domain
 from diskpack_cl.measures import hexagonal_radius, min_distance, normalized_radius
 from diskpack_cl.image import load_gray
-from diskpack_cl.raster import PowerRaster
+from diskpack_cl.device.raster import PowerRaster
 from diskpack_cl.relax import max_points_for_radius, relax_poisson
 from diskpack_cl.sampling import bridson, dart_throwing, random_points
 from diskpack_cl.dithering import error_diffusion

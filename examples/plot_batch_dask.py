@@ -2,7 +2,7 @@
 A batch on a Dask cluster
 =========================
 
-:func:`diskpack_cl.batch.stipple_many` stipples many images, writes each
+:func:`diskpack_cl.jobs.batch.stipple_many` stipples many images, writes each
 one's outputs atomically and records it in a manifest, so a rerun skips the
 finished items. With ``client=`` the items run on a ``dask.distributed``
 cluster: here a small in-process ``LocalCluster``; on real machines give the
@@ -19,7 +19,7 @@ from PIL import Image
 
 from diskpack_cl import load_gray, read_stipple, sample_image_path
 from diskpack_cl.picture_measures import render_dots
-from diskpack_cl.batch import stipple_many
+from diskpack_cl.jobs.batch import stipple_many
 
 # three small crops of the sample photograph as the "photos" folder
 work = Path(tempfile.mkdtemp())

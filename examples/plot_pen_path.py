@@ -4,7 +4,7 @@ Pen-path ordering
 
 A pen plotter lifts the pen and travels between dots; the order of the dots
 sets that travel, and with it most of the plot time besides the pen lifts.
-:func:`diskpack_cl.pen_path.pen_path_order` offers a Hilbert curve, greedy
+:func:`diskpack_cl.drawing.pen_path.pen_path_order` offers a Hilbert curve, greedy
 nearest neighbour, and ``"auto"``: the shorter of both, then rounds of 2-opt
 (as many as the number of dots allows, the same on every machine). The SVG
 writer uses ``"auto"`` unless told otherwise.
@@ -13,7 +13,7 @@ writer uses ``"auto"`` unless told otherwise.
 import matplotlib.pyplot as plt
 
 from diskpack_cl import load_gray, sample_image_path, stipple
-from diskpack_cl.pen_path import pen_path_order
+from diskpack_cl.drawing.pen_path import pen_path_order
 
 gray = load_gray(sample_image_path())[40:200, 170:330]
 points = stipple(gray, 800, seed=0).points

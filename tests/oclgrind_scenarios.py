@@ -30,9 +30,9 @@ def _sites(dom, n, seed, heavy=0.0):
 def _raster(ctx, dom, shape, n, heavy):
     """power_labels (both passes), power_labels_tile, cell_max, cell_argmax,
     cell_sums and power_sums_tile, on a raster with partial tiles."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
-    from diskpack_cl.device_checks import verdict_of
+    from diskpack_cl.device.checks import verdict_of
 
     pts, w = _sites(dom, n, 1, heavy)
     out = {}
@@ -65,7 +65,7 @@ def raster_torus(ctx):
 def raster_streamed(ctx):
     """A raster so coarse that one tile has more candidates than the local
     list holds (CAP = 256): they stream through it in chunks."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     dom = Domain.rect(10.0, 10.0)
     pts, w = _sites(dom, 600, 5, 0.3)
@@ -76,8 +76,7 @@ def raster_streamed(ctx):
 
 
 def _cells(ctx, dom, n, heavy):
-    from diskpack_cl import cells
-
+    from diskpack_cl.device import cells
     pts, w = _sites(dom, n, 3, heavy)
     solver = cells.CellMIC(dom, device=ctx)
     # enqueues of a few groups each, so that the chunking is exercised
@@ -98,8 +97,7 @@ def cells_torus(ctx):
 
 def cells_list(ctx):
     """cell_mic on a list of cells (unsorted, repeated) of a weighted torus set."""
-    from diskpack_cl import cells
-
+    from diskpack_cl.device import cells
     pts, w = _sites(Domain.torus(), 40, 3, 0.5)
     r = cells.CellMIC(Domain.torus(), device=ctx).solve(pts, w, cells=[7, 3, 39, 3, 0])
     return {"centers": r.centers, "radii": r.radii, "nn": r.nn}
@@ -107,8 +105,7 @@ def cells_list(ctx):
 
 def nearest(ctx):
     """nearest (the nearest-neighbour distances alone) on the torus and on a rectangle."""
-    from diskpack_cl import cells
-
+    from diskpack_cl.device import cells
     out = {}
     for name, dom in (("torus", Domain.torus()), ("rect", Domain.rect(30.0, 20.0))):
         pts, _ = _sites(dom, 40, 5)
@@ -120,7 +117,7 @@ def cells_full(ctx):
     """cell_mic where a cell has 40 tight sides (full constraint list, full
     near-tight slots) and a site alone beside a cluster (wide rings, scans
     past one period: the flag paths)."""
-    from diskpack_cl.cells import CellMIC
+    from diskpack_cl.device.cells import CellMIC
 
     t = np.arange(40) * 2 * np.pi / 40
     ring = np.column_stack([5 + np.cos(t), 5 + np.sin(t)])
@@ -134,8 +131,7 @@ def cells_full(ctx):
 
 
 def _cells3(ctx, dom, n):
-    from diskpack_cl import cells3
-
+    from diskpack_cl.device import cells3
     pts = np.random.default_rng(6).random((n, 3)) * dom.size
     solver = cells3.CellMIC3(dom, device=ctx)
     chunk = cells3.CHUNK
@@ -152,14 +148,14 @@ def _cells3(ctx, dom, n):
 
 def cells3_box(ctx):
     """cell_mic3 in a box (the six walls as constraints), in several enqueues."""
-    from diskpack_cl.cells3 import Domain3
+    from diskpack_cl.device.cells3 import Domain3
 
     return _cells3(ctx, Domain3.box(3.0, 2.0, 1.5), 40)
 
 
 def cells3_torus(ctx):
     """cell_mic3 on the 3-torus (27 period shifts of the bucket rings)."""
-    from diskpack_cl.cells3 import Domain3
+    from diskpack_cl.device.cells3 import Domain3
 
     return _cells3(ctx, Domain3.torus(), 36)
 
@@ -188,7 +184,7 @@ def end_to_end(ctx):
 
 def refused(ctx):
     """NaN weights in a box and on a torus: a ValueError, no kernel runs."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     out = {}
     for name, dom in (("rect", Domain.rect(8.0, 8.0)), ("torus", Domain.torus())):
@@ -206,7 +202,7 @@ def bad_labels(ctx):
     those grid cells must touch no per-site buffer."""
     import pyopencl as cl
 
-    from diskpack_cl.raster import INT_MAX, PowerRaster
+    from diskpack_cl.device.raster import INT_MAX, PowerRaster
 
     pr = PowerRaster(Domain.rect(8.0, 4.0), (4, 8), device=ctx)
     est = pr.compute(np.array([[2.0, 2.0], [6.0, 2.0]]))
@@ -228,8 +224,7 @@ def bad_labels(ctx):
 def unowned(ctx):
     """NaN weights past the host check: the kernels' own guards keep every
     access in bounds and every ring search finite, and the host refuses."""
-    from diskpack_cl import raster
-
+    from diskpack_cl.device import raster
     out = {}
     check = raster.check_sites
     for name, dom in (("rect", Domain.rect(8.0, 8.0)), ("torus", Domain.torus())):
@@ -253,7 +248,7 @@ def unowned(ctx):
 def blur(ctx):
     """blur_columns and blur_rows: vector runs, the partial run at the right edge, and
     lines shorter than the blur's reach (reflected more than once)."""
-    from diskpack_cl.blur import DeviceBlur
+    from diskpack_cl.device.blur import DeviceBlur
 
     b = DeviceBlur(ctx)
     a = np.random.default_rng(5).random((13, 21))

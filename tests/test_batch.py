@@ -18,12 +18,13 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from diskpack_cl import executors, jobs
-from diskpack_cl.batch import poisson_many, stipple_many
-from diskpack_cl.executors import Manifest
-from diskpack_cl.jobs import Item, derive_seeds, expand_inputs, plan_stipple, render_template
+from diskpack_cl.jobs import executors
+from diskpack_cl.jobs import items as jobs
+from diskpack_cl.jobs.batch import poisson_many, stipple_many
+from diskpack_cl.jobs.executors import Manifest
+from diskpack_cl.jobs.items import Item, derive_seeds, expand_inputs, plan_stipple, render_template
 from diskpack_cl.cli import main
-from diskpack_cl.export import WriteOptions
+from diskpack_cl.drawing.writers import WriteOptions
 
 DATA = Path(__file__).parent / "data"
 QUICK = dict(schedule=[("pack", 2)])  # a short schedule: the batch layer is under test
@@ -418,7 +419,7 @@ def test_single_input_switches_refused_on_a_batch(tmp_path, capsys, flags):
 
 
 def test_collision_hint_names_the_field_that_differs(tmp_path):
-    from diskpack_cl.jobs import check_outputs
+    from diskpack_cl.jobs.items import check_outputs
 
     a = Item("stipple", 0, str(tmp_path / "cat.jpg"), 0, {}, (str(tmp_path / "cat.svg"),))
     b = Item("stipple", 1, str(tmp_path / "cat.png"), 0, {}, (str(tmp_path / "cat.svg"),))
@@ -614,7 +615,7 @@ def test_workers_end_when_the_coordinator_is_killed(tmp_path, argv):
 
 NO_MAIN_GUARD = """
 import sys
-from diskpack_cl.batch import poisson_many
+from diskpack_cl.jobs.batch import poisson_many
 
 for rec in poisson_many(2, 64, [sys.argv[1] + "/{i}.npz"], seed=1, backend="exact", jobs=2):
     print(rec["status"], rec.get("error"), flush=True)

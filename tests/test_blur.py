@@ -1,4 +1,4 @@
-"""DeviceBlur (kernels/gaussian_blur.cl) against scipy.ndimage.gaussian_filter."""
+"""DeviceBlur (kernels/blur.cl) against scipy.ndimage.gaussian_filter."""
 
 import numpy as np
 import pytest
@@ -14,8 +14,8 @@ from diskpack_cl.radii import gaussian_blur
 
 @pytest.fixture(scope="module")
 def device_blur(ctx):
-    from diskpack_cl.blur import DeviceBlur
-    from diskpack_cl.device_stage import has_fp64
+    from diskpack_cl.device.blur import DeviceBlur
+    from diskpack_cl.device.stage import has_fp64
 
     if not has_fp64(ctx):
         pytest.skip("device without float64")
@@ -39,10 +39,10 @@ def test_device_blur_is_scipys(device_blur, h, w, sigma, seed):
 def blur_256(ctx, device_blur):
     """The device blur of the 256-bit build (``WIDE_BUILTINS=0``), where the device is
     trusted with the blur: its sums round as scipy's, bit for bit."""
-    from diskpack_cl.blur import DeviceBlur
-    from diskpack_cl.device_checks import Verdict, use_verdict, verdict_of
+    from diskpack_cl.device.blur import DeviceBlur
+    from diskpack_cl.device.checks import Verdict, use_verdict, verdict_of
 
-    if verdict_of(ctx).refused("gaussian_blur"):
+    if verdict_of(ctx).refused("blur"):
         pytest.skip("the device's checks did not trust the blur")
     use_verdict(Verdict.trusting(ctx.devices[0], False, ["gaussian_blur"]))
     try:

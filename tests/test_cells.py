@@ -6,7 +6,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
-from diskpack_cl.cells import FLAGS, NO_CODE, CellMIC, _scatter, refine_active
+from diskpack_cl.device.cells import FLAGS, NO_CODE, CellMIC, _scatter, refine_active
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.sampling import dart_throwing
@@ -284,9 +284,9 @@ def test_host_refinement_rejects_what_it_can_check():
 def test_flag_bits_match_the_kernel():
     import re
 
-    from diskpack_cl._kernels import kernel_dir
+    from diskpack_cl.device.programs import kernel_dir
 
-    src = (kernel_dir() / "cell_mic.cl").read_text()
+    src = (kernel_dir() / "cells.cl").read_text()
     defined = {m[1].lower(): int(m[2]) for m in re.finditer(r"#define F_(\w+)\s+(\d+)", src)}
     assert defined == FLAGS
 
@@ -314,9 +314,8 @@ def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit)
     follows the limit, every enqueue holds whole groups (a group reaching
     into the next enqueue would solve its cells twice), and the MICs are the
     same, bit for bit."""
-    from diskpack_cl import _device
-    from diskpack_cl import cells as cells_mod
-
+    from diskpack_cl.device import context as _device
+    from diskpack_cl.device import cells as cells_mod
     dom = Domain.rect(30.0, 20.0)
     rng = np.random.default_rng(5)
     pts = rng.random((700, 2)) * (30.0, 20.0)
@@ -399,7 +398,8 @@ def test_the_call_free_math_gives_the_builtins_answers(ctx, dom, monkeypatch):
     """kernels/common.h's INLINE_MATH (clang's builtins on PoCL's CPU device) and the
     OpenCL builtins give the same MICs and nearest neighbours, bit for bit: both are the
     IEEE operations.  Weighted sites too, so that the proof scan runs."""
-    from diskpack_cl import _kernels, device_stage
+    from diskpack_cl.device import programs as _kernels
+    from diskpack_cl.device import stage as device_stage
 
     rng = np.random.default_rng(5)
     pts = rng.random((3000, 2)) * (dom.width, dom.height)
@@ -422,16 +422,16 @@ def test_the_call_free_math_gives_the_builtins_answers(ctx, dom, monkeypatch):
 
 @pytest.mark.parametrize("dom", [Domain.torus(), Domain(3.0, 2.0, True), Domain.rect(3.0, 2.0)])
 def test_the_rows_kernel_wraps_and_places_as_the_host_does(ctx, dom):
-    """``mic_rows`` (cell_mic.cl) puts each cell's answer in its result row, the site
+    """``mic_rows`` (cells.cl) puts each cell's answer in its result row, the site
     itself for an empty cell, and on a torus wraps the centre as ``Domain.wrap`` (numpy's
     mod) does, bit for bit: -0.0, a sum that rounds up to the period, a period or more
     out.  Its flag words stay in list order."""
     import pyopencl as cl
     import pyopencl.array as cla
 
-    from diskpack_cl._device import padded
-    from diskpack_cl._kernels import build_program
-    from diskpack_cl.cells import MAXC, MAXNEAR
+    from diskpack_cl.device.context import padded
+    from diskpack_cl.device.programs import build_program
+    from diskpack_cl.device.cells import MAXC, MAXNEAR
 
     W, H = dom.width, dom.height
     edge = [-1e-17, -0.0, 0.0, W, np.nextafter(W, 0), -0.25 * W, 1.25 * W, 2.5 * W, -3.75 * W, 0.5 * W]
@@ -450,7 +450,7 @@ def test_the_rows_kernel_wraps_and_places_as_the_host_does(ctx, dom):
            {"site": site, "cells": cells, "rows": rows, "mic": mic, "codes": codes}.items()}
     out = {"center": cla.empty(q, (m, 2), np.float64), "radius": cla.empty(q, m, np.float64),
            "nn": cla.empty(q, m, np.float64), "flags": cla.empty(q, m, np.int32)}
-    kernel = build_program(ctx, "cell_mic", {"PERIODIC": int(dom.periodic), "MAXC": MAXC,
+    kernel = build_program(ctx, "cells", {"PERIODIC": int(dom.periodic), "MAXC": MAXC,
                                              "MAXNEAR": MAXNEAR})["mic_rows"]
     kernel(q, (padded(m, 1),), None, dev["site"].data, dev["cells"].data, dev["rows"].data,
            np.int32(m), np.float64(W), np.float64(H), dev["mic"].data, dev["codes"].data,

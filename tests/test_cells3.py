@@ -5,8 +5,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-import diskpack_cl.cells3 as cells3
-from diskpack_cl.cells3 import CellMIC3, Domain3, certify_mis, exact_mis, inscribed_sphere_linprog
+import diskpack_cl.device.cells3 as cells3
+from diskpack_cl.device.cells3 import CellMIC3, Domain3, certify_mis, exact_mis, inscribed_sphere_linprog
 from diskpack_cl.poisson3 import (FCC_DENSITY, as_box3, dart_throwing3, fcc_radius, normalized_radius3,
                                   relax_poisson3)
 
@@ -176,7 +176,7 @@ def test_uncertified_iterates_3d(box, ctx, monkeypatch):
     """certify=False: the device's proven spheres (within 1e-9 of the certified ones,
     no host re-solve; cells it could not prove still go to exact_mis), the same
     iterations; rho still the brute-force one."""
-    import diskpack_cl.cells3 as cells3
+    import diskpack_cl.device.cells3 as cells3
 
     dom = as_box3(box)
     X = np.random.default_rng(4).random((500, 3)) * dom.size

@@ -297,7 +297,7 @@ def test_readme_commands_match_ci():
 # ------------------------------------------------------------------ stipple
 
 # the package re-exports the function under the module's name: patch the module
-JOBS = importlib.import_module("diskpack_cl.jobs")  # every run looks stipple up there
+JOBS = importlib.import_module("diskpack_cl.jobs.items")  # every run looks stipple up there
 POISSON = importlib.import_module("diskpack_cl.poisson")  # poisson sets look relax_poisson up there
 STIPPLE_ARGS = ["-n", "150", "--beta", "3", "--lloyd", "2", "--rounds", "2"]  # 3+2+2 iterations
 
@@ -456,7 +456,7 @@ def test_stipple_interrupt_writes_nothing(monkeypatch, tmp_path, capsys):
 
 
 def test_stipple_failed_writer_removes_earlier_outputs(ctx, monkeypatch, tmp_path, capsys):
-    import diskpack_cl.export as export
+    import diskpack_cl.drawing.writers as export
 
     def boom(path, result, **opts):
         raise ValueError("disk full (fake)")
@@ -813,7 +813,7 @@ def test_pen_lift_sets_the_plot_time(stippled, tmp_path, capsys, lift):
 @pytest.mark.parametrize("command", ["stipple", "export"])
 def test_pen_path_help_says_what_it_runs(capsys, command):
     """The 2-opt of --pen-path auto is a number of rounds, not a time bound."""
-    from diskpack_cl.pen_path import TWO_OPT_WORK
+    from diskpack_cl.drawing.pen_path import TWO_OPT_WORK
 
     assert cli.main([command, "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())

@@ -11,8 +11,8 @@ from diskpack_cl.color_measures import color_measures, render_pens
 from diskpack_cl.colorspace import linear_negative, srgb_to_linear
 from diskpack_cl.palette import auto_palette
 from diskpack_cl.separation import separate
-from diskpack_cl.color_export import write_color_png
-from diskpack_cl.export import read_stipple
+from diskpack_cl.drawing.color_writers import write_color_png
+from diskpack_cl.drawing.writers import read_stipple
 from diskpack_cl.multipen import stipple_colors
 
 INK = "{http://www.inkscape.org/namespaces/inkscape}"

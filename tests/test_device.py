@@ -6,8 +6,9 @@ import pytest
 from diskpack_cl import NoOpenCLError
 from types import SimpleNamespace
 
-from diskpack_cl import _device, device_checks
-from diskpack_cl.device_checks import DeviceWarning
+from diskpack_cl.device import checks as device_checks
+from diskpack_cl.device import context as _device
+from diskpack_cl.device.checks import DeviceWarning
 
 
 class _Dev:

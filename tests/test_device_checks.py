@@ -1,4 +1,4 @@
-"""Known-answer checks (diskpack_cl.device_checks): faults injected into the check itself.
+"""Known-answer checks (diskpack_cl.device.checks): faults injected into the check itself.
 
 Each fault is what a broken driver does: a program that returns wrong numbers,
 one that crashes its process, one that never returns, and broken entries of
@@ -15,9 +15,11 @@ import sys
 import numpy as np
 import pytest
 
-from diskpack_cl import NoOpenCLError, _device, device_checks
-from diskpack_cl.device_checks import DeviceWarning, verdict_of
-from diskpack_cl.known_answers import check_device
+from diskpack_cl import NoOpenCLError
+from diskpack_cl.device import checks as device_checks
+from diskpack_cl.device import context as _device
+from diskpack_cl.device.checks import DeviceWarning, verdict_of
+from diskpack_cl.device.known_answers import check_device
 
 pytest.importorskip("pyopencl")
 
@@ -51,39 +53,39 @@ def test_the_known_answers_pass_on_the_test_device(fresh, tmp_path):
 
 
 def test_wrong_numbers_refuse_a_core_program_and_the_device(fresh, tmp_path, monkeypatch):
-    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "cell_mic=wrong")
+    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "cells=wrong")
     v = verdict_of(fresh)
-    why = v.refused("cell_mic")
+    why = v.refused("cells")
     assert why is not None and "MIC radii" in why and "off by" in why
-    assert v.refused("power_diagram") is None
+    assert v.refused("raster_labels") is None
     # the device is passed over with one line, and the engine falls back to the host
     with pytest.warns(DeviceWarning, match="passed over: cell_mic"):
-        with pytest.raises(NoOpenCLError, match="cell_mic"):
+        with pytest.raises(NoOpenCLError, match="cells"):
             _device.get_context()
     from diskpack_cl.domain import Domain
     from diskpack_cl.engine import make_engine
 
     with pytest.warns(DeviceWarning):
         engine = make_engine(Domain.torus(), 100, "auto")
-    assert engine.backend == "exact" and "cell_mic" in engine.fallback
+    assert engine.backend == "exact" and "cells" in engine.fallback
     # cached, and reused without a child (the fault is gone: the verdict still holds)
     monkeypatch.delenv("DISKPACK_CL_CHECK_FAULT")
     monkeypatch.setattr(device_checks, "_MEMO", {})
     _no_children(monkeypatch)
     again = verdict_of(fresh)
-    assert again.cached and again.refused("cell_mic") == why
+    assert again.cached and again.refused("cells") == why
 
 
 def test_a_crash_refuses_that_program_only_and_its_stage_runs_on_the_host(fresh, monkeypatch):
-    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "gaussian_blur=crash")
+    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "blur=crash")
     v = verdict_of(fresh)
-    if v.programs["gaussian_blur"]["why"] == "the device has no float64":
+    if v.programs["blur"]["why"] == "the device has no float64":
         pytest.skip("no float64: the blur never runs on this device")
-    assert "crashed (SIGSEGV)" in v.refused("gaussian_blur")
+    assert "crashed (SIGSEGV)" in v.refused("blur")
     # the programs after it were checked in a new child
-    assert v.core_failure() is None and v.programs["cell_mic3"]["ok"]
-    from diskpack_cl.blur import DeviceBlur
-    from diskpack_cl.device_checks import UntrustedProgram
+    assert v.core_failure() is None and v.programs["cells3"]["ok"]
+    from diskpack_cl.device.blur import DeviceBlur
+    from diskpack_cl.device.checks import UntrustedProgram
     from diskpack_cl.stipple import stipple
 
     with pytest.raises(UntrustedProgram, match="gaussian_blur failed its check"):
@@ -95,13 +97,13 @@ def test_a_crash_refuses_that_program_only_and_its_stage_runs_on_the_host(fresh,
 
 
 def test_a_hang_is_killed_at_the_time_limit_and_refused(fresh, monkeypatch):
-    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "dart_round=hang")
+    monkeypatch.setenv("DISKPACK_CL_CHECK_FAULT", "parallel_darts=hang")
     monkeypatch.setenv("DISKPACK_CL_CHECK_TIME_LIMIT_S", "8")
     v = verdict_of(fresh)
-    if v.programs["dart_round"]["why"] == "the device has no float64":
+    if v.programs["parallel_darts"]["why"] == "the device has no float64":
         pytest.skip("no float64: the dart rounds never run on this device")
-    assert "no answer in 8 s (killed)" in v.refused("dart_round")
-    assert v.programs["gaussian_blur"]["ok"]   # checked after the hang, in a new child
+    assert "no answer in 8 s (killed)" in v.refused("parallel_darts")
+    assert v.programs["blur"]["ok"]   # checked after the hang, in a new child
     from diskpack_cl.parallel_darts import parallel_darts
 
     with pytest.warns(DeviceWarning, match="dart rounds on the host"):
@@ -112,7 +114,7 @@ def test_a_hang_is_killed_at_the_time_limit_and_refused(fresh, monkeypatch):
 def test_a_damaged_verdict_file_is_checked_again(fresh, tmp_path, monkeypatch):
     verdict_of(fresh)
     (path,) = _cached_files(tmp_path)
-    path.write_text('{"format": 1, "programs": {"cell_mic": ')
+    path.write_text('{"format": 1, "programs": {"cells": ')
     monkeypatch.setattr(device_checks, "_MEMO", {})
     v = verdict_of(fresh)
     assert not v.cached and json.loads(path.read_text())["programs"].keys() == v.programs.keys()
@@ -128,7 +130,7 @@ def test_checks_off_trusts_without_a_child(monkeypatch, ctx):
 _SCRIPT = """
 import json, warnings
 warnings.simplefilter("always")
-from diskpack_cl.known_answers import check_device
+from diskpack_cl.device.known_answers import check_device
 v = check_device()
 print(json.dumps({"notes": v.notes, "failed": {k: e["why"] for k, e in v.programs.items()
                   if not e["ok"] and e["why"] != "the device has no float64"}}))
@@ -198,11 +200,11 @@ def test_a_run_without_a_trusted_device_says_so_and_names_the_fix(ctx, tmp_path)
     kernel on AMD Zen 5), the stippling runs on the host and its summary says why and
     what gives a fast device."""
     env = dict(os.environ, DISKPACK_CL_CACHE_DIR=str(tmp_path / "cache"),
-               DISKPACK_CL_CHECK_FAULT="power_diagram=wrong")
+               DISKPACK_CL_CHECK_FAULT="raster_labels=wrong")
     out = tmp_path / "s.npz"
     proc = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", "stipple", "sample", "-n", "300",
                            "-o", str(out)], env=env, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert out.exists()
     text = proc.stderr
-    assert "on the host" in text and "power_diagram" in text and "pocl-opencl-icd" in text
+    assert "on the host" in text and "raster_labels" in text and "pocl-opencl-icd" in text

@@ -51,7 +51,7 @@ def test_public_objects_are_found():
     objects = public_objects()
     assert len(objects) > 150
     for name in ("diskpack_cl.stipple.stipple", "diskpack_cl.poisson.poisson_disk",
-                 "diskpack_cl.cli.build_parser", "diskpack_cl._device.get_context"):
+                 "diskpack_cl.cli.build_parser", "diskpack_cl.device.context.get_context"):
         assert name in objects
 
 

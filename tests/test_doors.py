@@ -15,11 +15,11 @@ import pytest
 
 from diskpack_cl import cli
 from diskpack_cl.domain import Domain
-from diskpack_cl.export import write_stipple
+from diskpack_cl.drawing.writers import write_stipple
 from diskpack_cl.geometry import certify_disks
 from diskpack_cl.image import sample_image_path
 from diskpack_cl.io import read_points, write_points
-from diskpack_cl.readers import read_stipple
+from diskpack_cl.drawing.readers import read_stipple
 
 
 def _run(argv, capsys):
@@ -34,9 +34,9 @@ def no_work(monkeypatch):
     def not_called(*args, **kwargs):
         raise AssertionError("the work started although an output is an input")
 
-    for module, name in [("diskpack_cl.jobs", "stipple"), ("diskpack_cl.jobs", "relax_poisson"),
-                         ("diskpack_cl.poisson", "poisson_disk"), ("diskpack_cl.batch", "run_batch"),
-                         ("diskpack_cl.export", "read_stipple"), ("diskpack_cl.reports", "analyze")]:
+    for module, name in [("diskpack_cl.jobs.items", "stipple"), ("diskpack_cl.jobs.items", "relax_poisson"),
+                         ("diskpack_cl.poisson", "poisson_disk"), ("diskpack_cl.jobs.batch", "run_batch"),
+                         ("diskpack_cl.drawing.writers", "read_stipple"), ("diskpack_cl.reports", "analyze")]:
         monkeypatch.setattr(importlib.import_module(module), name, not_called)
 
 
@@ -214,7 +214,7 @@ def test_npz_reader_refuses_what_the_certificate_refuses(tmp_path):
     res = _stippling()
     res.points[1] = res.points[0] + 0.5        # two dots on each other
     path = tmp_path / "dots.npz"
-    from diskpack_cl.export import write_npz
+    from diskpack_cl.drawing.writers import write_npz
     write_npz(path, res)
     _refuses(path, "rows 0 and 1", "overlap", "certificate")
 
@@ -227,7 +227,7 @@ def test_npz_reader_refuses_what_the_certificate_refuses(tmp_path):
     ("radii", np.array(["a"] * 16), ["radii", "numbers"]),
 ])
 def test_npz_reader_checks_every_field(tmp_path, field, value, words):
-    from diskpack_cl.export import write_npz
+    from diskpack_cl.drawing.writers import write_npz
     path = tmp_path / "dots.npz"
     write_npz(path, _color_stippling())
     arrays = dict(np.load(path))
@@ -605,12 +605,12 @@ def test_every_test_has_a_time_limit(request):
 def test_an_interrupted_batch_with_nothing_done_names_no_manifest(tmp_path, capsys, monkeypatch):
     """Interrupted before any item finished, a batch does not point to a manifest that does
     not exist."""
-    import diskpack_cl.batch
+    import diskpack_cl.jobs.batch
 
     def interrupted(self):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(diskpack_cl.batch.Batch, "__iter__", interrupted)
+    monkeypatch.setattr(diskpack_cl.jobs.batch.Batch, "__iter__", interrupted)
     rc, _, err = _run(["poisson", "--count", "2", "-n", "50", "-o",
                        str(tmp_path / "sets" / "{i}.npz")], capsys)
     assert rc == 130 and "none had finished" in err and "manifest.jsonl" not in err

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from diskpack_cl import stipple, write_stipple
-from diskpack_cl.drawing import check_fit, crowded_dots, long_plot
+from diskpack_cl.drawing.page import check_fit, crowded_dots, long_plot
 
 PEN_TOO_WIDE = "the pen .* is as wide as the"
 DOTS_TOO_WIDE = "wide do not fit the"

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from diskpack_cl import export
+from diskpack_cl.drawing import writers as export
 from diskpack_cl.domain import Domain
-from diskpack_cl.export import (
+from diskpack_cl.drawing.writers import (
     check_output_path,
     path_travel,
     pen_path_order,
@@ -293,7 +293,7 @@ def test_auto_pen_path_is_shorter_than_either_order(points):
 
 
 def test_two_opt_keeps_a_permutation_never_longer_and_a_zero_budget():
-    from diskpack_cl.pen_path import two_opt
+    from diskpack_cl.drawing.pen_path import two_opt
 
     p = np.random.default_rng(4).random((500, 2))
     start = np.random.default_rng(5).permutation(500)
@@ -306,7 +306,7 @@ def test_two_opt_keeps_a_permutation_never_longer_and_a_zero_budget():
 def test_two_opt_same_order_whatever_chunks_its_candidates_come_in(monkeypatch):
     """The moves are made for a few dots at a time and kept in the order of one pass:
     chunks of 7 dots give the order of one chunk of all of them."""
-    import diskpack_cl.pen_path as pen_path
+    import diskpack_cl.drawing.pen_path as pen_path
 
     p = np.random.default_rng(6).random((700, 2))
     start = np.random.default_rng(8).permutation(700)
@@ -319,7 +319,7 @@ def test_pen_path_does_not_depend_on_the_clock(monkeypatch):
     """The order is counted in rounds: a slow machine (a clock that races) gets the same SVG order."""
     import time
 
-    from diskpack_cl.pen_path import two_opt, two_opt_rounds
+    from diskpack_cl.drawing.pen_path import two_opt, two_opt_rounds
 
     p = np.random.default_rng(7).random((3000, 2))
     calm = pen_path_order(p)[0]
@@ -333,7 +333,7 @@ def test_pen_path_does_not_depend_on_the_clock(monkeypatch):
 
 
 def test_png_preview_progress_and_default_size(tmp_path, result):
-    from diskpack_cl.export import preview_scale
+    from diskpack_cl.drawing.writers import preview_scale
 
     done = []
     write_png(tmp_path / "a.png", result, progress=done.append)
@@ -348,7 +348,7 @@ def test_the_tone_dot_is_the_same_size_through_every_writer_path(tmp_path, resul
     """The tone dot size comes from export.tone_dot_size alone: the writers without a
     dot size and write_stipple_outputs (which hands them one) draw the same dots; a
     second formula that forgot radius_scale or the factor 2 would differ."""
-    from diskpack_cl.jobs import write_stipple_outputs
+    from diskpack_cl.jobs.items import write_stipple_outputs
 
     a, b = tmp_path / "a.svg", tmp_path / "b.svg"
     write_svg(a, result, width_mm=160, radius_scale=radius_scale, pen_path="none")
@@ -416,7 +416,7 @@ def test_white_paper_pens_are_not_drawn_on_black_from_any_file(tmp_path, result,
 
 def test_an_old_colour_csv_on_black_paper_is_refused_by_its_pens(tmp_path, result):
     """A CSV that does not say its paper (written before it did): CMYK pens are for white."""
-    from diskpack_cl.color_export import on_black
+    from diskpack_cl.drawing.color_writers import on_black
 
     cmyk = _colour(result, ("yellow", "cyan", "magenta", "black"),
                    ((1, 1, 0), (0, 1, 1), (1, 0, 1), (0, 0, 0)))

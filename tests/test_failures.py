@@ -19,7 +19,7 @@ import pytest
 from diskpack_cl import cli, memory
 from diskpack_cl.io import write_points
 
-JOBS = importlib.import_module("diskpack_cl.jobs")  # every run looks stipple up there
+JOBS = importlib.import_module("diskpack_cl.jobs.items")  # every run looks stipple up there
 
 
 @pytest.fixture
@@ -60,7 +60,7 @@ def no_stipple(monkeypatch):
 
 CHILD = textwrap.dedent("""
     import sys, time
-    import diskpack_cl.export as export
+    import diskpack_cl.drawing.writers as export
 
     def png_that_hangs(path, result, **opts):
         print("writing png", flush=True)   # the .npz and .svg are written by now
@@ -306,7 +306,7 @@ def no_opencl(monkeypatch):
     """No OpenCL platform, and no context cached from earlier tests."""
     import pyopencl
 
-    import diskpack_cl._device as dev
+    import diskpack_cl.device.context as dev
 
     monkeypatch.setattr(pyopencl, "get_platforms", lambda: [])
     monkeypatch.setattr(dev, "_CONTEXTS", {})

@@ -16,14 +16,14 @@ from diskpack_cl.cli._common import RUN_FLAGS
 from diskpack_cl.cli import one_line_help
 from diskpack_cl.pens import ColorOptions
 from diskpack_cl.domain import DomainOptions
-from diskpack_cl.export import WriteOptions
+from diskpack_cl.drawing.writers import WriteOptions
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import add_arguments
 from diskpack_cl.poisson import PoissonOptions, PoissonSetOptions
 from diskpack_cl.relax import RelaxOptions
 from diskpack_cl.reports import AnalyzeOptions
 from diskpack_cl.schedule import StippleCount, StippleOptions
-from diskpack_cl.tiles import TileOptions
+from diskpack_cl.jobs.tiles import TileOptions
 
 #: The options dataclasses each subcommand builds from its arguments.
 CLASSES = {

@@ -124,7 +124,7 @@ def test_the_package_has_no_import_circle():
 
 def private_imports(module, path):
     """``[(line, imported module, name)]``: the private names (``_x``) that `module` takes
-    from another module of the package; a private *module* (``from . import _device``) is
+    from another module of the package; a private *module* (``from . import _timing``) is
     a module, not a name, and may be imported."""
     found = []
     for node in ast.walk(ast.parse(path.read_text())):
@@ -140,7 +140,7 @@ def private_imports(module, path):
 
 def test_private_imports_finds_a_private_name_and_passes_a_private_module(tmp_path):
     path = tmp_path / "mod.py"
-    path.write_text("from .stipple import _run, run\nfrom . import _device\n")
+    path.write_text("from .stipple import _run, run\nfrom . import _timing\n")
     assert private_imports("diskpack_cl.mod", path) == [(1, "diskpack_cl.stipple", "_run")]
 
 
@@ -149,3 +149,33 @@ def test_no_private_name_crosses_a_module():
              for module, path in MODULES.items()
              for line, target, name in private_imports(module, path)]
     assert not found, "\n".join(found)
+
+
+def kernel_home(stem, modules):
+    """The module a kernel file's stem names: the longest of its ``_``-prefixes that is a
+    module's name (``raster_labels`` -> ``raster``), or None."""
+    parts = stem.split("_")
+    by_name = {m.rpartition(".")[2]: m for m in modules}
+    for end in range(len(parts), 0, -1):
+        if "_".join(parts[:end]) in by_name:
+            return by_name["_".join(parts[:end])]
+    return None
+
+
+def test_kernel_home_takes_the_longest_prefix():
+    modules = ["p.device.cells", "p.device.cells3", "p.parallel_darts"]
+    assert kernel_home("cells_nearest", modules) == "p.device.cells"
+    assert kernel_home("cells3", modules) == "p.device.cells3"
+    assert kernel_home("parallel_darts", modules) == "p.parallel_darts"
+    assert kernel_home("power_diagram", modules) is None
+
+
+def test_every_kernel_is_named_for_the_module_that_builds_it():
+    from diskpack_cl.device.programs import kernel_dir
+
+    wrong = []
+    for path in sorted(kernel_dir().glob("*.cl")):
+        home = kernel_home(path.stem, MODULES)
+        if home is None or f'"{path.stem}"' not in MODULES[home].read_text():
+            wrong.append(f"{path.name}: named for {home}, which does not build it")
+    assert not wrong, "\n".join(wrong)

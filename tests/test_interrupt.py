@@ -19,7 +19,7 @@ CHILD = textwrap.dedent("""
     import os, sys
     import numpy as np
     import pyopencl as cl
-    from diskpack_cl._device import get_context, wait_for
+    from diskpack_cl.device.context import get_context, wait_for
 
     ctx = get_context()
     queue = cl.CommandQueue(ctx)
@@ -59,7 +59,7 @@ def test_ctrl_c_is_answered_while_a_kernel_runs(ctx):
 
 
 def test_wait_for_raises_the_wait_error(ctx):
-    from diskpack_cl._device import wait_for
+    from diskpack_cl.device.context import wait_for
 
     class Broken:
         def wait(self):
@@ -71,7 +71,7 @@ def test_wait_for_raises_the_wait_error(ctx):
 
 @pytest.mark.parametrize("max_groups", [1, 2, 5])
 def test_labels_in_bands_equal_labels_in_one_enqueue(ctx, monkeypatch, max_groups):
-    import diskpack_cl.raster as raster
+    import diskpack_cl.device.raster as raster
 
     rng = np.random.default_rng(2)
     dom = Domain.rect(30.0, 20.0)
@@ -81,8 +81,7 @@ def test_labels_in_bands_equal_labels_in_one_enqueue(ctx, monkeypatch, max_group
     one = raster.PowerRaster(dom, shape, device=ctx).compute(pts, w)
     pr = raster.PowerRaster(dom, shape, device=ctx, max_groups=max_groups)
     waits = []
-    from diskpack_cl import device_stage
-
+    from diskpack_cl.device import stage as device_stage
     real = device_stage.wait_for
     monkeypatch.setattr(device_stage, "wait_for", lambda ev: (waits.append(ev), real(ev)))
     banded = pr.compute(pts, w)
@@ -99,7 +98,8 @@ WRITING_CHILD = textwrap.dedent("""
     import sys, time
     import numpy as np
     from PIL import Image
-    from diskpack_cl import cli, export
+    from diskpack_cl import cli
+    from diskpack_cl.drawing import writers as export
 
     folder = sys.argv[1]
     Image.fromarray(np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)).save(

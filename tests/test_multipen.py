@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from diskpack_cl.cli import main
-from diskpack_cl.export import read_stipple, write_stipple
+from diskpack_cl.drawing.writers import read_stipple, write_stipple
 from diskpack_cl import multipen
 from diskpack_cl.pens import PEN_SHARE_EXPONENT
 from diskpack_cl.multipen import assign_pens, dots_per_pen, pen_counts, stipple_colors
@@ -135,7 +135,7 @@ def _sequential_pens(x, share, counts, k=6):
     dot's error to those of its k nearest not yet visited, else on to the next dot."""
     from scipy.spatial import cKDTree
 
-    from diskpack_cl.pen_path import pen_path_order
+    from diskpack_cl.drawing.pen_path import pen_path_order
 
     dist, nbr = cKDTree(x).query(x, k=list(range(2, k + 2)))
     left, err = np.array(counts), np.zeros_like(share)
@@ -319,7 +319,7 @@ def _svg_layers(path):
 
 def test_dask_colour_batch_matches_one_process(tmp_path):
     distributed = pytest.importorskip("distributed")
-    from diskpack_cl.batch import stipple_many
+    from diskpack_cl.jobs.batch import stipple_many
 
     images = [str(p) for p in sorted(_two_images(tmp_path / "in").iterdir())]
     # one engine on both sides: Dask workers do not see the test run's OpenCL patch

@@ -129,8 +129,7 @@ def test_scenario_is_clean_on_oclgrind_and_matches(ctx, icd_dir, tmp_path, name,
     assert not found, "\n\n".join(found[:5])
     # the reference in Oclgrind's tile lanes: tiles of another shape round the fused
     # sums per tile elsewhere (the scenarios name the lanes where they test both)
-    from diskpack_cl import device_stage
-
+    from diskpack_cl.device import stage as device_stage
     monkeypatch.setattr(device_stage, "tile_lanes", lambda verdict: 8)
     want = oclgrind_scenarios.SCENARIOS[name](ctx)
     # 16-lane tiles where both devices are trusted with them (only Oclgrind's, where this

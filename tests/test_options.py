@@ -6,9 +6,10 @@ import importlib
 import numpy as np
 import pytest
 
-from diskpack_cl import cli, jobs, poisson
+from diskpack_cl import cli, poisson
+from diskpack_cl.jobs import items as jobs
 from diskpack_cl.pens import ColorOptions
-from diskpack_cl.export import WriteOptions, write_npz
+from diskpack_cl.drawing.writers import WriteOptions, write_npz
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import OptionConflict, describe, flag_name
 from diskpack_cl.relax import RELAX_FIELDS, RelaxOptions

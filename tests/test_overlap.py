@@ -64,7 +64,7 @@ def test_with_no_overlap_no_two_drawn_dots_touch(stippling, capsys):
 
 def test_dots_that_exactly_touch_count_as_touching():
     """A gap of exactly 0 is touching: for the share reported and for --no-overlap."""
-    from diskpack_cl.overlap import check_apart, touching
+    from diskpack_cl.drawing.overlap import check_apart, touching
 
     centres = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])
     assert touching(centres, np.full(3, 0.5)).tolist() == [True, True, False]

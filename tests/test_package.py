@@ -17,7 +17,7 @@ def _loaded_after(statement):
 def test_the_command_line_starts_without_the_stippling_stack():
     loaded = _loaded_after("import diskpack_cl.cli")
     assert not loaded & {"scipy.stats", "scipy.ndimage", "diskpack_cl.stipple",
-                         "diskpack_cl.qmc", "diskpack_cl.jobs", "matplotlib"}
+                         "diskpack_cl.qmc", "diskpack_cl.jobs.items", "matplotlib"}
 
 
 def test_every_public_name_resolves_to_its_module_object():
@@ -28,7 +28,7 @@ def test_every_public_name_resolves_to_its_module_object():
 
 
 def test_a_submodule_does_not_shadow_the_function_it_is_named_after():
-    loaded = _loaded_after("import diskpack_cl.jobs, diskpack_cl; "
+    loaded = _loaded_after("import diskpack_cl.jobs.items, diskpack_cl; "
                            "assert callable(diskpack_cl.stipple) and "
                            "diskpack_cl.stipple.__module__ == 'diskpack_cl.stipple'")
     assert "diskpack_cl.stipple" in loaded

@@ -13,7 +13,7 @@ from PIL import Image
 from scipy import ndimage
 
 from diskpack_cl import cli
-from diskpack_cl.export import WriteOptions, write_npz, write_page_png, write_stipple, write_svg
+from diskpack_cl.drawing.writers import WriteOptions, write_npz, write_page_png, write_stipple, write_svg
 from diskpack_cl.memory import MemoryLimit, check_stipple_memory
 
 SVG = "{http://www.w3.org/2000/svg}"

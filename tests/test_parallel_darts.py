@@ -70,7 +70,7 @@ def test_no_lattice_peaks_in_the_spectrum():
 # from 1296 points every radius here makes a grid of at least 64 cells across, the device's
 @given(n=st.integers(1300, 6000), rel=st.floats(0.5, 0.74), seed=st.integers(0, 2**32 - 1))
 def test_the_device_kernels_give_the_numpy_points(ctx, n, rel, seed):
-    """kernels/dart_round.cl does the distance tests of the numpy path in the same float64
+    """kernels/parallel_darts.cl does the distance tests of the numpy path in the same float64
     operations, on the same hashed darts: the same points, bit for bit."""
     from diskpack_cl import parallel_darts as pd
 

@@ -5,8 +5,8 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-import diskpack_cl.pen_path as pen_path
-from diskpack_cl.pen_path import path_travel, two_opt
+import diskpack_cl.drawing.pen_path as pen_path
+from diskpack_cl.drawing.pen_path import path_travel, two_opt
 
 
 def _length(q):

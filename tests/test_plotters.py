@@ -13,7 +13,7 @@ import pytest
 import vpype
 
 from diskpack_cl.cli import main
-from diskpack_cl.plotters import plotting_area
+from diskpack_cl.drawing.plotters import plotting_area
 
 PX_PER_MM = 96 / 25.4
 
@@ -123,7 +123,7 @@ def test_a_picture_too_large_names_the_plotting_area(tmp_path, capsys):
 
 
 def _stippling(folder):
-    from diskpack_cl.export import write_stipple
+    from diskpack_cl.drawing.writers import write_stipple
 
     path = folder / "dots.npz"
     write_stipple(path, SimpleNamespace(points=np.array([[10.0, 10.0], [30.0, 20.0]]),

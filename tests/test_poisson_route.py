@@ -13,7 +13,7 @@ import pytest
 from PIL import Image
 
 from diskpack_cl import cli
-from diskpack_cl.batch import poisson_many
+from diskpack_cl.jobs.batch import poisson_many
 from diskpack_cl.options import flag_name
 from diskpack_cl.poisson import PoissonOptions, poisson_disk, poisson_job
 

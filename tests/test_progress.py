@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl import cli, poisson_disk, relax_poisson, stipple
-from diskpack_cl.jobs import plan_stipple, stipple_item, write_stipple_outputs
+from diskpack_cl.jobs.items import plan_stipple, stipple_item, write_stipple_outputs
 from diskpack_cl.progress import STAGES, RunProgress, StageBars, running, stage, stage_text
 
 GRAY = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))

@@ -1,4 +1,4 @@
-"""OpenCL raster kernels (power_diagram.cl, inscribed_circle.cl) against reference.py."""
+"""OpenCL raster kernels (raster_labels.cl, raster_mic.cl) against reference.py."""
 
 import numpy as np
 import pytest
@@ -20,7 +20,7 @@ DIST = 1e-4
 
 
 def _raster(ctx, domain, shape, pts, w=None, neighbors=False):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     pr = PowerRaster(domain, shape, device=ctx)
     est = pr.compute(pts, w, neighbors=neighbors)
@@ -62,7 +62,7 @@ def cases(draw, weighted=None, n_max=24):
 
 
 def _wide(ctx):
-    from diskpack_cl.device_checks import verdict_of
+    from diskpack_cl.device.checks import verdict_of
 
     return verdict_of(ctx).wide
 
@@ -74,8 +74,8 @@ def _lanes_or_skip(ctx, lanes):
 
 
 def test_sixteen_lanes_are_refused_where_512_bit_vectors_are_not_trusted(ctx, monkeypatch):
-    from diskpack_cl import device_stage
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device import stage as device_stage
+    from diskpack_cl.device.raster import PowerRaster
 
     monkeypatch.setattr(device_stage, "tile_lanes", lambda verdict: 8)
     with pytest.raises(ValueError, match="16 lanes take 512-bit vectors"):
@@ -277,7 +277,7 @@ def test_centroids_input_not_mutated_and_shape_checked(ctx):
 
 
 def test_compute_does_not_mutate_inputs(ctx):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     rng = np.random.default_rng(5)
     pts = rng.random((20, 2)) * 1.5 - 0.25     # outside the torus: wrapped inside, not in place
@@ -290,7 +290,7 @@ def test_compute_does_not_mutate_inputs(ctx):
 
 @pytest.mark.parametrize("periodic", [True, False])
 def test_deterministic(ctx, periodic):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     dom = Domain.torus() if periodic else Domain.rect(50, 30)
     rng = np.random.default_rng(7)
@@ -307,7 +307,7 @@ def test_deterministic(ctx, periodic):
 
 def test_earlier_result_is_not_overwritten_by_next_compute(ctx):
     """A RasterResult must keep describing its own points after the next compute."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     pr = PowerRaster(Domain.torus(), (16, 16), device=ctx)
     rng = np.random.default_rng(8)
@@ -341,7 +341,7 @@ def test_neighbor_is_the_site_of_the_nearest_boundary_line(ctx):
 def test_labels_only_layouts_agree_with_the_reference(ctx, case):
     """The CPU vector-tile layout and the one-item-per-grid-cell layout give
     the same labels (bit for bit), and both the brute-force owner away from ties."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     dom, shape, pts, w = case
     labs = {}
@@ -362,7 +362,7 @@ def test_labels_only_layouts_agree_with_the_reference(ctx, case):
 @pytest.mark.parametrize("shape", [(1, 203), (203, 1), (2, 999), (17, 9)])
 def test_tile_layout_on_partial_tiles_and_thin_rasters(ctx, shape, lanes):
     _lanes_or_skip(ctx, lanes)
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     dom = Domain.rect(float(shape[1]), float(shape[0]))
     pts = np.random.default_rng(3).random((40, 2)) * (dom.width, dom.height)
@@ -373,7 +373,7 @@ def test_tile_layout_on_partial_tiles_and_thin_rasters(ctx, shape, lanes):
 
 
 def test_bad_layout(ctx):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     with pytest.raises(ValueError, match="layout must be"):
         PowerRaster(Domain.torus(), (8, 8), device=ctx, layout="gpu")
@@ -385,10 +385,10 @@ def test_bad_layout(ctx):
 @pytest.mark.parametrize("periodic", [True, False])
 def test_device_centroids_match_bincount(ctx, periodic, fused, lanes):
     _lanes_or_skip(ctx, lanes)
-    """The on-device reductions (cell_sums.cl: cell_sums, and power_sums_tile,
+    """The on-device reductions (raster_sums.cl: cell_sums, and power_sums_tile,
     which labels too) against numpy.bincount on the same labels."""
     from diskpack_cl.labels import cell_centroids
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     rng = np.random.default_rng(21)
     dom = Domain.torus() if periodic else Domain.rect(300.0, 170.0)
@@ -420,7 +420,7 @@ def test_device_centroids_match_bincount(ctx, periodic, fused, lanes):
 def test_a_result_overwritten_by_a_later_compute_says_so(ctx):
     """The raster reuses its map buffers: a result read after a later compute
     raises instead of returning the newer labels; one read before keeps them."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     rng = np.random.default_rng(31)
     pr = PowerRaster(Domain.torus(), (32, 32), device=ctx)
@@ -447,7 +447,7 @@ def test_neighbour_map_is_opt_in(ctx):
 
 
 def test_profiling_is_opt_in_and_counts_each_kernel(ctx):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     pts = np.random.default_rng(13).random((50, 2))
     quiet = PowerRaster(Domain.torus(), (64, 64), device=ctx)
@@ -479,7 +479,7 @@ _NAN_W = [0.1, np.nan, 0.2, 0.1, 0.3]
 ])
 def test_sites_without_an_owner_for_every_cell_are_refused(ctx, periodic, pts, w, match):
     """Before: a segfault (rectangle) or a search that never ended (torus)."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     dom = Domain.torus() if periodic else Domain.rect(8.0, 8.0)
     if pts is None:
@@ -497,8 +497,7 @@ def test_kernels_flag_unowned_cells_that_reach_them(ctx, monkeypatch, periodic, 
     its ring searches end at their limits and it reports the unowned cells,
     instead of indexing buffers with them or searching forever (``fused``:
     the labels-and-sums kernel of PowerRaster.centroids)."""
-    from diskpack_cl import raster as raster_mod
-
+    from diskpack_cl.device import raster as raster_mod
     dom = Domain.torus() if periodic else Domain.rect(8.0, 8.0)
     pr = raster_mod.PowerRaster(dom, (19, 21), device=ctx, layout=layout.replace("fused", "tile"))
     pts = np.random.default_rng(0).random((5, 2)) * (dom.width, dom.height)
@@ -533,8 +532,8 @@ def test_small_work_group_limits_give_identical_results(ctx, monkeypatch, limit,
     """A GPU whose kernels may run only `limit` work items per group: the
     raster picks a smaller tile and smaller reduction groups, and every map
     and estimate is the same, bit for bit."""
-    from diskpack_cl import _device
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device import context as _device
+    from diskpack_cl.device.raster import PowerRaster
 
     dom = Domain.torus() if periodic else Domain.rect(40.0, 30.0)
     rng = np.random.default_rng(7)
@@ -556,7 +555,7 @@ def test_power_ties_go_to_the_lowest_index(ctx, order, layout, lanes):
     _lanes_or_skip(ctx, lanes)
     """Two sites mirrored about the middle column of a 5 x 5 grid: every cell of that
     column is an exact tie, which the kernels (and the reference) give to site 0."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     dom = Domain.rect(5.0, 5.0)
     pts = np.array([[1.5, 2.5], [3.5, 2.5]])[list(order)]

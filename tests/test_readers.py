@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from diskpack_cl.export import read_stipple, write_npz, write_stipple
+from diskpack_cl.drawing.writers import read_stipple, write_npz, write_stipple
 
 W, H = 40, 30
 

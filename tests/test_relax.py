@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from diskpack_cl import _device
+from diskpack_cl.device import context as _device
 import reference as ref
 from diskpack_cl.domain import Domain
 from diskpack_cl.relax import relax_poisson

@@ -102,7 +102,7 @@ def test_a_local_step_moves_its_points_to_the_mics_of_the_whole_set(seed, eps):
 def test_a_local_step_on_the_device_moves_as_on_the_host(ctx, seed, eps):
     """The step's cells solved by the per-cell kernel on a list (CellMIC.solve with
     cells) land where exact_mic puts them, and leave the same bad points."""
-    from diskpack_cl.cells import CellMIC
+    from diskpack_cl.device.cells import CellMIC
 
     X = dart_throwing(600, rel_radius=0.5, seed=seed)
     B = bad_points(nearest_neighbor_distances(X), eps, 1.0)
@@ -346,7 +346,7 @@ def test_a_failed_guess_of_going_local_is_not_repeated(ctx, monkeypatch, eps):
     guess made at every iterate (``LOCAL_SOON`` 1), one nearest-neighbour call, not one
     every other iterate (5 and 13 of them before), and the same points."""
     import diskpack_cl.relax_local as rl
-    from diskpack_cl.cells import CellMIC
+    from diskpack_cl.device.cells import CellMIC
 
     X = dart_throwing(3000, rel_radius=0.6, seed=8)
     want = relax_poisson(X, eps, backend="opencl", device=ctx, local=True)

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from diskpack_cl.domain import Domain
-from diskpack_cl.export import read_stipple, write_npz, write_stipple
+from diskpack_cl.drawing.writers import read_stipple, write_npz, write_stipple
 from diskpack_cl.geometry import certify_disks
 
 # the SVG writes mm with 4 decimals: a centre moves by up to 0.5e-4 mm an axis, a radius

@@ -7,9 +7,9 @@ import numpy as np
 from PIL import Image
 
 from diskpack_cl import cli
-from diskpack_cl.batch import relax_many, stipple_many
+from diskpack_cl.jobs.batch import relax_many, stipple_many
 from diskpack_cl.pens import ColorOptions
-from diskpack_cl.jobs import plan_relax, plan_stipple, relax_item, run_job
+from diskpack_cl.jobs.items import plan_relax, plan_stipple, relax_item, run_job
 from diskpack_cl.schedule import StippleOptions
 
 DATA = Path(__file__).parent / "data"

@@ -13,7 +13,7 @@ pytest.importorskip("pyopencl")
 @pytest.mark.parametrize("width, height", [(1000.0, 1.0), (1.0, 1000.0), (50000.0, 2.0),
                                            (30.0, 20.0)])
 def test_bucket_grid_is_square_and_covers_a_rectangle(ctx, width, height):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     pr = PowerRaster(Domain.rect(width, height), (4, 4), device=ctx)
     pts = np.random.default_rng(0).random((100, 2)) * (width, height)
@@ -29,7 +29,7 @@ def test_bucket_grid_is_square_and_covers_a_rectangle(ctx, width, height):
 def test_labels_on_an_elongated_rectangle_with_an_empty_end(ctx, width, height, shape):
     """All sites in the first tenth, weighted: the far end's grid cells must
     reach across 900 px of empty buckets (this took seconds per call)."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     rng = np.random.default_rng(1)
     long_side = max(width, height)

@@ -12,9 +12,9 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from diskpack_cl import cli
-from diskpack_cl.color_export import write_color_svg
-from diskpack_cl.drawing import CROWDED_RATIO, svg_layout
-from diskpack_cl.export import write_stipple, write_svg
+from diskpack_cl.drawing.color_writers import write_color_svg
+from diskpack_cl.drawing.page import CROWDED_RATIO, svg_layout
+from diskpack_cl.drawing.writers import write_stipple, write_svg
 from diskpack_cl.memory import (HOST_BYTES_PER_CELL, HOST_BYTES_PER_PNG_PIXEL, MemoryLimit,
                                 check_png_memory, check_stipple_memory)
 
@@ -182,12 +182,12 @@ def test_export_names_a_png_too_large_before_writing_anything(tmp_path, capsys, 
 
 
 def test_a_tiled_run_names_a_png_too_large_before_the_tiles(tmp_path, capsys, monkeypatch):
-    import diskpack_cl.tiles
+    import diskpack_cl.jobs.tiles
 
     def no_tiles(*args, **kwargs):
         raise AssertionError("the tiles ran")
 
-    monkeypatch.setattr(diskpack_cl.tiles, "stipple_tiled", no_tiles)
+    monkeypatch.setattr(diskpack_cl.jobs.tiles, "stipple_tiled", no_tiles)
     out = tmp_path / "t.png"
     assert cli.main(["stipple", "sample", "-n", "2000", "--tiles", "2x2", "--png-scale", "1e4",
                      "-o", str(out)]) == 1

@@ -7,19 +7,19 @@ import numpy as np
 import pytest
 
 from diskpack_cl import cli, describe, stipple, stipple_colors
-from diskpack_cl.blur import DeviceBlur
-from diskpack_cl.device_checks import DeviceWarning, UntrustedProgram
-from diskpack_cl.device_stage import has_fp64
+from diskpack_cl.device.blur import DeviceBlur
+from diskpack_cl.device.checks import DeviceWarning, UntrustedProgram
+from diskpack_cl.device.stage import has_fp64
 from diskpack_cl.poisson import poisson_disk, poisson_summary
 from diskpack_cl.poisson3 import relax_poisson3
 from diskpack_cl.relax import RelaxResult, relax_poisson, relax_summary
-from diskpack_cl.tiles import TileOptions, stipple_tiled
+from diskpack_cl.jobs.tiles import TileOptions, stipple_tiled
 
 GRAY = np.tile(np.linspace(0.0, 1.0, 48), (32, 1))
 SHORT = [("mix", 3, 0.5)]
 HOST = {"backend": "exact", "device": "cpu (scipy)"}
 EXACT_ENGINE = {**HOST, "route": "exact"}
-#: The fix that the exact engine's fallback names (diskpack_cl._device's advice).
+#: The fix that the exact engine's fallback names (diskpack_cl.device.context's advice).
 FIX = "pip install pocl-binary-distribution"
 
 
@@ -28,7 +28,7 @@ def no_opencl(monkeypatch):
     """No OpenCL platform, and no context cached from earlier tests."""
     import pyopencl
 
-    import diskpack_cl._device as dev
+    import diskpack_cl.device.context as dev
 
     monkeypatch.setattr(pyopencl, "get_platforms", lambda: [])
     monkeypatch.setattr(dev, "_CONTEXTS", {})

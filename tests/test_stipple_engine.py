@@ -87,8 +87,7 @@ def test_opencl_engine_reuses_the_labels_of_its_mic(ctx, monkeypatch):
 
 
 def test_stipple_exact_backend_runs_without_opencl(monkeypatch):
-    from diskpack_cl import _device
-
+    from diskpack_cl.device import context as _device
     def boom():
         raise NoOpenCLError("no OpenCL platform found (test)")
 

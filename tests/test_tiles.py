@@ -1,4 +1,4 @@
-"""Tiled stippling (diskpack_cl.tiles): one certified packing across seams, the same bytes
+"""Tiled stippling (diskpack_cl.jobs.tiles): one certified packing across seams, the same bytes
 wherever the parts ran, resumed and retried parts, fields of a window equal to the picture's."""
 
 import math
@@ -13,12 +13,12 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from diskpack_cl import tiles
+from diskpack_cl.jobs import tiles
 from diskpack_cl.domain import Domain
 from diskpack_cl.engine import make_engine
 from diskpack_cl.schedule import StippleOptions
 from diskpack_cl.stipple import make_stage, field_margin
-from diskpack_cl.tiles import TileOptions, stipple_tiled, tile_grid
+from diskpack_cl.jobs.tiles import TileOptions, stipple_tiled, tile_grid
 
 SHORT = dict(schedule=[("mix", 3, 0.6), ("mix", 1, 0.75)])
 

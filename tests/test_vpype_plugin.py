@@ -14,7 +14,7 @@ from PIL import Image
 
 from diskpack_cl import load_gray, sample_image_path, stipple, write_stipple
 from diskpack_cl.pens import ColorOptions
-from diskpack_cl.export import WriteOptions
+from diskpack_cl.drawing.writers import WriteOptions
 from diskpack_cl.image import ToneOptions
 from diskpack_cl.options import add_arguments, flag_name
 from diskpack_cl.schedule import StippleOptions

@@ -160,7 +160,7 @@ def _main(argv):
         # a device asked for (--device, DISKPACK_DEVICE, PYOPENCL_CTX) must exist, on every
         # command that has one
         if hasattr(args, "device"):
-            from diskpack_cl._device import check_requested_device  # not loaded at start-up
+            from diskpack_cl.device.context import check_requested_device  # not loaded at start-up
 
             check_requested_device(args.device)
         return int(args.run(args) or 0)

@@ -77,10 +77,10 @@ def batch_run(args):
         try:
             import distributed  # noqa: F401
         except ImportError:
-            from diskpack_cl.executors import DASK_HINT  # not loaded at start-up
+            from diskpack_cl.jobs.executors import DASK_HINT  # not loaded at start-up
 
             raise ValueError(f"--scheduler: {DASK_HINT}") from None
-    from diskpack_cl.executors import default_jobs  # not loaded at start-up
+    from diskpack_cl.jobs.executors import default_jobs  # not loaded at start-up
 
     return dict(manifest=args.manifest, overwrite=args.overwrite, devices=devices,
                 jobs=args.jobs or default_jobs(devices), client=scheduler,

@@ -125,13 +125,13 @@ _SHOWN: list = []
 
 
 def show_device_notes(quiet=False):
-    """Print each :class:`~diskpack_cl.device_checks.DeviceWarning` as one line
+    """Print each :class:`~diskpack_cl.device.checks.DeviceWarning` as one line
     (``diskpack: note: ...``) instead of Python's two-line warning; ``quiet``: not at all.
 
     Examples
     --------
     >>> import warnings
-    >>> from diskpack_cl.device_checks import DeviceWarning
+    >>> from diskpack_cl.device.checks import DeviceWarning
     >>> with warnings.catch_warnings():
     ...     warnings.simplefilter("always")
     ...     show_device_notes()
@@ -139,7 +139,7 @@ def show_device_notes(quiet=False):
     """
     import warnings
 
-    from diskpack_cl.device_checks import DeviceWarning  # not loaded at start-up
+    from diskpack_cl.device.checks import DeviceWarning  # not loaded at start-up
 
     python_way = warnings.showwarning
 
@@ -318,7 +318,7 @@ class UsageError(ValueError):
 def checked_outputs(args, inputs):
     """The ``-o`` paths, each checked (extension, folder), given once and none of the
     `inputs`, before any work."""
-    from diskpack_cl.export import check_output_path  # not loaded at start-up
+    from diskpack_cl.drawing.writers import check_output_path  # not loaded at start-up
 
     outputs = [str(o) for o in args.output]
     seen = set()

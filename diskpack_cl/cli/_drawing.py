@@ -14,7 +14,7 @@ from diskpack_cl.options import add_arguments
 
 def drawing_options(p, summary):
     """The options of how the dots are drawn (SVG, PNG), of ``stipple`` and ``export``."""
-    from diskpack_cl.export import WriteOptions  # not loaded at start-up
+    from diskpack_cl.drawing.writers import WriteOptions  # not loaded at start-up
 
     o = add_arguments(p, WriteOptions)["output"]
     o.add_argument("--quiet", "-q", action="store_true",
@@ -65,7 +65,7 @@ def _touching_text(plot, no_overlap):
 
 def _warn_crowded(args, plot):
     """Say so when the SVG's dots are drawn far wider than the spacing of their centres."""
-    from diskpack_cl.drawing import crowded_dots  # not loaded at start-up
+    from diskpack_cl.drawing.page import crowded_dots  # not loaded at start-up
 
     crowded = plot and crowded_dots(plot["median_ink_mm"], plot["median_spacing_mm"])
     if crowded and not args.quiet:
@@ -76,7 +76,7 @@ def write_and_report(args, write, res, gray, outputs, summary, t0):
     """Write the outputs in the command's run (:func:`~._common.command_run`), add their
     figures to ``summary`` (``seconds`` since ``t0``, and ``stage_seconds``: the run's seconds
     per stage), print it with --json; return the tail of the summary line."""
-    from diskpack_cl.jobs import write_stipple_outputs  # not loaded at start-up
+    from diskpack_cl.jobs.items import write_stipple_outputs  # not loaded at start-up
 
     t_write = time.perf_counter()
     with command_run(args) as run:

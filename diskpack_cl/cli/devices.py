@@ -40,8 +40,8 @@ def _run_devices(args):
     if not rows:
         print("(no OpenCL devices)")
     if args.check:
-        from diskpack_cl.device_checks import check_table  # not loaded at start-up
-        from diskpack_cl.known_answers import check_device  # not loaded at start-up
+        from diskpack_cl.device.checks import check_table  # not loaded at start-up
+        from diskpack_cl.device.known_answers import check_device  # not loaded at start-up
 
         print("\n".join(check_table(check_device(args.device, refresh=args.recheck))))
     ctx = get_context(args.device)

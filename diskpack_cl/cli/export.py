@@ -35,7 +35,7 @@ def add_export(subparsers):
 
 
 def _run_export(args):
-    from diskpack_cl.export import WriteOptions, read_stipple  # not loaded at start-up
+    from diskpack_cl.drawing.writers import WriteOptions, read_stipple  # not loaded at start-up
     from diskpack_cl.progress import stage_text
 
     write = from_namespace(WriteOptions, args)

@@ -115,7 +115,7 @@ def _run_poisson_file(args):
         if count != args.n:
             raise ValueError(f"-n {args.n} does not match the {count} points of {args.init}; "
                              f"leave -n out")
-    from diskpack_cl.jobs import plan_relax   # the jobs load the stippling stack: not at start-up
+    from diskpack_cl.jobs.items import plan_relax   # the jobs load the stippling stack: not at start-up
 
     (item,) = plan_relax([args.init], [args.output], relax_options_of(args), box=args.box,
                          make_folders=False)
@@ -186,7 +186,7 @@ def _run_poisson_batch(args):
         raise ValueError("--radius and --min-distance make one set; they do not combine with "
                          "--count or a batch")
     _single_only(args, "box", "mask", "density")
-    from diskpack_cl.batch import poisson_many   # loads the stippling stack: not at start-up
+    from diskpack_cl.jobs.batch import poisson_many   # loads the stippling stack: not at start-up
 
     batch = poisson_many(args.count or 1, 1024 if args.n is None else args.n, [args.output],
                          from_namespace(PoissonOptions, args), seed=args.seed, **batch_run(args))

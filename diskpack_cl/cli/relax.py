@@ -59,9 +59,9 @@ def relax_progress(args, label):
 
 
 def relax_and_write(item, args, points=None, *, extra_summary=None):
-    """Relax and write a one-item plan (:func:`diskpack_cl.jobs.relax_item`), report;
+    """Relax and write a one-item plan (:func:`diskpack_cl.jobs.items.relax_item`), report;
     return the exit status."""
-    from diskpack_cl.jobs import relax_item  # not loaded at start-up
+    from diskpack_cl.jobs.items import relax_item  # not loaded at start-up
 
     callback, close = relax_progress(args, "relax")
     try:
@@ -125,8 +125,8 @@ def _columns(text):
 
 def _run_relax(args):
     """One input: a one-item plan without a manifest, run here; else a batch."""
-    from diskpack_cl.batch import relax_many  # not loaded at start-up
-    from diskpack_cl.jobs import plan_relax  # not loaded at start-up
+    from diskpack_cl.jobs.batch import relax_many  # not loaded at start-up
+    from diskpack_cl.jobs.items import plan_relax  # not loaded at start-up
 
     where = dict(box=args.box, columns=args.columns)
     if batch_mode(args, args.inputs, [args.output]):

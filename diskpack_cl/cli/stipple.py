@@ -69,7 +69,7 @@ def _schedules_text():
 def add_stipple(subparsers):
     from diskpack_cl.pens import ColorOptions  # not loaded at start-up
     from diskpack_cl.schedule import STIPPLING_GROUP, COUNT, StippleCount, StippleOptions  # not loaded at start-up
-    from diskpack_cl.tiles import TileOptions  # not loaded at start-up
+    from diskpack_cl.jobs.tiles import TileOptions  # not loaded at start-up
 
     p = subparsers.add_parser(
         "stipple", help="stipple an image with N dots (paper Algorithm 2)",
@@ -116,7 +116,7 @@ def _stipple_objects(args):
     that contradict each other.
     """
     from diskpack_cl.pens import ColorOptions  # not loaded at start-up
-    from diskpack_cl.export import WriteOptions  # not loaded at start-up
+    from diskpack_cl.drawing.writers import WriteOptions  # not loaded at start-up
     from diskpack_cl.schedule import StippleOptions  # not loaded at start-up
 
     return (from_namespace(StippleOptions, args), from_namespace(ToneOptions, args),
@@ -169,7 +169,7 @@ def _run_stipple(args):
 
 def _warn_long_plot(args):
     """Before the work: say so when the SVG of -n dots takes more than a working day to plot."""
-    from diskpack_cl.drawing import long_plot  # not loaded at start-up
+    from diskpack_cl.drawing.page import long_plot  # not loaded at start-up
 
     slow = long_plot(args.n, pen_lift_s=args.pen_lift_s)
     if slow and not args.quiet and any(str(o).lower().endswith(".svg") for o in args.output):
@@ -177,9 +177,9 @@ def _warn_long_plot(args):
 
 
 def _run_stipple_one(args, options, tone, write, separation):
-    """One input: a one-item plan, run here (:func:`diskpack_cl.jobs.stipple_item`)
+    """One input: a one-item plan, run here (:func:`diskpack_cl.jobs.items.stipple_item`)
     without a manifest; every refusal comes before the computation."""
-    from diskpack_cl.jobs import plan_stipple, stipple_item  # not loaded at start-up
+    from diskpack_cl.jobs.items import plan_stipple, stipple_item  # not loaded at start-up
     from diskpack_cl.progress import stage, stage_text  # not loaded at start-up
 
     t0 = time.perf_counter()
@@ -213,11 +213,11 @@ def _step_note(bars):
 
 
 def _run_stipple_tiled(args, options, tone, write, separation):
-    """One large input in tiles (:func:`diskpack_cl.tiles.stipple_tiled`), on --jobs workers
+    """One large input in tiles (:func:`diskpack_cl.jobs.tiles.stipple_tiled`), on --jobs workers
     or a Dask cluster; the outputs as for one input."""
-    from diskpack_cl.export import check_preview_memory  # not loaded at start-up
+    from diskpack_cl.drawing.writers import check_preview_memory  # not loaded at start-up
     from diskpack_cl.image import image_size
-    from diskpack_cl.tiles import TileOptions, stipple_tiled
+    from diskpack_cl.jobs.tiles import TileOptions, stipple_tiled
 
     if separation is not None or len(args.images) > 1 or not isinstance(args.n, int) \
             or any(getattr(args, k) for k in ("verify", "profile", "manifest", "collect")):
@@ -297,7 +297,7 @@ def _result_text(res, summary):
 
 
 def _run_stipple_batch(args, options, tone, write, color=None):
-    from diskpack_cl.batch import stipple_many  # not loaded at start-up
+    from diskpack_cl.jobs.batch import stipple_many  # not loaded at start-up
 
     batch = stipple_many([image_path(x) for x in args.images], [str(o) for o in args.output],
                          options, **_count(args), recursive=args.recursive,

@@ -1,6 +1,6 @@
 """3D per-cell stage: the maximal inscribed sphere of every Voronoi cell, on the device.
 
-``kernels/cell_mic3.cl`` gives each site one work item that solves its
+``kernels/cells3.cl`` gives each site one work item that solves its
 cell's Chebyshev-centre linear program in float64 by the dual simplex
 method (four active constraints at the optimum, against three in 2D) and
 proves the answer by scanning every bucket the cutter ball touches.  The
@@ -26,8 +26,8 @@ from scipy.optimize import linprog
 from scipy.spatial import cKDTree
 import pyopencl as cl
 
-from ._device import group_size, padded
-from .device_stage import DeviceStage
+from .context import group_size, padded
+from .stage import DeviceStage
 
 __all__ = ["Domain3", "CellMIC3", "MIS", "exact_mis", "certify_mis", "inscribed_sphere_linprog",
            "refine_basis"]
@@ -35,7 +35,7 @@ __all__ = ["Domain3", "CellMIC3", "MIS", "exact_mis", "certify_mis", "inscribed_
 CHUNK = 1 << 16  # work items per enqueue
 _FIRST_K = 24    # sites per cell in the certificate's first pass
 GROUP = 16
-#: Flag bits of the kernel, mirrored from ``kernels/cell_mic3.cl``.
+#: Flag bits of the kernel, mirrored from ``kernels/cells3.cl``.
 FLAGS = {"pivots": 1, "unbounded": 2, "scan_wide": 4, "singular": 8, "shift": 16}
 _WALLS = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], float)
 
@@ -391,7 +391,7 @@ class CellMIC3(DeviceStage):
         self.domain = domain
         super().__init__(device, fp64=True)
         self.sites_per_bucket = float(sites_per_bucket)
-        self._kernel = self.program("cell_mic3", {"PERIODIC": int(domain.periodic)})["cell_mic3"]
+        self._kernel = self.program("cells3", {"PERIODIC": int(domain.periodic)})["cell_mic3"]
         self.group = group_size(self._kernel, self.ctx.devices[0], GROUP)
 
     def _buckets(self, X):

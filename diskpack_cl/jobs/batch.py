@@ -1,10 +1,10 @@
 """Batch jobs: folders of images and many point sets, resumable, in parallel, on Dask.
 
 :func:`stipple_many`, :func:`poisson_many` and :func:`relax_many` plan the
-three kinds of batch (items of :mod:`diskpack_cl.jobs`: one input image,
+three kinds of batch (items of :mod:`diskpack_cl.jobs.items`: one input image,
 point file or seed, its parameters and its output paths, rendered from
 templates) and return a :class:`Batch`. Iterating it runs the items with
-:func:`diskpack_cl.executors.run_batch`: in this process, in ``jobs``
+:func:`diskpack_cl.jobs.executors.run_batch`: in this process, in ``jobs``
 spawned worker processes, or on a ``dask.distributed`` cluster, one record
 (a JSON-ready dict) per item as it finishes. Each item writes its outputs
 atomically; then the coordinating process appends one line to the manifest
@@ -27,7 +27,7 @@ Examples
 from __future__ import annotations
 
 from .executors import Manifest, default_manifest, run_batch
-from .jobs import plan_poisson, plan_relax, plan_stipple
+from .items import plan_poisson, plan_relax, plan_stipple
 
 __all__ = ["Batch", "stipple_many", "poisson_many", "relax_many"]
 
@@ -40,7 +40,7 @@ class Batch:
     items : list of Item
     manifest : str or None
     progress : callable or None
-        ``progress(item, iteration, text)``, see :func:`~diskpack_cl.executors.run_batch`.
+        ``progress(item, iteration, text)``, see :func:`~diskpack_cl.jobs.executors.run_batch`.
 
     Examples
     --------
@@ -73,12 +73,12 @@ def stipple_many(inputs, outputs, options=None, *, n=None, density=None, dots_pe
                  progress=None, **overrides):
     """Stipple many images: a :class:`Batch` that yields one record per image as it finishes.
 
-    Plans with :func:`~diskpack_cl.jobs.plan_stipple` now (every template and output is
-    checked before any work) and runs with :func:`~diskpack_cl.executors.run_batch` when iterated.
+    Plans with :func:`~diskpack_cl.jobs.items.plan_stipple` now (every template and output is
+    checked before any work) and runs with :func:`~diskpack_cl.jobs.executors.run_batch` when iterated.
     ``manifest`` defaults to ``manifest.jsonl`` in the folder of the first
     output template (``False``: none). ``jobs``, ``devices``, ``client``
     (a ``distributed.Client`` or a scheduler address), ``collect`` and
-    ``progress`` are those of :func:`~diskpack_cl.executors.run_batch`.
+    ``progress`` are those of :func:`~diskpack_cl.jobs.executors.run_batch`.
 
     Examples
     --------
@@ -107,8 +107,8 @@ def poisson_many(count, n, outputs, options=None, *, seed=None, manifest=None, o
     record's ``seed`` recreates its set alone. Without ``seed``, a rerun
     takes the seed of the run recorded in the manifest (else a fresh one). ``options`` (a
     :class:`~diskpack_cl.poisson.PoissonOptions`) and ``overrides``: see
-    :func:`~diskpack_cl.jobs.plan_poisson`; and
-    :func:`~diskpack_cl.executors.run_batch`; the module's example shows a run and its resume.
+    :func:`~diskpack_cl.jobs.items.plan_poisson`; and
+    :func:`~diskpack_cl.jobs.executors.run_batch`; the module's example shows a run and its resume.
 
     Examples
     --------
@@ -132,7 +132,7 @@ def poisson_many(count, n, outputs, options=None, *, seed=None, manifest=None, o
 def relax_many(inputs, outputs, relax=None, *, box=None, columns=None, manifest=None,
                overwrite=False, jobs=1, devices=None, client=None, collect=False, progress=None,
                **overrides):
-    """Relax many point files; yield records as they finish (see :func:`~diskpack_cl.jobs.plan_relax`
+    """Relax many point files; yield records as they finish (see :func:`~diskpack_cl.jobs.items.plan_relax`
     for ``box`` and ``columns``).
 
     Examples

@@ -5,7 +5,7 @@ plot-time model (:func:`plot_time`), the SVG's elements (:func:`svg_head`,
 :func:`svg_dots`, :func:`svg_meta`, :func:`svg_size`, :func:`inside_page`)
 with every name escaped (:func:`xml_attr`, :func:`xml_text`), and the ink of
 the dots in a raster preview (:func:`ink_coverage`).
-:mod:`diskpack_cl.export` and :mod:`diskpack_cl.color_export` both build on
+:mod:`diskpack_cl.drawing.writers` and :mod:`diskpack_cl.drawing.color_writers` both build on
 this module, and neither imports the other's private names.
 """
 
@@ -83,7 +83,7 @@ def check_size(width_mm=None, height_mm=None, dpi=None):
 
 
 def mm_per_px(width, height, width_mm=None, height_mm=None, dpi=None):
-    """Millimetres per image pixel for a physical size, as :func:`diskpack_cl.export.write_svg` uses it.
+    """Millimetres per image pixel for a physical size, as :func:`diskpack_cl.drawing.writers.write_svg` uses it.
 
     ``width_mm`` and/or ``height_mm`` (both: fit inside the box, keeping the
     aspect ratio), else ``dpi`` (default 96).
@@ -218,7 +218,7 @@ def paper_size(page, *, landscape=False):
 
 def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=None,
                landscape=False, margin_mm=None, plotter=None):
-    """Where :func:`diskpack_cl.export.write_svg` puts a ``width x height`` px picture, all in mm.
+    """Where :func:`diskpack_cl.drawing.writers.write_svg` puts a ``width x height`` px picture, all in mm.
 
     Without ``page`` the page is the picture, sized by :func:`mm_per_px`.
     With ``page`` (see :func:`paper_size`) the picture is centred on it,
@@ -226,7 +226,7 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     inside the margins (``margin_mm``, default :data:`DEFAULT_MARGIN_MM`).
     With ``plotter`` (a device of vpype's profiles) the margins are those
     of the part of the page it plots too
-    (:func:`diskpack_cl.plotters.plotting_area`), and the picture is centred
+    (:func:`diskpack_cl.drawing.plotters.plotting_area`), and the picture is centred
     there.
 
     Returns
@@ -259,7 +259,7 @@ def svg_layout(width, height, *, width_mm=None, height_mm=None, dpi=None, page=N
     x0, y0, x1, y1 = margin, margin, pw - margin, ph - margin
     reach = ""
     if plotter is not None:
-        from diskpack_cl.plotters import area_text, plotting_area
+        from diskpack_cl.drawing.plotters import area_text, plotting_area
 
         ax0, ay0, ax1, ay1 = plotting_area(plotter, (pw, ph))
         reach = f" and the plotting area of {plotter} ({area_text((ax0, ay0, ax1, ay1))})"
@@ -330,7 +330,7 @@ def svg_dots(c, rad, pen):
     """SVG lines of the dots, one element each, and their pen-down length (mm).
 
     Without a pen: filled ``<circle>``s. With a pen ``pen`` mm wide (see
-    :func:`diskpack_cl.export.write_svg`): a ``<circle>`` outline for a one-ring dot, one
+    :func:`diskpack_cl.drawing.writers.write_svg`): a ``<circle>`` outline for a one-ring dot, one
     ``<path>`` of concentric rings joined by short radial lines for a wider
     dot, a 0.01 mm ``<path>`` (a pen touch) for a dot not wider than the pen.
 
@@ -504,9 +504,9 @@ def place_dots(points, rad, packing, lay, *, no_overlap=False, pen=None):
     ``points`` are in image pixels, ``rad`` and ``packing`` (the drawn and
     the packing radii) in mm, ``lay`` is :func:`svg_layout`'s; with
     ``no_overlap`` each drawn radius is at most its packing radius
-    (:func:`diskpack_cl.overlap.cap_radii`), and dots that would still touch
+    (:func:`diskpack_cl.drawing.overlap.cap_radii`), and dots that would still touch
     (a pen wider than the disks) are refused
-    (:func:`diskpack_cl.overlap.check_apart`). Dots whose ink (with a `pen`
+    (:func:`diskpack_cl.drawing.overlap.check_apart`). Dots whose ink (with a `pen`
     wider than the dot, half the pen's width around its centre) would stick
     out of the picture move inward (:func:`inside_page`): the ink stays in
     the picture, and so inside the margins and the plotter's area.
@@ -590,7 +590,7 @@ def save_png(path, values, dpi=None):
     """
     from PIL import Image
 
-    from .io import atomic_write
+    from ..io import atomic_write
 
     img = Image.fromarray(np.round(np.asarray(values) * 255).astype(np.uint8))
     with atomic_write(path, "wb") as fh:

@@ -1,6 +1,6 @@
 """Per-cell stage: the maximal inscribed circle of every power cell on the device.
 
-``diskpack_cl/kernels/cell_mic.cl`` gives each site one work item that gathers its
+``diskpack_cl/kernels/cells.cl`` gives each site one work item that gathers its
 neighbours from a bucket grid, solves its cell's Chebyshev-centre linear
 program in float64 by the dual simplex method, proves the answer against
 every site that could cut the disk, and reports the three active
@@ -15,7 +15,7 @@ device's answer wherever the device proved it (the global iterates of
 kernel ``mic_rows`` then puts those answers into the caller's order on the
 device, and they are all that comes back.
 
-Devices without ``cl_khr_fp64`` cannot run this kernel; :func:`~diskpack_cl.device_stage.has_fp64`
+Devices without ``cl_khr_fp64`` cannot run this kernel; :func:`~diskpack_cl.device.stage.has_fp64`
 tells, and the engines fall back to the raster estimate refined by
 ``exact_mic``.
 """
@@ -28,11 +28,11 @@ from scipy.ndimage import maximum_filter
 from scipy.spatial import cKDTree
 import pyopencl as cl
 
-from ._checks import check_sites
-from ._device import group_size, padded, preferred_multiple
-from .device_stage import DeviceStage
-from .domain import Domain
-from .geometry import MIC, mic_centres, checked_cells, cramer_inverse, power_vertex, exact_mic
+from .._checks import check_sites
+from .context import group_size, padded, preferred_multiple
+from .stage import DeviceStage
+from ..domain import Domain
+from ..geometry import MIC, mic_centres, checked_cells, cramer_inverse, power_vertex, exact_mic
 
 __all__ = ["CellMIC", "FLAGS"]
 
@@ -48,7 +48,7 @@ CHUNK = 1 << 17  # work items per enqueue (rounded down to whole groups): each w
 GROUP = 16
 _MAX_WINDOW = 8  # widest weight window of the proof scan, in buckets (CellMIC._local_wmax)
 
-#: Flag bits of the kernel (``diskpack_cl/kernels/cell_mic.cl``): why a cell was not proven.
+#: Flag bits of the kernel (``diskpack_cl/kernels/cells.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
          "rounds": 32, "shift": 64, "nn": 128}
 _NN = FLAGS["nn"]
@@ -99,7 +99,7 @@ class CellMIC(DeviceStage):
         super().__init__(device, profile=profile, timings=timings, fp64=True)
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
-        kernels = self.program("cell_mic", defines)
+        kernels = self.program("cells", defines)
         self._kernel, self._rows_kernel = kernels["cell_mic"], kernels["mic_rows"]
         dev = self.ctx.devices[0]
         self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
@@ -236,7 +236,7 @@ class CellMIC(DeviceStage):
         """Distance from every site to its nearest other site (periodic on a torus), exact.
 
         :meth:`solve` finds these on its way (``nn``); here they come alone,
-        from ``kernels/nearest.cl`` (at a million sites about a tenth of a
+        from ``kernels/cells_nearest.cl`` (at a million sites about a tenth of a
         :meth:`solve`), for a set whose MICs are not needed: the iterate
         where :func:`~diskpack_cl.relax_poisson` goes local.  A site with no
         other within a bucket side of it is measured by a KD-tree.
@@ -250,10 +250,10 @@ class CellMIC(DeviceStage):
         True
         """
         X, w = check_sites(points, None, self.domain, minimum=2)
-        if not self.trusts("nearest"):
+        if not self.trusts("cells_nearest"):
             return _nearest(X, self.domain, np.arange(len(X)))
         # built on the first call: the stippling's cells never need it
-        kernel = self.program("nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
+        kernel = self.program("cells_nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
         group = group_size(kernel, self.ctx.devices[0], 64)
         with self.timings("buckets"):
             order, start, _, (nbx, nby, bw, bh) = self._buckets(X, w)

@@ -50,7 +50,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .io import atomic_write
+from ..io import atomic_write
 
 
 __all__ = ["PROGRAMS", "CORE", "VECTOR_PROGRAMS", "Verdict", "UntrustedProgram", "DeviceWarning",
@@ -58,26 +58,26 @@ __all__ = ["PROGRAMS", "CORE", "VECTOR_PROGRAMS", "Verdict", "UntrustedProgram",
 
 #: Every program the package runs on a device, and what it computes.
 PROGRAMS = {
-    "power_diagram": "labels of the discrete power diagram (tile and item layouts)",
-    "inscribed_circle": "raster MIC estimates (per-cell maxima of the distance map)",
-    "cell_sums": "density sums of the cells (label runs and fused tiles)",
-    "cell_mic": "MICs of 2D power cells (float64 simplex)",
-    "nearest": "nearest-neighbour distances",
-    "cell_mic3": "maximal inscribed spheres of 3D Voronoi cells",
-    "dart_round": "rounds of parallel dart throwing",
-    "gaussian_blur": "Gaussian blurs of the stippling's fields",
+    "raster_labels": "labels of the discrete power diagram (tile and item layouts)",
+    "raster_mic": "raster MIC estimates (per-cell maxima of the distance map)",
+    "raster_sums": "density sums of the cells (label runs and fused tiles)",
+    "cells": "MICs of 2D power cells (float64 simplex)",
+    "cells_nearest": "nearest-neighbour distances",
+    "cells3": "maximal inscribed spheres of 3D Voronoi cells",
+    "parallel_darts": "rounds of parallel dart throwing",
+    "blur": "Gaussian blurs of the stippling's fields",
 }
 #: Programs without which the device is passed over (the engine's every step needs them).
-CORE = ("power_diagram", "inscribed_circle", "cell_sums", "cell_mic")
+CORE = ("raster_labels", "raster_mic", "raster_sums", "cells")
 #: Programs with 512-bit vectors through builtins in their wide build (``kernels/wide.h``).
-VECTOR_PROGRAMS = ("power_diagram", "cell_sums", "gaussian_blur")
+VECTOR_PROGRAMS = ("raster_labels", "raster_sums", "blur")
 #: The programs that need float64 (``cl_khr_fp64``); elsewhere they are not run at all.
-FP64_PROGRAMS = ("cell_mic", "nearest", "cell_mic3", "dart_round", "gaussian_blur")
+FP64_PROGRAMS = ("cells", "cells_nearest", "cells3", "parallel_darts", "blur")
 
 _FORMAT = 1
 #: Seconds one program's check may take (a cold build included) before it counts as a hang.
 TIME_LIMIT_S = 120.0
-#: Seconds the probe of 512-bit builtins may take (``kernels/wide_probe.cl``).
+#: Seconds the probe of 512-bit builtins may take (``kernels/checks_wide_probe.cl``).
 PROBE_LIMIT_S = 10.0
 
 
@@ -170,8 +170,8 @@ class Verdict:
 
     Examples
     --------
-    >>> v = Verdict("cpu", False, {"cell_mic": {"ok": False, "why": "wrong", "seconds": 0.1, "salt": 0}})
-    >>> v.refused("cell_mic"), v.core_failure(), v.defines("cell_mic")
+    >>> v = Verdict("cpu", False, {"cells": {"ok": False, "why": "wrong", "seconds": 0.1, "salt": 0}})
+    >>> v.refused("cells"), v.core_failure(), v.defines("cells")
     ('wrong', 'cell_mic: wrong', {'WIDE_BUILTINS': 0})
     """
 
@@ -191,8 +191,8 @@ class Verdict:
         --------
         >>> from types import SimpleNamespace
         >>> cpu = SimpleNamespace(name="cpu", platform=SimpleNamespace(name="PoCL"))
-        >>> v = Verdict.trusting(cpu, False, ["cell_mic"], salt=7)
-        >>> v.device, v.core_failure(), v.defines("cell_mic")
+        >>> v = Verdict.trusting(cpu, False, ["cells"], salt=7)
+        >>> v.device, v.core_failure(), v.defines("cells")
         ('cpu (PoCL)', None, {'WIDE_BUILTINS': 0, 'DISKPACK_SALT': 7})
         """
         return cls(_describe(device), bool(wide),
@@ -234,13 +234,13 @@ def _reports_wide(device):
 @functools.lru_cache(maxsize=None)
 def _sources_hash():
     """Of the kernel sources and the checks: read once a process (every stage asks)."""
-    from ._kernels import kernel_dir
+    from .programs import kernel_dir
 
     h = hashlib.sha256()
     for p in sorted(kernel_dir().iterdir()):
         if p.suffix in (".cl", ".h"):
             h.update(p.name.encode() + b"\0" + p.read_bytes())
-    for name in ("device_checks.py", "known_answers.py"):   # the checks themselves
+    for name in ("checks.py", "known_answers.py"):   # the checks themselves
         h.update((Path(__file__).parent / name).read_bytes())
     return h.hexdigest()
 
@@ -249,7 +249,7 @@ def _key(device):
     """What a verdict holds for: the driver, the device and the kernel sources."""
     import pyopencl as cl
 
-    from . import __version__
+    from .. import __version__
 
     p = device.platform
     parts = [str(_FORMAT), __version__, cl.VERSION_TEXT, p.name, p.vendor, p.version, device.name,
@@ -345,7 +345,8 @@ def _run_checks(device):
     if wide:
         # a fresh build each time (a crashed one leaves a broken cache entry), and a short
         # limit: the right answer takes a second; a driver that miscompiles it runs away
-        probe = _children(address, ["wide_probe"], True, salt=_salt(), limit=PROBE_LIMIT_S)["wide_probe"]
+        probe = _children(address, ["checks_wide_probe"], True, salt=_salt(),
+                          limit=PROBE_LIMIT_S)["checks_wide_probe"]
         if not probe["ok"]:
             wide = False
             notes.append(f"512-bit vectors through builtins failed (wide_probe: {probe['why']}); "
@@ -366,7 +367,7 @@ def _run_checks(device):
             wide = False
     for s in PROGRAMS:
         results.setdefault(s, {"ok": False, "why": "the device has no float64", "seconds": 0.0, "salt": 0})
-    results.pop("wide_probe", None)
+    results.pop("checks_wide_probe", None)
     return Verdict(_describe(device), wide, results, time.perf_counter() - start, False, notes)
 
 
@@ -415,7 +416,8 @@ def _children(address, stems, wide, salt, limit=None):
 
 def _one_child(address, stems, wide, salt, limit=None):
     """One child over `stems`: ``(results, program running when it ended, why it ended)``."""
-    cmd = [sys.executable, "-m", "diskpack_cl.known_answers", "--child", f"{address[0]}:{address[1]}",
+    cmd = [sys.executable, "-m", "diskpack_cl.device.known_answers", "--child",
+           f"{address[0]}:{address[1]}",
            "--wide", str(int(wide)), "--salt", str(salt), *stems]
     limit = float(os.environ.get("DISKPACK_CL_CHECK_TIME_LIMIT_S", TIME_LIMIT_S) if limit is None else limit)
     results, running = {}, None

@@ -1,6 +1,6 @@
 """The known answers of every device program, and the child process that checks them.
 
-:mod:`diskpack_cl.device_checks` starts ``python -m diskpack_cl.known_answers``
+:mod:`diskpack_cl.device.checks` starts ``python -m diskpack_cl.device.known_answers``
 for a device; here each program runs on small fixed inputs through its
 stage and is compared with numpy and scipy (see that module for what the
 verdicts do).  Kept apart from it so that the stages, which read verdicts,
@@ -8,7 +8,7 @@ are not imported by what reads them.
 
 Examples
 --------
->>> sorted(CHECKS) == sorted(PROGRAMS) + ["wide_probe"]
+>>> sorted(CHECKS) == sorted([*PROGRAMS, "checks_wide_probe"])
 True
 """
 
@@ -21,9 +21,9 @@ import warnings
 
 import numpy as np
 
-from ._device import context_unchecked
-from ._kernels import BuildError
-from .device_checks import PROGRAMS, Verdict, use_verdict, verdict_of
+from .context import context_unchecked
+from .programs import BuildError
+from .checks import PROGRAMS, Verdict, use_verdict, verdict_of
 
 __all__ = ["CHECKS", "check_device", "main"]
 
@@ -79,7 +79,7 @@ def _differ(name, got, want, atol):
 def _cases2d():
     """Small 2D inputs with the code paths in them: random sites, a lattice (ties), sites on
     the borders and corners, and weights; a torus and a rectangle."""
-    from .domain import Domain
+    from ..domain import Domain
 
     rng = np.random.default_rng(20261205)
     lattice = (np.stack(np.meshgrid(np.arange(6), np.arange(5)), -1).reshape(-1, 2) + 0.5) / (6, 5)
@@ -95,7 +95,7 @@ def _cases2d():
 
 def _power_gap(domain, shape, pts, w, labels):
     """How much worse, in power distance, each grid cell's label is than its best site."""
-    from .labels import grid_centers
+    from ..labels import grid_centers
 
     c = grid_centers(domain, shape).reshape(-1, 1, 2)
     d = c - pts[None]
@@ -108,7 +108,7 @@ def _power_gap(domain, shape, pts, w, labels):
     return float((pw[np.arange(len(lab)), lab] - pw.min(1)).max())
 
 
-def _check_power_diagram(ctx, wrong):
+def _check_raster_labels(ctx, wrong):
     from .raster import PowerRaster
 
     for domain, pts, w in _cases2d():
@@ -125,7 +125,7 @@ def _check_power_diagram(ctx, wrong):
     return None
 
 
-def _check_inscribed_circle(ctx, wrong):
+def _check_raster_mic(ctx, wrong):
     from .raster import PowerRaster
 
     for domain, pts, w in _cases2d():
@@ -139,8 +139,8 @@ def _check_inscribed_circle(ctx, wrong):
     return None
 
 
-def _check_cell_sums(ctx, wrong):
-    from .labels import cell_centroids
+def _check_raster_sums(ctx, wrong):
+    from ..labels import cell_centroids
     from .raster import PowerRaster
 
     rng = np.random.default_rng(7)
@@ -162,9 +162,9 @@ def _check_cell_sums(ctx, wrong):
     return None
 
 
-def _check_cell_mic(ctx, wrong):
+def _check_cells(ctx, wrong):
     from .cells import CellMIC
-    from .geometry import exact_mic
+    from ..geometry import exact_mic
 
     for domain, pts, w in _cases2d():
         got = CellMIC(domain, ctx).solve(pts, w, certify=False)
@@ -174,11 +174,11 @@ def _check_cell_mic(ctx, wrong):
     return None
 
 
-def _check_nearest(ctx, wrong):
+def _check_cells_nearest(ctx, wrong):
     from scipy.spatial import cKDTree
 
     from .cells import CellMIC
-    from .domain import Domain
+    from ..domain import Domain
 
     rng = np.random.default_rng(3)
     for pts in (rng.random((300, 2)), np.vstack([rng.random((50, 2)), [[0.0, 0.0], [0.999, 0.999]]])):
@@ -189,7 +189,7 @@ def _check_nearest(ctx, wrong):
     return None
 
 
-def _check_cell_mic3(ctx, wrong):
+def _check_cells3(ctx, wrong):
     from .cells3 import CellMIC3, Domain3, exact_mis
 
     rng = np.random.default_rng(5)
@@ -202,17 +202,17 @@ def _check_cell_mic3(ctx, wrong):
     return None
 
 
-def _check_dart_round(ctx, wrong):
-    from .parallel_darts import parallel_darts
+def _check_parallel_darts(ctx, wrong):
+    from ..parallel_darts import parallel_darts
 
     got = parallel_darts(3000, seed=11, device=ctx)
     want = parallel_darts(3000, seed=11, device=False)
     return _differ("dart points", got + wrong, want, 0.0)
 
 
-def _check_gaussian_blur(ctx, wrong):
+def _check_blur(ctx, wrong):
     from .blur import DeviceBlur
-    from .radii import gaussian_blur
+    from ..radii import gaussian_blur
 
     rng = np.random.default_rng(9)
     blur = DeviceBlur(ctx)
@@ -224,12 +224,12 @@ def _check_gaussian_blur(ctx, wrong):
     return None
 
 
-def _check_wide_probe(ctx, wrong):
+def _check_checks_wide_probe(ctx, wrong):
     import pyopencl as cl
 
-    from ._kernels import build_program
+    from .programs import build_program
 
-    k = build_program(ctx, "wide_probe", verdict_of(ctx).defines("wide_probe"))["wide_probe"]
+    k = build_program(ctx, "checks_wide_probe", verdict_of(ctx).defines("checks_wide_probe"))["wide_probe"]
     queue, mf = cl.CommandQueue(ctx), cl.mem_flags
     x = np.linspace(-3.3, 4.1, 8)
     f = np.linspace(-1.25, 2.5, 16).astype(np.float32)
@@ -245,12 +245,12 @@ def _check_wide_probe(ctx, wrong):
 
 
 CHECKS = {name[len("_check_"):]: fn for name, fn in globals().items() if name.startswith("_check_")}
-assert set(CHECKS) == set(PROGRAMS) | {"wide_probe"}
+assert set(CHECKS) == set(PROGRAMS) | {"checks_wide_probe"}
 
 
 
 def check_device(device=None, *, refresh=False):
-    """The :class:`~diskpack_cl.device_checks.Verdict` of a device string's device (see
+    """The :class:`~diskpack_cl.device.checks.Verdict` of a device string's device (see
     :func:`diskpack_cl.get_context`), the checks run now where none is cached (or with `refresh`).
 
     Examples
@@ -262,9 +262,9 @@ def check_device(device=None, *, refresh=False):
 
 
 def main(argv=None):
-    """The child's entry: ``python -m diskpack_cl.known_answers --child P:D --wide W --salt S STEM...``.
+    """The child's entry: ``python -m diskpack_cl.device.known_answers --child P:D --wide W --salt S STEM...``.
 
-    It prints a line of JSON before and after each check (see :mod:`diskpack_cl.device_checks`).
+    It prints a line of JSON before and after each check (see :mod:`diskpack_cl.device.checks`).
 
     Examples
     --------
@@ -272,7 +272,7 @@ def main(argv=None):
     """
     import argparse
 
-    ap = argparse.ArgumentParser(prog="python -m diskpack_cl.known_answers")
+    ap = argparse.ArgumentParser(prog="python -m diskpack_cl.device.known_answers")
     ap.add_argument("--child", required=True)
     ap.add_argument("--wide", type=int, required=True)
     ap.add_argument("--salt", type=int, default=0)
@@ -286,6 +286,6 @@ def main(argv=None):
 
 if __name__ == "__main__":
     # the package's own module, not this __main__ copy: the stages read its verdict
-    from diskpack_cl.known_answers import main as _main
+    from diskpack_cl.device.known_answers import main as _main
 
     _main()

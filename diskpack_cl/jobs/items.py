@@ -7,7 +7,7 @@ items. :func:`stipple_item`, :func:`relax_item` and :func:`poisson_start`
 are the one implementation of each job, run by a single input (a one-item
 plan) and by every item of a batch; :func:`run_job` runs an item and writes
 its outputs. Running many items (worker processes, Dask, the manifest) is
-:mod:`diskpack_cl.executors`. This module uses only the public API of the
+:mod:`diskpack_cl.jobs.executors`. This module uses only the public API of the
 package, so it follows the engine as it changes.
 
 Examples
@@ -31,21 +31,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .export import (WriteOptions, check_output_path, check_preview_memory, preview_scale,
+from ..drawing.writers import (WriteOptions, check_output_path, check_preview_memory, preview_scale,
                      svg_layout, tone_dot_count, tone_dot_size, write_page_png, write_stipple)
-from .image import ToneOptions, load_gray, load_rgb
-from .io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
+from ..image import ToneOptions, load_gray, load_rgb
+from ..io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
-from .memory import check_stipple_memory
-from .multipen import stipple_colors
-from .options import changed
-from .palette import grey_note
-from .picture_measures import tone_radius
-from .poisson import PoissonOptions, as_box, poisson_job
-from .progress import RunProgress, running, stage
-from .relax import RELAX_FIELDS, RelaxOptions, relax_poisson, relax_summary
-from .schedule import StippleOptions
-from .stipple import stipple
+from ..memory import check_stipple_memory
+from ..multipen import stipple_colors
+from ..options import changed
+from ..palette import grey_note
+from ..picture_measures import tone_radius
+from ..poisson import PoissonOptions, as_box, poisson_job
+from ..progress import RunProgress, running, stage
+from ..relax import RELAX_FIELDS, RelaxOptions, relax_poisson, relax_summary
+from ..schedule import StippleOptions
+from ..stipple import stipple
 
 __all__ = [
     "TEMPLATE_FIELDS", "IMAGE_SUFFIXES", "Item", "expand_inputs", "render_template",
@@ -326,7 +326,7 @@ def dots_for_image(width, height, *, n=None, density=None, dots_per_cm2=None, **
     """The number of dots: ``n``, or ``density`` per megapixel, or per cm^2 of the print.
 
     ``dots_per_cm2`` needs the physical size: ``layout`` as for the SVG
-    (:func:`diskpack_cl.export.svg_layout`), with ``width_mm``,
+    (:func:`diskpack_cl.drawing.writers.svg_layout`), with ``width_mm``,
     ``height_mm``, ``dpi`` or ``page``.
 
     Examples
@@ -371,7 +371,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     outputs : list of str
         ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
     options : WriteOptions, optional
-        How the dots are drawn (:class:`diskpack_cl.export.WriteOptions`;
+        How the dots are drawn (:class:`diskpack_cl.drawing.writers.WriteOptions`;
         ``pen_mm``: the PNG preview shows what the pen draws).
     progress : callable or RunProgress, optional
         ``progress(stage, done, total)`` (:mod:`diskpack_cl.progress`): the
@@ -379,7 +379,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
         dots it stamped, and within it an SVG's ``pen path`` (its 2-opt
         rounds); None: the run going on, if any.
     **overrides
-        Fields of :class:`~diskpack_cl.export.WriteOptions` replacing those of `options`.
+        Fields of :class:`~diskpack_cl.drawing.writers.WriteOptions` replacing those of `options`.
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Writers for colour stipplings (:class:`diskpack_cl.multipen.ColorStippleResult`).
 
-:func:`diskpack_cl.export.write_stipple` sends a result with a ``pen``
+:func:`diskpack_cl.drawing.writers.write_stipple` sends a result with a ``pen``
 attribute here for ``.svg`` and ``.png``; ``.npz`` and ``.csv`` are the mono
 writers with the pens added (a ``pen`` column, pen names and colours).
 
@@ -24,13 +24,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .colorspace import linear_negative, linear_to_srgb, srgb_to_linear
-from .pens import check_paper, palette_of
-from .drawing import (FRAME_INK, MM_PER_INCH, PEN_LIFT_S, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
+from ..colorspace import linear_negative, linear_to_srgb, srgb_to_linear
+from ..pens import check_paper, palette_of
+from .page import (FRAME_INK, MM_PER_INCH, PEN_LIFT_S, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
                       place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
                       svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
-from .io import atomic_write
+from ..io import atomic_write
 from .overlap import cap_radii, check_apart, ink_figures
 from .readers import check_stippling
 
@@ -133,7 +133,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
                     plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False, pen_lift_s=PEN_LIFT_S):
     """Write an SVG with one named layer per pen (see the module docstring).
 
-    The options are those of :func:`diskpack_cl.export.write_svg`, plus
+    The options are those of :func:`diskpack_cl.drawing.writers.write_svg`, plus
     `pen_order` (pen names, first drawn first); ``dots="tone"`` draws each
     pen's dots at the radius that holds its layer's ink; black paper where the
     pens were separated for it (:func:`on_black`).
@@ -141,7 +141,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     Returns
     -------
     dict
-        As :func:`diskpack_cl.export.write_svg`'s (all layers together), and
+        As :func:`diskpack_cl.drawing.writers.write_svg`'s (all layers together), and
         ``layers`` (name, colour, n and plot seconds, in drawing order).
 
     Examples
@@ -157,7 +157,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     >>> [name for name in res.names if f'inkscape:label="{name}"' in text] == list(res.names)
     True
     """
-    from .multipen import hex_color
+    from ..multipen import hex_color
 
     check_stippling(result, path, packing=False)
     black = on_black(result, invert)
@@ -208,7 +208,7 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
                     invert=False, pen_px=None, progress=None, no_overlap=False):
     """Write a colour PNG preview: every pen's dots, inks composited (8-bit sRGB).
 
-    Options and the returned dict as :func:`diskpack_cl.export.write_png`;
+    Options and the returned dict as :func:`diskpack_cl.drawing.writers.write_png`;
     black paper as :func:`on_black` says.
 
     Examples
@@ -259,7 +259,7 @@ def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert
                          **drawing):
     """Write a colour PNG of the whole page as :func:`write_color_svg` lays it out (8-bit sRGB).
 
-    What :func:`diskpack_cl.export.write_page_png` writes for a colour
+    What :func:`diskpack_cl.drawing.writers.write_page_png` writes for a colour
     stippling: the paper, a light line at the margins, each pen's dots where
     the SVG draws them, as far as their ink reaches, inks composited as in
     :func:`write_color_png`. `drawing` are the options of

@@ -1,6 +1,6 @@
 """Raster stage: discrete power diagram and inscribed-circle estimates in OpenCL.
 
-The kernels (``kernels/power_diagram.cl``, ``kernels/inscribed_circle.cl``)
+The kernels (``kernels/raster_labels.cl``, ``kernels/raster_mic.cl``)
 label every grid cell with the site of least power distance, give it its
 analytic distance to the boundary of that site's power cell, and reduce the
 distances per site to a maximal-inscribed-circle estimate.  The estimate is
@@ -16,19 +16,19 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyopencl as cl
 
-from . import _device
-from ._checks import check_sites
-from ._device import group_size, padded
-from .device_stage import DeviceStage
-from .domain import Domain
-from .labels import cell_centroids
-from .measures import bucket_order
+from . import context as _device
+from .._checks import check_sites
+from .context import group_size, padded
+from .stage import DeviceStage
+from ..domain import Domain
+from ..labels import cell_centroids
+from ..measures import bucket_order
 
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
-TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/power_diagram.cl)
-CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/cell_sums.cl
+TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/raster_labels.cl)
+CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/raster_sums.cl
 TILE_ROWS = 16   # grid rows of a work item's tile in the CPU layout (TH in power_gather.h)
 # 8 x 8 work-groups per enqueue of power_labels (about 4 M grid cells): each enqueue is
 # waited for on its own (wait_for's helper thread); bands of 0.26 M grid cells made an
@@ -39,7 +39,7 @@ MAX_GROUPS = 65536
 # kernel and device limits may give fewer); their atomics make the result
 # independent of the group size
 REDUCE_GROUP = 256
-#: Status bits of diskpack_cl/kernels/power_diagram.cl (ST_* in common.h): why a labelling is refused.
+#: Status bits of diskpack_cl/kernels/raster_labels.cl (ST_* in common.h): why a labelling is refused.
 STATUS = {"ring_limit": 1, "no_owner": 2}
 
 
@@ -197,7 +197,7 @@ class PowerRaster(DeviceStage):
     Notes
     -----
     Work-group sizes come from the device and the kernels
-    (:func:`diskpack_cl._device.group_size`): ``power_labels`` runs in
+    (:func:`diskpack_cl.device.context.group_size`): ``power_labels`` runs in
     square tiles of 8 x 8 grid cells where the kernel may run 64 work items
     in a group, else 4 x 4, 2 x 2 or 1 (:attr:`tile`), with the same labels
     and distances; the reductions run in groups of up to 256, launches
@@ -244,14 +244,14 @@ class PowerRaster(DeviceStage):
         self._k_sums = self._k_fused = None
         if "cl_khr_int64_base_atomics" in dev.extensions:
             fp64 = int("cl_khr_fp64" in dev.extensions)
-            sums = self.program("cell_sums", {"PERIODIC": periodic, "USE_FP64": fp64,
+            sums = self.program("raster_sums", {"PERIODIC": periodic, "USE_FP64": fp64,
                                                   "TW": self.lanes})
             self._k_sums = sums["cell_sums"]
             # labels and sums in one pass where labels come in tiles
             self._k_fused = sums["power_sums_tile"] if layout == "tile" else None
             self._real = np.float64 if fp64 else np.float32
         self._density = None
-        k = self.program("inscribed_circle", {"PERIODIC": periodic})
+        k = self.program("raster_mic", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._groups = {name: group_size(k[name], dev, REDUCE_GROUP) for name in k}
         if self._k_sums is not None:
@@ -273,7 +273,7 @@ class PowerRaster(DeviceStage):
         tile = TILE
         while True:
             if tile * tile <= dev.max_work_group_size and tile <= min(dev.max_work_item_sizes[:2]):
-                prg = self.program("power_diagram", {"PERIODIC": periodic, "TILE": tile,
+                prg = self.program("raster_labels", {"PERIODIC": periodic, "TILE": tile,
                                                                   "TW": self.lanes})
                 if tile == 1 or tile * tile <= _device.kernel_group_limit(prg["power_labels"], dev):
                     return prg, tile
@@ -427,7 +427,7 @@ class PowerRaster(DeviceStage):
         As ``compute(points, weights, distance=False).centroids(density)``;
         on a CPU device with 64-bit atomics (the ``tile`` layout) in one
         pass that labels the grid cells and sums them without a label map
-        (``power_sums_tile`` in ``diskpack_cl/kernels/cell_sums.cl``).
+        (``power_sums_tile`` in ``diskpack_cl/kernels/raster_sums.cl``).
 
         Returns
         -------
@@ -518,7 +518,7 @@ class PowerRaster(DeviceStage):
                                "sites the host checks should have refused")
 
     def _device_centroids(self, label_buf, sites, density):
-        """Centroids from the device reduction (diskpack_cl/kernels/cell_sums.cl): the label
+        """Centroids from the device reduction (diskpack_cl/kernels/raster_sums.cl): the label
         map never leaves the device; the density is uploaded once per array.
         The sums are fixed point (2^-24), so masses and centroids agree with a
         float64 host reduction to about 1e-7 relative."""

@@ -5,7 +5,7 @@ paper (turned when the orientations differ, turned over for ``rotate_180``),
 converts it to plotter units from the paper's origin and crops everything
 outside the device's ``x_range`` x ``y_range``: a dot there is lost or cut.
 :func:`plotting_area` inverts those steps, so a picture laid out inside it
-(``--plotter NAME``, :func:`diskpack_cl.export.svg_layout`) keeps every dot.
+(``--plotter NAME``, :func:`diskpack_cl.drawing.writers.svg_layout`) keeps every dot.
 The profiles are vpype's (its bundled ``vpype_config.toml`` and the user's
 ``~/.vpype.toml``); vpype is the ``vpype`` extra.
 """
@@ -16,7 +16,7 @@ import math
 import os
 from pathlib import Path
 
-from .extras import install_command
+from ..extras import install_command
 
 __all__ = ["area_text", "plotter_config", "plotting_area"]
 

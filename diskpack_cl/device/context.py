@@ -55,7 +55,7 @@ def _usable_pocl_cache():
     """PoCL refuses every context when ``POCL_CACHE_DIR`` is set empty: point it at a
     private folder of ours instead (before PoCL starts, which reads it once), with a note."""
     if os.environ.get("POCL_CACHE_DIR", None) == "":
-        from .device_checks import DeviceWarning, cache_dir
+        from .checks import DeviceWarning, cache_dir
 
         os.environ["POCL_CACHE_DIR"] = str(cache_dir() / "pocl")
         warnings.warn(DeviceWarning(f"POCL_CACHE_DIR was set empty, which PoCL cannot use: "
@@ -317,7 +317,7 @@ def _pick(spec):
 def get_context(device=None):
     """Return a cached ``pyopencl.Context`` for the chosen device, once it is trusted.
 
-    A device is taken once its core programs gave the host's answers (:mod:`diskpack_cl.device_checks`: run
+    A device is taken once its core programs gave the host's answers (:mod:`diskpack_cl.device.checks`: run
     once per driver, device and kernel sources, in a child process, and
     cached); a device that fails them is passed over, with one line saying
     why, for the next one the device string allows.
@@ -340,7 +340,7 @@ def get_context(device=None):
     """
     import pyopencl as cl  # not loaded at start-up
 
-    from .device_checks import DeviceWarning, verdict_of  # not loaded at start-up
+    from .checks import DeviceWarning, verdict_of  # not loaded at start-up
 
     if isinstance(device, cl.Context):
         return device
@@ -403,7 +403,7 @@ def check_requested_device(device=None):
     >>> check_requested_device("no-such-device")
     Traceback (most recent call last):
     ...
-    diskpack_cl._device.NoOpenCLError: no OpenCL ...
+    diskpack_cl.device.context.NoOpenCLError: no OpenCL ...
 
     (``no OpenCL device matches 'no-such-device'; available: ...``, or where no
     platform is installed ``no OpenCL platform found; ...``.)
@@ -434,7 +434,7 @@ def wait_for(event):
     thread waits on that thread in slices of 0.1 s, handling signals in
     between: the ``KeyboardInterrupt`` (or the CLI's SIGTERM exception)
     arrives while the device is still busy.  Callers keep each enqueue
-    bounded (see :class:`diskpack_cl.raster.PowerRaster`), so that what is
+    bounded (see :class:`diskpack_cl.device.raster.PowerRaster`), so that what is
     already queued ends soon after; the helper is not a daemon thread, so an
     interrupted process exits once that enqueue is done (a daemon thread
     stopped inside the OpenCL library at exit would abort the process).
@@ -497,8 +497,8 @@ def group_size(kernel, device, want):
     Examples
     --------
     >>> ctx = get_context()
-    >>> from diskpack_cl._kernels import build_program
-    >>> k = build_program(ctx, "inscribed_circle", {"PERIODIC": 1})["cell_max"]
+    >>> from diskpack_cl.device.programs import build_program
+    >>> k = build_program(ctx, "raster_mic", {"PERIODIC": 1})["cell_max"]
     >>> g = group_size(k, ctx.devices[0], 256)
     >>> 1 <= g <= 256
     True

@@ -1,10 +1,10 @@
 /* Distance from every site to its nearest other site, one work item per site, float64.
  *
- * The sites come sorted by bucket (the grid of cell_mic.cl).  A work item
+ * The sites come sorted by bucket (the grid of cells.cl).  A work item
  * scans the 3 x 3 buckets around its own; every site nearer than one bucket
  * side lies in them, so a nearest distance up to that side is exact, and a
  * larger one (a site alone in its neighbourhood) is written as -1 for the
- * host to measure.  The distances are computed as cell_mic.cl computes them
+ * host to measure.  The distances are computed as cells.cl computes them
  * (offset to the shifted site, sqrt of the smallest squared length): this
  * kernel gives the nearest-neighbour distances of the sets whose MICs are
  * not needed (the iterate where a relaxation goes local) at a small part of

@@ -1,7 +1,7 @@
 """Running many items: here, in spawned worker processes or on a Dask cluster, resumable.
 
-:func:`run_batch` runs items (:class:`~diskpack_cl.jobs.Item`, planned by
-:mod:`diskpack_cl.jobs`) in this process, in ``jobs`` spawned worker
+:func:`run_batch` runs items (:class:`~diskpack_cl.jobs.items.Item`, planned by
+:mod:`diskpack_cl.jobs.items`) in this process, in ``jobs`` spawned worker
 processes, or on a ``dask.distributed`` cluster, and yields one record (a
 JSON-ready dict, :func:`run_item`) per item as it finishes. Each item writes
 its outputs atomically; then the coordinating process appends one line to
@@ -27,10 +27,10 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import replace
 from pathlib import Path
 
-from .extras import install_command
-from .io import atomic_write, atomic_writes, remove_partial_files
-from .io import json_default
-from .jobs import run_job
+from ..extras import install_command
+from ..io import atomic_write, atomic_writes, remove_partial_files
+from ..io import json_default
+from .items import run_job
 
 __all__ = [
     "POCL_THREAD_VARS", "DASK_HINT", "MANIFEST_NAME", "Manifest", "default_manifest",
@@ -186,7 +186,7 @@ def run_item(item, *, device=None, collect=False, progress=None):
 
     Examples
     --------
-    >>> from diskpack_cl.jobs import Item
+    >>> from diskpack_cl.jobs.items import Item
     >>> rec = run_item(Item("relax", 0, "missing.npz", None, {}, ("out.npz",)))
     >>> rec["status"], rec["error"]
     ('failed', 'missing.npz: no such file')
@@ -525,7 +525,7 @@ def _dask(todo, client, device, collect):
 def map_tasks(fn, tasks, *, jobs=1, devices=None, client=None, retries=2):
     """Yield ``(index, fn(task))`` for each task as it finishes: here, in workers or on Dask.
 
-    The parts of one job (the tiles of :func:`diskpack_cl.tiles.stipple_tiled`)
+    The parts of one job (the tiles of :func:`diskpack_cl.jobs.tiles.stipple_tiled`)
     run where the items of a batch run (:func:`run_batch`). A task that
     raises, or whose worker process dies, runs again, up to `retries` more
     times; then its last error is raised.
@@ -674,7 +674,7 @@ def run_batch(items, *, manifest=None, overwrite=False, jobs=1, devices=None, cl
     Examples
     --------
     >>> import os, tempfile
-    >>> from diskpack_cl.jobs import plan_poisson
+    >>> from diskpack_cl.jobs.items import plan_poisson
     >>> out = tempfile.mkdtemp()
     >>> items = plan_poisson(2, 64, [os.path.join(out, "{i}.npz")], seed=1)
     >>> manifest = os.path.join(out, "manifest.jsonl")

@@ -17,16 +17,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from diskpack_cl.drawing import (DEFAULT_MARGIN_MM, FRAME_INK, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S,
+from diskpack_cl.drawing.page import (DEFAULT_MARGIN_MM, FRAME_INK, PAPERS, PEN_LIFT_S, PLOT_SPEED_MM_S,
                                   MM_PER_INCH, check_fit, check_size, ink_coverage, mm_per_px,
                                   page_frame, paper_size, place_dots, plot_time, save_png, svg_dots,
                                   svg_head, svg_layout, svg_meta, svg_size)
 from diskpack_cl.io import atomic_write, check_writable
 from diskpack_cl.memory import check_png_memory
 from diskpack_cl.options import OptionConflict, check_fields, option
-from diskpack_cl.overlap import cap_radii, check_apart, ink_figures
-from diskpack_cl.pen_path import PEN_PATHS, TWO_OPT_WORK, path_travel, pen_path_order
-from diskpack_cl.readers import CSV_TAG, check_stippling, csv_name, read_stipple
+from diskpack_cl.drawing.overlap import cap_radii, check_apart, ink_figures
+from diskpack_cl.drawing.pen_path import PEN_PATHS, TWO_OPT_WORK, path_travel, pen_path_order
+from diskpack_cl.drawing.readers import CSV_TAG, check_stippling, csv_name, read_stipple
 
 __all__ = [
     "WRITERS",
@@ -98,7 +98,7 @@ def tone_dot_size(result, scale, radius_scale=1.0, *, gray=None, invert=False):
     0.6000000000000001
     """
     if gray is not None:
-        from .picture_measures import tone_radius
+        from ..picture_measures import tone_radius
 
         tone = tone_radius(len(result.points), gray if invert else 1.0 - gray)
     elif getattr(result, "tone_radius", None) is None:
@@ -183,7 +183,7 @@ def _check_page(page):
 
 
 def _check_plotter(name):
-    from diskpack_cl.plotters import plotter_config
+    from diskpack_cl.drawing.plotters import plotter_config
 
     plotter_config(name)
 
@@ -191,7 +191,7 @@ def _check_plotter(name):
 @dataclass(frozen=True)
 class WriteOptions:
     """How a stippling is drawn (SVG, PNG): the options of
-    :func:`diskpack_cl.jobs.write_stipple_outputs`, ``diskpack stipple`` and
+    :func:`diskpack_cl.jobs.items.write_stipple_outputs`, ``diskpack stipple`` and
     ``diskpack export``.
 
     Examples
@@ -335,7 +335,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
     outline, a pen width wider). With ``pen_mm=W`` each dot is drawn as the
     pen draws it: a dot not wider than the pen is one touch (a 0.01 mm
     path, round caps), a wider one one path of concentric rings W apart
-    (:func:`~diskpack_cl.drawing.pen_rings`), the outermost of radius ``(diameter - W) / 2``.
+    (:func:`~diskpack_cl.drawing.page.pen_rings`), the outermost of radius ``(diameter - W) / 2``.
 
     Parameters
     ----------
@@ -347,7 +347,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
         ``result.tone_radius``, ink = the image's darkness; ``"packing"``:
         the certified disks) times ``radius_scale``.
     pen_path : {"auto", "hilbert", "greedy", "none"}
-        See :func:`diskpack_cl.pen_path.pen_path_order`.
+        See :func:`diskpack_cl.drawing.pen_path.pen_path_order`.
     invert : bool, optional
         White dots on black paper: a black image in the layer ``% paper
         (not plotted)``, which vpype and plotters skip.
@@ -358,8 +358,8 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
         Speed and pen lift of the plot-time estimate (:func:`plot_time`).
     no_overlap : bool
         No two drawn dots touch: each at most its packing disk
-        (:func:`diskpack_cl.overlap.cap_radii`); dots that still touch (a pen
-        wider than the disks) are refused (:func:`diskpack_cl.overlap.check_apart`).
+        (:func:`diskpack_cl.drawing.overlap.cap_radii`); dots that still touch (a pen
+        wider than the disks) are refused (:func:`diskpack_cl.drawing.overlap.check_apart`).
 
     Returns
     -------
@@ -367,7 +367,7 @@ def write_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=N
         ``width_mm``, ``height_mm`` (picture), ``page_mm``, ``n``,
         ``travel_before_mm``, ``travel_after_mm`` (pen-up, from the origin),
         ``moved_inside``, ``pen_downs``, ``draw_mm``, ``plot_seconds``,
-        the touching share and ink of :func:`diskpack_cl.overlap.ink_figures`
+        the touching share and ink of :func:`diskpack_cl.drawing.overlap.ink_figures`
         and, with ``pen_mm``, ``pen_touches``.
 
     Examples
@@ -541,7 +541,7 @@ def write_page_png(path, result, *, scale=None, aa=4, progress=None, invert=Fals
     for a colour stippling).
 
     The paper, a light line just outside its usable area (inside the
-    margins and the plotter's reach, :func:`~diskpack_cl.drawing.page_frame`),
+    margins and the plotter's reach, :func:`~diskpack_cl.drawing.page.page_frame`),
     and each dot where the SVG draws it, filled as far as its ink reaches:
     its drawn radius, and at least half the pen (a pen touch). The file
     records its dpi, so that it prints at the paper's size.
@@ -559,7 +559,7 @@ def write_page_png(path, result, *, scale=None, aa=4, progress=None, invert=Fals
     **drawing
         The options of :func:`write_svg` that lay out the page and size the
         dots (``page``, ``margin_mm``, ``pen_mm``, ``dot_mm``, ...); a colour
-        stippling takes those of :func:`diskpack_cl.color_export.write_color_svg`.
+        stippling takes those of :func:`diskpack_cl.drawing.color_writers.write_color_svg`.
 
     Returns
     -------
@@ -581,7 +581,7 @@ def write_page_png(path, result, *, scale=None, aa=4, progress=None, invert=Fals
                      **{k: v for k, v in drawing.items() if k in LAYOUT})
     ppm = _page_px_per_mm(lay, scale)
     if getattr(result, "pen", None) is not None:
-        from diskpack_cl.color_export import write_color_page_png
+        from diskpack_cl.drawing.color_writers import write_color_page_png
 
         return write_color_page_png(path, result, px_per_mm=ppm, aa=aa, progress=progress,
                                     invert=invert, **drawing)
@@ -714,7 +714,7 @@ def write_csv(path, result):
 
 def _write_pen_csv(fh, tag, p, r, result):
     """A colour stippling's CSV: the tag line with ``pens=NAME:#rrggbb;...``, then
-    ``x,y,r,pen`` rows (the pen's name); names percent-encoded (:func:`~diskpack_cl.readers.csv_name`)."""
+    ``x,y,r,pen`` rows (the pen's name); names percent-encoded (:func:`~diskpack_cl.drawing.readers.csv_name`)."""
     from diskpack_cl.multipen import hex_color
 
     coded = [csv_name(name) for name in result.names]
@@ -786,7 +786,7 @@ def write_stipple(path, result, **opts):
     """
     ext = check_output_path(path)
     if getattr(result, "pen", None) is not None and ext in (".svg", ".png"):
-        from diskpack_cl.color_export import COLOR_WRITERS
+        from diskpack_cl.drawing.color_writers import COLOR_WRITERS
 
         return COLOR_WRITERS[ext](path, result, **opts)
     return WRITERS[ext](path, result, **opts)

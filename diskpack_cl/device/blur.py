@@ -4,7 +4,7 @@ The stippling's fields are blurs of the picture's darkness (the radius
 field, the detail weight, the ink); at millions of pixels scipy's
 one-core-at-a-time correlation is most of the time a run spends making
 them.  :class:`DeviceBlur` makes the same blur with the kernels of
-``kernels/gaussian_blur.cl``, summed in scipy's order.
+``kernels/blur.cl``, summed in scipy's order.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pyopencl as cl
 
-from .device_stage import DeviceStage
-from .radii import TRUNCATE
+from .stage import DeviceStage
+from ..radii import TRUNCATE
 
 __all__ = ["DeviceBlur", "gaussian_weights"]
 
@@ -44,12 +44,12 @@ class DeviceBlur(DeviceStage):
     Parameters
     ----------
     device : pyopencl.Context, str or None
-        As :func:`diskpack_cl._device.get_context`.
+        As :func:`diskpack_cl.device.context.get_context`.
 
     Raises
     ------
     RuntimeError
-        The device has no float64 (:class:`~diskpack_cl.device_checks.UntrustedProgram`:
+        The device has no float64 (:class:`~diskpack_cl.device.checks.UntrustedProgram`:
         the program failed its check there).
 
     Examples
@@ -62,7 +62,7 @@ class DeviceBlur(DeviceStage):
 
     def __init__(self, device=None):
         super().__init__(device, fp64=True)
-        k = self.program("gaussian_blur")
+        k = self.program("blur")
         self._passes = (k["blur_columns"], k["blur_rows"])
         self._pass_buffers = None
 

@@ -1,7 +1,7 @@
 """Stippling a picture larger than one process holds: tiles, seams stippled again, one certificate.
 
 :func:`stipple_tiled` stipples one picture in R x C tiles, on worker
-processes or a Dask cluster (:func:`diskpack_cl.executors.map_tasks`). The
+processes or a Dask cluster (:func:`diskpack_cl.jobs.executors.map_tasks`). The
 picture is read once, strip by strip, into a gray raster on disk (a
 ``.npy`` file in the work folder); every task reads only its window of it.
 
@@ -51,19 +51,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._timing import Stopwatch
-from .domain import Domain
-from .engine import make_engine
+from .._timing import Stopwatch
+from ..domain import Domain
+from ..engine import make_engine
 from .executors import peak_rss_mib, map_tasks
-from .image import ToneOptions, gray_strips
-from .io import atomic_write
-from .jobs import derive_seeds
-from .options import check_fields, option
-from .radii import certified_k, detail_scale
-from .schedule import StippleOptions
-from .dithering import error_diffusion
-from .memory import freed_memory_kept
-from .stipple import StippleResult, field_margin, StippleState, make_stage, run_schedule, dot_radii
+from ..image import ToneOptions, gray_strips
+from ..io import atomic_write
+from .items import derive_seeds
+from ..options import check_fields, option
+from ..radii import certified_k, detail_scale
+from ..schedule import StippleOptions
+from ..dithering import error_diffusion
+from ..memory import freed_memory_kept
+from ..stipple import StippleResult, field_margin, StippleState, make_stage, run_schedule, dot_radii
 
 __all__ = ["TileOptions", "tile_grid", "stipple_tiled", "WorkFolderBusy", "WorkFolderWarning"]
 
@@ -659,7 +659,7 @@ def stipple_tiled(image, n, options=None, tiling=None, *, tone=None, jobs=1, cli
     tone : ToneOptions, optional
         Tone controls applied to the picture first.
     jobs, client, devices
-        Where the tasks run (:func:`diskpack_cl.executors.map_tasks`): this
+        Where the tasks run (:func:`diskpack_cl.jobs.executors.map_tasks`): this
         process, ``jobs`` spawned workers, or a Dask cluster (its workers
         must see the work folder).
     backend : {"auto", "opencl", "exact"}

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .progress import stage
+from ..progress import stage
 
 __all__ = ["GREEDY_MAX", "PEN_PATHS", "TWO_OPT_WORK", "path_travel", "pen_path_order", "two_opt",
            "two_opt_rounds"]

@@ -1,7 +1,7 @@
-/* Candidate gathering of the labelling kernels (power_diagram.cl) and of the
- * fused labels-and-sums kernel (cell_sums.cl): the bucket ring walks, the
+/* Candidate gathering of the labelling kernels (raster_labels.cl) and of the
+ * fused labels-and-sums kernel (raster_sums.cl): the bucket ring walks, the
  * tile bound U, and the CPU layout's owner scan of a TW x TH tile.  See
- * power_diagram.cl for the bounds.
+ * raster_labels.cl for the bounds.
  *
  * Build-time switches: PERIODIC (common.h); TW, the CPU tile's lanes (8 or
  * 16, see tile_owners); CAP, the local candidate list

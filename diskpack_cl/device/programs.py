@@ -18,8 +18,8 @@ class BuildError(RuntimeError):
 
 
 def kernel_dir() -> Path:
-    """Folder holding the OpenCL sources: the package data ``diskpack_cl/kernels``."""
-    p = Path(str(importlib.resources.files("diskpack_cl") / "kernels"))
+    """Folder holding the OpenCL sources: the package data ``diskpack_cl/device/kernels``."""
+    p = Path(str(importlib.resources.files("diskpack_cl.device") / "kernels"))
     if not (p / "common.h").is_file():
         raise FileNotFoundError(f"OpenCL kernel sources not found in {p}")
     return p

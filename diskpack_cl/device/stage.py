@@ -1,9 +1,9 @@
 """The device base: what every stage that runs OpenCL programs holds, in one place.
 
-A stage (:class:`~diskpack_cl.raster.PowerRaster`, :class:`~diskpack_cl.cells.CellMIC`,
-:class:`~diskpack_cl.cells3.CellMIC3`, :class:`~diskpack_cl.blur.DeviceBlur`, the
+A stage (:class:`~diskpack_cl.device.raster.PowerRaster`, :class:`~diskpack_cl.device.cells.CellMIC`,
+:class:`~diskpack_cl.device.cells3.CellMIC3`, :class:`~diskpack_cl.device.blur.DeviceBlur`, the
 dart rounds' grid) is a small class on :class:`DeviceStage`: the context, one
-queue, the device's verdict (:mod:`diskpack_cl.device_checks`), programs
+queue, the device's verdict (:mod:`diskpack_cl.device.checks`), programs
 built with the switches the checks chose and refused where they failed,
 waits that let Ctrl-C through, and kernel profiling.
 """
@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import pyopencl as cl
 
-from ._device import describe, get_context, wait_for
-from ._kernels import build_program
-from ._timing import Stopwatch
-from .device_checks import UntrustedProgram, verdict_of
+from .context import describe, get_context, wait_for
+from .programs import build_program
+from .._timing import Stopwatch
+from .checks import UntrustedProgram, verdict_of
 
 __all__ = ["DeviceStage", "has_fp64", "tile_lanes"]
 
@@ -70,7 +70,7 @@ class DeviceStage:
     Examples
     --------
     >>> stage = DeviceStage()
-    >>> sorted(stage.program("inscribed_circle", {"PERIODIC": 1}))
+    >>> sorted(stage.program("raster_mic", {"PERIODIC": 1}))
     ['cell_argmax', 'cell_max']
     """
 
