@@ -22,7 +22,7 @@ import time
 
 
 from diskpack_cl import error_diffusion, load_gray, sample_image_path
-from diskpack_cl.drawing.writers import plot_time
+from diskpack_cl.drawing.page import plot_time
 from diskpack_cl.drawing.pen_path import (_greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt,
                                   two_opt_rounds)
 

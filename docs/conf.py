@@ -76,16 +76,21 @@ sphinx_gallery_conf = {
 
 
 def public_modules():
-    """The package's public modules (no leading underscore), sorted."""
-    names = [m.name for m in pkgutil.iter_modules(diskpack_cl.__path__) if not m.name.startswith("_")]
-    return sorted(f"diskpack_cl.{n}" for n in names)
+    """The package's public modules and subpackages (no part with a leading underscore), sorted."""
+    names = [m.name for m in pkgutil.walk_packages(diskpack_cl.__path__, "diskpack_cl.")]
+    return sorted(n for n in names if not any(part.startswith("_") for part in n.split("."))
+                  and not n.startswith("diskpack_cl.cli."))   # the CLI's page is its reference
 
 
 def write_module_pages(app):
     """One ``reference/modules/<module>.rst`` per public module, so that a new module gets a page."""
     out = HERE / "reference" / "modules"
     out.mkdir(parents=True, exist_ok=True)
-    for name in public_modules():
+    names = public_modules()
+    for page in out.glob("*.rst"):   # a module that moved or went leaves no page behind
+        if page.stem not in names:
+            page.unlink()
+    for name in names:
         title = f"``{name}``"
         text = [title, "=" * len(title), "", f".. automodule:: {name}", "   :members:", ""]
         page = out / f"{name}.rst"

@@ -172,7 +172,7 @@ def test_write_png_draws_a_result_on_the_paper_it_was_made_for(tmp_path):
     img = _dark_image() / 255.0
     res = stipple_colors(img, 200, LIGHT3, invert=True, schedule=[("mix", 3, 0.5)],
                          backend="exact")
-    write_color_png(tmp_path / "a.png", res)   # no invert given: the result's paper
+    write_color_png(tmp_path / "a.png", res, png_scale=1.0)   # no invert given: the result's paper
     with Image.open(tmp_path / "a.png") as im:
         assert np.asarray(im)[30:, 40:].mean() < 0.1 * 255   # the near-black quarter
 

@@ -15,7 +15,7 @@ import pytest
 
 from diskpack_cl import cli
 from diskpack_cl.domain import Domain
-from diskpack_cl.drawing.writers import write_stipple
+from diskpack_cl.drawing.writers import write_stipple, write_svg
 from diskpack_cl.geometry import certify_disks
 from diskpack_cl.image import sample_image_path
 from diskpack_cl.io import read_points, write_points
@@ -455,7 +455,7 @@ def test_every_name_that_can_be_written_reads_back(tmp_path, names, layer):
         assert _dot_pens(read_stipple(path)) == _dot_pens(res)
     mono = tmp_path / "mono.svg"
     try:
-        write_stipple(mono, _stippling(), width_mm=80, layer=layer)
+        write_svg(mono, _stippling(), width_mm=80, layer=layer)
     except ValueError as exc:
         assert "cannot carry" in str(exc)
     else:

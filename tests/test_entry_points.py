@@ -260,16 +260,16 @@ def _check_writers(request):
     back = _written_and_read(tmp_path / "mono.svg", mono, width_mm=80)
     assert back.points.shape == mono.points.shape
     assert (back.width, back.height) == (mono.width, mono.height)
-    diskpack_cl.write_stipple(tmp_path / "mono.png", mono, scale=2)
+    diskpack_cl.write_stipple(tmp_path / "mono.png", mono, png_scale=2)
     with Image.open(tmp_path / "mono.png") as png:
         assert png.size == (80, 60) and np.asarray(png.convert("L")).min() < 255
     colour = _colour_stippling()
     back = _written_and_read(tmp_path / "colour.svg", colour, width_mm=80)
     assert back.names == colour.names
     np.testing.assert_array_equal(np.bincount(back.pen), colour.counts)
-    diskpack_cl.write_stipple(tmp_path / "colour.png", colour)
+    diskpack_cl.write_stipple(tmp_path / "colour.png", colour)   # 2 px a pixel, as the CLI
     with Image.open(tmp_path / "colour.png") as png:
-        assert png.mode == "RGB" and png.size == (48, 32)
+        assert png.mode == "RGB" and png.size == (96, 64)
 
 
 #: The check of each public callable (the writers' check covers ``write_stipple`` and

@@ -86,7 +86,7 @@ def test_svg_box_fit_and_conflicts(tmp_path, result):
 
 def test_png_size_and_antialiasing(tmp_path, result):
     out = tmp_path / "a.png"
-    info = write_png(out, result, scale=2.0)
+    info = write_png(out, result, png_scale=2.0)
     with Image.open(out) as im:
         assert im.size == (160, 120) == (info["width"], info["height"])
         a = np.asarray(im)
@@ -99,7 +99,7 @@ def test_png_coverage_matches_ink(tmp_path):
     res = SimpleNamespace(points=np.array([[32.3, 31.7]]), radii=np.array([10.0]),
                           width=64, height=64)
     out = tmp_path / "d.png"
-    write_png(out, res, dots="packing")
+    write_png(out, res, dots="packing", png_scale=1.0)
     ink = (255 - np.asarray(Image.open(out), dtype=float)).sum() / 255
     assert ink == pytest.approx(np.pi * 100, rel=0.01)
 
@@ -263,7 +263,7 @@ def test_python_writers_draw_what_the_cli_draws(ctx, tmp_path):
     Image.fromarray(np.round(gray * 255).astype(np.uint8)).save(tmp_path / "g.png")
     res = stipple(str(tmp_path / "g.png"), 150, schedule=[("pack", 3)], device=ctx)
     assert cli.main(["stipple", str(tmp_path / "g.png"), "-n", "150", "--beta", "3",
-                     "--rounds", "1", "-q", "--png-scale", "1",
+                     "--rounds", "1", "-q",
                      "-o", str(tmp_path / "cli.png"), "-o", str(tmp_path / "cli.svg")]) == 0
     for ext in ("png", "svg"):
         write_stipple(tmp_path / f"api.{ext}", res)
@@ -459,4 +459,4 @@ def test_a_pen_as_wide_as_the_picture_is_refused(tmp_path, result):
     with pytest.raises(ValueError, match=r"the pen \(60 mm\) is as wide as the 80 x 60 mm"):
         write_svg(tmp_path / "a.svg", result, dpi=25.4, pen_mm=60.0)
     with pytest.raises(ValueError, match=r"the pen \(120 px\) is as wide as the 160 x 120 px"):
-        write_png(tmp_path / "a.png", result, scale=2.0, pen_px=120.0)
+        write_png(tmp_path / "a.png", result, png_scale=2.0, dpi=25.4, pen_mm=60.0)

@@ -62,7 +62,7 @@ CHILD = textwrap.dedent("""
     import sys, time
     import diskpack_cl.drawing.writers as export
 
-    def png_that_hangs(path, result, **opts):
+    def png_that_hangs(path, result, *options, **overrides):
         print("writing png", flush=True)   # the .npz and .svg are written by now
         time.sleep(600)
 

@@ -211,7 +211,7 @@ def test_svg_one_layer_per_pen(tmp_path, result):
 
 
 def test_png_preview_composites_the_inks(tmp_path, result):
-    write_stipple(tmp_path / "c.png", result, scale=2)
+    write_stipple(tmp_path / "c.png", result, png_scale=2)
     im = np.asarray(Image.open(tmp_path / "c.png"))
     assert im.shape == (80, 96, 3)
     left, right = im[:, :48].reshape(-1, 3).mean(0), im[:, 48:].reshape(-1, 3).mean(0)

@@ -134,7 +134,7 @@ def test_the_pen_inks_at_least_its_own_width(tmp_path):
     res = _dots(1)
     pen = 3.0
     kw = dict(page="a5", margin_mm=MARGIN, dots="packing", radius_scale=0.4, pen_mm=pen)
-    info = write_page_png(tmp_path / "p.png", res, scale=8.0, **kw)
+    info = write_page_png(tmp_path / "p.png", res, png_scale=8.0, **kw)
     svg = write_svg(tmp_path / "p.svg", res, **kw)
     ppm = info["dpi"] / 25.4
     drawn = np.maximum(res.radii * 0.4 * svg["width_mm"] / res.width, 0.5 * pen)
@@ -148,7 +148,7 @@ def test_the_pen_inks_at_least_its_own_width(tmp_path):
 def test_a_colour_page_preview_has_each_pen_where_its_layer_is(tmp_path):
     res = _dots(2, pens=("red", "blue"))
     kw = dict(page="a5", margin_mm=MARGIN, dots="packing", radius_scale=0.6)
-    info = write_page_png(tmp_path / "c.png", res, scale=8.0, **kw)
+    info = write_page_png(tmp_path / "c.png", res, png_scale=8.0, **kw)
     write_stipple(tmp_path / "c.svg", res, **kw)   # the colour SVG: a layer per pen
     layers, _ = _svg_circles(tmp_path / "c.svg")
     ppm = info["dpi"] / 25.4

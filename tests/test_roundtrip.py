@@ -116,7 +116,7 @@ def test_every_format_reads_back(tmp_path, res, dots, scale):
     _check_packing_formats(res, tmp_path)
     _check_svg(res, tmp_path, dots, scale)
     png = tmp_path / "a.png"
-    write_stipple(png, res, scale=2.0, dots=dots, invert=res.params["invert"])
+    write_stipple(png, res, png_scale=2.0, dots=dots, invert=res.params["invert"])
     with Image.open(png) as im:
         assert im.size == (2 * res.width, 2 * res.height)
     with pytest.raises(ValueError, match=r"a\.png: .*a \.png preview holds no dots"):

@@ -162,7 +162,7 @@ def test_vpype_sees_exactly_n_dots_inside_the_page(tmp_path, opts):
     assert len(lines) == len(res.points) and _inside(lines, page)
     assert page == pytest.approx(tuple(v * PX_PER_MM for v in info["page_mm"]), rel=1e-6)
     if "page" in opts:
-        from diskpack_cl.drawing.writers import paper_size
+        from diskpack_cl.drawing.page import paper_size
 
         assert info["page_mm"] == pytest.approx(paper_size(opts["page"],
                                                            landscape=opts.get("landscape", False)))

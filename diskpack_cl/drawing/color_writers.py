@@ -26,13 +26,13 @@ import numpy as np
 
 from ..colorspace import linear_negative, linear_to_srgb, srgb_to_linear
 from ..pens import check_paper, palette_of
-from .page import (FRAME_INK, MM_PER_INCH, PEN_LIFT_S, PLOT_SPEED_MM_S, check_fit, ink_coverage, page_frame,
-                      place_dots, plot_time, save_png, svg_dots, svg_head, svg_layout, svg_meta,
-                      svg_size, xml_attr)
+from .page import (FRAME_INK, MM_PER_INCH, check_fit, ink_coverage, page_frame, place_dots,
+                   save_png, svg_dots, svg_head, svg_layout, svg_meta, svg_size, xml_attr)
 from .pen_path import pen_path_order, two_opt_rounds
 from ..io import atomic_write
 from .overlap import cap_radii, check_apart, ink_figures
 from .readers import check_stippling
+from .write_options import plot_seconds, write_options
 
 __all__ = ["layer_order", "on_black", "write_color_svg", "write_color_png", "write_color_page_png"]
 
@@ -91,13 +91,9 @@ def on_black(result, invert=False):
     return black
 
 
-def _radii(result, scale, dots, dot_mm, radius_scale):
-    """Drawn radius per dot in output units: each pen's tone radius (the one tone
-    radius of a stippling read from CSV), the packing disks, or dot_mm."""
-    if dot_mm is not None:
-        if not dot_mm > 0:
-            raise ValueError(f"dot_mm must be > 0, got {dot_mm}")
-        return np.full(len(result.points), 0.5 * float(dot_mm))
+def _radii(result, scale, dots, radius_scale):
+    """Drawn radius per dot in output units (``scale`` of them per pixel): each pen's tone
+    radius (the one tone radius of a stippling read from CSV), or the packing disks."""
     if dots == "packing":
         return np.asarray(result.radii) * scale * radius_scale
     per_pen = getattr(result, "pen_radius", None)
@@ -111,32 +107,28 @@ def _paint(color, pen_mm):
             f'stroke-linejoin="round"')
 
 
-def _drawn_dots(result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
-                radius_scale=1.0, dots="tone", page=None, landscape=False, margin_mm=None,
-                plotter=None, pen_mm=None, no_overlap=False):
+def _drawn_dots(result, o):
     """The page and the dots of :func:`write_color_svg`: ``(layout, centres, radii, drawn
     radii, moved)``, in mm (``radii`` before ``no_overlap`` and the move inward)."""
-    lay = svg_layout(float(result.width), float(result.height), width_mm=width_mm,
-                     height_mm=height_mm, dpi=dpi, page=page, landscape=landscape,
-                     margin_mm=margin_mm, plotter=plotter)
-    rad = _radii(result, lay["scale"], dots, dot_mm, radius_scale)
-    check_fit(rad, lay["picture"], pen_mm)
+    lay = svg_layout(float(result.width), float(result.height), **o.layout())
+    rad = (np.full(len(result.points), 0.5 * float(o.dot_mm)) if o.dot_mm is not None
+           else _radii(result, lay["scale"], o.dot_kind, o.radius_scale))
+    check_fit(rad, lay["picture"], o.pen_mm)
     pm, drawn, moved = place_dots(np.asarray(result.points), rad,
                                   np.asarray(result.radii) * lay["scale"], lay,
-                                  no_overlap=no_overlap, pen=pen_mm)
+                                  no_overlap=o.no_overlap, pen=o.pen_mm)
     return lay, pm, rad, drawn, moved
 
 
-def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, dot_mm=None,
-                    radius_scale=1.0, pen_path="auto", pen_mm=None, dots="tone", pen_order=None,
-                    invert=False, page=None, landscape=False, margin_mm=None, plotter=None,
-                    plot_speed_mm_s=PLOT_SPEED_MM_S, no_overlap=False, pen_lift_s=PEN_LIFT_S):
+def write_color_svg(path, result, options=None, **overrides):
     """Write an SVG with one named layer per pen (see the module docstring).
 
-    The options are those of :func:`diskpack_cl.drawing.writers.write_svg`, plus
-    `pen_order` (pen names, first drawn first); ``dots="tone"`` draws each
-    pen's dots at the radius that holds its layer's ink; black paper where the
-    pens were separated for it (:func:`on_black`).
+    The options (:class:`~diskpack_cl.drawing.write_options.WriteOptions`, and
+    `overrides` of its fields) are those of
+    :func:`~diskpack_cl.drawing.writers.write_svg`, and ``pen_order`` (pen names,
+    first drawn first); ``dots="tone"`` draws each pen's dots at the radius that
+    holds its layer's ink; black paper where the pens were separated for it
+    (:func:`on_black`).
 
     Returns
     -------
@@ -159,27 +151,28 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
     """
     from ..multipen import hex_color
 
+    o = write_options(options, **overrides)
+    pen_mm = o.pen_mm
     check_stippling(result, path, packing=False)
-    black = on_black(result, invert)
+    black = on_black(result, o.invert)
     W, H = float(result.width), float(result.height)
-    lay, pm, rad, drawn, moved = _drawn_dots(
-        result, width_mm=width_mm, height_mm=height_mm, dpi=dpi, dot_mm=dot_mm,
-        radius_scale=radius_scale, dots=dots, page=page, landscape=landscape,
-        margin_mm=margin_mm, plotter=plotter, pen_mm=pen_mm, no_overlap=no_overlap)
+    lay, pm, rad, drawn, moved = _drawn_dots(result, o)
     # the figures of the dots drawn (their radii on the SVG's grid), or of those capped
-    ink = ink_figures(pm, rad if no_overlap else drawn, np.asarray(result.radii) * lay["scale"],
-                      pen=pen_mm, no_overlap=no_overlap)
+    ink = ink_figures(pm, rad if o.no_overlap else drawn,
+                      np.asarray(result.radii) * lay["scale"], pen=pen_mm,
+                      no_overlap=o.no_overlap)
     rad = drawn
-    order = layer_order(result.names, result.colors, pen_order, black)
+    order = layer_order(result.names, result.colors, o.pen_order, black)
     meta = dict(svg_meta(result, lay, rad, pen_mm, black, result.names[order[0]]),
                 pens=[result.names[p] for p in order])
-    parts = [svg_head(lay, svg_size(lay, W, H, width_mm, height_mm, page), meta,
-                       _paint(hex_color(result.colors[order[0]]), pen_mm), black)]
+    parts = [svg_head(lay, svg_size(lay, W, H, o.width_mm, o.height_mm, o.page), meta,
+                      _paint(hex_color(result.colors[order[0]]), pen_mm), black)]
     layers, before, after, draw = [], 0.0, 0.0, 0.0
     for i, p in enumerate(order):
         idx = np.flatnonzero(result.pen == p)
         # the 2-opt work of one mono drawing of all the dots, shared by the pens
-        path_order, b, a = pen_path_order(pm[idx], method=pen_path, rounds=two_opt_rounds(len(pm)))
+        path_order, b, a = pen_path_order(pm[idx], method=o.pen_path,
+                                          rounds=two_opt_rounds(len(pm)))
         idx = idx[path_order]
         c = hex_color(result.colors[p])
         if i:
@@ -188,8 +181,7 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
         text, length = svg_dots(pm[idx], rad[idx], pen_mm)
         parts.append(text)
         layers.append({"name": result.names[p], "color": c, "n": int(len(idx)),
-                       "plot_seconds": plot_time(len(idx), length, a, speed_mm_s=plot_speed_mm_s,
-                                                 pen_lift_s=pen_lift_s)})
+                       "plot_seconds": plot_seconds(o, len(idx), length, a)})
         before, after, draw = before + b, after + a, draw + length
     with atomic_write(path, "w") as fh:
         fh.write("".join(parts) + "  </g>\n</svg>\n")
@@ -197,15 +189,13 @@ def write_color_svg(path, result, *, width_mm=None, height_mm=None, dpi=None, do
             "page_mm": list(lay["page"]), "n": int(len(pm)), "layers": layers,
             "travel_before_mm": before, "travel_after_mm": after, "moved_inside": moved,
             "pen_downs": int(len(pm)), "draw_mm": draw, **ink,
-            "plot_seconds": plot_time(len(pm), draw, after, speed_mm_s=plot_speed_mm_s,
-                                      pen_lift_s=pen_lift_s)}
+            "plot_seconds": plot_seconds(o, len(pm), draw, after)}
     if pen_mm is not None:
         info["pen_touches"] = int(np.count_nonzero(2 * rad <= pen_mm))
     return info
 
 
-def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, aa=4, dots="tone",
-                    invert=False, pen_px=None, progress=None, no_overlap=False):
+def write_color_png(path, result, options=None, *, aa=4, progress=None, **overrides):
     """Write a colour PNG preview: every pen's dots, inks composited (8-bit sRGB).
 
     Options and the returned dict as :func:`diskpack_cl.drawing.writers.write_png`;
@@ -219,18 +209,20 @@ def write_color_png(path, result, *, scale=1.0, radius_scale=1.0, dot_px=None, a
     >>> img = np.dstack([np.tile(np.linspace(0, 1, 32), (24, 1)), np.full((24, 32), 0.3), np.full((24, 32), 0.8)])
     >>> res = stipple_colors(img, 80, "cmyk", backend="exact", schedule=[("mix", 3, 0.5)])
     >>> path = os.path.join(tempfile.mkdtemp(), "dots.png")
-    >>> _ = write_color_png(path, res, scale=2.0)
+    >>> _ = write_color_png(path, res, png_scale=2.0)
     >>> with Image.open(path) as im:
     ...     im.mode, im.size
     ('RGB', (64, 48))
     """
+    o = write_options(options, **overrides)
     check_stippling(result, path, packing=False)
-    black = on_black(result, invert)
+    black = on_black(result, o.invert)
+    scale, dot_px, pen_px = o.png_pixels(float(result.width), float(result.height))
     ow, oh = max(1, round(result.width * scale)), max(1, round(result.height * scale))
     p = np.asarray(result.points) * scale
-    rad = (np.full(len(result.points), float(dot_px)) if dot_px is not None
-           else _radii(result, scale, dots, None, radius_scale))
-    if no_overlap:
+    rad = (np.full(len(result.points), dot_px) if dot_px is not None
+           else _radii(result, scale, o.dot_kind, o.radius_scale))
+    if o.no_overlap:
         rad = cap_radii(rad, np.asarray(result.radii) * scale)
         check_apart(p, rad, np.asarray(result.radii) * scale, pen=pen_px, unit="px")
     if pen_px is not None:   # what the pen draws: at least a touch a pen wide
@@ -255,16 +247,15 @@ def _composite(result, centres, rad, paper, aa, progress, black=False):
     return 1.0 - lin if black else lin
 
 
-def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert=False,
-                         **drawing):
+def write_color_page_png(path, result, options=None, *, px_per_mm, aa=4, progress=None,
+                         **overrides):
     """Write a colour PNG of the whole page as :func:`write_color_svg` lays it out (8-bit sRGB).
 
     What :func:`diskpack_cl.drawing.writers.write_page_png` writes for a colour
     stippling: the paper, a light line at the margins, each pen's dots where
     the SVG draws them, as far as their ink reaches, inks composited as in
-    :func:`write_color_png`. `drawing` are the options of
-    :func:`write_color_svg` that lay out the page and size the dots; black
-    paper and a light line as :func:`on_black` says.
+    :func:`write_color_png`. The options (`options` and `overrides`) are those of
+    :func:`write_color_svg`; black paper and a light line as :func:`on_black` says.
 
     Examples
     --------
@@ -278,12 +269,12 @@ def write_color_page_png(path, result, *, px_per_mm, aa=4, progress=None, invert
     >>> info["width"], info["height"], round(info["dpi"], 1)
     (296, 420, 50.8)
     """
+    o = write_options(options, **overrides)
     check_stippling(result, path, packing=False)
-    black = on_black(result, invert)
-    lay, pm, _, rad, _ = _drawn_dots(result, **drawing)
+    black = on_black(result, o.invert)
+    lay, pm, _, rad, _ = _drawn_dots(result, o)
     line = page_frame(lay, px_per_mm)
-    pen = drawing.get("pen_mm")
-    ink_rad = rad if pen is None else np.maximum(rad, 0.5 * pen)
+    ink_rad = rad if o.pen_mm is None else np.maximum(rad, 0.5 * o.pen_mm)
     frame = np.repeat(FRAME_INK * line[..., None], 3, axis=2)
     lin = _composite(result, pm * px_per_mm, ink_rad * px_per_mm,
                      frame if black else 1.0 - frame, aa, progress, black)

@@ -31,8 +31,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..drawing.writers import (WriteOptions, check_output_path, check_preview_memory, preview_scale,
-                     svg_layout, tone_dot_count, tone_dot_size, write_page_png, write_stipple)
+from ..drawing.page import svg_layout
+from ..drawing.write_options import (WriteOptions, check_preview_memory, preview_scale,
+                                     write_options)
+from ..drawing.writers import check_output_path, tone_dot_count, tone_dot_size, write_stipple
 from ..image import ToneOptions, load_gray, load_rgb
 from ..io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
@@ -371,7 +373,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     outputs : list of str
         ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
     options : WriteOptions, optional
-        How the dots are drawn (:class:`diskpack_cl.drawing.writers.WriteOptions`;
+        How the dots are drawn (:class:`diskpack_cl.drawing.write_options.WriteOptions`;
         ``pen_mm``: the PNG preview shows what the pen draws).
     progress : callable or RunProgress, optional
         ``progress(stage, done, total)`` (:mod:`diskpack_cl.progress`): the
@@ -379,7 +381,7 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
         dots it stamped, and within it an SVG's ``pen path`` (its 2-opt
         rounds); None: the run going on, if any.
     **overrides
-        Fields of :class:`~diskpack_cl.drawing.writers.WriteOptions` replacing those of `options`.
+        Fields of :class:`~diskpack_cl.drawing.write_options.WriteOptions` replacing those of `options`.
 
     Returns
     -------
@@ -399,42 +401,21 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
     >>> written[0]["format"], round(dot_mm, 3) > 0
     ('svg', True)
     """
-    o = (options or WriteOptions()).replace(**overrides)
-    dots = o.dots or "tone"
-    scale = o.scale(result.width, result.height)
-    png_scale = preview_scale(result.width, result.height, o.png_scale)
+    o = write_options(options, **overrides)
     check_preview_memory(o, result.width, result.height, outputs)   # before any file
-    dot_mm = o.dot_mm
-    color = getattr(result, "pen", None) is not None   # one tone dot size per pen
-    if dot_mm is None and dots == "tone" and not color:
-        dot_mm = tone_dot_size(result, scale, o.radius_scale, gray=gray, invert=o.invert)
-    drawing = dict(dot_mm=dot_mm, radius_scale=o.radius_scale, invert=o.invert, pen_mm=o.pen_mm,
-                   dots=dots, no_overlap=o.no_overlap, **o.layout())
-    svg_opts = dict(drawing, pen_path=o.pen_path, plot_speed_mm_s=o.plot_speed_mm_s,
-                    pen_lift_s=o.pen_lift_s,
-                    **({"pen_order": o.pen_order} if color else {}))
-    png_opts = dict(scale=png_scale, radius_scale=o.radius_scale, invert=o.invert, dots=dots,
-                    no_overlap=o.no_overlap)
-    if dot_mm is not None:  # preview the pen's dots
-        png_opts["dot_px"] = 0.5 * dot_mm / scale * png_scale
-    if o.pen_mm is not None:  # and what the pen draws: touches a pen wide, filled dots
-        png_opts["pen_px"] = o.pen_mm / scale * png_scale
+    if o.dot_mm is None and o.dot_kind == "tone" and getattr(result, "pen", None) is None:
+        # one tone dot size, from the image (a colour stippling has one per pen)
+        o = o.replace(dots=None, dot_mm=tone_dot_size(result, o.scale(result.width, result.height),
+                                                      o.radius_scale, gray=gray, invert=o.invert))
     written = []
     units = [len(result.points) if out.lower().endswith(".png") else 1 for out in outputs]
     with running(progress), stage("writing", sum(units)) as advance, atomic_writes():
         for out, done in zip(outputs, np.cumsum([0, *units[:-1]]).tolist()):
             ext = check_output_path(out)
-            stamped = _stamped(advance, done)
-            if ext == ".png" and o.preview == "page":
-                info = write_page_png(out, result, scale=o.png_scale, progress=stamped,
-                                      **drawing)
-            else:
-                opts = svg_opts if ext == ".svg" else dict(png_opts, progress=stamped) \
-                    if ext == ".png" else {}
-                info = write_stipple(out, result, **opts)
+            info = write_stipple(out, result, o, progress=_stamped(advance, done))
             advance(done + units[len(written)])
             written.append({"path": out, "format": ext[1:], **info})
-    return dot_mm, written
+    return o.dot_mm, written
 
 
 def _stamped(advance, done):
