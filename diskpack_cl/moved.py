@@ -50,6 +50,13 @@ class _Finder(importlib.abc.MetaPathFinder):
 
 
 def install():
-    """Put the finder of the old names on :data:`sys.meta_path` (once)."""
+    """Put the finder of the old names on :data:`sys.meta_path` (once; the package does it).
+
+    Examples
+    --------
+    >>> install()
+    >>> sum(isinstance(f, _Finder) for f in sys.meta_path)
+    1
+    """
     if not any(isinstance(f, _Finder) for f in sys.meta_path):
         sys.meta_path.append(_Finder())

@@ -44,7 +44,7 @@ def blur_256(ctx, device_blur):
 
     if verdict_of(ctx).refused("blur"):
         pytest.skip("the device's checks did not trust the blur")
-    use_verdict(Verdict.trusting(ctx.devices[0], False, ["gaussian_blur"]))
+    use_verdict(Verdict.trusting(ctx.devices[0], False, ["blur"]))
     try:
         return DeviceBlur(ctx)
     finally:

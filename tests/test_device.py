@@ -88,12 +88,12 @@ def test_a_device_that_fails_its_core_checks_is_passed_over(fake, monkeypatch):
     monkeypatch.setattr(_device, "describe", lambda ctx: ctx.devices[0].name)
 
     def verdict(ctx):
-        why = "power_diagram: error: unknown target CPU 'generic'" if ctx.devices[0] is GPU0 else None
+        why = "raster_labels: error: unknown target CPU 'generic'" if ctx.devices[0] is GPU0 else None
         return SimpleNamespace(core_failure=lambda: why)
     monkeypatch.setattr(device_checks, "verdict_of", verdict)
-    with pytest.warns(DeviceWarning, match="NVIDIA H200 passed over: power_diagram"):
+    with pytest.warns(DeviceWarning, match="NVIDIA H200 passed over: raster_labels"):
         assert _device.get_context().devices[0] is GPU1              # the next GPU
-    with pytest.raises(NoOpenCLError, match="NVIDIA H200 passed over: power_diagram: .*unknown target"):
+    with pytest.raises(NoOpenCLError, match="NVIDIA H200 passed over: raster_labels: .*unknown target"):
         with pytest.warns(DeviceWarning):
             _device.get_context("1:0")                               # asked for by name: refused
 

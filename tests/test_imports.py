@@ -2,6 +2,7 @@
 modules import each other (directly or round a longer circle)."""
 
 import ast
+import importlib
 import random
 import subprocess
 import sys
@@ -10,6 +11,7 @@ from pathlib import Path
 import pytest
 
 import diskpack_cl
+from diskpack_cl.moved import MOVED
 
 PACKAGE = Path(diskpack_cl.__file__).parent
 
@@ -179,3 +181,14 @@ def test_every_kernel_is_named_for_the_module_that_builds_it():
         if home is None or f'"{path.stem}"' not in MODULES[home].read_text():
             wrong.append(f"{path.name}: named for {home}, which does not build it")
     assert not wrong, "\n".join(wrong)
+
+
+@pytest.mark.parametrize("old", sorted(MOVED))
+def test_an_old_module_name_gives_the_new_module_with_a_warning(old):
+    sys.modules.pop(old, None)
+    try:
+        with pytest.warns(DeprecationWarning, match=f"{old} moved to {MOVED[old]}"):
+            module = importlib.import_module(old)
+        assert module is importlib.import_module(MOVED[old])
+    finally:
+        sys.modules.pop(old, None)

@@ -105,7 +105,7 @@ WRITING_CHILD = textwrap.dedent("""
     Image.fromarray(np.tile(np.linspace(0, 255, 24), (24, 1)).astype(np.uint8)).save(
         folder + "/g.png")
 
-    def stuck(path, result, **opts):
+    def stuck(path, result, *options, **overrides):
         print("writing", path, flush=True)
         time.sleep(120)
 

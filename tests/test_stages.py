@@ -41,7 +41,7 @@ def untrusted_blur(ctx, monkeypatch):
         pytest.skip("the device has no float64: the blur runs on the host anyway")
 
     def refused(self, device=None):
-        raise UntrustedProgram("gaussian_blur failed its check on X: wrong")
+        raise UntrustedProgram("blur failed its check on X: wrong")
 
     monkeypatch.setattr(DeviceBlur, "__init__", refused)
 
@@ -84,9 +84,9 @@ def test_without_opencl_the_summary_says_the_exact_engine_and_why(no_opencl):
 
 
 def test_a_blur_that_falls_back_is_recorded_on_the_host(untrusted_blur, ctx):
-    with pytest.warns(DeviceWarning, match="gaussian_blur failed its check"):
+    with pytest.warns(DeviceWarning, match="blur failed its check"):
         stages = stipple(GRAY, 60, schedule=SHORT, device=ctx).summary()["stages"]
-    assert stages["blur"] == {**HOST, "fallback": "gaussian_blur failed its check on X: wrong"}
+    assert stages["blur"] == {**HOST, "fallback": "blur failed its check on X: wrong"}
     assert stages["engine"]["backend"] == "opencl"
 
 
@@ -94,7 +94,7 @@ def test_a_large_picture_s_bands_record_their_blur(untrusted_blur, ctx):
     tall = np.tile(np.linspace(0.0, 1.0, 24), (1100, 1))   # more than 1024 rows: in bands
     with pytest.warns(DeviceWarning):
         stages = stipple(tall, 200, schedule=SHORT, device=ctx).summary()["stages"]
-    assert stages["blur"]["fallback"] == "gaussian_blur failed its check on X: wrong"
+    assert stages["blur"]["fallback"] == "blur failed its check on X: wrong"
 
 
 def test_colour_and_tiled_summaries_hold_the_stages():
@@ -136,8 +136,8 @@ def test_stipple_notes_a_blur_on_the_host(untrusted_blur, tmp_path, capsys):
         warnings.simplefilter("ignore", DeviceWarning)
         s, err = _main(["stipple", "sample", "-n", "100", "--schedule", "pack", "--json",
                         "-o", str(tmp_path / "s.npz")], capsys)
-    assert s["stages"]["blur"]["fallback"] == "gaussian_blur failed its check on X: wrong"
-    assert _notes(err) == ["diskpack: note: blur ran on the host: gaussian_blur failed its check "
+    assert s["stages"]["blur"]["fallback"] == "blur failed its check on X: wrong"
+    assert _notes(err) == ["diskpack: note: blur ran on the host: blur failed its check "
                            "on X: wrong"]
 
 

@@ -14,3 +14,5 @@
 
 Nothing above this layer builds a program or touches a queue.
 """
+
+__all__ = []   # the folder's API is its modules'

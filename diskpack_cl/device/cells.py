@@ -1,6 +1,6 @@
 """Per-cell stage: the maximal inscribed circle of every power cell on the device.
 
-``diskpack_cl/kernels/cells.cl`` gives each site one work item that gathers its
+``diskpack_cl/device/kernels/cells.cl`` gives each site one work item that gathers its
 neighbours from a bucket grid, solves its cell's Chebyshev-centre linear
 program in float64 by the dual simplex method, proves the answer against
 every site that could cut the disk, and reports the three active
@@ -48,7 +48,7 @@ CHUNK = 1 << 17  # work items per enqueue (rounded down to whole groups): each w
 GROUP = 16
 _MAX_WINDOW = 8  # widest weight window of the proof scan, in buckets (CellMIC._local_wmax)
 
-#: Flag bits of the kernel (``diskpack_cl/kernels/cells.cl``): why a cell was not proven.
+#: Flag bits of the kernel (``diskpack_cl/device/kernels/cells.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
          "rounds": 32, "shift": 64, "nn": 128}
 _NN = FLAGS["nn"]

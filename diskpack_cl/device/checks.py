@@ -172,7 +172,7 @@ class Verdict:
     --------
     >>> v = Verdict("cpu", False, {"cells": {"ok": False, "why": "wrong", "seconds": 0.1, "salt": 0}})
     >>> v.refused("cells"), v.core_failure(), v.defines("cells")
-    ('wrong', 'cell_mic: wrong', {'WIDE_BUILTINS': 0})
+    ('wrong', 'cells: wrong', {'WIDE_BUILTINS': 0})
     """
 
     device: str
@@ -349,7 +349,7 @@ def _run_checks(device):
                           limit=PROBE_LIMIT_S)["checks_wide_probe"]
         if not probe["ok"]:
             wide = False
-            notes.append(f"512-bit vectors through builtins failed (wide_probe: {probe['why']}); "
+            notes.append(f"512-bit vectors through builtins failed (checks_wide_probe: {probe['why']}); "
                          "built with 256-bit halves")
     results, more = _checked(address, stems, wide)
     notes += more
@@ -488,7 +488,7 @@ def check_table(verdict):
     --------
     >>> ok = {"ok": True, "why": "", "seconds": 0.5, "salt": 0}
     >>> print(check_table(Verdict("cpu", True, {s: ok for s in PROGRAMS}))[1])
-      power_diagram     ok         0.50 s  labels of the discrete power diagram (tile and item layouts)
+      raster_labels     ok         0.50 s  labels of the discrete power diagram (tile and item layouts)
     """
     rows = [f"{verdict.device}: vectors {'512' if verdict.wide else '256'}-bit through builtins; "
             f"checks {'cached' if verdict.cached else 'run now'} "

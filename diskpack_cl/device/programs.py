@@ -33,7 +33,7 @@ def inline_math(ctx) -> int:
 
 
 def build_program(ctx, stem: str, defines: dict | None = None):
-    """Build ``diskpack_cl/kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
+    """Build ``diskpack_cl/device/kernels/<stem>.cl`` with ``-D`` defines; return a kernel dict.
 
     ``INLINE_MATH`` is defined too, as :func:`inline_math` says, unless `defines` sets it.
 

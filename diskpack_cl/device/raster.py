@@ -27,8 +27,8 @@ from ..measures import bucket_order
 __all__ = ["PowerRaster", "RasterResult", "auto_grid"]
 
 INT_MAX = np.iinfo(np.int32).max
-TILE = 8   # widest work-group side of power_labels (diskpack_cl/kernels/raster_labels.cl)
-CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/kernels/raster_sums.cl
+TILE = 8   # widest work-group side of power_labels (diskpack_cl/device/kernels/raster_labels.cl)
+CELL_SUMS_SEG, CELL_SUMS_FIX = 32, 2.0 ** 24   # SEG and FIX of diskpack_cl/device/kernels/raster_sums.cl
 TILE_ROWS = 16   # grid rows of a work item's tile in the CPU layout (TH in power_gather.h)
 # 8 x 8 work-groups per enqueue of power_labels (about 4 M grid cells): each enqueue is
 # waited for on its own (wait_for's helper thread); bands of 0.26 M grid cells made an
@@ -39,7 +39,7 @@ MAX_GROUPS = 65536
 # kernel and device limits may give fewer); their atomics make the result
 # independent of the group size
 REDUCE_GROUP = 256
-#: Status bits of diskpack_cl/kernels/raster_labels.cl (ST_* in common.h): why a labelling is refused.
+#: Status bits of diskpack_cl/device/kernels/raster_labels.cl (ST_* in common.h): why a labelling is refused.
 STATUS = {"ring_limit": 1, "no_owner": 2}
 
 
@@ -427,7 +427,7 @@ class PowerRaster(DeviceStage):
         As ``compute(points, weights, distance=False).centroids(density)``;
         on a CPU device with 64-bit atomics (the ``tile`` layout) in one
         pass that labels the grid cells and sums them without a label map
-        (``power_sums_tile`` in ``diskpack_cl/kernels/raster_sums.cl``).
+        (``power_sums_tile`` in ``diskpack_cl/device/kernels/raster_sums.cl``).
 
         Returns
         -------
@@ -518,7 +518,7 @@ class PowerRaster(DeviceStage):
                                "sites the host checks should have refused")
 
     def _device_centroids(self, label_buf, sites, density):
-        """Centroids from the device reduction (diskpack_cl/kernels/raster_sums.cl): the label
+        """Centroids from the device reduction (diskpack_cl/device/kernels/raster_sums.cl): the label
         map never leaves the device; the density is uploaded once per array.
         The sums are fixed point (2^-24), so masses and centroids agree with a
         float64 host reduction to about 1e-7 relative."""

@@ -10,3 +10,5 @@
 - :mod:`~diskpack_cl.drawing.overlap`: drawn dots that must not touch;
 - :mod:`~diskpack_cl.drawing.pen_path`: the order the pen visits the dots.
 """
+
+__all__ = []   # the folder's API is its modules'

@@ -10,6 +10,8 @@
 
 import importlib
 
+__all__ = []   # the folder's API is its modules' (the items' names load on demand)
+
 
 def __getattr__(name):
     # the items' names, loaded when first asked for: `diskpack poisson` never imports them
