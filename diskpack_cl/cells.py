@@ -426,6 +426,7 @@ class _Launcher:
             self._args = args
         return cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
 
+
 def _take(a, order, out):
     """``a[order]`` written into `out`: np.take, as numpy's row gather ``X[order]`` is several
     times slower (40 against 5 ms at 1M); mode "clip" so that it writes `out` directly
@@ -465,7 +466,7 @@ class _Packed:
         self.parts = {f: self.buffer.get_sub_region(o, e - o)
                       for (f, o), e in zip(self.offsets.items(), ends)}
         self.room = room if room is not None and len(room) >= self.total else None
-        self._host = self._sent = None
+        self._host = self._sent = self._all = None
 
     def _views(self, host, names):
         return {f: host[self.offsets[f]:].view(dtype)[:int(np.prod(shape))].reshape(shape)
@@ -615,7 +616,7 @@ def refine_active(X, w, domain, active, near, cells=None):
     ok[np.flatnonzero(basis < -4) // 3] = False   # a code that is neither a site nor an edge
     if len(rows):
         slack = B[k:] - np.einsum("kj,kj->k", N[k:], q[rows]) - R[rows]
-        ok[rows[slack < -tol]] = False
+        ok[rows[~(slack >= -tol)]] = False   # NaN too
     return q, R, ok
 
 
