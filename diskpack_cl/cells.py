@@ -24,8 +24,6 @@ from __future__ import annotations
 
 
 import numpy as np
-from scipy.ndimage import maximum_filter
-from scipy.spatial import cKDTree
 import pyopencl as cl
 
 from ._checks import check_sites
@@ -162,6 +160,8 @@ class CellMIC(DeviceStage):
         nbx, nby, bw, bh = grid
         if wmax == 0.0:
             return bwmax, 0
+
+        from scipy.ndimage import maximum_filter  # not loaded at start-up: weighted sets only
 
         win = min(_MAX_WINDOW, int(np.ceil(np.sqrt(wmax) / min(bw, bh))) + 2)
         mode = "wrap" if self.domain.periodic else "constant"
@@ -622,6 +622,8 @@ def refine_active(X, w, domain, active, near, cells=None):
 
 def _nearest(X, domain, at):
     """Distance from the points `at` (indices) to their nearest other point (cKDTree)."""
+    from scipy.spatial import cKDTree  # not loaded at start-up: few sets have a site this far
+
     box = (domain.width, domain.height) if domain.periodic else None
     d, _ = cKDTree(X, boxsize=box).query(X[at], k=2)
     return d[:, 1]
