@@ -149,9 +149,9 @@ def main():
                 append(args.json, {"n": n, "engine": name, "iteration": it, "seconds": sec,
                                    **{f"stage_{k}": v for k, v in st.items()}, "max_dx": dx, "rho": float(rho)})
             med = {k: float(np.median([s.get(k, 0.0) for s in stages])) for k in stages[0]}
-            st = " ".join(f"{k}={v:.4f}" for k, v in med.items())
+            st = " ".join(f"{k}={v:.6f}" for k, v in med.items())
             sec = np.median(seconds)
-            print(f"{n:>8} {name:>7} {sec:9.4f} {sec / sec_exact:8.3f} {dx:9.1e}  {st}", flush=True)
+            print(f"{n:>8} {name:>7} {sec:9.6f} {sec / sec_exact:8.3f} {dx:9.1e}  {st}", flush=True)
         if "plain" in res:
             print(f"{n:>8} cells / plain scipy = {np.median(res['cells'][0]) / np.median(res['plain'][0]):.3f}",
                   flush=True)

@@ -37,7 +37,6 @@ torus every point has that.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .geometry import exact_mic
 from .measures import ball_candidates, hexagonal_radius
@@ -82,6 +81,8 @@ def _pairs_near(X, C, r, domain):
     KD-tree where the grid does not serve."""
     found = ball_candidates(X, C, r, domain)
     if found is None:
+        from scipy.spatial import cKDTree  # not loaded at start-up: the grid serves most sets
+
         tree = cKDTree(X, boxsize=domain.size if domain.periodic else None)
         lists = tree.query_ball_point(X[C], r, return_sorted=False)
         lens = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))

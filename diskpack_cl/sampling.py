@@ -15,7 +15,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ._checks import check_count
 from .measures import hexagonal_radius, normalized_radius
@@ -152,6 +151,8 @@ def first_come(cand, d, boxsize=1.0):
     """Sequential acceptance inside one batch: a dart is kept unless an earlier kept
     dart of the batch lies closer than `d` (vectorized rounds, no per-dart loop);
     `boxsize`: the torus (any dimension), or None in a box."""
+    from scipy.spatial import cKDTree  # not loaded at start-up: a Poisson set of parallel darts needs none
+
     m = len(cand)
     pairs = cKDTree(cand, boxsize=boxsize).query_pairs(d, output_type="ndarray")
     if not len(pairs):

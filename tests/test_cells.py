@@ -115,6 +115,48 @@ def test_a_list_of_cells_is_solved_as_exact_mic_solves_it(solvers, case, certify
     assert np.array_equal(res.nn, full.nn[cells])
 
 
+@SETTINGS
+@given(cell_sets(), st.integers(0, 2**32 - 1))
+def test_the_host_puts_cell_mics_answers_by_row_as_mic_rows_does(solvers, case, seed):
+    """With the host's re-solve only cell_mic's own arrays come back, and the host puts
+    each cell's nearest-neighbour distance in its row and reads its flag word; without
+    it, mic_rows does both on the device: the same distances bit for bit and the same
+    flag counts, for all cells and for a list of cells (any order, repeats)."""
+    dom, pts, w = case
+    assume(len(pts) >= 2)
+    rng = np.random.default_rng(seed)
+    solver = solvers(dom)
+    for cells in (None, rng.integers(0, len(pts), rng.integers(1, 2 * len(pts)))):
+        host = solver.solve(pts, w, cells=cells)
+        device = solver.solve(pts, w, certify=False, cells=cells)
+        assert host.nn.tobytes() == device.nn.tobytes()
+        assert {k: host.stats[k] for k in FLAGS} == {k: device.stats[k] for k in FLAGS}
+        assert np.array_equal(host.empty, device.empty)
+
+
+@settings(max_examples=15)
+@given(st.lists(st.tuples(st.sampled_from([3, 40, 300]), st.sampled_from(["all", "some", "nearest"]),
+                          st.booleans()), min_size=3, max_size=6), st.integers(0, 2**32 - 1))
+def test_one_solver_for_sets_of_every_size_answers_as_a_fresh_one(ctx, calls, seed):
+    """The packed transfers are laid out anew when a call's sizes differ from the last
+    one's, in the host memory of the last where it is large enough (a relaxation's
+    local steps): a solver called with sets of varied sizes, lists of cells and
+    nearest-neighbour queries in between gives bit for bit what a fresh solver gives."""
+    dom = Domain.torus()
+    rng = np.random.default_rng(seed)
+    solver = CellMIC(dom, device=ctx)
+    for n, kind, certify in calls:
+        pts = rng.random((n, 2))
+        fresh = CellMIC(dom, device=ctx)
+        if kind == "nearest":
+            assert solver.nearest(pts).tobytes() == fresh.nearest(pts).tobytes()
+            continue
+        cells = rng.integers(0, n, rng.integers(1, n + 1)) if kind == "some" else None
+        got, want = (s.solve(pts, certify=certify, cells=cells) for s in (solver, fresh))
+        for a, b in zip((got.centers, got.radii, got.nn), (want.centers, want.radii, want.nn)):
+            assert a.tobytes() == b.tobytes()
+
+
 @pytest.mark.parametrize("certify", [True, False])
 @pytest.mark.parametrize("start", ["dart", "random", "relaxed"])
 def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start, certify):
@@ -279,6 +321,14 @@ def test_host_refinement_rejects_what_it_can_check():
     q, R, ok = refine_active(pts, w, dom, 9 * nb[:, 1:4] + 4, 9 * nb[:, 4:] + 4)
     wrong = np.abs(R - m.radii) > 1e-12
     assert wrong.any() and not np.any(ok & wrong)
+    # a basis holding a code that names neither a site nor an edge (the kernel's
+    # artificial half-planes, -5 and below) is refused, whatever its vertex
+    active = 9 * nb[:, 1:4] + 4
+    odd = np.arange(0, len(pts), 7)
+    active[odd, odd % 3] = -5 - odd % 5
+    _, _, ok_odd = refine_active(pts, w, dom, active, np.full((len(pts), 1), NO_CODE))
+    _, _, ok_all = refine_active(pts, w, dom, 9 * nb[:, 1:4] + 4, np.full((len(pts), 1), NO_CODE))
+    assert ok_all[odd].any() and not ok_odd[odd].any()
 
 
 def test_flag_bits_match_the_kernel():

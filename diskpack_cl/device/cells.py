@@ -24,8 +24,6 @@ from __future__ import annotations
 
 
 import numpy as np
-from scipy.ndimage import maximum_filter
-from scipy.spatial import cKDTree
 import pyopencl as cl
 
 from .._checks import check_sites
@@ -100,13 +98,15 @@ class CellMIC(DeviceStage):
         self.sites_per_bucket = float(sites_per_bucket)
         defines = {"PERIODIC": int(domain.periodic), "MAXC": MAXC, "MAXNEAR": MAXNEAR}
         kernels = self.program("cells", defines)
-        self._kernel, self._rows_kernel = kernels["cell_mic"], kernels["mic_rows"]
+        self._kernel, self._rows_kernel = _Launcher(kernels["cell_mic"]), _Launcher(kernels["mic_rows"])
         dev = self.ctx.devices[0]
-        self.group = group_size(self._kernel, dev, max(GROUP, preferred_multiple(self._kernel, dev)))
-        self._rows_group = group_size(self._rows_kernel, dev, 64)
+        self.group = group_size(kernels["cell_mic"], dev,
+                                max(GROUP, preferred_multiple(kernels["cell_mic"], dev)))
+        self._rows_group = group_size(kernels["mic_rows"], dev, 64)
         # whole groups per enqueue: the last group of one must not reach into the next
         self.chunk = CHUNK - CHUNK % self.group
         self._order = None
+        self._packs = {}
         self._warm()
 
     def _warm(self):
@@ -160,6 +160,8 @@ class CellMIC(DeviceStage):
         nbx, nby, bw, bh = grid
         if wmax == 0.0:
             return bwmax, 0
+
+        from scipy.ndimage import maximum_filter  # not loaded at start-up: weighted sets only
 
         win = min(_MAX_WINDOW, int(np.ceil(np.sqrt(wmax) / min(bw, bh))) + 2)
         mode = "wrap" if self.domain.periodic else "constant"
@@ -225,12 +227,11 @@ class CellMIC(DeviceStage):
         # everything below runs in bucket order: neighbours sit close in memory
         with self.timings("buckets"):
             order, start, bwmax, grid = self._buckets(X, w, density)
-            # np.take: numpy's row gather X[order] is several times slower (40 against 5 ms at 1M)
-            Xs, ws = np.take(X, order, axis=0), w[order]
             pos, rows = _positions(order, None if cells is None else checked_cells(cells, len(X)))
+            up, win = self._inputs(X, w, order, start, bwmax, grid, pos, rows)
         with self.timings("device"):
-            out = self._run(Xs, ws, start, bwmax, grid, pos, rows, certify)
-        return self._finish(Xs, ws, out, pos, rows)
+            out = self._run(up, grid, win, w.max(), len(pos), certify)
+        return self._finish(up.views["site"], up.views["weight"], out, pos, rows)
 
     def nearest(self, points):
         """Distance from every site to its nearest other site (periodic on a torus), exact.
@@ -255,16 +256,18 @@ class CellMIC(DeviceStage):
         # built on the first call: the stippling's cells never need it
         kernel = self.program("cells_nearest", {"PERIODIC": int(self.domain.periodic)})["nearest"]
         group = group_size(kernel, self.ctx.devices[0], 64)
+        n, dom = len(X), self.domain
         with self.timings("buckets"):
             order, start, _, (nbx, nby, bw, bh) = self._buckets(X, w)
-            Xs = np.take(X, order, axis=0)
+            up = self._pack("inputs", (("site", np.float64, (n, 2)), ("start", np.int32, start.shape)))
+            Xs = _take(X, order, up.views["site"])
+            up.views["start"][...] = start
         with self.timings("device"):
-            n, dom = len(Xs), self.domain
+            up.send(self.queue)
             nn = np.empty(n)
             b_nn = self.buffer("out_nn", nn.nbytes)
-            kernel(self.queue, (padded(n, group),), (group,),
-                   self.upload("site", Xs, wait=False), self.upload("start", start, wait=False), np.int32(n),
-                   np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
+            kernel(self.queue, (padded(n, group),), (group,), up.parts["site"], up.parts["start"],
+                   np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw), np.float64(bh),
                    np.float64(dom.width), np.float64(dom.height), b_nn)
             cl.enqueue_copy(self.queue, nn, b_nn)
         far = np.flatnonzero(nn < 0)
@@ -272,56 +275,82 @@ class CellMIC(DeviceStage):
             nn[far] = _nearest(Xs, dom, far)
         return _scatter(nn, order)
 
-    def _run(self, Xs, ws, start, bwmax, grid, pos, rows, codes):
-        """The kernels on the cells at sorted positions `pos`: ``center``, ``radius`` and
-        ``nn`` by result row (`rows`: ``mic_rows`` puts them there), ``flags`` in the order
-        of `pos`, and with `codes`, cell_mic's ``mic`` and ``codes`` in that order too (for
-        the host's re-solve; 48 of the 80 bytes a cell)."""
-        n, dom = len(pos), self.domain
-        bwloc, win = self._local_wmax(bwmax, grid, ws.max())
-        up = {"site": np.ascontiguousarray(Xs), "weight": np.ascontiguousarray(ws), "start": start,
-              "bwmax": bwmax, "bwloc": bwloc, "cells": pos, "rows": rows.astype(np.int32)}
-        b = {k: self.upload(k, v, wait=False) for k, v in up.items()}
-        outs = {"mic": np.empty((n, 4)), "codes": np.empty((n, 4 + MAXNEAR), np.int32),
-                "center": np.empty((n, 2)), "radius": np.empty(n), "nn": np.empty(n),
-                "flags": np.empty(n, np.int32)}
-        bufs = {k: self.buffer("out_" + k, v.nbytes) for k, v in outs.items()}
-        self._solve_cells(b, bufs, n, len(Xs), grid, win, ws.max())
-        self._rows_kernel(self.queue, (padded(n, self._rows_group),), (self._rows_group,),
-                          b["site"], b["cells"], b["rows"], np.int32(n), np.float64(dom.width),
-                          np.float64(dom.height), bufs["mic"], bufs["codes"], bufs["center"],
-                          bufs["radius"], bufs["nn"], bufs["flags"])
-        if not codes:
-            del outs["mic"], outs["codes"]
-        for k, v in outs.items():
-            cl.enqueue_copy(self.queue, v, bufs[k], is_blocking=False)
-        self.queue.finish()
-        self.transfers = {"bytes_to_device": int(sum(v.nbytes for v in up.values())),
-                          "bytes_from_device": int(sum(v.nbytes for v in outs.values()))}
-        return outs
+    def _pack(self, name, fields):
+        """The :class:`_Packed` arrays `fields` in device buffer `name`: the last one made
+        under that name where its fields are the same (a relaxation's every step)."""
+        pack = self._packs.get(name)
+        if pack is None or pack.fields != fields:
+            pack = _Packed(self, name, fields, None if pack is None else pack.room)
+            self._packs[name] = pack
+        return pack
 
-    def _solve_cells(self, b, bufs, n, n_sites, grid, win, wmax):
-        """cell_mic on the `n` cells of ``b["cells"]`` (uploaded inputs `b`, outputs
-        ``bufs["mic"]`` and ``bufs["codes"]``), a chunk of work items an enqueue."""
-        nbx, nby, bw, bh = grid
-        dom = self.domain
-        tol = 1e-12 * max(dom.width, dom.height)
-        near_tol = 1e-7 * np.sqrt(dom.area / n_sites)
-        events = []
-        for off in range(0, n, self.chunk):
-            events.append(self._kernel(
-                self.queue, (padded(min(self.chunk, n - off), self.group),), (self.group,),
-                b["site"], b["weight"], b["start"], b["bwmax"], b["bwloc"], np.int32(win),
-                b["cells"], np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw),
-                np.float64(bh), np.float64(dom.width), np.float64(dom.height), np.float64(wmax),
-                np.float64(tol), np.float64(near_tol), np.int32(off), bufs["mic"], bufs["codes"]))
+    def _inputs(self, X, w, order, start, bwmax, grid, pos, rows):
+        """The kernels' inputs, written into their packed host array (sites and weights in
+        bucket order, the buckets' start and weight maxima, the cells' sorted positions
+        and result rows): one copy to the device.  ``(packed, win)``, `win` the window
+        of :meth:`_local_wmax`."""
+        n, m = len(X), len(pos)
+        bwloc, win = self._local_wmax(bwmax, grid, w.max())
+        up = self._pack("inputs", (("site", np.float64, (n, 2)), ("weight", np.float64, (n,)),
+                                   ("start", np.int32, start.shape), ("bwmax", np.float64, bwmax.shape),
+                                   ("bwloc", np.float64, bwmax.shape), ("cells", np.int32, (m,)),
+                                   ("rows", np.int32, (m,))))
+        v = up.views
+        _take(X, order, v["site"])
+        _take(w, order, v["weight"])
+        v["start"][...], v["bwmax"][...], v["bwloc"][...] = start, bwmax, bwloc
+        v["cells"][...], v["rows"][...] = pos, rows
+        return up, win
+
+    def _run(self, up, grid, win, wmax, n, codes):
+        """The kernels on the `n` cells of the packed inputs `up` (:meth:`_inputs`, with
+        its `win`; `wmax` the largest weight).  With `codes`, cell_mic's ``mic`` and
+        ``codes`` in the order of the cells, for the host's re-solve (which puts them by
+        row itself); else ``center``, ``radius`` and ``nn`` by result row and ``flags`` in
+        the order of the cells, as ``mic_rows`` puts them (32 of the 80 bytes a cell).
+        One copy up, one down, one wait: at a thousand sites each costs about what the
+        kernel does."""
+        dom, b = self.domain, up.parts
+        mine = (("mic", np.float64, (n, 4)), ("codes", np.int32, (n, 4 + MAXNEAR)))
+        rowed = (("center", np.float64, (n, 2)), ("radius", np.float64, (n,)),
+                 ("nn", np.float64, (n,)), ("flags", np.int32, (n,)))
+        down = self._pack("outputs", mine if codes else rowed + mine)
+        out = down.parts
+        up.send(self.queue)
+        events = self._solve_cells(b, out, n, len(up.views["site"]), grid, win, wmax)
+        if not codes:
+            self._rows_kernel(self.queue, (padded(n, self._rows_group),), (self._rows_group,),
+                              b["site"], b["cells"], b["rows"], np.int32(n), np.float64(dom.width),
+                              np.float64(dom.height), out["mic"], out["codes"], out["center"],
+                              out["radius"], out["nn"], out["flags"])
+        # the results' own arrays, every call: the MIC returned holds them
+        views, received = down.receive(self.queue, None if codes else "mic")
         for ev in events:
             # a chunk takes well under a second, so a plain wait per chunk
             # answers Ctrl-C in time without wait_for's helper thread
             ev.wait()
+        received.wait()
         if self.profile:
             self.timings.kernel("cell_mic", sum((ev.profile.end - ev.profile.start) * 1e-9
                                                 for ev in events))
+        self.transfers = {"bytes_to_device": up.nbytes, "bytes_from_device": _nbytes(views)}
+        return views
+
+    def _solve_cells(self, b, bufs, n, n_sites, grid, win, wmax):
+        """Enqueue cell_mic on the `n` cells of ``b["cells"]`` (uploaded inputs `b`,
+        outputs ``bufs["mic"]`` and ``bufs["codes"]``), a chunk of work items an enqueue;
+        their events."""
+        nbx, nby, bw, bh = grid
+        dom = self.domain
+        tol = 1e-12 * max(dom.width, dom.height)
+        near_tol = 1e-7 * np.sqrt(dom.area / n_sites)
+        return [self._kernel(
+            self.queue, (padded(min(self.chunk, n - off), self.group),), (self.group,),
+            b["site"], b["weight"], b["start"], b["bwmax"], b["bwloc"], np.int32(win),
+            b["cells"], np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw),
+            np.float64(bh), np.float64(dom.width), np.float64(dom.height), np.float64(wmax),
+            np.float64(tol), np.float64(near_tol), np.int32(off), bufs["mic"], bufs["codes"])
+            for off in range(0, n, self.chunk)]
 
     def _refine(self, X, w, out, pos):
         """Host re-solve and check of the cells at sorted positions `pos`: ``(q, R, accepted)``."""
@@ -330,8 +359,10 @@ class CellMIC(DeviceStage):
                                      cells=pos)
             # the device and the host solved the same 3 x 3 system: same radius, same centre
             scale = max(self.domain.width, self.domain.height)
+            off = np.abs(np.take(X, pos, axis=0) + q - out["mic"][:, :2])
+            # the larger of the two columns, not np.all along rows (several times slower)
             agree = ((np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale)
-                     & np.all(np.abs(X[pos] + q - out["mic"][:, :2]) <= 1e-9 * scale, axis=1))
+                     & (np.maximum(off[:, 0], off[:, 1]) <= 1e-9 * scale))
         return q, R, ok & agree
 
     def _finish(self, X, w, out, pos, rows):
@@ -339,6 +370,9 @@ class CellMIC(DeviceStage):
         device's, or where :meth:`_run` read back its codes, the host's re-solve of them
         (:meth:`_certified`); exact_mic for the cells the device could not prove or the
         host refused."""
+        if "flags" not in out:   # cell_mic's own answers came back: the flags and nn from them
+            out["flags"] = np.ascontiguousarray(out["codes"][:, 3])
+            out["nn"] = _scatter(out["mic"][:, 3], rows)
         flags = out["flags"]
         raised = np.flatnonzero(flags)   # few cells: one pass over all, then over these
         unproven = raised[(flags[raised] & ~_NN) != 0]
@@ -359,7 +393,9 @@ class CellMIC(DeviceStage):
         empty = R < 0
         stats = {"flagged": len(unproven), "rejected": len(refused), "fallback": len(bad),
                  "empty": int(empty.sum())}
-        stats.update({name: int(np.count_nonzero(flags[raised] & bit)) for name, bit in FLAGS.items()})
+        raised_flags = flags[raised]
+        stats.update({name: int(np.count_nonzero(raised_flags & bit)) if len(raised) else 0
+                      for name, bit in FLAGS.items()})
         stats.update(self.transfers)
         return MIC(centers, R, empty, stats, nn)
 
@@ -371,6 +407,103 @@ class CellMIC(DeviceStage):
         refused = np.flatnonzero(~accepted & ((out["flags"] & ~_NN) == 0))
         centers, _ = mic_centres(np.take(X, pos, axis=0), q, R, self.domain)
         return _scatter(centers, rows), _scatter(R, rows), refused
+
+
+class _Launcher:
+    """A kernel of this stage's own (the program's kernels are shared by every stage built
+    with the same switches), called as pyopencl's are, that sets its arguments only where
+    they differ from the last call's: setting cell_mic's twenty costs about 90 us, more
+    than the kernel at a thousand sites, and a relaxation's steps pass the same ones."""
+
+    def __init__(self, kernel):
+        self.kernel = cl.Kernel(kernel.program, kernel.function_name)
+        self._args = None   # held: no buffer of theirs is freed and its address reused
+
+    def __call__(self, queue, global_size, local_size, *args):
+        if self._args is None or len(args) != len(self._args) or not all(
+                a is b or (type(a) is type(b) and a == b) for a, b in zip(args, self._args)):
+            self.kernel.set_args(*args)
+            self._args = args
+        return cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
+
+
+def _take(a, order, out):
+    """``a[order]`` written into `out`: np.take, as numpy's row gather ``X[order]`` is several
+    times slower (40 against 5 ms at 1M); mode "clip" so that it writes `out` directly
+    (with "raise" numpy buffers it), `order` holding valid indices."""
+    return np.take(a, order, axis=0, out=out, mode="clip")
+
+
+def _layout(fields, align):
+    """Byte offset of each of `fields` (``(name, dtype, shape)``) in one packed array, each
+    aligned to `align` bytes (a sub-buffer's origin must be) and at least `align` long
+    (a sub-buffer is never empty), and the total size."""
+    offsets, at = {}, 0
+    for name, dtype, shape in fields:
+        offsets[name] = at
+        at += max(1, -(-np.dtype(dtype).itemsize * int(np.prod(shape)) // align)) * align
+    return offsets, at
+
+
+class _Packed:
+    """Arrays packed into one host array and one device buffer (`name` of `stage`), so
+    that a call moves them in one copy: PoCL spends about 45 us on a copy, and at a
+    thousand sites seven copies up and six down cost more than the kernel.
+
+    ``parts``: sub-buffers at the fields' offsets, the kernels' arguments, by field
+    name; ``views``: typed views of the host array the inputs are written into, made
+    on first use (the outputs come back into a new array every call, :meth:`receive`),
+    in ``room``, the host memory of the last layout (`room`) where it is large
+    enough: a local step's sub-problem has a size of its own every call, and new
+    pages for it each time cost more than its copy.
+    """
+
+    def __init__(self, stage, name, fields, room=None):
+        self.fields = fields
+        self.offsets, self.total = _layout(fields, stage.device.mem_base_addr_align // 8)
+        self.buffer = stage.buffer(name, self.total)
+        ends = list(self.offsets.values())[1:] + [self.total]
+        self.parts = {f: self.buffer.get_sub_region(o, e - o)
+                      for (f, o), e in zip(self.offsets.items(), ends)}
+        self.room = room if room is not None and len(room) >= self.total else None
+        self._host = self._sent = self._all = None
+
+    def _views(self, host, names):
+        return {f: host[self.offsets[f]:].view(dtype)[:int(np.prod(shape))].reshape(shape)
+                for f, dtype, shape in self.fields if f in names}
+
+    @property
+    def views(self):
+        if self._host is None:
+            if self.room is None:
+                self.room = np.empty(self.total, np.uint8)
+            self._host = self.room[:self.total]
+            self._all = self._views(self._host, self.offsets)
+        return self._all
+
+    @property
+    def nbytes(self):
+        return _nbytes(self.views)
+
+    def send(self, queue):
+        """Queue the copy of the host array to the device; the host array must not change
+        until the queue has read it (its event is kept till the next send: pyopencl waits
+        for a host copy whose event goes)."""
+        self._sent = cl.enqueue_copy(queue, self.buffer, self._host, is_blocking=False)
+
+    def receive(self, queue, upto=None):
+        """Queue the copy of the device buffer (the fields before `upto`; None: all) into
+        a new host array: ``(views, event)``, the views valid once the event is done (keep
+        the event till then: pyopencl waits for a host copy whose event goes)."""
+        names = list(self.offsets)
+        names = names[:names.index(upto)] if upto else names
+        host = np.empty(self.offsets[upto] if upto else self.total, np.uint8)
+        return self._views(host, names), cl.enqueue_copy(queue, host, self.buffer, is_blocking=False)
+
+
+def _nbytes(views):
+    """Bytes of the arrays `views` (a dict)."""
+    return int(sum(v.nbytes for v in views.values()))
 
 
 def _scatter(a, rows):
@@ -400,23 +533,22 @@ def _positions(order, cells):
 _SHIFT = np.array([-1 - 1j, -1, -1 + 1j, -1j, 0, 1j, 1 - 1j, 1, 1 + 1j])   # code % 9 -> (sx, sy)
 
 
-def _code_constraints(X, w, cells, codes, domain):
-    """Half-planes ``q . n <= beta`` of `cells` from the kernel's constraint codes.
+def _code_constraints(X, w, i, c, domain):
+    """Half-planes ``q . n <= beta`` of cells `i` from the kernel's constraint codes `c`
+    (one code a cell of `i`: flat arrays of the same length).
 
     codes >= 0 name site ``code // 9`` shifted by ``(code % 9 // 3 - 1,
     code % 3 - 1)`` periods; -1..-4 the left, right, top and bottom edges;
     anything else is an unused slot (beta = 1e300).  Returns arrays of
-    shape ``codes.shape + (2,)`` and ``codes.shape``.  Points are gathered
+    shape ``(len(c), 2)`` and ``(len(c),)``.  Points are gathered
     as complex numbers (one 16-byte load each, several times faster than
     numpy's row gather) and lengths are ``sqrt(x^2 + y^2)``, as in the kernel.
     """
     Z = np.ascontiguousarray(X).view(np.complex128).ravel()
-    c = codes.ravel()
-    i = np.repeat(cells, codes.shape[1])
     site = c >= 0
     j, r = np.divmod(np.where(site, c, 4), 9)
-    s = _SHIFT[r]
-    a = Z[j] + (s.real * domain.width + 1j * s.imag * domain.height) - Z[i]
+    # the nine shifts in the domain's periods first, then one gather: 3 passes fewer
+    a = Z[j] + (_SHIFT.real * domain.width + 1j * _SHIFT.imag * domain.height)[r] - Z[i]
     L2 = a.real * a.real + a.imag * a.imag
     L = np.sqrt(L2)
     other = np.nonzero(~site | (L == 0))[0]
@@ -432,7 +564,7 @@ def _code_constraints(X, w, cells, codes, domain):
         lim = np.stack([xi[:, 0], domain.width - xi[:, 0], xi[:, 1], domain.height - xi[:, 1]], 1)
         N[edge] = _EDGE_NORMALS[e] @ (1, 1j)
         B[edge] = lim[np.arange(len(edge)), e]
-    return N.view(np.float64).reshape(codes.shape + (2,)), B.reshape(codes.shape)
+    return N.view(np.float64).reshape(len(c), 2), B
 
 
 def refine_active(X, w, domain, active, near, cells=None):
@@ -468,20 +600,30 @@ def refine_active(X, w, domain, active, near, cells=None):
     """
     cells = np.arange(len(X)) if cells is None else cells
     tol = 1e-11 * max(domain.width, domain.height)
-    N, B = _code_constraints(X, w, cells, active, domain)
-    R, inv, ok = cramer_inverse(N[..., 0], N[..., 1], B)
-    q = np.stack(power_vertex(N[..., 0], N[..., 1], B, inv), 1)
-    ok &= np.all((active >= 0) | ((active <= -1) & (active >= -4)), axis=1)
-    rows, cols = np.nonzero(near != NO_CODE)
+    # flat indices, not np.nonzero's pairs or reductions along rows of three: at a
+    # thousand cells these calls are most of the re-solve's cost
+    rows, cols = np.divmod(np.flatnonzero(near != NO_CODE), near.shape[1])
+    basis = active.ravel()
+    k = len(basis)
+    # the basis and the near-tight constraints in one pass (a pass is some 30 numpy calls)
+    N, B = _code_constraints(X, w, np.concatenate([np.repeat(cells, 3), cells[rows]]),
+                             np.concatenate([basis, near[rows, cols]]), domain)
+    # the basis' normals as contiguous (k, 3) arrays: the arithmetic is faster on them
+    a, b = (np.ascontiguousarray(N[:k, j]).reshape(-1, 3) for j in (0, 1))
+    Ba = B[:k].reshape(-1, 3)
+    R, inv, ok = cramer_inverse(a, b, Ba)
+    q = np.stack(power_vertex(a, b, Ba, inv), 1)
+    ok[np.flatnonzero(basis < -4) // 3] = False   # a code that is neither a site nor an edge
     if len(rows):
-        Nn, Bn = _code_constraints(X, w, cells[rows], near[rows, cols][:, None], domain)
-        slack = Bn[:, 0] - np.einsum("kj,kj->k", Nn[:, 0], q[rows]) - R[rows]
-        np.logical_and.at(ok, rows, slack >= -tol)
+        slack = B[k:] - np.einsum("kj,kj->k", N[k:], q[rows]) - R[rows]
+        ok[rows[~(slack >= -tol)]] = False   # NaN too
     return q, R, ok
 
 
 def _nearest(X, domain, at):
     """Distance from the points `at` (indices) to their nearest other point (cKDTree)."""
+    from scipy.spatial import cKDTree  # not loaded at start-up: few sets have a site this far
+
     box = (domain.width, domain.height) if domain.periodic else None
     d, _ = cKDTree(X, boxsize=box).query(X[at], k=2)
     return d[:, 1]
