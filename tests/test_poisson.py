@@ -33,7 +33,7 @@ def test_a_torus_set_on_a_float64_device_loads_no_kd_tree(ctx):
     import subprocess
     import sys
 
-    from diskpack_cl.device_stage import has_fp64
+    from diskpack_cl.device.stage import has_fp64
 
     if not has_fp64(ctx):
         pytest.skip("the exact route (no float64) uses scipy's trees")
@@ -43,6 +43,7 @@ def test_a_torus_set_on_a_float64_device_loads_no_kd_tree(ctx):
             "'scipy.spatial' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["cells", "True", "False"], out.stdout + out.stderr
+
 
 def test_as_box():
     assert as_box("3x0.5") == Domain.rect(3, 0.5)
