@@ -444,13 +444,17 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     r = dot_radii(state, stage, x)
     w = (state.k * r) ** 2
     refine = bool(opt.refine_every) and state.packs % opt.refine_every == 0
+    need_power = opt.capacity > 0 or opt.support > 0 or (blend > 0 and opt.blend_cell == "power")
+    # the centroids' pass begun before an exact MIC step (on the cells route it runs
+    # beside the MICs' work); after an estimate, which may label the grid for it
+    power = stage.engine.start_centroids(x, w, stage.density) if need_power and refine else None
     mic = stage.engine.mic(x, w, exact=refine, certify=False)   # the result is certified at the end
     entry = {}
     ok = ~mic.empty & np.all(np.isfinite(mic.centers), axis=1)
     # whole-array where, not row gathers and scatters: several times faster
     newx = np.where(ok[:, None], mic.centers, x)
-    need_power = opt.capacity > 0 or opt.support > 0 or (blend > 0 and opt.blend_cell == "power")
-    power = stage.engine.centroids(x, w, stage.density) if need_power else None
+    if need_power:
+        power = power() if power is not None else stage.engine.centroids(x, w, stage.density)
     ink = state.ink
     if opt.capacity > 0:
         ink = equal_ink(ink, power[1], opt.capacity)

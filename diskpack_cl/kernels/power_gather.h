@@ -238,6 +238,27 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
 #error "TW must be 8 or 16"
 #endif
 
+/* Candidates between two updates of tile_owners' reach (a power of two). */
+#define REACH_EVERY 8
+
+/* The largest best power over the tile, padded as tile_bound pads U: no
+ * candidate whose power exceeds it over the whole tile can own a grid cell. */
+inline float tile_reach(const floatT *best, float pad)
+{
+    /* select, not fmax: no builtin call on a 512-bit vector (wide.h) */
+    floatT v = best[0];
+    for (int r = 1; r < TH; ++r) v = select(v, best[r], best[r] > v);
+#if TW == 16
+    const float8 a = select(v.lo, v.hi, v.hi > v.lo);
+#else
+    const float8 a = v;
+#endif
+    const float4 b = select(a.lo, a.hi, a.hi > a.lo);
+    const float2 c = select(b.lo, b.hi, b.hi > b.lo);
+    const float M = FMAX(c.lo, c.hi);
+    return M + pad + 1e-5f * FABS(M);
+}
+
 /* Owners of the tile whose first grid cell is (gx0, gy0): best_id[r] holds
  * row r's, caller's indices (lanes past the raster repeat its last column).
  * A grid cell of the raster left without one sets ST_NO_OWNER. */
@@ -260,6 +281,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
         best[r] = (floatT)(INFINITY);
         best_id[r] = (intT)(INT_MAX);
     }
+    float reach = U;
     for (int chunk = 0; ; ++chunk) {
         const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
                                  site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
@@ -268,6 +290,13 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
         for (int c = 0; c < m; ++c) {
             const float2 s = cpos[c];
             const float wc = cw[c];
+            /* The gather walks rings outwards, so after the first candidates
+               every grid cell holds a near site and most later ones cannot
+               beat it anywhere in the tile: skip those (their power exceeds
+               every cell's best, even rounded: the pad of tile_bound). */
+            if ((c & (REACH_EVERY - 1)) == 0) reach = FMIN(reach, tile_reach(best, pad));
+            const float ds = box_dist(s.x, s.y, x0, y0, x1, y1);
+            if (ds * ds - wc > reach) continue;
             const intT id = (intT)(cid[c]);
             const floatT dx = px - s.x;
             const floatT dx2 = dx * dx;
