@@ -4,7 +4,10 @@ For n in --n (default 5k, 20k, 50k) on the 512x512 sample photograph and a
 2048x2048 upscale of it, runs a few disk-packing and Lloyd iterations and
 prints the median seconds per iteration and per stage (the grid's power
 labels, the MIC step: :data:`MIC_STAGES`, the centroids), plus the
-error-diffusion start.
+error-diffusion start, and the anchor: scipy's ``Voronoi`` of n uniform
+random points timed in the same run (the median of three, before the
+stipplings of that n), with each method's seconds per iteration over it
+(``ratio``).
 Methods: ``diskpack`` (paper disk-packing steps), ``mix`` (the default
 schedule's step: disk packing blended with power-cell centroids, with the
 default's options), ``mix-before`` (the same without ``support`` and
@@ -52,6 +55,7 @@ from diskpack_cl.dithering import error_diffusion
 from diskpack_cl.schedule import SCHEDULE_OPTIONS
 from diskpack_cl.stipple import stipple
 from perf_rows import append, count, medians, num
+from stipple_large import voronoi_seconds
 
 
 def image(size):
@@ -126,7 +130,8 @@ def main(argv=None):
         return end_to_end(a.end_to_end, a.device, a.json)
     if a.color:
         return color_against_mono(a)
-    hdr = f"{'size':>5s} {'n':>7s} {'method':8s} {'start':>7s} {'s/iter':>7s} {'labels':>7s} {'mic':>7s} {'centr':>7s}"
+    hdr = (f"{'size':>5s} {'n':>7s} {'method':8s} {'start':>7s} {'s/iter':>7s} {'labels':>7s} {'mic':>7s} "
+           f"{'centr':>7s} {'ratio':>6s}")
     hdr += f" {'kernel':>7s}" if a.profile else ""
     print(hdr)
     for size in a.sizes:
@@ -135,6 +140,7 @@ def main(argv=None):
             t = time.perf_counter()
             error_diffusion(g, n, seed=0)
             t_start = time.perf_counter() - t
+            voronoi_s = float(np.median([voronoi_seconds(n)[0] for _ in range(3)]))
             for method, sched in (("diskpack", [("pack", a.iters + 1)]),
                                   ("mix", [("mix", a.iters + 1)]), ("mix-before", [("mix", a.iters + 1)]),
                                   ("lloyd", None)):
@@ -152,12 +158,13 @@ def main(argv=None):
                        "s_per_iter": med(hist, "seconds"), "labels_s": med(hist, "raster_labels_s"),
                        "mic_s": med_sum(hist, MIC_STAGES), "centroids_s": med(hist, "centroids_s"),
                        "first_iter_s": res.history[0]["seconds"], "certify_s": res.timings["certify"],
-                       "supersample": res.params["supersample"]}
+                       "supersample": res.params["supersample"], "voronoi_s": voronoi_s}
+                row["ratio"] = row["s_per_iter"] / voronoi_s
                 kernels = sorted({k for h in hist for k in h if k.startswith("kernel")})
                 row.update({k: med(hist, k) for k in kernels})
                 append(a.json, {"kind": "iterations", "iters": a.iters, **row})
                 print(f"{size:5d} {n:7d} {method:8s} {t_start:7.3f} {row['s_per_iter']:7.3f} "
-                      f"{row['labels_s']:7.3f} {row['mic_s']:7.3f} {row['centroids_s']:7.3f}"
+                      f"{row['labels_s']:7.3f} {row['mic_s']:7.3f} {row['centroids_s']:7.3f} {row['ratio']:6.3f}"
                       + (f" {row['kernel_s']:7.3f}" if a.profile else ""), flush=True)
     return 0
 

@@ -10,7 +10,10 @@ protocol:
   without the host's re-solve, for a caller that certifies what it returns);
 - ``engine.centroids(points, weights, density)``: ``(centroids, mass)``,
   the density-weighted centroids and masses of the power cells on the
-  engine's grid (engines made with a ``grid``).
+  engine's grid (engines made with a ``grid``);
+  ``engine.start_centroids(...)`` the same, begun: it returns the function
+  that gives them (on the ``cells`` route the device's pass runs while the
+  host asks for the MICs).
 
 Every engine has ``name`` (its route), ``backend`` (``opencl`` or
 ``exact``), ``device``, ``fallback`` (None, or why ``auto`` chose the exact
@@ -175,6 +178,11 @@ class _Engine:
             check_against_exact(points, weights, self.domain, m.radii, m.empty)
         return m
 
+    def start_centroids(self, points, weights, density):
+        """:meth:`centroids`, begun: the function that gives them.  Here they are
+        computed when it is called (after a :meth:`mic` whose labels they may reuse)."""
+        return lambda: self.centroids(points, weights, density)
+
 
 class ExactEngine(_Engine):
     """The host engine: exact MICs and exact float64 grid labels, no OpenCL.
@@ -322,6 +330,13 @@ class OpenCLEngine(_Engine):
             return self.raster.centroids(points, weights, density)
         with self.timings("centroids"):
             return last[2].centroids(density)
+
+    def start_centroids(self, points, weights, density):
+        """:meth:`centroids`, begun: on the ``cells`` route the raster's pass is queued
+        now (a :meth:`mic` there labels no grid), and runs beside the MICs' work."""
+        if self.cells is None:
+            return super().start_centroids(points, weights, density)
+        return self.raster.start_centroids(points, weights, density)
 
 
 def _auto_grid(n, domain):

@@ -569,3 +569,70 @@ def test_power_ties_go_to_the_lowest_index(ctx, order, layout, lanes):
     assert np.all(lab[:, 2] == 0) and np.array_equal(lab, rl)
     left = order.index(0)                         # the site on the left owns columns 0, 1
     assert np.all(lab[:, :2] == left) and np.all(lab[:, 3:] == 1 - left)
+
+
+@settings(max_examples=15)
+@given(periodic=st.booleans(), n=st.integers(50, 2500), seed=st.integers(0, 2**32 - 1),
+       heavy=st.sampled_from([0.0, 0.4, 1.2]), per_site=st.sampled_from([2, 6, 21]),
+       lanes=st.sampled_from([8, 16]))
+def test_tile_layouts_skip_no_owner_among_dense_sites(ctx, periodic, n, seed, heavy, per_site, lanes):
+    """The tile layouts skip the candidates that cannot beat any grid cell's best
+    (``tile_reach`` in power_gather.h); among many sites, where most are skipped,
+    their labels stay bit for bit those of the item layout, which scans every
+    candidate, and the masses of the one-pass sums those of its labels."""
+    from diskpack_cl.raster import PowerRaster
+
+    if lanes == 16 and not _wide(ctx):
+        lanes = 8
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(float(rng.integers(20, 90)), float(rng.integers(20, 90)))
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    spacing = np.sqrt(dom.area / n)
+    w = (heavy * spacing * rng.random(n)) ** 2
+    side = np.sqrt(n * per_site / dom.area)
+    shape = (max(4, int(side * dom.height)), max(4, int(side * dom.width)))
+    dens = rng.random(shape)
+    item = PowerRaster(dom, shape, device=ctx, layout="item").compute(pts, w, distance=False).labels.copy()
+    tile = PowerRaster(dom, shape, device=ctx, layout="tile", lanes=lanes)
+    assert np.array_equal(tile.compute(pts, w, distance=False).labels, item)
+    if tile._k_fused is not None:
+        _, mass = tile.centroids(pts, w, dens)
+        want = np.bincount(item.ravel(), dens.ravel(), minlength=n)
+        np.testing.assert_allclose(mass, want, rtol=0, atol=1e-6 * max(want.max(), 1))
+
+
+@settings(max_examples=10)
+@given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(2, 400))
+def test_started_centroids_are_the_centroids(ctx, seed, periodic, n):
+    """``start_centroids`` queues the one pass and returns; its function, called after
+    another stage's kernel ran on the device, gives ``centroids``' answer bit for bit."""
+    from diskpack_cl.cells import CellMIC
+    from diskpack_cl.raster import PowerRaster
+
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(40.0, 30.0)
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    w = (0.5 * np.sqrt(dom.area / n) * rng.random(n)) ** 2
+    dens = rng.random((48, 64)).astype(np.float32)
+    pr = PowerRaster(dom, (48, 64), device=ctx)
+    want = pr.centroids(pts, w, dens)
+    done = pr.start_centroids(pts, w, dens)
+    CellMIC(dom, device=ctx).solve(pts, w)   # another queue's work meanwhile
+    for got, ref_ in zip(done(), want):
+        np.testing.assert_array_equal(got, ref_)
+
+
+def test_a_started_pass_overwritten_by_a_later_one_says_so(ctx):
+    from diskpack_cl.raster import PowerRaster
+
+    rng = np.random.default_rng(5)
+    pr = PowerRaster(Domain.torus(), (32, 32), device=ctx)
+    dens = np.ones((32, 32))
+    first = pr.start_centroids(rng.random((40, 2)), None, dens)
+    if pr._k_fused is None:
+        pytest.skip("no one-pass sums on this device: the centroids are made at the start")
+    pr.compute(rng.random((40, 2)), distance=False)
+    with pytest.raises(RuntimeError, match="overwritten by a later pass"):
+        first()
+    c, m = pr.start_centroids(rng.random((40, 2)), None, dens)()
+    assert np.isclose(m.sum(), 32 * 32)

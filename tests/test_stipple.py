@@ -590,3 +590,14 @@ def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
             assert (a is None) == (b is None), name
             if a is not None:
                 np.testing.assert_array_equal(b, a, err_msg=f"{name}, bands of {rows} rows")
+
+
+@settings(max_examples=50)
+@given(st.lists(st.tuples(st.sampled_from([0.0, -1.5, 2.0, np.nan, np.inf, -np.inf]),
+                          st.sampled_from([0.0, 3.0, np.nan, np.inf, -np.inf])), max_size=40))
+def test_finite_rows_is_all_isfinite_along_rows(rows):
+    """The steps' row test, column by column, against numpy's reduction along the rows."""
+    from diskpack_cl.stipple import _finite_rows
+
+    a = np.array(rows, dtype=np.float64).reshape(-1, 2)
+    np.testing.assert_array_equal(_finite_rows(a), np.all(np.isfinite(a), axis=1))

@@ -154,3 +154,24 @@ def test_stipple_engines_refuse_sites_they_cannot_bound(ctx, route, method, pts,
     args = (pts, np.asarray(w)) + ((np.ones((8, 8)),) if method == "centroids" else ())
     with pytest.raises(ValueError, match=match):
         getattr(eng, method)(*args)
+
+
+def test_centroids_begun_before_the_mics_change_no_step(ctx, monkeypatch):
+    """``pack_step`` begins the centroids' pass before the MICs (on the ``cells`` route
+    it runs beside the MIC kernel): every step of a run is the same, bit for bit, as
+    with the centroids asked for after the MICs (the base engine's ``start_centroids``)."""
+    from diskpack_cl import engine
+
+    g = np.clip(np.add.outer(np.linspace(0.1, 0.9, 40), np.linspace(0.0, 0.5, 56)), 0, 1)
+    g[10:20, 20:30] = 0.0   # a black square: off_support, reseat_dead and ink factors at work
+    args = dict(schedule=[("mix", 5, 0.7), ("pack", 2), ("mix", 1, 0.5)], device=ctx,
+                backend="opencl", support=8.0, capacity=0.1, seed=3)
+    begun = stipple(g, 300, **args)
+    if make_engine(Domain.rect(56, 40), 300, "opencl", device=ctx).name != "cells":
+        pytest.skip("the raster route labels the grid in its MIC step: nothing is begun early")
+    monkeypatch.setattr(engine.OpenCLEngine, "start_centroids", engine._Engine.start_centroids)
+    after = stipple(g, 300, **args)
+    np.testing.assert_array_equal(begun.points, after.points)
+    def measures(entry):   # what a step found, not its seconds
+        return {k: v for k, v in entry.items() if not (k.endswith("_s") or k == "seconds")}
+    assert [measures(h) for h in begun.history] == [measures(h) for h in after.history]

@@ -260,6 +260,7 @@ class PowerRaster(DeviceStage):
                                             dev.max_work_item_sizes[1])
         self._maps = {}
         self._generation = 0
+        self._uploads = 0   # uploads of sites or sums buffers: a pending pass checks it
         self._warm()
 
     def _labels_program(self, periodic):
@@ -333,6 +334,11 @@ class PowerRaster(DeviceStage):
         """A kernel of the CPU layout (``LABEL_ARGS`` then `args`; TW x TH grid cells
         a work item) over the raster, in bands of tile rows of about `max_groups` * 64
         grid cells, waited for one at a time."""
+        for ev in self._tile_bands(kernel, bufs, grid, wmax, *args):
+            self.wait(ev, name)
+
+    def _tile_bands(self, kernel, bufs, grid, wmax, *args):
+        """Enqueue the bands of :meth:`_run_tiles` one by one (a generator of their events)."""
         nbx, nby, bw, bh = grid
         ny, nx = self.shape
         dom = self.domain
@@ -340,11 +346,11 @@ class PowerRaster(DeviceStage):
         tx, ty = -(-nx // tw), -(-ny // th)
         band = max(1, (self.max_groups * TILE * TILE) // (tx * tw * th))
         for y0 in range(0, ty, band):
-            self.wait(kernel(
+            yield kernel(
                 self.queue, (tx, min(band, ty - y0)), (1, 1), *bufs,
                 np.int32(nbx), np.int32(nby), np.float32(bw), np.float32(bh),
                 np.float32(dom.width), np.float32(dom.height), np.float32(wmax),
-                np.int32(nx), np.int32(ny), *args, global_offset=(0, y0)), name)
+                np.int32(nx), np.int32(ny), *args, global_offset=(0, y0))
 
     def compute(self, points, weights=None, distance=True, neighbors=False):
         """Label the raster and estimate every power cell's inscribed circle.
@@ -412,6 +418,7 @@ class PowerRaster(DeviceStage):
         """Check the sites, sort them into buckets and upload them: ``(points,
         buffers, bucket grid, largest weight)`` for the labelling kernels."""
         pts, w = check_sites(points, weights, self.domain)
+        self._uploads += 1
         # Float32 kernels: only relative power distances matter, and the
         # largest weight shifts all of them equally, so subtract it.
         w32 = (w - w.max()).astype(np.float32)
@@ -441,20 +448,58 @@ class PowerRaster(DeviceStage):
         >>> c.round(6).tolist(), mass.tolist()
         ([[16.0, 16.0], [48.0, 16.0]], [1024.0, 1024.0])
         """
+        return self.start_centroids(points, weights, density)()
+
+    def start_centroids(self, points, weights=None, density=None):
+        """:meth:`centroids`, begun: the returned function gives its ``(centroids, mass)``.
+
+        Where :meth:`centroids` takes one pass (``power_sums_tile``), the
+        pass is queued here and the function waits for it, so that the host
+        can drive another stage (the MICs' kernel and host work) meanwhile;
+        elsewhere the centroids are computed here.  The answers are those of
+        :meth:`centroids`.
+
+        Raises
+        ------
+        RuntimeError
+            (from the function) a later :meth:`compute` or :meth:`start_centroids`
+            reused the pass's buffers before it was read.
+
+        Examples
+        --------
+        >>> pr = PowerRaster(Domain.rect(64, 32), (32, 64))
+        >>> done = pr.start_centroids([[16.0, 16.0], [48.0, 16.0]], density=np.ones((32, 64)))
+        >>> c, mass = done()
+        >>> mass.tolist()
+        [1024.0, 1024.0]
+        """
         if self._k_fused is None or density is None:
             est = self.compute(points, weights, distance=False)
             with self.timings("centroids"):
-                return est.centroids(density)
+                answer = est.centroids(density)
+            return lambda: answer
         t0 = time.perf_counter()
         pts, bufs, grid, wmax = self._upload_sites(points, weights)
         b_density, b_pts, acc, b_acc = self._sums_buffers(pts, density)
         b_status = self.upload("status", np.zeros(1, np.int32))
-        self._run_tiles(self._k_fused, "power_sums_tile", bufs, grid, wmax,
-                        b_density, b_pts, np.int32(len(pts)), b_status, b_acc)
-        self._check_status(b_status)
+        uploads = self._uploads
+        # every band queued now: the device works through them while the host goes on
+        events = list(self._tile_bands(self._k_fused, bufs, grid, wmax, b_density, b_pts,
+                                       np.int32(len(pts)), b_status, b_acc))
         self.timings.add("raster_labels", time.perf_counter() - t0)
-        with self.timings("centroids"):
-            return self._sums_to_centroids(acc, b_acc, pts)
+
+        def finish():
+            t1 = time.perf_counter()
+            for ev in events:   # one at a time: Ctrl-C gets through between bands
+                self.wait(ev, "power_sums_tile")
+            if self._uploads != uploads:
+                raise RuntimeError("the centroids' pass was overwritten by a later pass of this "
+                                   "raster (it reuses its device buffers): read it first")
+            self._check_status(b_status)
+            self.timings.add("raster_labels", time.perf_counter() - t1)
+            with self.timings("centroids"):
+                return self._sums_to_centroids(acc, b_acc, pts)
+        return finish
 
     def _map_buffers(self, npix):
         """The label, distance and neighbour maps (buffer, dtype).
@@ -540,6 +585,7 @@ class PowerRaster(DeviceStage):
         """Buffers of the device sums: the density (uploaded once per array), the
         sites in grid-cell units, and the zeroed sums (host array and buffer)."""
         ny, nx = self.shape
+        self._uploads += 1
         if self._density is None or self._density[0] is not density:
             d = np.ascontiguousarray(density, np.float32)   # summed in `real` on the device
             if d.shape != self.shape:

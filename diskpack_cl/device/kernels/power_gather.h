@@ -4,8 +4,9 @@
  * raster_labels.cl for the bounds.
  *
  * Build-time switches: PERIODIC (common.h); TW, the CPU tile's lanes (8 or
- * 16, see tile_owners); CAP, the local candidate list
- * (default 256; longer lists are streamed in chunks).
+ * 16, see tile_owners); CAP, power_labels' local candidate list
+ * (default 256; longer lists are streamed in chunks; the CPU tiles scan
+ * their candidates as they find them and keep no list).
  */
 #ifndef DISKPACK_POWER_GATHER_H
 #define DISKPACK_POWER_GATHER_H
@@ -19,8 +20,95 @@
 
 #define GATHER_OWNER 0
 #define GATHER_DIST 1
+#define GATHER_SCAN 2
 
-#define GATHER_DIST 1
+/* The CPU layout: one work item per TW x TH tile of grid cells, no
+ * barriers, and the candidate scan written with explicit TW-wide vectors
+ * (a row of the tile at a time), which PoCL turns into packed SIMD
+ * instructions where it would not vectorize the scalar scan of
+ * power_labels.  The arithmetic is that of power_labels' pass 1, and the
+ * candidates are its candidates but for those that cannot own a grid cell
+ * of the tile, so both give the same labels.  (GPUs want the opposite
+ * layout: one work item per grid cell, power_labels.) */
+/* TW lanes (build-time: 8 fills AVX2 registers; 16 fills AVX-512 ones and
+ * would change the call ABI of the builtins on CPUs without it), TH = 16
+ * rows: the bucket walk of a tile is paid once for 128 or 256 grid cells
+ * (tiles of 16 x 32 rows spill registers and are slower). */
+#ifndef TW
+#define TW 8
+#endif
+#if TW == 16 && !WIDE_BUILTINS
+#error "TW 16 takes 512-bit vectors through builtins: WIDE_BUILTINS must be 1"
+#endif
+#define TH 16
+#if TW == 16
+#define intT int16
+#define floatT float16
+#define vstoreT vstore16
+#define vloadT vload16
+#define convert_floatT convert_float16
+#define LANES ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+#elif TW == 8
+#define intT int8
+#define floatT float8
+#define vstoreT vstore8
+#define vloadT vload8
+#define convert_floatT convert_float8
+#define LANES ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
+#else
+#error "TW must be 8 or 16"
+#endif
+
+/* Candidates between two updates of tile_owners' reach (a power of two). */
+#define REACH_EVERY 8
+
+/* The largest best power over the tile, padded as tile_bound pads U: no
+ * candidate whose power exceeds it over the whole tile can own a grid cell. */
+inline float tile_reach(const floatT *best, float pad)
+{
+    /* select, not fmax: no builtin call on a 512-bit vector (wide.h) */
+    floatT v = best[0];
+    for (int r = 1; r < TH; ++r) v = select(v, best[r], best[r] > v);
+#if TW == 16
+    const float8 a = select(v.lo, v.hi, v.hi > v.lo);
+#else
+    const float8 a = v;
+#endif
+    const float4 b = select(a.lo, a.hi, a.hi > a.lo);
+    const float2 c = select(b.lo, b.hi, b.hi > b.lo);
+    const float M = FMAX(c.lo, c.hi);
+    return M + pad + 1e-5f * FABS(M);
+}
+
+/* The tile layout's scan (GATHER_SCAN): its grid-cell centres, each cell's
+ * best power and owner so far, and the reach beyond which no candidate can
+ * own a grid cell of the tile (tile_reach). */
+struct tile_scan {
+    floatT px;            /* the tile's columns */
+    float py[TH];         /* and rows */
+    floatT best[TH];      /* least power distance so far, per row */
+    intT best_id[TH];     /* its site (caller's index; ties to the lowest) */
+    float pad;            /* rounding pad of the bounds (tile_bound's) */
+    float reach;          /* candidates with boxdist^2 - w above it own no grid cell */
+    int seen;             /* candidates scanned */
+};
+
+/* One candidate at (xs, ys) with weight wc and index id, scanned over the
+ * tile's grid cells; every REACH_EVERY candidates the reach is tightened. */
+inline void scan_site(struct tile_scan *t, float xs, float ys, float wc, int id)
+{
+    const intT vid = (intT)(id);
+    const floatT dx = t->px - xs;
+    const floatT dx2 = dx * dx;
+    for (int r = 0; r < TH; ++r) {
+        const float dy = t->py[r] - ys;
+        const floatT pw = (dx2 + dy * dy) - wc;
+        const intT take = (pw < t->best[r]) | ((pw == t->best[r]) & (vid < t->best_id[r]));
+        t->best[r] = take ? pw : t->best[r];
+        t->best_id[r] = take ? vid : t->best_id[r];
+    }
+    if ((++t->seen & (REACH_EVERY - 1)) == 0) t->reach = FMIN(t->reach, tile_reach(t->best, t->pad));
+}
 
 /* Distance between boxes [ax0,ax1]x[ay0,ay1] and [bx0,bx1]x[by0,by1]. */
 inline float boxbox(float ax0, float ay0, float ax1, float ay1,
@@ -52,7 +140,9 @@ inline int gather_limit(int nbx, int nby, int span)
  * ST_RING_LIMIT in `status` when the rings reach gather_limit.
  *   GATHER_OWNER: boxdist^2 - w <= bound
  *   GATHER_DIST:  boxdist <= bound + sqrt(bound2 + w)   (bound2 >= -w)
- */
+ *   GATHER_SCAN:  boxdist^2 - w <= scan->reach, each such site scanned at
+ *                 once (scan_site) and no list kept: the reach tightens as
+ *                 the rings go out, and the walk stops at it */
 inline int gather(int mode, float bound, float bound2, int skip,
                   float x0, float y0, float x1, float y1,
                   __global const float2 *site, __global const float *weight,
@@ -60,8 +150,9 @@ inline int gather(int mode, float bound, float bound2, int skip,
                   __global const float *bucket_wmax,
                   int nbx, int nby, float bw, float bh, float W, float H, float wmax,
                   __local float2 *cpos, __local float *cw, __local int *cid,
-                  __global int *status)
+                  __global int *status, struct tile_scan *scan)
 {
+    float lim = mode == GATHER_SCAN ? scan->reach : bound;
     const int bx0 = iclamp((int)FLOOR(x0 / bw), -(1 << 20), 1 << 20);
     const int by0 = iclamp((int)FLOOR(y0 / bh), -(1 << 20), 1 << 20);
     const int bx1 = (int)FLOOR(x1 / bw), by1 = (int)FLOOR(y1 / bh);
@@ -82,7 +173,7 @@ inline int gather(int mode, float bound, float bound2, int skip,
 #endif
             const float gap = FMIN(FMIN(gl, gr), FMIN(gb, gt));
             if (gap > 0.0f) {
-                if (mode == GATHER_OWNER && gap * gap - wmax > bound) break;
+                if (mode != GATHER_DIST && gap * gap - wmax > lim) break;
                 if (mode == GATHER_DIST && gap > bound + SQRT(FMAX(bound2 + wmax, 0.0f))) break;
             }
 #if !PERIODIC
@@ -113,16 +204,21 @@ inline int gather(int mode, float bound, float bound2, int skip,
                 const float ex0 = cx * bw + sx, ey0 = cy * bh + sy;
                 const float d = boxbox(x0, y0, x1, y1, ex0, ey0, ex0 + bw, ey0 + bh);
                 const float wb = bucket_wmax[b];
-                if (mode == GATHER_OWNER && d * d - wb > bound) continue;
+                if (mode != GATHER_DIST && d * d - wb > lim) continue;
                 if (mode == GATHER_DIST && d > bound + SQRT(FMAX(bound2 + wb, 0.0f))) continue;
                 for (int k = bucket_start[b]; k < bucket_start[b + 1]; ++k) {
                     const float2 s = site[k];
                     const float xs = s.x + sx, ys = s.y + sy;
                     const float ds = box_dist(xs, ys, x0, y0, x1, y1);
                     const float wk = weight[k];
-                    const int pass = (mode == GATHER_OWNER) ? (ds * ds - wk <= bound)
-                                                            : (ds <= bound + SQRT(FMAX(bound2 + wk, 0.0f)));
+                    const int pass = (mode != GATHER_DIST) ? (ds * ds - wk <= lim)
+                                                           : (ds <= bound + SQRT(FMAX(bound2 + wk, 0.0f)));
                     if (!pass) continue;
+                    if (mode == GATHER_SCAN) {
+                        scan_site(scan, xs, ys, wk, site_id[k]);
+                        lim = scan->reach;
+                        continue;
+                    }
                     const int slot = total - skip;
                     if (slot >= 0 && slot < CAP) {
                         cpos[slot] = (float2)(xs, ys);
@@ -202,87 +298,34 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
 /* The arguments of LABEL_ARGS, passed on. */
 #define LABEL_PASS site, weight, site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax, nx, ny
 
-/* The CPU layout: one work item per TW x TH tile of grid cells, no
- * barriers, and the candidate scan written with explicit TW-wide vectors
- * (a row of the tile at a time), which PoCL turns into packed SIMD
- * instructions where it would not vectorize the scalar scan of
- * power_labels.  The candidates and the arithmetic are those of
- * power_labels' pass 1, so both give the same labels.  (GPUs want the
- * opposite layout: one work item per grid cell, power_labels.) */
-/* TW lanes (build-time: 8 fills AVX2 registers; 16 fills AVX-512 ones and
- * would change the call ABI of the builtins on CPUs without it), TH = 16
- * rows: the bucket walk of a tile is paid once for 128 or 256 grid cells
- * (tiles of 16 x 32 rows spill registers and are slower). */
-#ifndef TW
-#define TW 8
-#endif
-#if TW == 16 && !WIDE_BUILTINS
-#error "TW 16 takes 512-bit vectors through builtins: WIDE_BUILTINS must be 1"
-#endif
-#define TH 16
-#if TW == 16
-#define intT int16
-#define floatT float16
-#define vstoreT vstore16
-#define vloadT vload16
-#define convert_floatT convert_float16
-#define LANES ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
-#elif TW == 8
-#define intT int8
-#define floatT float8
-#define vstoreT vstore8
-#define vloadT vload8
-#define convert_floatT convert_float8
-#define LANES ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
-#else
-#error "TW must be 8 or 16"
-#endif
-
 /* Owners of the tile whose first grid cell is (gx0, gy0): best_id[r] holds
  * row r's, caller's indices (lanes past the raster repeat its last column).
- * A grid cell of the raster left without one sets ST_NO_OWNER. */
-inline void tile_owners(int gx0, int gy0, LABEL_ARGS,
-                        __local float2 *cpos, __local float *cw, __local int *cid,
-                        __global int *status, intT *best_id)
+ * The candidates are those of power_labels' pass 1 but for the ones that
+ * cannot own a grid cell of the tile (GATHER_SCAN), so both give the same
+ * labels.  A grid cell of the raster left without one sets ST_NO_OWNER. */
+inline void tile_owners(int gx0, int gy0, LABEL_ARGS, __global int *status, intT *best_id)
 {
     const float hx = W / nx, hy = H / ny;
     const float x0 = (gx0 + 0.5f) * hx, y0 = (gy0 + 0.5f) * hy;
     const float x1 = (imin(gx0 + TW, nx) - 0.5f) * hx, y1 = (imin(gy0 + TH, ny) - 0.5f) * hy;
-    const float pad = 1e-4f * (hx * hx + hy * hy);
-    const float U = tile_bound(x0, y0, x1, y1, pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
-
+    struct tile_scan t;
+    t.pad = 1e-4f * (hx * hx + hy * hy);
+    t.reach = tile_bound(x0, y0, x1, y1, t.pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
+    t.seen = 0;
     /* columns past the raster shadow its last column */
-    const floatT px = (convert_floatT(min(gx0 + LANES, (intT)(nx - 1))) + 0.5f) * hx;
-    float py[TH];
-    floatT best[TH];
+    t.px = (convert_floatT(min(gx0 + LANES, (intT)(nx - 1))) + 0.5f) * hx;
     for (int r = 0; r < TH; ++r) {
-        py[r] = (imin(gy0 + r, ny - 1) + 0.5f) * hy;
-        best[r] = (floatT)(INFINITY);
-        best_id[r] = (intT)(INT_MAX);
+        t.py[r] = (imin(gy0 + r, ny - 1) + 0.5f) * hy;
+        t.best[r] = (floatT)(INFINITY);
+        t.best_id[r] = (intT)(INT_MAX);
     }
-    for (int chunk = 0; ; ++chunk) {
-        const int total = gather(GATHER_OWNER, U, 0.0f, chunk * CAP, x0, y0, x1, y1, site, weight,
-                                 site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax,
-                                 cpos, cw, cid, status);
-        const int m = imin(total - chunk * CAP, CAP);
-        for (int c = 0; c < m; ++c) {
-            const float2 s = cpos[c];
-            const float wc = cw[c];
-            const intT id = (intT)(cid[c]);
-            const floatT dx = px - s.x;
-            const floatT dx2 = dx * dx;
-            for (int r = 0; r < TH; ++r) {
-                const float dy = py[r] - s.y;
-                const floatT pw = (dx2 + dy * dy) - wc;
-                const intT take = (pw < best[r]) | ((pw == best[r]) & (id < best_id[r]));
-                best[r] = take ? pw : best[r];
-                best_id[r] = take ? id : best_id[r];
-            }
-        }
-        if (total <= (chunk + 1) * CAP) break;
+    /* (no local list: the candidates are scanned as they are found) */
+    gather(GATHER_SCAN, t.reach, 0.0f, 0, x0, y0, x1, y1, site, weight, site_id, bucket_start,
+           bucket_wmax, nbx, nby, bw, bh, W, H, wmax, 0, 0, 0, status, &t);
+    for (int r = 0; r < TH; ++r) {
+        best_id[r] = t.best_id[r];
+        if (gy0 + r < ny && any(best_id[r] == (intT)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
     }
-    for (int r = 0; r < TH && gy0 + r < ny; ++r)
-        if (any(best_id[r] == (intT)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
 }
 
 #endif

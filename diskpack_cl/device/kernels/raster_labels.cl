@@ -50,7 +50,7 @@
     if (lid == 0)                                                                       \
         count_l = gather(mode, a, b, chunk * CAP, x0, y0, x1, y1, site, weight,         \
                          site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H,    \
-                         wmax, cpos, cw, cid, status);                                  \
+                         wmax, cpos, cw, cid, status, 0);                               \
     barrier(CLK_LOCAL_MEM_FENCE);                                                       \
     const int total = count_l;                                                          \
     const int m = imin(total - chunk * CAP, CAP)
@@ -188,13 +188,10 @@ void power_labels_tile(
     __global int *label,                /* out: caller's index of the owning site */
     __global int *status)               /* in/out: ST_* bits (common.h), init 0 */
 {
-    __local float2 cpos[CAP];
-    __local float cw[CAP];
-    __local int cid[CAP];
     const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
     if (gx0 >= nx || gy0 >= ny) return;
     intT best_id[TH];
-    tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
+    tile_owners(gx0, gy0, LABEL_PASS, status, best_id);
     const int cols = imin(TW, nx - gx0);
     for (int r = 0; r < TH && gy0 + r < ny; ++r) {
         __global int *row = label + (size_t)(gy0 + r) * nx + gx0;

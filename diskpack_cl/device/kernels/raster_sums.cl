@@ -19,7 +19,7 @@
  * cell_sums' of power_labels_tile's labels, but for where the fixed point
  * rounds (per tile and owner, not per run).
  *
- * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1), TW and CAP
+ * Build-time switches: PERIODIC (see common.h), USE_FP64 (0 or 1), TW
  * (power_gather.h), WIDE_BUILTINS (wide.h).
  */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
@@ -168,13 +168,10 @@ void power_sums_tile(
     __global int *status,            /* in/out: ST_* bits (common.h), init 0 */
     __global long *acc)              /* in/out: per site mass, x moment, y moment (init 0) */
 {
-    __local float2 cpos[CAP];
-    __local float cw[CAP];
-    __local int cid[CAP];
     const int gx0 = get_global_id(0) * TW, gy0 = get_global_id(1) * TH;
     if (gx0 >= nx || gy0 >= ny) return;
     intT best_id[TH];
-    tile_owners(gx0, gy0, LABEL_PASS, cpos, cw, cid, status, best_id);
+    tile_owners(gx0, gy0, LABEL_PASS, status, best_id);
     const int rows = imin(TH, ny - gy0);
     /* lanes past the raster repeat its last column's owner and read no
        density (density_row), so they add nothing */
