@@ -580,7 +580,7 @@ def test_tile_layouts_skip_no_owner_among_dense_sites(ctx, periodic, n, seed, he
     (``tile_reach`` in power_gather.h); among many sites, where most are skipped,
     their labels stay bit for bit those of the item layout, which scans every
     candidate, and the masses of the one-pass sums those of its labels."""
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     if lanes == 16 and not _wide(ctx):
         lanes = 8
@@ -606,8 +606,8 @@ def test_tile_layouts_skip_no_owner_among_dense_sites(ctx, periodic, n, seed, he
 def test_started_centroids_are_the_centroids(ctx, seed, periodic, n):
     """``start_centroids`` queues the one pass and returns; its function, called after
     another stage's kernel ran on the device, gives ``centroids``' answer bit for bit."""
-    from diskpack_cl.cells import CellMIC
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.cells import CellMIC
+    from diskpack_cl.device.raster import PowerRaster
 
     rng = np.random.default_rng(seed)
     dom = Domain.torus() if periodic else Domain.rect(40.0, 30.0)
@@ -623,7 +623,7 @@ def test_started_centroids_are_the_centroids(ctx, seed, periodic, n):
 
 
 def test_a_started_pass_overwritten_by_a_later_one_says_so(ctx):
-    from diskpack_cl.raster import PowerRaster
+    from diskpack_cl.device.raster import PowerRaster
 
     rng = np.random.default_rng(5)
     pr = PowerRaster(Domain.torus(), (32, 32), device=ctx)
