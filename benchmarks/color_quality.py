@@ -107,7 +107,7 @@ def crop(name, results, box, out, scale=2):
              .crop((x, y, x + s, y + s)).resize((s * scale, s * scale), Image.LANCZOS)]
     with tempfile.TemporaryDirectory() as tmp:
         for res in results:
-            write_color_png(Path(tmp) / "t.png", res, scale=scale)
+            write_color_png(Path(tmp) / "t.png", res, png_scale=scale)
             tiles.append(Image.open(Path(tmp) / "t.png").crop(
                 (x * scale, y * scale, (x + s) * scale, (y + s) * scale)))
     sheet = Image.new("RGB", (len(tiles) * s * scale + 8 * (len(tiles) - 1), s * scale), "white")

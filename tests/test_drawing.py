@@ -40,7 +40,7 @@ def result():
 
 @pytest.mark.parametrize("suffix, options", [
     (".svg", {"width_mm": 20.0, "pen_mm": 20.0}),   # the 32 x 32 px picture 20 mm wide
-    (".png", {"scale": 2.0, "pen_px": 64.0}),       # 64 x 64 output pixels
+    (".png", {"png_scale": 2.0, "width_mm": 20.0, "pen_mm": 20.0}),   # 64 px of 64 x 64
 ])
 def test_writers_refuse_a_pen_as_wide_as_the_picture(tmp_path, result, suffix, options):
     with pytest.raises(ValueError, match=PEN_TOO_WIDE):
