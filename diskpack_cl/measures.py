@@ -554,6 +554,22 @@ def coincident_pairs(points, domain=Domain.torus(), tol=0.0):
     return np.array(sorted(pairs), dtype=np.intp).reshape(-1, 2)
 
 
+def _crowded(X, domain):
+    """Which points of X share their cell of a grid of about 4 cells a point with
+    another: coincident points share every cell, so the sorts of :func:`_any_identical`
+    need only these.  A set of rho above about 0.66 (a spacing over the cells'
+    diagonal; the dart sets of :func:`diskpack_cl.poisson_disk` have 0.72) has none,
+    and the count of the points per cell costs a quarter of the sort of a million x.
+    Coordinates outside the domain go to its edge cells, NaN to the first (fmax, fmin:
+    a NaN cast to an integer would be no index): equal values still share a cell."""
+    side = 0.5 * np.sqrt(domain.area / max(len(X), 1))
+    nx, ny = (max(1, min(int(s / side), 1 << 15)) for s in domain.size)
+    col = np.fmin(np.fmax(X[:, 0] * (nx / domain.width), 0), nx - 1).astype(np.int64)
+    row = np.fmin(np.fmax(X[:, 1] * (ny / domain.height), 0), ny - 1).astype(np.int64)
+    cells = row * nx + col
+    return np.bincount(cells, minlength=nx * ny)[cells] > 1
+
+
 def _any_identical(points, domain):
     """Whether two points coincide (wrapped into the torus on one), by one sort or two.
 
@@ -569,6 +585,7 @@ def _any_identical(points, domain):
         return True
     if domain.periodic:   # wrap() maps into [0, W) x [0, H): coincident means equal there
         X = domain.wrap(X)
+    X = X[_crowded(X, domain)]
     # coincident points share their x: a sort of the x alone (float64, about 7 times
     # faster than the complex sort) clears every set whose x all differ
     x = np.sort(X[:, 0])

@@ -53,14 +53,31 @@ __constant int NEAR[24][2] = {
     {-2, -2}, {-2, -1}, {-2, 0}, {-2, 1}, {-2, 2}, {-1, -2}, {-1, 2}, {0, -2},
     {0, 2}, {1, -2}, {1, 2}, {2, -2}, {2, -1}, {2, 0}, {2, 1}, {2, 2}};
 
+/* Is cell (r, c) two cells or more from every edge?  Then its 24 neighbours are plain
+ * offsets in the grid, with no wrap (most cells: all but 8 g of the g * g). */
+static int inner(int r, int c, int g)
+{
+    return r >= 2 && r < g - 2 && c >= 2 && c < g - 2;
+}
+
+/* Is p closer than sqrt(d2) to q? */
+static int closer(double2 p, double2 q, double d2)
+{
+    const double dx = p.x - q.x, dy = p.y - q.y;
+    return dx * dx + dy * dy < d2;
+}
+
 /* Is a point of the 24 cells around (r, c) closer than sqrt(d2) to q? */
 static int near_point(__global const double2 *pt, int r, int c, int g, double2 q, double d2)
 {
-    for (int k = 0; k < 24; ++k) {
-        const double2 p = at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g);
-        const double dx = p.x - q.x, dy = p.y - q.y;
-        if (dx * dx + dy * dy < d2) return 1;
+    if (inner(r, c, g)) {   /* the wrap's four tests a neighbour were most of the test */
+        const int at = r * g + c;
+        for (int k = 0; k < 24; ++k)
+            if (closer(pt[at + NEAR[k][0] * g + NEAR[k][1]], q, d2)) return 1;
+        return 0;
     }
+    for (int k = 0; k < 24; ++k)
+        if (closer(at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g), q, d2)) return 1;
     return 0;
 }
 
@@ -132,14 +149,13 @@ __kernel void dart_keep(
     const double mine = prio[k];
     const double2 q = dart[k];
     const int r = k / g, c = k % g;
+    const int plain = inner(r, c, g);
     int ok = 1;
     for (int j = 0; j < 24 && ok; ++j) {
-        double2 shift;
-        const int at = wrap_cell(r + NEAR[j][0], c + NEAR[j][1], g, &shift);
-        if (!(prio[at] > mine)) continue;
-        const double2 p = dart[at] + shift;
-        const double dx = p.x - q.x, dy = p.y - q.y;
-        ok = !(dx * dx + dy * dy < d2);
+        double2 shift = (double2)(0.0, 0.0);
+        const int at = plain ? k + NEAR[j][0] * g + NEAR[j][1]
+                             : wrap_cell(r + NEAR[j][0], c + NEAR[j][1], g, &shift);
+        if (prio[at] > mine) ok = !closer(dart[at] + shift, q, d2);
     }
     keep[i] = ok;
 }
@@ -158,16 +174,16 @@ __kernel void cell_covered(
     const int r = cells[i] / g, col = cells[i] % g;
     /* the 8 points around, loaded once for the 5 samples */
     double2 p[8];
-    for (int k = 0; k < 8; ++k) p[k] = at_cell(pt, r + NEAR[k][0], col + NEAR[k][1], g);
+    if (inner(r, col, g))
+        for (int k = 0; k < 8; ++k) p[k] = pt[cells[i] + NEAR[k][0] * g + NEAR[k][1]];
+    else
+        for (int k = 0; k < 8; ++k) p[k] = at_cell(pt, r + NEAR[k][0], col + NEAR[k][1], g);
     const double sx[5] = {0.0, 1.0, 0.0, 1.0, 0.5}, sy[5] = {0.0, 0.0, 1.0, 1.0, 0.5};
     int all = 1;
     for (int s = 0; s < 5 && all; ++s) {
         const double2 q = (double2)((col + sx[s]) * c, (r + sy[s]) * c);
         all = 0;
-        for (int k = 0; k < 8 && !all; ++k) {
-            const double dx = p[k].x - q.x, dy = p[k].y - q.y;
-            all = dx * dx + dy * dy < d2;
-        }
+        for (int k = 0; k < 8 && !all; ++k) all = closer(p[k], q, d2);
     }
     covered[i] = all;
 }
