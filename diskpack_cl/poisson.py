@@ -23,7 +23,6 @@ search over n.
 from __future__ import annotations
 
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -52,10 +51,6 @@ START_RADIUS = 0.72
 #: A box longer than this many times its width throws its start darts folded into a
 #: near-square (:func:`start_points`).
 FOLD_ASPECT = 2.0
-
-#: Fewest points for which the relaxation's kernels are built while the darts are thrown
-#: (:func:`_warm_cells`): below, the darts take less time than a thread costs.
-AHEAD_MIN = 20_000
 
 #: The start sets :func:`poisson_disk` draws.
 STARTS = ("dart", "random")
@@ -694,10 +689,8 @@ def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
     """Start set, relaxation (`opt` to `eps`, the keywords `run` of the run), mask: the
     :class:`PoissonDiskResult` of one run."""
     t0 = time.perf_counter()
-    with ThreadPoolExecutor(1) as pool:
-        _warm_cells(pool, n, domain, opt, run["device"])
-        start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
-                             init=opt.init, dart_radius=opt.dart_radius)
+    start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
+                         init=opt.init, dart_radius=opt.dart_radius)
     t_start = time.perf_counter() - t0
     res = relax_poisson(start, eps, opt, domain=domain, **run)
     pts = res.points
@@ -710,28 +703,6 @@ def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
     return PoissonDiskResult(pts, domain, rho, float(d_min), reached, res.stop_reason,
                              res.iterations, res.seconds, t_start, float(eps), res.timings,
                              float(res.rho[0]), res.backend, res.device, res.stats, res.stages)
-
-
-def _warm_cells(pool, n, domain, opt, device):
-    """Submit :func:`~diskpack_cl.device.cells.warm_up` to `pool` where the relaxation of
-    `n` points will run the per-cell kernels on `device` (a float64 device, local route):
-    built while the darts are thrown, their 0.1-0.2 s leave the critical path.  The caller
-    leaves the pool (so waits) before it relaxes.  A failure there stays in the future,
-    unraised: the relaxation meets it (and reports or falls back) when it makes the same
-    stage.  Small sets gain nothing; without a device there is nothing to build."""
-    from .device.context import NoOpenCLError, get_context  # not loaded at start-up
-    from .device.stage import has_fp64
-
-    if opt.backend == "exact" or not opt.local or n < AHEAD_MIN:
-        return
-    try:   # on this thread: the darts' device grid takes the same context
-        ctx = get_context(device)
-    except NoOpenCLError:
-        return
-    if has_fp64(ctx):
-        from .device.cells import warm_up
-
-        pool.submit(warm_up, domain, ctx)
 
 
 def _with_density(n, density, domain, seed, backend, device):

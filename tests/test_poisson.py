@@ -45,29 +45,6 @@ def test_a_torus_set_on_a_float64_device_loads_no_kd_tree(ctx):
     assert out.stdout.split() == ["cells", "True", "False"], out.stdout + out.stderr
 
 
-def test_the_relaxation_kernels_built_during_the_darts_change_nothing(ctx, monkeypatch):
-    """From AHEAD_MIN points the per-cell kernels are built on another thread while the
-    darts are thrown (for the domain and context of the relaxation), and the set is the
-    one made without that."""
-    import diskpack_cl.device.cells as cells
-    import diskpack_cl.poisson as poisson
-    from diskpack_cl.device.stage import has_fp64
-
-    if not has_fp64(ctx):
-        pytest.skip("no per-cell kernel to build without float64")
-    calls = []
-    warm_up = cells.warm_up
-    monkeypatch.setattr(cells, "warm_up", lambda *a: calls.append(a) or warm_up(*a))
-    for box in (None, (2.0, 1.0)):
-        monkeypatch.setattr(poisson, "AHEAD_MIN", 10 ** 9)
-        plain = poisson_disk(3000, box=box, seed=5, device=ctx)
-        monkeypatch.setattr(poisson, "AHEAD_MIN", 3000)
-        ahead = poisson_disk(3000, box=box, seed=5, device=ctx)
-        assert calls[-1] == (as_box(box), ctx)
-        assert np.array_equal(ahead.points, plain.points) and ahead.rho == plain.rho
-    assert len(calls) == 2
-
-
 def test_as_box():
     assert as_box("3x0.5") == Domain.rect(3, 0.5)
     assert as_box((2, 1)) == Domain.rect(2, 1)

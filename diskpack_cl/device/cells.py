@@ -32,7 +32,7 @@ from .stage import DeviceStage
 from ..domain import Domain
 from ..geometry import MIC, mic_centres, checked_cells, cramer_inverse, power_vertex, exact_mic
 
-__all__ = ["CellMIC", "FLAGS", "warm_up"]
+__all__ = ["CellMIC", "FLAGS"]
 
 MAXC = 64        # constraint list capacity per work item
 MAXNEAR = 8      # near-tight constraints reported besides the basis
@@ -52,25 +52,6 @@ FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full
 _NN = FLAGS["nn"]
 
 _EDGE_NORMALS = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
-
-
-def warm_up(domain, device=None):
-    """Build and run once the kernels of :class:`CellMIC` in `domain` (``cells`` and
-    ``cells_nearest``), so that the stages a relaxation makes later find them ready.
-
-    Each costs 40-100 ms from PoCL's cache in every process, and a program
-    build lets go of the interpreter: :func:`diskpack_cl.poisson_disk` calls
-    this on another thread while its darts are thrown.  The caller waits for it
-    before it makes a stage of its own (the stages share the kernel objects).
-
-    Examples
-    --------
-    >>> warm_up(Domain.torus())
-    """
-    stage = CellMIC(domain, device)
-    # nearest on a few sites: its program is built on the first call, and PoCL compiles
-    # a kernel's work-group function on its first launch
-    stage.nearest(np.random.default_rng(0).random((16, 2)) * (domain.width, domain.height))
 
 
 class CellMIC(DeviceStage):
