@@ -89,13 +89,18 @@ def summary(rows):
     values = ["s_per_iter", "mic_s", "centroids_s", "labels_s"]
     med = {(r["size"], r["n"], r["method"]): r
            for r in medians([r for r in rows if r["kind"] == "iterations"], ("size", "n", "method"), values)}
+    anchored = [r for r in rows if r["kind"] == "iterations" and r.get("voronoi_s")]
+    ratio = {(r["size"], r["n"], r["method"]): r
+             for r in medians(anchored, ("size", "n", "method"), ["ratio"])}
     header = ["image", "n", "disk packing s/iter (MIC)", "default mix s/iter (MIC / labels and centroids)",
-              "weighted Lloyd s/iter (labels and centroids)"]
+              "default mix / Voronoi(n)", "weighted Lloyd s/iter (labels and centroids)"]
     out = []
     for size, n in dict.fromkeys(key[:2] for key in med):
         pack, mix, lloyd = (med[size, n, m] for m in ("diskpack", "mix", "lloyd"))
+        anchor = ratio.get((size, n, "mix"))
         out.append([f"{size} x {size}", count(n), f"{num(pack['s_per_iter'])} ({num(pack['mic_s'])})",
                     f"{num(mix['s_per_iter'])} ({num(mix['mic_s'])} / {num(_grid_s(mix))})",
+                    num(anchor["ratio"]) if anchor else "-",
                     f"{num(lloyd['s_per_iter'])} ({num(_grid_s(lloyd))})"])
     return header, out
 

@@ -36,10 +36,14 @@ class _Alias(importlib.abc.Loader):
     def create_module(self, spec):
         warnings.warn(f"{spec.name} moved to {MOVED[spec.name]}: import it from there (the old "
                       f"name goes in the next release)", DeprecationWarning, stacklevel=2)
-        return importlib.import_module(MOVED[spec.name])
+        module = importlib.import_module(MOVED[spec.name])
+        self.spec = module.__spec__
+        return module
 
     def exec_module(self, module):
-        pass   # the new module ran when it was imported
+        # the new module ran when it was imported; the import system gave it the old name's
+        # spec meanwhile, which its relative imports would read
+        module.__spec__ = self.spec
 
 
 class _Finder(importlib.abc.MetaPathFinder):

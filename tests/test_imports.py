@@ -190,5 +190,6 @@ def test_an_old_module_name_gives_the_new_module_with_a_warning(old):
         with pytest.warns(DeprecationWarning, match=f"{old} moved to {MOVED[old]}"):
             module = importlib.import_module(old)
         assert module is importlib.import_module(MOVED[old])
+        assert module.__spec__.name == MOVED[old]   # its relative imports still resolve
     finally:
         sys.modules.pop(old, None)
