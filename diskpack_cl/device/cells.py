@@ -416,7 +416,10 @@ class _Launcher:
     than the kernel at a thousand sites, and a relaxation's steps pass the same ones."""
 
     def __init__(self, kernel):
-        self.kernel = cl.Kernel(kernel.program, kernel.function_name)
+        # a fresh kernel object of the same program: cl.Kernel(kernel.program, name) would
+        # look for the program's source first, by creating a kernel named "_source"
+        self.kernel = next(k for k in kernel.program.all_kernels()
+                           if k.function_name == kernel.function_name)
         self._args = None   # held: no buffer of theirs is freed and its address reused
 
     def __call__(self, queue, global_size, local_size, *args):
