@@ -29,7 +29,7 @@ import numpy as np
 
 from .options import OptionConflict, check_fields, option
 
-__all__ = ["adjust_tone", "ToneOptions", "load_gray", "load_rgb", "to_gray", "gray_strips",
+__all__ = ["adjust_tone", "ToneOptions", "load_gray", "load_picture", "load_rgb", "to_gray", "gray_strips",
            "image_size", "sample_image_path", "LUMA_601"]
 
 #: ITU-R BT.601 luma weights for R', G', B' (Pillow's ``convert("L")``).
@@ -133,6 +133,45 @@ def load_gray(path, *, invert=False, allow_large=False):
     return _pil_to_gray(im, invert=invert, name=name)
 
 
+def load_picture(path, *, allow_large=False):
+    """Read an image file as the smallest array whose gray is :func:`load_gray`'s.
+
+    An 8-bit gray or RGB(A) file comes back as its pixels, a uint8 array
+    (an eighth or, in colour, three eighths of the float64 gray image);
+    :func:`to_gray` then makes the gray of :func:`load_gray` from it, bit
+    for bit.  Other files come back as :func:`load_gray`'s gray image.  A
+    stippling that is handed the small array makes its own gray image, and
+    frees it when its fields are made.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        As :func:`load_gray` reads it (``"-"``: standard input).
+    allow_large : bool, optional
+        As for :func:`load_gray`.
+
+    Returns
+    -------
+    picture : (H, W), (H, W, 2|3|4) uint8 or (H, W) float64 ndarray
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        As :func:`load_gray`.
+
+    Examples
+    --------
+    >>> from diskpack_cl.image import load_gray, load_picture, sample_image_path
+    >>> pic = load_picture(sample_image_path())
+    >>> pic.dtype, bool((to_gray(pic) == load_gray(sample_image_path())).all())
+    (dtype('uint8'), True)
+    """
+    im, name = _open_image(path, allow_large)
+    if im.mode in ("L", "LA", "RGB", "RGBA") and im.width and im.height:
+        return np.asarray(im)
+    return _pil_to_gray(im, name=name)
+
+
 def load_rgb(image):
     """Anything image-like to float64 sRGB (H, W, 3) in [0, 1] (a new array).
 
@@ -193,8 +232,11 @@ def gray_strips(image, *, rows=256, allow_large=False):
                     yield y0, _pil_to_gray(im.crop(box), name=name)
             return (im.height, im.width), strips()
         image = _pil_to_gray(im, name=name)
-    g = to_gray(image)
-    return g.shape, ((y0, g[y0:y0 + rows]) for y0 in range(0, g.shape[0], rows))
+    if not isinstance(image, np.ndarray):
+        image = to_gray(image)
+    # an array's rows convert on their own: to_gray's values, without a whole float copy
+    return image.shape[:2], ((y0, to_gray(image[y0:y0 + rows], copy=False))
+                             for y0 in range(0, image.shape[0], rows))
 
 
 def image_size(path, *, allow_large=False):

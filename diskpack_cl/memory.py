@@ -21,7 +21,7 @@ from .options import NamedOptionError
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
            "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_png_memory",
            "check_poisson_memory",
-           "check_stipple_memory", "freed_memory_kept", "PageReserve"]
+           "check_stipple_memory", "drop_pages", "freed_memory_kept", "give_back", "PageReserve"]
 
 # Peak bytes per unit of a stippling run (default schedule; PNG writer)
 HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
@@ -65,6 +65,7 @@ def available_memory():
 # glibc's mallopt parameters, and the thresholds its dynamic ones reach on
 # 64-bit systems (DEFAULT_MMAP_THRESHOLD_MAX and twice that)
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+_MADV_DONTNEED = 4   # Linux
 _MMAP_AFTER, _TRIM_AFTER = 32 << 20, 64 << 20
 _KEEP = 2**31 - 1   # mallopt takes an int
 _kept = {"depth": 0, "lock": threading.Lock(), "libc": None}
@@ -126,6 +127,52 @@ def freed_memory_kept():
             if _kept["depth"] == 0:
                 _set_thresholds(libc, _MMAP_AFTER, _TRIM_AFTER)
                 libc.malloc_trim(ctypes.c_size_t(0))
+
+
+def give_back():
+    """Hand the heap's free memory back to the system now, inside :func:`freed_memory_kept` too.
+
+    For memory that the rest of a run will not ask for again: a stippling
+    gives back its float gray image once its fields are made, so that the
+    steps' peak is the fields', not the fields' and the picture's.  With
+    another C library it does nothing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> with freed_memory_kept():
+    ...     a = np.ones(1 << 20); del a
+    ...     give_back()
+    """
+    libc = _glibc()
+    if libc is not None:
+        libc.malloc_trim(ctypes.c_size_t(0))
+
+
+def drop_pages(a):
+    """Hand the whole pages of C-contiguous array `a`'s memory back to the system now.
+
+    Their contents become zeros (``madvise(MADV_DONTNEED)``): for the rows of
+    an array that its owner, the run that made it, will not read again, so
+    that the run's peak memory falls as it goes.  Elsewhere than Linux with
+    glibc it does nothing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.ones((4, 4096))
+    >>> drop_pages(a[:2])
+    >>> float(a[2:].sum())
+    8192.0
+    """
+    libc = _glibc()
+    if libc is None or not a.flags.c_contiguous:
+        return
+    page = mmap.PAGESIZE
+    addr = a.ctypes.data
+    start, end = -(-addr // page) * page, (addr + a.nbytes) // page * page
+    if end > start:
+        libc.madvise(ctypes.c_void_p(start), ctypes.c_size_t(end - start), _MADV_DONTNEED)
 
 
 class PageReserve:

@@ -79,6 +79,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -95,7 +96,7 @@ from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_bl
 from .schedule import StippleOptions, StipplePlan
 from .engine import HOST_DEVICE, engine_record, make_engine, stage_record
 from .image import to_gray
-from .memory import PageReserve, freed_memory_kept
+from .memory import PageReserve, drop_pages, freed_memory_kept, give_back
 
 __all__ = ["StippleResult", "StippleState", "StippleStage", "stipple", "pack_step", "lloyd_step",
            "equal_ink", "off_support", "reseat_dead"]
@@ -140,8 +141,8 @@ class StippleResult(Previewable):
         ``"opencl"`` or ``"exact"``: the engine's backend (see :mod:`diskpack_cl.engine`).
     tone_radius : float
         Radius (px) at which n equal dots hold the image's darkness as ink
-        (:func:`diskpack_cl.picture_measures.tone_radius`): what the writers draw by
-        default.
+        (:func:`diskpack_cl.picture_measures.tone_radius`; the darkness without
+        ``paper_tone``): what the writers draw by default.
     stages : dict
         Where each stage ran (:attr:`StippleStage.stages`): ``engine`` (the
         MICs and centroids) and ``blur`` (the fields' Gaussian blurs), each a
@@ -614,13 +615,15 @@ def centroid_density(darkness, opt, blur=gaussian_blur):
 
 
 def _toned(gray, paper_tone):
-    """The gray image under the paper tone and its ink, the summed darkness (refused when
-    white); no darkness image is made (a whole picture's fresh memory)."""
+    """``(toned, ink, picture_ink)``: the gray image under the paper tone (refused when
+    white), its ink (the summed darkness) and the picture's own, without the paper tone (the
+    tone dots' ink); no darkness image is made (a whole picture's fresh memory)."""
+    picture_ink = float(gray.size - gray.sum())
     if paper_tone > 0:
         gray = gray * (1.0 - paper_tone)
     if not 1.0 - gray.min() > 1e-9:
         raise ValueError("nothing to stipple: the image is white")
-    return gray, float(gray.size - gray.sum())
+    return gray, float(gray.size - gray.sum()) if paper_tone > 0 else picture_ink, picture_ink
 
 
 #: Bytes a pixel of the picture takes in the stage's fields (float32 radius field, blend
@@ -649,20 +652,25 @@ def field_margin(plan, ell):
     return int(math.ceil(4.0 * max(sigmas) + 0.5)) + dilation + 2
 
 
-def _banded_stage(gray, opt, engine, rows):
-    """:func:`make_stage` of a whole picture, its fields made `rows` rows at a time, each
-    band from itself and the margin its blurs and dilation reach (the same values)."""
+def _banded_stage(gray, opt, engine, bands):
+    """:func:`make_stage` of a picture or of its window, its fields made ``bands.rows`` rows at a
+    time, each band from itself and the margin its blurs and dilation reach (the same values);
+    with ``bands.consume`` the rows of `gray` that no later band reads are dropped as they go."""
     H, W = gray.shape
-    ell = detail_ell(gray, opt.n) if opt.features == "detail" else None
+    rows, cols = bands.window or (slice(0, H), slice(0, W))
+    rows = range(H)[rows]
+    ell = bands.ell
+    if ell is None and opt.features == "detail":
+        ell = detail_ell(gray, opt.n)
     m, s = field_margin(opt, ell), opt.supersample
-    blur = _field_blur(engine)
+    blur = bands.blur or _field_blur(engine)
     stages = None
     names = ("radius_field", "density", "blend_weight", "ink")
     fields = {}
-    for y0 in range(0, H, rows):
-        y1 = min(y0 + rows, H)
+    for y0 in range(rows.start, rows.stop, bands.rows):
+        y1 = min(y0 + bands.rows, rows.stop)
         lo, hi = max(0, y0 - m), min(H, y1 + m)
-        part = make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), slice(0, W)),
+        part = make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), cols),
                            ell=ell, blur=blur)
         stages = part.stages
         for name in names:
@@ -672,9 +680,22 @@ def _banded_stage(gray, opt, engine, rows):
                 continue
             scale = s if name == "density" else 1
             if name not in fields:
-                fields[name] = np.empty((H * scale, W * scale), f.dtype)
-            fields[name][y0 * scale:y1 * scale] = f
+                fields[name] = np.empty((len(rows) * scale, f.shape[1]), f.dtype)
+            fields[name][(y0 - rows.start) * scale:(y1 - rows.start) * scale] = f
+        if bands.consume:   # the fields grow as the picture shrinks: their sum stays the peak
+            drop_pages(gray[max(0, y0 - m):max(0, y1 - m)])
     return StippleStage(engine, opt, *(fields[name] for name in names), stages=stages)
+
+
+class _Bands(NamedTuple):
+    """How :func:`_banded_stage` goes: `rows` a band, the `window` of the picture and its
+    detail scale `ell` (None: the whole picture's), the `blur`, whether to `consume` it."""
+
+    rows: int
+    window: tuple
+    ell: float
+    blur: tuple
+    consume: bool
 
 
 def _sampled(field):
@@ -682,16 +703,19 @@ def _sampled(field):
     return None if field is None else field.astype(np.float32)
 
 
-def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None):
+def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None,
+               consume=False):
     """The :class:`StippleStage` of a gray image: radius field, centroid density, ink.
 
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
     of that part of `gray`, computed with the margin around it, and `ell`
     is the detail scale of the whole picture (:func:`~diskpack_cl.jobs.tiles.stipple_tiled`).
-    Without it, a picture of more than twice `band_rows` rows has its fields made in bands.
+    A picture, or a window, of more than twice `band_rows` rows has its fields made in bands;
+    `consume`: `gray` is the caller's to lose (its pages are given back, as zeros, as the
+    bands no longer read them).
     `blur`: the ``(blur, record)`` of :func:`_field_blur` (default: the engine's)."""
-    if window is None and gray.shape[0] > 2 * band_rows:
-        return _banded_stage(gray, opt, engine, band_rows)
+    if len(range(gray.shape[0])[window[0] if window else slice(None)]) > 2 * band_rows:
+        return _banded_stage(gray, opt, engine, _Bands(band_rows, window, ell, blur, consume))
     blur, blur_record = blur or _field_blur(engine)
     stages = {"engine": engine_record(engine), "blur": blur_record}
     rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma,
@@ -716,22 +740,26 @@ def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND
                         stages)
 
 
-def _certified_result(state, stage, history, t_start, ink):
+def _certified_result(state, r, record, history, t_start, ink):
     """The :class:`StippleResult` of the final state: radii at the largest certified k
-    (`ink`: the picture's summed darkness, for the tone radius)."""
-    W, H = stage.size
-    watch = stage.engine.timings
+    (`r`: the base radii at its dots; `record`: the stage's :func:`_stage_record`; `ink`: the
+    picture's summed darkness without the paper tone, for the tone radius)."""
+    watch, backend, options, stages, (W, H) = record
     with watch("certify"), run_stage("certificate"):
-        r = dot_radii(state, stage, state.points)
         k, radii, cert = certified_k(state.points, r, W, H, Domain.rect(W, H))
     watch.add("total", time.perf_counter() - t_start)
     return StippleResult(
         points=state.points, radii=radii, k=float(k), base_radii=r, certificate=cert,
         history=history, width=W, height=H, timings=watch.seconds,
-        params=stage.options.params(),
-        engine=stage.engine.backend, tone_radius=tone_radius(len(state.points), ink),
-        stages=stage.stages,
+        params=options.params(), engine=backend, tone_radius=tone_radius(len(state.points), ink),
+        stages=stages,
     )
+
+
+def _stage_record(stage):
+    """What the result keeps of a stage: its timings, engine name, options, where its parts
+    ran and its size (not its fields nor the engine's buffers)."""
+    return stage.engine.timings, stage.engine.backend, stage.options, stage.stages, stage.size
 
 
 def stipple(image, n, options=None, *, start=None, callback=None, progress=None, device=None,
@@ -829,8 +857,8 @@ def _stipple(image, n, options, start, callback, engine_args):
         H, W = gray.shape
         # the pages of the stage's fields, touched on another core while this one starts
         reserve = PageReserve(STAGE_BYTES_PER_PIXEL * W * H)
-        gray, ink = _toned(gray, options.paper_tone)
-        opt = options.plan(n, W, H, ink=ink)
+        gray, toned_ink, ink = _toned(gray, options.paper_tone)
+        opt = options.plan(n, W, H, ink=toned_ink)
     with watch("start"), run_stage("start"):
         x = _start_points(gray, opt, start)
     with watch("setup"):
@@ -840,7 +868,13 @@ def _stipple(image, n, options, start, callback, engine_args):
             engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
                                  **engine_args)
         with run_stage("setup", 0 if exact else 1):
-            stage = make_stage(gray, opt, engine)
+            # the run's own gray image (made from 8-bit pixels, or toned) is consumed
+            stage = make_stage(gray, opt, engine, consume=gray is not image and gray.flags.owndata)
     del gray   # the stage holds every field the steps read
+    give_back()   # the gray image where the run made it (from 8-bit pixels), and the bands'
     state, history = run_schedule(StippleState(x, float(opt.k0)), stage, callback)
-    return _certified_result(state, stage, history, t_start, ink)
+    r, record = dot_radii(state, stage, state.points), _stage_record(stage)
+    # the fields and the engine's buffers go before the certificate, which then reuses
+    # their memory (the run's peak at a million dots)
+    del stage, engine
+    return _certified_result(state, r, record, history, t_start, ink)

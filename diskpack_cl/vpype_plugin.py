@@ -183,8 +183,8 @@ def _stippling_document(image, n, kw):
                                _of(StippleOptions, kw), n=n, write=write,
                                tone=_of(ToneOptions, kw), color=separation, make_folders=False)
         with with_bars() as run:   # a bar per stage on stderr, as diskpack stipple draws them
-            result, gray, summary = stipple_item(item, note=_note)
-            _, (info,) = write_stipple_outputs(result, gray, [svg], write)
+            result, summary = stipple_item(item, note=_note)
+            _, (info,) = write_stipple_outputs(result, None, [svg], write)
         times = stage_text(run.by_stage(), summary["iterations"], run.elapsed())
         logging.info(f"diskpack: {result.n} dots; {times}; plot about "
                      f"{info['plot_seconds'] / 60:.0f} min, {info['touching_share']:.1%} of the "

@@ -141,3 +141,41 @@ def test_adjust_tone_in_place_equals_the_copy(controls):
     np.testing.assert_array_equal(same, new)
     if not controls:
         np.testing.assert_array_equal(same, kept)        # the identity controls change nothing
+
+
+# -- the smallest array of a picture ---------------------------------------------
+
+def _picture_file(tmp_path, mode, seed):
+    """A small image file of `mode`, with random pixels (and a few pure black and white ones)."""
+    rng = np.random.default_rng(seed)
+    h, w = 7 + seed % 5, 9 + seed % 3
+    if mode == "I;16":
+        im = Image.fromarray(rng.integers(0, 65536, (h, w), dtype=np.uint16))
+    else:
+        bands = {"L": 1, "LA": 2, "RGB": 3, "RGBA": 4, "P": 3, "1": 1}[mode]
+        a = rng.integers(0, 256, (h, w, bands), dtype=np.uint8)
+        a[0, 0], a[-1, -1] = 0, 255
+        im = Image.fromarray(a[..., 0] if bands == 1 else a,
+                             "L" if bands == 1 else {2: "LA", 3: "RGB", 4: "RGBA"}[bands])
+        if mode in ("P", "1"):
+            im = im.convert(mode)
+    path = tmp_path / f"{mode.replace(';', '_')}_{seed}.png"
+    im.save(path)
+    return path
+
+
+@pytest.mark.parametrize("mode", ["L", "LA", "RGB", "RGBA", "P", "1", "I;16"])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_load_picture_gives_load_grays_gray_bit_for_bit(tmp_path, mode, seed):
+    """load_picture keeps 8-bit gray and RGB(A) files as uint8 (the float gray left to the
+    stippling); to_gray of it is load_gray's gray to the bit, and so is every strip of
+    gray_strips."""
+    from diskpack_cl.image import gray_strips, load_picture
+
+    path = _picture_file(tmp_path, mode, seed)
+    pic, gray = load_picture(path), load_gray(path)
+    assert pic.dtype == (np.uint8 if mode in ("L", "LA", "RGB", "RGBA") else np.float64)
+    assert np.array_equal(to_gray(pic, copy=False), gray)
+    shape, strips = gray_strips(pic, rows=3)
+    assert shape == gray.shape
+    assert np.array_equal(np.concatenate([s for _, s in strips]), gray)

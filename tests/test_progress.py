@@ -60,8 +60,8 @@ def test_job_reports_every_stage_of_the_run(ctx, tmp_path):
     (item,) = plan_stipple([image], outputs, n=150, schedule=SHORT, make_folders=False)
     events = Events()
     with running(events) as run:
-        res, gray, _ = stipple_item(item, device=ctx)
-        write_stipple_outputs(res, gray, outputs)
+        res, _ = stipple_item(item, device=ctx)
+        write_stipple_outputs(res, None, outputs)
     assert events.order() == list(STAGES)
     events.check_counts()
     rounds = [e for e in events if e[0] == "pen path"]
@@ -95,8 +95,8 @@ def test_colour_job_reports_every_stage_of_the_run(ctx, tmp_path):
                            schedule=SHORT, make_folders=False)
     events = Events()
     with running(events):
-        res, gray, _ = stipple_item(item, device=ctx)
-        write_stipple_outputs(res, gray, [out])
+        res, _ = stipple_item(item, device=ctx)
+        write_stipple_outputs(res, None, [out])
     order = events.order()   # the fields come before the start here
     assert set(order) == set(STAGES) and order[:2] == ["load", "device"]
     assert order[4:] == ["iterations", "certificate", "writing", "pen path"]

@@ -571,8 +571,11 @@ def test_one_collector_times_a_colour_stippling():
 @pytest.mark.parametrize("n, shape, supersample", [(900, (90, 110), None), (900, (90, 110), 2),
                                                    (20000, (300, 260), None)])
 def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
-    """A large picture's stage fields come band by band (peak memory); every value is the same."""
+    """A large picture's stage fields come band by band (peak memory); every value is the same,
+    also where the bands consume the picture as they go."""
+    from diskpack_cl import memory
     from diskpack_cl.engine import make_engine
+    from diskpack_cl.radii import detail_ell
     from diskpack_cl.stipple import make_stage
 
     H, W = shape
@@ -583,13 +586,28 @@ def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
     plan = options.plan(n, W, H, ink=float((1 - g).sum()))
     engine = make_engine(Domain.rect(W, H), n, "exact")
     whole = make_stage(g, plan, engine, band_rows=H)
-    for rows in (7, 16, 40):
-        part = make_stage(g, plan, engine, band_rows=rows)
+    for rows, consume in ((7, False), (16, False), (40, False), (7, True), (40, True)):
+        # consumed: the picture's pages go back as the bands pass, as zeros
+        picture = g.copy() if consume else g
+        part = make_stage(picture, plan, engine, band_rows=rows, consume=consume)
         for name in ("radius_field", "density", "blend_weight", "ink"):
             a, b = getattr(whole, name), getattr(part, name)
             assert (a is None) == (b is None), name
             if a is not None:
                 np.testing.assert_array_equal(b, a, err_msg=f"{name}, bands of {rows} rows")
+        if consume and memory._glibc() is not None:
+            assert (picture[:H // 2] == 0).mean() > 0.25   # (no level of g is 0)
+    # a tile's window of the picture, with its margin around it (stipple_tiled), the same
+    ell = detail_ell(g, n)
+    window = (slice(11, H - 5), slice(13, W - 17))
+    whole = make_stage(g, plan, engine, window=window, ell=ell, band_rows=H)
+    for rows in (7, 16):
+        part = make_stage(g.copy(), plan, engine, window=window, ell=ell, band_rows=rows, consume=True)
+        for name in ("radius_field", "density", "blend_weight", "ink"):
+            a, b = getattr(whole, name), getattr(part, name)
+            assert (a is None) == (b is None), name
+            if a is not None:
+                np.testing.assert_array_equal(b, a, err_msg=f"{name} of the window, bands of {rows}")
 
 
 @settings(max_examples=50)

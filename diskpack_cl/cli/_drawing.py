@@ -72,7 +72,7 @@ def _warn_crowded(args, plot):
         print(f"{PROG}: warning: {crowded}", file=sys.stderr)
 
 
-def write_and_report(args, write, res, gray, outputs, summary, t0):
+def write_and_report(args, write, res, outputs, summary, t0):
     """Write the outputs in the command's run (:func:`~._common.command_run`), add their
     figures to ``summary`` (``seconds`` since ``t0``, and ``stage_seconds``: the run's seconds
     per stage), print it with --json; return the tail of the summary line."""
@@ -80,7 +80,7 @@ def write_and_report(args, write, res, gray, outputs, summary, t0):
 
     t_write = time.perf_counter()
     with command_run(args) as run:
-        dot_mm, written = write_stipple_outputs(res, gray, outputs, write)
+        dot_mm, written = write_stipple_outputs(res, None, outputs, write)
     plot, text = _plot_summary(written, write)
     _warn_crowded(args, plot)
     summary.update(dot_mm=dot_mm, outputs=written, plot=plot,

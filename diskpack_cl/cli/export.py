@@ -48,7 +48,7 @@ def _run_export(args):
     write = write.replace(invert=write.invert or bool(res.params.get("invert", False)))
     summary = {"n": len(res.points), "width": res.width, "height": res.height,
                "input": str(args.input)}
-    tail = write_and_report(args, write, res, None, outputs, summary, t0)
+    tail = write_and_report(args, write, res, outputs, summary, t0)
     if not args.quiet:
         times = stage_text(summary["stage_seconds"], whole=summary["seconds"])
         print(f"{PROG}: {len(res.points)} dots of {args.input}; {times}{tail}", file=sys.stderr)

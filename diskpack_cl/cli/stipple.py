@@ -188,10 +188,10 @@ def _run_stipple_one(args, options, tone, write, separation):
             (item,) = plan_stipple([image_path(args.images[0])], [str(o) for o in args.output],
                                    options, **_count(args), allow_large=args.allow_large,
                                    write=write, tone=tone, color=separation, make_folders=False)
-        res, gray, summary = stipple_item(item, device=args.device, verify=args.verify,
-                                          profile=args.profile, note=None if args.quiet else _note,
-                                          callback=_step_note(run.hook))
-        tail = write_and_report(args, write, res, gray, list(item.outputs), summary, t0)
+        res, summary = stipple_item(item, device=args.device, verify=args.verify,
+                                    profile=args.profile, note=None if args.quiet else _note,
+                                    callback=_step_note(run.hook))
+        tail = write_and_report(args, write, res, list(item.outputs), summary, t0)
     if not args.quiet:
         times = stage_text(summary["stage_seconds"], summary["iterations"], summary["seconds"])
         print(f"{PROG}: {_result_text(res, summary)}; {times}{_where(res)}{tail}", file=sys.stderr)
@@ -243,7 +243,7 @@ def _run_stipple_tiled(args, options, tone, write, separation):
             res.summary(), image=image, tone_n=None, parts=res.history,
             iterations=max(h["steps"] for h in res.history),
             peak_rss_mib=max(h["peak_rss_mib"] or 0 for h in res.history))
-        done["tail"] = write_and_report(args, write, res, None, outputs, summary, t0)
+        done["tail"] = write_and_report(args, write, res, outputs, summary, t0)
 
     try:
         res = stipple_tiled(image, args.n, options, tiling, tone=tone, jobs=run["jobs"],

@@ -108,15 +108,18 @@ def tone_dot_size(result, scale, radius_scale=1.0, *, gray=None, invert=False):
 def tone_dot_count(darkness, scale, dot_mm):
     """The number of dots ``dot_mm`` wide whose ink equals the image's on paper.
 
-    ``darkness`` is per pixel in [0, 1]; ``scale`` mm per pixel. Fewer
-    than 2 dots is a ``ValueError`` (the dots are too large for the ink).
+    ``darkness`` is per pixel in [0, 1], or its sum over the image (a
+    number); ``scale`` mm per pixel. Fewer than 2 dots is a ``ValueError``
+    (the dots are too large for the ink).
 
     Examples
     --------
     >>> tone_dot_count(np.full((100, 100), 0.5), 1.0, 2.0)  # 5000 mm^2 of ink
     1592
+    >>> tone_dot_count(5000.0, 1.0, 2.0)
+    1592
     """
-    ink_mm2 = float(np.mean(darkness)) * np.size(darkness) * scale * scale
+    ink_mm2 = float(np.sum(darkness)) * scale * scale
     count = ink_mm2 / (0.25 * np.pi * dot_mm * dot_mm)
     if count < 2:
         raise ValueError(f"the image's ink holds {count:.2g} dots {dot_mm:g} mm wide, fewer than "

@@ -35,7 +35,7 @@ from ..drawing.page import svg_layout
 from ..drawing.write_options import (WriteOptions, check_preview_memory, preview_scale,
                                      write_options)
 from ..drawing.writers import check_output_path, tone_dot_count, tone_dot_size, write_stipple
-from ..image import ToneOptions, load_gray, load_rgb
+from ..image import ToneOptions, gray_strips, load_picture, load_rgb, to_gray
 from ..io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
 from ..memory import check_stipple_memory
@@ -369,7 +369,8 @@ def write_stipple_outputs(result, gray, outputs, options=None, *, progress=None,
         Or a stippling :func:`diskpack_cl.read_stipple` read.
     gray : (H, W) array or None
         The gray image that was stippled (before ``invert``); None: the
-        tone dot size is ``result.tone_radius``.
+        tone dot size is ``result.tone_radius`` (a :class:`~diskpack_cl.StippleResult`'s is
+        its picture's darkness without the paper tone, as from its gray).
     outputs : list of str
         ``.svg``, ``.png``, ``.npz`` or ``.csv`` paths.
     options : WriteOptions, optional
@@ -431,14 +432,18 @@ def _stamped(advance, done):
 
 
 def _item_image(path, params):
-    """``(gray, image, run)`` of an item: the toned gray image and :func:`diskpack_cl.stipple`,
-    or (with ``params["color"]``) the colour image and :func:`diskpack_cl.stipple_colors`;
-    ``run(image, n, options, **keywords)``."""
+    """``(gray_sum, image, run)`` of an item: the sum of its toned gray image's levels, the
+    picture :func:`diskpack_cl.stipple` takes (its 8-bit pixels where the tone controls
+    leave them as they are: the run then holds the only float copy, and frees it when its
+    fields are made), or (with ``params["color"]``) None, the colour image and
+    :func:`diskpack_cl.stipple_colors`; ``run(image, n, options, **keywords)``."""
     color = params.get("color")
     if color is None:
-        gray = ToneOptions(**params.get("tone", {})).adjust(
-            load_gray(path, allow_large=params.get("allow_large", False)), copy=False)
-        return gray, gray, stipple
+        tone = ToneOptions(**params.get("tone", {}))
+        picture = load_picture(path, allow_large=params.get("allow_large", False))
+        if tone != ToneOptions():
+            picture = tone.adjust(to_gray(picture, copy=False), copy=False)
+        return sum(float(strip.sum()) for _, strip in gray_strips(picture)[1]), picture, stipple
 
     def run(image, n, options, **keywords):
         return stipple_colors(image, n, options=options, **color, **keywords)
@@ -481,13 +486,16 @@ def _ink_note(n, drawn_mm, darkness, scale, tone):
             + (f" (-n tone uses {tone})" if like == tone else ""))
 
 
-def _item_dots(params, write, gray, width, height, note):
+def _item_dots(params, write, gray_sum, width, height, note):
     """``(n, tone_n)`` of an item: its dot count, and with a dot or pen size (one pen) the
-    count whose ink is the image's on paper (``-n tone``), a note when n is far from it."""
+    count whose ink is the image's on paper (``-n tone``; `gray_sum`: the sum of its gray
+    levels), a note when n is far from it."""
     n, tone_n = params.get("n"), None
     dot = write.dot_mm or write.pen_mm
-    if gray is not None and dot is not None:
-        darkness, scale = gray if write.invert else 1.0 - gray, write.scale(width, height)
+    if gray_sum is not None and dot is not None:
+        # the summed darkness: what the dot counts and sizes below sum
+        darkness = gray_sum if write.invert else width * height - gray_sum
+        scale = write.scale(width, height)
         tone = tone_dot_count(darkness, scale, dot)
         text = isinstance(n, int) and _ink_note(n, _drawn_dot_mm(write, n, darkness, scale),
                                                 darkness, scale, tone)
@@ -537,9 +545,8 @@ def stipple_item(item, *, device=None, callback=None, progress=None, verify=Fals
     Returns
     -------
     result : StippleResult or ColorStippleResult
-        With ``params["tone"]`` (one pen): the tone controls applied.
-    gray : (H, W) array or None
-        The toned gray image (None for colour).
+        With ``params["tone"]`` (one pen): the tone controls applied, and a
+        ``tone_radius`` from the toned picture's darkness (what the writers draw).
     summary : dict
         ``result.summary()`` with ``image`` and ``tone_n`` (the count whose
         ink is the image's with a dot size, else None).
@@ -550,7 +557,7 @@ def stipple_item(item, *, device=None, callback=None, progress=None, verify=Fals
     >>> from diskpack_cl import sample_image_path
     >>> item, = plan_stipple([sample_image_path()], [os.path.join(tempfile.mkdtemp(), "a.svg")],
     ...                      n=300, method="lloyd")
-    >>> result, gray, summary = stipple_item(item)
+    >>> result, summary = stipple_item(item)
     >>> result.n, result.certificate.valid, summary["image"].endswith("astronaut.png")
     (300, True, True)
     """
@@ -563,16 +570,16 @@ def _stipple_item_run(item, device, callback, verify, profile, note):
     with stage("load"):
         loaded = _stipple_item_load(item, device, note)
     res = _stipple_item_stipple(item, loaded, device, callback, verify, profile)
-    grey = loaded.gray is None and note is not None and grey_note(loaded.image, res.names, res.pen)
+    grey = loaded.gray_sum is None and note is not None and grey_note(loaded.image, res.names, res.pen)
     if grey:
         note(grey)
-    return res, loaded.gray, dict(res.summary(), image=item.input, tone_n=loaded.tone_n)
+    return res, dict(res.summary(), image=item.input, tone_n=loaded.tone_n)
 
 
 class _Loaded(NamedTuple):
     """A stipple item read: see :func:`_item_image` and :func:`_item_dots`."""
 
-    gray: object
+    gray_sum: object
     image: object
     run: object
     tone_n: object
@@ -586,24 +593,23 @@ def _stipple_item_load(item, device, note):
     params = item.params
     write = WriteOptions(**item.write)
     options = StippleOptions(**params.get("options", {}))
-    gray, image, run = _item_image(item.input, params)
+    gray_sum, image, run = _item_image(item.input, params)
     H, W = image.shape[:2]
-    n, tone_n = _item_dots(params, write, gray, W, H, note)
+    n, tone_n = _item_dots(params, write, gray_sum, W, H, note)
     # the ink without the paper tone: no more than the stippling's, so no smaller a raster
-    # (for the memory check alone: summed without a second whole image)
-    ink = None if gray is None else float(gray.sum()) if options.invert else gray.size - float(gray.sum())
+    ink = None if gray_sum is None else gray_sum if options.invert else W * H - gray_sum
     area = write.preview_area(W, H)
     # the device's first use in the job: found, and on its first run checked (known answers)
     with stage("device"):
         check_stipple_memory(W, H, n, supersample=options.supersample, ink=ink,
                              png_scale=preview_scale(*area, write.png_scale), png_area=area,
                              device=device, outputs=item.outputs)
-    return _Loaded(gray, image, run, tone_n, n, options)
+    return _Loaded(gray_sum, image, run, tone_n, n, options)
 
 
 def _stipple_item_stipple(item, loaded, device, callback, verify, profile):
     """The stippling of a :class:`_Loaded` item."""
-    params, (gray, image, run, _, n, options) = item.params, loaded
+    params, (gray_sum, image, run, _, n, options) = item.params, loaded
     H, W = image.shape[:2]
     each = None
     if callback is not None:
@@ -612,10 +618,10 @@ def _stipple_item_stipple(item, loaded, device, callback, verify, profile):
         def each(entry):
             callback(entry, total)
 
-    extra = {} if gray is None else {"verify": verify, "profile": profile}
+    extra = {} if gray_sum is None else {"verify": verify, "profile": profile}
     res = run(image, n, options, device=device, callback=each,
               backend=params.get("backend", "auto"), **extra)
-    if gray is not None:   # recorded in the .npz and the --json params
+    if gray_sum is not None:   # recorded in the .npz and the --json params
         res.params["tone"] = ToneOptions(**params.get("tone", {})).params()
     return res
 
@@ -628,9 +634,9 @@ def _stipple_item(item, device, progress):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
     with running(RunProgress()) as run:   # the item's own run: its seconds per stage
-        res, gray, summary = stipple_item(item, device=device, callback=callback)
+        res, summary = stipple_item(item, device=device, callback=callback)
         t = time.perf_counter()
-        dot_mm, written = write_stipple_outputs(res, gray, list(item.outputs), **item.write)
+        dot_mm, written = write_stipple_outputs(res, None, list(item.outputs), **item.write)
     summary.pop("params", None)
     summary.update(dot_mm=dot_mm, files=written, write_seconds=time.perf_counter() - t,
                    stage_seconds=run.by_stage())

@@ -62,7 +62,7 @@ from ..options import check_fields, option
 from ..radii import certified_k, detail_scale
 from ..schedule import StippleOptions
 from ..dithering import error_diffusion
-from ..memory import freed_memory_kept
+from ..memory import freed_memory_kept, give_back
 from ..stipple import StippleResult, field_margin, StippleState, make_stage, run_schedule, dot_radii
 
 __all__ = ["TileOptions", "tile_grid", "stipple_tiled", "WorkFolderBusy", "WorkFolderWarning"]
@@ -298,9 +298,6 @@ def _run_part(part):
     x0, y0, x1, y1 = part.rect
     gray, window = _window(part.raster, part.rect, part.margin)
     plan = part.plan
-    engine = make_engine(Domain.rect(x1 - x0, y1 - y0), plan.n, part.backend, device=part.device,
-                         grid=plan.grid_shape(x1 - x0, y1 - y0))
-    stage = make_stage(gray, plan, engine, window=window, ell=part.ell)
     offset = np.array([x0, y0], dtype=np.float64)
     before = None
     if part.points is None:
@@ -308,6 +305,12 @@ def _run_part(part):
     else:
         state = StippleState(part.points - offset, float(part.k), 0, part.ink)
         before = _holding(~part.moving, state)
+    engine = make_engine(Domain.rect(x1 - x0, y1 - y0), plan.n, part.backend, device=part.device,
+                         grid=plan.grid_shape(x1 - x0, y1 - y0))
+    # the window is this run's own copy: its bands consume it, and it is gone before the steps
+    stage = make_stage(gray, plan, engine, window=window, ell=part.ell, consume=True)
+    del gray
+    give_back()
     state, history = run_schedule(state, stage, None, before=before)
     keep = slice(None) if part.moving is None else part.moving
     ink = np.ones(len(state.points)) if state.ink is None else state.ink
