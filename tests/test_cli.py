@@ -150,14 +150,23 @@ def test_poisson_default_n_is_1024(fake_relax, tmp_path):
     assert fake_relax[0]["points"].shape == (1024, 2)
 
 
-def test_progress_bar_on_a_terminal(fake_relax, tmp_path, monkeypatch):
+@pytest.fixture
+def every_update(monkeypatch):
+    """tqdm draws every update (its TQDM_ variables are read when tqdm is first imported,
+    which an earlier test may have done)."""
+    from functools import partialmethod
+
+    from tqdm import tqdm
+    monkeypatch.setattr(tqdm, "__init__", partialmethod(tqdm.__init__, mininterval=0))
+
+
+def test_progress_bar_on_a_terminal(fake_relax, tmp_path, monkeypatch, every_update):
     class Tty(io.StringIO):
         def isatty(self):
             return True
 
     err = Tty()
     monkeypatch.setattr(sys, "stderr", err)
-    monkeypatch.setenv("TQDM_MININTERVAL", "0")  # draw every update
     assert cli.main(["poisson", "-n", "10", "-o", str(tmp_path / "o.npz"), "--seed", "0"]) == 0
     text = err.getvalue()
     assert "rho=0.73" in text and "relax" in text
@@ -386,14 +395,13 @@ def test_stipple_packing_dots(ctx, tmp_path, capsys):
         assert np.all(np.sort(svg_r) <= np.sort(z["radii"]))
 
 
-def test_stipple_progress_bar_on_a_terminal(ctx, tmp_path, monkeypatch):
+def test_stipple_progress_bar_on_a_terminal(ctx, tmp_path, monkeypatch, every_update):
     class Tty(io.StringIO):
         def isatty(self):
             return True
 
     err = Tty()
     monkeypatch.setattr(sys, "stderr", err)
-    monkeypatch.setenv("TQDM_MININTERVAL", "0")
     image = _gradient_png(tmp_path / "g.png", 32)
     rc = cli.main(["stipple", str(image), "-n", "40", "--beta", "2", "--lloyd", "1",
                    "--rounds", "2", "-o", str(tmp_path / "o.npz")])
