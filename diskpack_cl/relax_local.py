@@ -178,7 +178,16 @@ def _within(X, B, r, domain, cells=None, among=None):
     :meth:`_Neighbourhoods.near`)."""
     C, B = _candidates(X, B, r, cells, among)
     _, j, q = _pairs_near(X[C], B, r, domain)
-    return C[np.unique(j[(q * q).sum(axis=1) <= r * r])]
+    return C[_distinct(j[(q * q).sum(axis=1) <= r * r], len(C))]
+
+
+def _distinct(idx, size):
+    """The distinct values of `idx`, each in ``[0, size)``, in order (as np.unique gives
+    them), from a mark a value: numpy 2's unique hashed the 92 000 indices of a 1M set's
+    first local step in 22 ms, the marks take under 1 ms."""
+    mark = np.zeros(size, dtype=bool)
+    mark[idx] = True
+    return np.flatnonzero(mark)
 
 
 def _candidates(X, B, r, cells, among=None):

@@ -170,6 +170,16 @@ def test_a_search_among_a_wider_ones_points_finds_what_a_search_of_all_finds(see
     np.testing.assert_array_equal(cells.near(B, radius, among=S)[0], cells.near(B, radius)[0])
 
 
+@given(idx=st.lists(st.integers(0, 99), max_size=300), extra=st.integers(0, 5))
+def test_distinct_gives_the_values_np_unique_gives(idx, extra):
+    """relax_local's marks give np.unique's sorted values of indices below a size."""
+    from diskpack_cl.relax_local import _distinct
+
+    idx = np.array(idx, dtype=np.int64)
+    size = int(idx.max(initial=-1)) + 1 + extra
+    np.testing.assert_array_equal(_distinct(idx, size), np.unique(idx))
+
+
 @pytest.mark.parametrize("seed", [3, 4])
 def test_relax_local_keeps_the_cells_of_the_points_it_moves(seed):
     """The grid cells kept from step to step give the steps that cells found anew give."""
