@@ -256,28 +256,38 @@ class _DeviceGrid(DeviceStage):
     def free(self, cells, xy=None):
         """Which darts, one in each of the distinct empty `cells` (int32), are at least
         d from every point: `xy`, or (None) those :meth:`place` put in the dart grid."""
-        m = np.int32(len(cells))
-        if not m:
+        if not len(cells):
             return np.zeros(0, dtype=bool)
-        b_cells = self._darts_at(cells, xy)
+        return self._free_at(self._darts_at(cells, xy), len(cells))
+
+    def _free_at(self, b_cells, m):
+        """:meth:`free` of the darts at the `m` cells of the device list `b_cells`."""
+        m = np.int32(m)
         return self._test("dart_free", m, self.b_pt, b_cells, self.b_dart, m, np.int32(self.g),
                           np.float64(self.d2))
 
     def place(self, cells, ku, kv):
         """Put the darts ``((col + u) c, (row + v) c)`` of the distinct `cells` (int32,
         non-empty) into the dart grid, on the device: u, v the uniforms of keys `ku`, `kv`."""
-        m = np.int32(len(cells))
-        self._launch("dart_place", m, self.b_dart, self._up(cells), m, np.int32(self.g),
+        self._place_at(self._up(cells), len(cells), ku, kv)
+
+    def _place_at(self, b_cells, m, ku, kv):
+        """:meth:`place` at the `m` cells of the device list `b_cells`."""
+        m = np.int32(m)
+        self._launch("dart_place", m, self.b_dart, b_cells, m, np.int32(self.g),
                      np.float64(self.c), np.uint64(ku), np.uint64(kv))
 
     def kept(self, cells, xy, key):
         """Which free darts, one in each of the distinct `cells` (int32), with the
         priorities of key `key` (:func:`_uniform`), have no dart of higher priority
         within d: `xy`, or (None) those in the dart grid."""
-        k = np.int32(len(cells))
-        if not k:
+        if not len(cells):
             return np.zeros(0, dtype=bool)
-        b_cells = self._darts_at(cells, xy)
+        return self._kept_at(self._darts_at(cells, xy), len(cells), key)
+
+    def _kept_at(self, b_cells, k, key):
+        """:meth:`kept` of the darts at the `k` cells of the device list `b_cells`."""
+        k = np.int32(k)
         self._launch("set_prio", k, self.b_prio, b_cells, k, np.uint64(key), np.int32(0))
         kept = self._test("dart_keep", k, self.b_dart, self.b_prio, b_cells, k,
                           np.int32(self.g), np.float64(self.d2))
@@ -288,10 +298,14 @@ class _DeviceGrid(DeviceStage):
     def throw(self, live, rng, room, empty):
         """One round (as :func:`_round`): the cells still live and the points placed."""
         ku, kv, kp = _keys(rng)
-        self.place(live, ku, kv)
-        # no point yet: every dart is free
-        keep = np.arange(live.size) if empty else np.flatnonzero(self.free(live))
-        keep = _room(keep[self.kept(live[keep], None, kp)], room, rng)
+        b_live = self._up(live)   # one copy of the live cells for the round's kernels
+        self._place_at(b_live, live.size, ku, kv)
+        if empty:   # no point yet: every dart is free, and its cells' list is up already
+            keep = np.flatnonzero(self._kept_at(b_live, live.size, kp))
+        else:
+            keep = np.flatnonzero(self._free_at(b_live, live.size))
+            keep = keep[self.kept(live[keep], None, kp)]
+        keep = _room(keep, room, rng)
         cells = live[keep]
         row, col = np.divmod(cells, self.g)
         # (col + u) c and (row + v) c as in _round and dart_place, for the kept darts only

@@ -148,6 +148,38 @@ def test_kept_cells_find_every_point_near_after_moves(seed, step):
     assert not everything and set(within.tolist()) <= set(S.tolist())
 
 
+@settings(max_examples=60)
+@given(seed=st.integers(0, 2**32 - 1), step=st.floats(0.0, 0.05), k=st.integers(1, 40),
+       radius=st.floats(0.0, 0.08), periodic=st.booleans())
+def test_a_search_among_a_wider_ones_points_finds_what_a_search_of_all_finds(seed, step, k,
+                                                                             radius, periodic):
+    """:meth:`near` with `among` (the points a search of the grid's side found around
+    B, some of the others moved since) gives what a pass over every point gives."""
+    from diskpack_cl.relax_local import _Neighbourhoods
+
+    dom = TORUS if periodic else Domain.rect(1.0, 1.0)
+    rng = np.random.default_rng(seed)
+    X = rng.random((800, 2))
+    cells = _Neighbourhoods(X, 0.08, dom)
+    B = rng.choice(800, k, replace=False)
+    S, everything = cells.near(B)
+    assume(not everything)
+    moved = np.setdiff1d(S[rng.random(len(S)) < 0.3], B)
+    X[moved] = np.clip(X[moved] + rng.normal(0, step, (len(moved), 2)), 0.0, np.nextafter(1, 0))
+    cells.moved(moved, X)
+    np.testing.assert_array_equal(cells.near(B, radius, among=S)[0], cells.near(B, radius)[0])
+
+
+@given(idx=st.lists(st.integers(0, 99), max_size=300), extra=st.integers(0, 5))
+def test_distinct_gives_the_values_np_unique_gives(idx, extra):
+    """relax_local's marks give np.unique's sorted values of indices below a size."""
+    from diskpack_cl.relax_local import _distinct
+
+    idx = np.array(idx, dtype=np.int64)
+    size = int(idx.max(initial=-1)) + 1 + extra
+    np.testing.assert_array_equal(_distinct(idx, size), np.unique(idx))
+
+
 @pytest.mark.parametrize("seed", [3, 4])
 def test_relax_local_keeps_the_cells_of_the_points_it_moves(seed):
     """The grid cells kept from step to step give the steps that cells found anew give."""
