@@ -55,3 +55,13 @@ def test_a_broken_binary_is_built_again(ctx, kernels, tmp_path, damage):
         path.write_bytes(np.random.default_rng(0).bytes(256) if damage == "random"
                          else other.get_info(cl.program_info.BINARIES)[0])
     assert _value(ctx, "probe") == 3
+
+
+def test_a_cache_that_cannot_be_written_keeps_nothing_and_builds(ctx, kernels, tmp_path, monkeypatch):
+    """Where the cache folder cannot be made (a file stands in its place), the program is
+    built from its source and works; nothing is kept."""
+    (kernels / "probe.h").write_text("#define VALUE 4\n")
+    (tmp_path / "blocked").write_text("a file, not a folder")
+    monkeypatch.setenv("DISKPACK_CL_CACHE_DIR", str(tmp_path / "blocked"))
+    assert _value(ctx, "probe") == 4
+    assert (tmp_path / "blocked").read_text() == "a file, not a folder"
