@@ -74,6 +74,7 @@ typedef struct {
     double d[MAXC];      /* distance of the site from x_i (0 for edges) */
     int code[MAXC];
     int m;
+    int raw;             /* entries raw .. m-1 still hold (a.x, a.y, len^2 - w_j + w_i, len^2) */
 } clist;
 
 /* Inverse of the 3x3 matrix with rows (nx_k, ny_k, 1); returns 0 if singular. */
@@ -161,14 +162,37 @@ static void start_basis(const clist *L, int first, int *b)
     for (int k = first; k < L->m; ++k) {
         /* sextants 0 1 2 above the x axis from the right, 3 4 5 below from the left;
          * computed and kept without branches: the directions are random, and
-         * mispredicted branches here cost more than the simplex */
+         * mispredicted branches here cost more than the simplex.  Every sextant's
+         * minimum is updated (unrolled, in registers): indexing near[s] made the
+         * compiler branch on each comparison and keep the minima in memory */
         const double x = L->nx[k], be = L->be[k];
-        const int s = L->ny[k] >= 0.0 ? 2 - (x > 0.5) - (x > -0.5) : 3 + !(x < -0.5) + !(x < 0.5);
-        const int take = be < nbe[s];
-        near[s] = take ? k : near[s];
-        nbe[s] = take ? be : nbe[s];
+        const int up = L->ny[k] >= 0.0;
+        const int s = up * (2 - (x > 0.5) - (x > -0.5)) + (1 - up) * (3 + (x >= -0.5) + (x >= 0.5));
+#pragma unroll
+        for (int j = 0; j < 6; ++j) {
+            const int take = (s == j) & (be < nbe[j]);
+            near[j] = take ? k : near[j];
+            nbe[j] = take ? be : nbe[j];
+        }
     }
     if (!sector_basis(L, near, nbe, 0, b)) sector_basis(L, near, nbe, 1, b);
+}
+
+/* Normalise the raw entries of the list (gather_run stores the offsets):
+ * n = a / |a|, beta = (|a|^2 - w_j + w_i) / (2 |a|), d = |a|, as set_site
+ * does one by one, with the same operations.  A loop of its own, without
+ * branches, so that the compiler can vectorize the square roots and
+ * divisions that cost most of the gather when done site by site. */
+static void normalise(clist *L)
+{
+    for (int k = L->raw; k < L->m; ++k) {
+        const double len = SQRT(L->d[k]), il = 1.0 / len;
+        L->nx[k] *= il;
+        L->ny[k] *= il;
+        L->be[k] = 0.5 * L->be[k] * il;
+        L->d[k] = len;
+    }
+    L->raw = L->m;
 }
 
 static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
@@ -255,19 +279,27 @@ static void gather_run(__global const double2 *site, __global const double *weig
                        double W, double H, int fixed, int replace, clist *L, double *nn2,
                        double *dropped, int *flag)
 {
+    /* the nearest distance and the list's length in registers: kept in memory,
+     * each site waited on the last one's store */
+    double nn = *nn2;
+    int m = L->m;
     for (int t = t0; t < t1; ++t) {
         if (t == s && qx == 0 && qy == 0) continue;
         const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
         const double len2 = ax * ax + ay * ay;
-        *nn2 = FMIN(*nn2, len2);
-        if (L->m < GATHER_CAP) {
-            push_site(L, ax, ay, weight[t], wi, site_code(t, qx, qy, flag));
+        nn = len2 < nn ? len2 : nn;   /* fmin: no NaN here (check_sites) */
+        if (m < GATHER_CAP) {
+            if (len2 == 0.0) continue;   /* coincides with the site: no bisector */
+            L->nx[m] = ax; L->ny[m] = ay; L->be[m] = len2 - weight[t] + wi; L->d[m] = len2;
+            L->code[m++] = site_code(t, qx, qy, flag);
             continue;
         }
+        L->m = m;
+        normalise(L);   /* the replacements below compare distances */
         const double len = SQRT(len2);
         if (!replace) { *dropped = FMIN(*dropped, len); continue; }
         int far = fixed;
-        for (int k = fixed + 1; k < L->m; ++k)
+        for (int k = fixed + 1; k < m; ++k)
             if (L->d[k] > L->d[far]) far = k;
         if (len < L->d[far]) {
             *dropped = FMIN(*dropped, L->d[far]);
@@ -276,6 +308,8 @@ static void gather_run(__global const double2 *site, __global const double *weig
             *dropped = FMIN(*dropped, len);
         }
     }
+    L->m = m;
+    *nn2 = nn;
 }
 
 /* Add the sites of the buckets at Chebyshev distance `ring` from the home
@@ -306,6 +340,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
                        fixed, replace, L, nn2, dropped, flag);
         }
     }
+    normalise(L);
 }
 
 __kernel void cell_mic(
@@ -353,6 +388,7 @@ __kernel void cell_mic(
     L.m = 7;
 #endif
     const int fixed = L.m;
+    L.raw = L.m;
 
     /* 1. gather rings of buckets around the home bucket, and more while the
      *    cell is still unbounded by what was gathered */
