@@ -93,6 +93,34 @@ static int inv3(const double *ax, const double *ay, double *inv)
     return 1;
 }
 
+/* Slack of constraint k of the list at z = (qx, qy, R). */
+static double slack(const clist *L, int k, const double *z)
+{
+    return L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
+}
+
+/* The most violated constraint at z (slack below -tol; the lowest index on
+ * ties), -1 for none.  Even and odd positions kept apart and merged at the
+ * end: one running minimum made each constraint wait for the last one's
+ * comparison. */
+static int most_violated(const clist *L, const double *z, double tol)
+{
+    int e0 = -1, e1 = -1;
+    double w0 = -tol, w1 = -tol;
+    int k = 0;
+    for (; k + 1 < L->m; k += 2) {
+        const double s0 = slack(L, k, z), s1 = slack(L, k + 1, z);
+        if (s0 < w0) { w0 = s0; e0 = k; }
+        if (s1 < w1) { w1 = s1; e1 = k + 1; }
+    }
+    if (k < L->m) {
+        const double s0 = slack(L, k, z);
+        if (s0 < w0) { w0 = s0; e0 = k; }
+    }
+    /* e1 >= 0 whenever w1 < -tol; on a tie the lower index (e0 >= 0 there) */
+    return w1 < w0 || (w1 == w0 && e1 >= 0 && e1 < e0) ? e1 : e0;
+}
+
 /* Dual simplex on the list from basis b[3]; z = (qx, qy, R). Returns flag bits. */
 static int dual_simplex(const clist *L, int *b, double *z, double tol)
 {
@@ -103,13 +131,7 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
         z[0] = inv[0] * be[0] + inv[1] * be[1] + inv[2] * be[2];
         z[1] = inv[3] * be[0] + inv[4] * be[1] + inv[5] * be[2];
         z[2] = inv[6] * be[0] + inv[7] * be[1] + inv[8] * be[2];
-        /* entering: the most violated constraint (lowest index on ties) */
-        int e = -1;
-        double worst = -tol;
-        for (int k = 0; k < L->m; ++k) {
-            const double s = L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
-            if (s < worst) { worst = s; e = k; }
-        }
+        const int e = most_violated(L, z, tol);
         if (e < 0) return 0;
         /* ratio test: dual multipliers l = third row of inv, direction u = a_e^T inv */
         int out = -1;
@@ -273,8 +295,10 @@ static int is_artificial(const clist *L, const int *b)
 
 /* Add the sites t0 .. t1-1 (shifted by qx, qy periods) to the list, and track the
  * nearest one; a full list keeps the GATHER_CAP nearest (before the first solve:
- * `replace`; after it the basis indexes the list) and remembers the nearest dropped. */
-static void gather_run(__global const double2 *site, __global const double *weight,
+ * `replace`; after it the basis indexes the list) and remembers the nearest dropped.
+ * Inlined: a call per bucket run, with its many arguments, cost about a tenth
+ * of the kernel on the torus. */
+static inline __attribute__((always_inline)) void gather_run(__global const double2 *site, __global const double *weight,
                        int s, double2 xi, double wi, int t0, int t1, int qx, int qy,
                        double W, double H, int fixed, int replace, clist *L, double *nn2,
                        double *dropped, int *flag)
@@ -312,6 +336,16 @@ static void gather_run(__global const double2 *site, __global const double *weig
     *nn2 = nn;
 }
 
+/* wrap_bucket, without its integer divisions for a bucket on the grid (on a
+ * torus most are: they cost more than the sites of a ring's run). */
+static int grid_bucket(int *cx, int *cy, int *qx, int *qy, int nbx, int nby)
+{
+#if PERIODIC
+    if (*cx >= 0 && *cx < nbx && *cy >= 0 && *cy < nby) { *qx = 0; *qy = 0; return 1; }
+#endif
+    return wrap_bucket(cx, cy, qx, qy, nbx, nby);
+}
+
 /* Add the sites of the buckets at Chebyshev distance `ring` from the home
  * bucket (hx, hy) to the list (gather_run), row by row, each row from the left.
  * The top and bottom rows' buckets are one run of sites where the row does not
@@ -326,7 +360,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
         const int edge = dy == -ring || dy == ring;
         if (edge && hx - ring >= 0 && hx + ring < nbx) {
             int cx = hx, cy = hy + dy, qx, qy;
-            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+            if (!grid_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int row = cy * nbx;
             gather_run(site, weight, s, xi, wi, bstart[row + hx - ring], bstart[row + hx + ring + 1],
                        0, qy, W, H, fixed, replace, L, nn2, dropped, flag);
@@ -334,7 +368,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
         }
         for (int dx = -ring; dx <= ring; dx += edge ? 1 : imax(2 * ring, 1)) {
             int cx = hx + dx, cy = hy + dy, qx, qy;
-            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+            if (!grid_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int b = cy * nbx + cx;
             gather_run(site, weight, s, xi, wi, bstart[b], bstart[b + 1], qx, qy, W, H,
                        fixed, replace, L, nn2, dropped, flag);
@@ -454,7 +488,7 @@ __kernel void cell_mic(
             for (int bx = x0; bx <= x1; ++bx) {
                 if (inner && iabs(bx - hx) <= ring && iabs(by - hy) <= ring) continue;
                 int cx = bx, cy = by, qx, qy;
-                if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+                if (!grid_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
                 const int bb = cy * nbx + cx;
                 /* distance from the centre to this bucket (with its shift) */
                 const double ox = bx * bw, oy = by * bh;
