@@ -99,6 +99,17 @@ static double slack(const clist *L, int k, const double *z)
     return L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
 }
 
+/* How many constraints have slack below `lim` at z, of the positions
+ * first.. other than b[0..2] (b: NULL for none); without branches. */
+static int count_tight(const clist *L, const double *z, double lim, int first, const int *b)
+{
+    const int b0 = b ? b[0] : -1, b1 = b ? b[1] : -1, b2 = b ? b[2] : -1;
+    int c = 0;
+    for (int k = first; k < L->m; ++k)
+        c += (slack(L, k, z) < lim) & (k != b0) & (k != b1) & (k != b2);
+    return c;
+}
+
 /* The most violated constraint at z (slack below -tol; the lowest index on
  * ties), -1 for none.  Even and odd positions kept apart and merged at the
  * end: one running minimum made each constraint wait for the last one's
@@ -131,6 +142,9 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
         z[0] = inv[0] * be[0] + inv[1] * be[1] + inv[2] * be[2];
         z[1] = inv[3] * be[0] + inv[4] * be[1] + inv[5] * be[2];
         z[2] = inv[6] * be[0] + inv[7] * be[1] + inv[8] * be[2];
+        /* most calls end at a basis that is already optimal: a count first, which
+         * the compiler vectorizes, and the search only where something is violated */
+        if (!count_tight(L, z, -tol, 0, NULL)) return 0;
         const int e = most_violated(L, z, tol);
         if (e < 0) return 0;
         /* ratio test: dual multipliers l = third row of inv, direction u = a_e^T inv */
@@ -539,11 +553,13 @@ __kernel void cell_mic(
 
     /* 4. outputs */
     __global int *out = codes + (size_t)i * (4 + MAXNEAR);
+    /* most cells have no near-tight constraint besides the basis: counted first
+     * (the count is the loop's, the same slacks) */
+    const int ntight = count_tight(&L, z, near_tol, 3, b);
     int nnear = 0;
-    for (int k = 3; k < L.m; ++k) {
+    for (int k = 3; k < L.m && nnear < ntight; ++k) {
         if (k == b[0] || k == b[1] || k == b[2]) continue;
-        const double sl = L.be[k] - L.nx[k] * z[0] - L.ny[k] * z[1] - z[2];
-        if (sl < near_tol) {
+        if (slack(&L, k, z) < near_tol) {
             if (nnear < MAXNEAR) out[4 + nnear] = L.code[k];
             nnear++;
         }
