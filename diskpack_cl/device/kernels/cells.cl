@@ -206,9 +206,10 @@ static void start_basis(const clist *L, int first, int *b)
         const int s = up * (2 - (x > 0.5) - (x > -0.5)) + (1 - up) * (3 + (x >= -0.5) + (x >= 0.5));
 #pragma unroll
         for (int j = 0; j < 6; ++j) {
-            const int take = (s == j) & (be < nbe[j]);
+            const double cand = s == j ? be : INFINITY;
+            const int take = cand < nbe[j];
             near[j] = take ? k : near[j];
-            nbe[j] = take ? be : nbe[j];
+            nbe[j] = take ? cand : nbe[j];
         }
     }
     if (!sector_basis(L, near, nbe, 0, b)) sector_basis(L, near, nbe, 1, b);
@@ -455,9 +456,10 @@ __kernel void cell_mic(
     /* 2. more rings while the cell is unbounded by the list, or its disk
      *    reaches past what the rings cover; no replacements once solved
      *    (the basis indexes the list), so this stops at the first dropped site */
-    double Rp, qn, reach2, G;
+    double Rp, qn, reach2, G, cut;
     for (;;) {
-        cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
+        /* (at the end, the cutter radius of the z that step 3 starts from) */
+        cut = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
         /* every site within G of x_i is in the list: the rings cover their
          * width, and a full list kept the nearest, none dropped closer */
         G = FMIN(ring * FMIN(bw, bh), dropped);
@@ -482,8 +484,8 @@ __kernel void cell_mic(
                                      (hx + win + 1) * bw, (hy + win + 1) * bh);
     for (; round < MAX_ROUNDS && !(flag & (F_PIVOTS | F_LIST_FULL)); ++round) {
         const double cxp = xi.x + z[0], cyp = xi.y + z[1];
-        const double rad = local_reach(cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2), Rp, reach2,
-                          wloc, cxp, cyp, window);
+        if (round > 0) cut = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
+        const double rad = local_reach(cut, Rp, reach2, wloc, cxp, cyp, window);
         if (qn + rad <= G) break;
         const int partial = rad > box;
         const double reach = partial ? box : rad;
