@@ -15,8 +15,9 @@ stippling of ``--n`` dots (the sample photograph at that size, the first
 phase of the default schedule's band, cut to four steps), as a whole run's
 steps pass them.  Printed per version: the median device seconds of the
 kernel, and the medians (and quartiles) of its CPU seconds and kernel
-seconds over the first version's, call by call; and whether its MICs are
-the first version's bit for bit.  Separate processes timed one after the
+seconds over the first version's, call by call; and whether its MICs
+(centres, radii, nearest-neighbour distances, flag counts) are the first
+version's bit for bit.  Separate processes timed one after the
 other move by 10-15 % with the load on the development VM; these ratios by
 a few percent.
 """
@@ -93,7 +94,8 @@ def rotate(solver, kernels, points, rounds):
                 res = solver.solve(X, w, certify=False)
                 cpu[k].append(time.process_time() - c0)
                 dev[k].append(solver.timings.since(mark)["kernel"])
-                digest[k].update(res.centers.tobytes() + res.radii.tobytes())
+                digest[k].update(res.centers.tobytes() + res.radii.tobytes() + res.nn.tobytes()
+                                 + repr(sorted(res.stats.items())).encode())
     return cpu, dev, [d.hexdigest() for d in digest]
 
 
