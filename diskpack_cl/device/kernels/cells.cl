@@ -132,13 +132,19 @@ static int most_violated(const clist *L, const double *z, double tol)
     return w1 < w0 || (w1 == w0 && e1 >= 0 && e1 < e0) ? e1 : e0;
 }
 
-/* Dual simplex on the list from basis b[3]; z = (qx, qy, R). Returns flag bits. */
-static int dual_simplex(const clist *L, int *b, double *z, double tol)
+/* Dual simplex on the list from basis b[3]; z = (qx, qy, R). Returns flag bits.
+ * inv0: the basis' inverse where the caller has it (start_basis computed it
+ * to check the basis), else NULL. */
+static int dual_simplex(const clist *L, int *b, double *z, double tol, const double *inv0)
 {
     double inv[9], ax[3], ay[3], be[3];
     for (int it = 0; it < MAX_PIVOTS; ++it) {
         for (int k = 0; k < 3; ++k) { ax[k] = L->nx[b[k]]; ay[k] = L->ny[b[k]]; be[k] = L->be[b[k]]; }
-        if (!inv3(ax, ay, inv)) return F_PIVOTS;
+        if (it == 0 && inv0) {
+            for (int k = 0; k < 9; ++k) inv[k] = inv0[k];
+        } else if (!inv3(ax, ay, inv)) {
+            return F_PIVOTS;
+        }
         z[0] = inv[0] * be[0] + inv[1] * be[1] + inv[2] * be[2];
         z[1] = inv[3] * be[0] + inv[4] * be[1] + inv[5] * be[2];
         z[2] = inv[6] * be[0] + inv[7] * be[1] + inv[8] * be[2];
@@ -168,11 +174,12 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
  * the nearest constraint of each sextant, -1 for none, `nbe` its beta, INFINITY
  * for none), when the three bound a triangle: their normals span the plane
  * positively, the dual multipliers (third row of the basis inverse) are > 0.
- * Returns whether it did. */
-static int sector_basis(const clist *L, const int *near, const double *nbe, int first, int *b)
+ * Returns whether it did; the basis' inverse (inv3) is then in `inv`. */
+static int sector_basis(const clist *L, const int *near, const double *nbe, int first, int *b,
+                        double *inv)
 {
     int c[3];
-    double ax[3], ay[3], inv[9];
+    double ax[3], ay[3];
     for (int k = 0; k < 3; ++k) {
         const int u = first + 2 * k, v = u == 5 ? 0 : u + 1;
         c[k] = nbe[v] < nbe[u] ? near[v] : near[u];   /* the nearer; the first on a tie */
@@ -190,8 +197,9 @@ static int sector_basis(const clist *L, const int *near, const double *nbe, int 
  * three do not bound a triangle, the sectors turned by 60 degrees); else `b` is
  * left as it is (the artificial triangle).  A relaxed cell's optimal basis is
  * mostly its nearest neighbours': from there the simplex needs about a third of
- * the pivots it needs from the artificial triangle, which it must pivot out first. */
-static void start_basis(const clist *L, int first, int *b)
+ * the pivots it needs from the artificial triangle, which it must pivot out first.
+ * Returns whether it found one; its inverse is then in `inv`. */
+static int start_basis(const clist *L, int first, int *b, double *inv)
 {
     int near[6] = {-1, -1, -1, -1, -1, -1};   /* nearest in each 60-degree sextant */
     double nbe[6] = {INFINITY, INFINITY, INFINITY, INFINITY, INFINITY, INFINITY};
@@ -212,7 +220,7 @@ static void start_basis(const clist *L, int first, int *b)
             nbe[j] = take ? cand : nbe[j];
         }
     }
-    if (!sector_basis(L, near, nbe, 0, b)) sector_basis(L, near, nbe, 1, b);
+    return sector_basis(L, near, nbe, 0, b, inv) || sector_basis(L, near, nbe, 1, b, inv);
 }
 
 /* Normalise the raw entries of the list (gather_run stores the offsets):
@@ -450,9 +458,9 @@ __kernel void cell_mic(
         if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
     }
     int b[3] = {0, 1, 2};
-    start_basis(&L, 3, b);
-    double z[3];
-    flag |= dual_simplex(&L, b, z, tol);
+    double inv0[9], z[3];
+    const int sector = start_basis(&L, 3, b, inv0);
+    flag |= dual_simplex(&L, b, z, tol, sector ? inv0 : NULL);
     /* 2. more rings while the cell is unbounded by the list, or its disk
      *    reaches past what the rings cover; no replacements once solved
      *    (the basis indexes the list), so this stops at the first dropped site */
@@ -469,7 +477,7 @@ __kernel void cell_mic(
         if (ring >= RMAX_GROW || dropped < INFINITY || (flag & F_PIVOTS)) break;
         gather_ring(site, weight, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
                     fixed, 0, &L, &nn2, &dropped, &flag);
-        flag |= dual_simplex(&L, b, z, tol);
+        flag |= dual_simplex(&L, b, z, tol, NULL);
     }
     const double Gnn = ring * FMIN(bw, bh);
 
@@ -545,7 +553,7 @@ __kernel void cell_mic(
             box *= 2.0;   /* nothing cuts within the box: look further */
             continue;
         }
-        flag |= dual_simplex(&L, b, z, tol);
+        flag |= dual_simplex(&L, b, z, tol, NULL);
     }
     if (round == MAX_ROUNDS) flag |= F_ROUNDS;
     if (is_artificial(&L, b)) flag |= F_UNBOUNDED;
