@@ -1,7 +1,7 @@
 """Two or more versions of the cell_mic kernel, timed against each other in one process.
 
     python benchmarks/kernel_ab.py OLD.cl NEW.cl [MORE.cl ...] [--n 1000000] [--rounds 8]
-        [--box] [--include DIR]
+        [--box | --stipple SIZE] [--include DIR]
 
 Each file is built as :class:`diskpack_cl.device.cells.CellMIC` builds
 ``kernels/cells.cl`` (with ``kernels/`` on the include path, or
@@ -9,10 +9,15 @@ Each file is built as :class:`diskpack_cl.device.cells.CellMIC` builds
 start of ``--n`` points and that set moved once (over-relaxed, as the
 relaxation's first move) are solved with each version in turn, the order
 rotating every round, so that the load of a shared machine falls on all
-versions alike.  Printed per version: the median device seconds of the
+versions alike.  ``--stipple SIZE`` solves power cells on a SIZE x SIZE
+rectangle instead: the points and weights of the last two steps of a short
+stippling of ``--n`` dots (the sample photograph at that size, the first
+phase of the default schedule's band, cut to four steps), as a whole run's
+steps pass them.  Printed per version: the median device seconds of the
 kernel, and the medians (and quartiles) of its CPU seconds and kernel
-seconds over the first version's, call by call; and whether its MICs are
-the first version's bit for bit.  Separate processes timed one after the
+seconds over the first version's, call by call; and whether its MICs
+(centres, radii, nearest-neighbour distances, flag counts) are the first
+version's bit for bit.  Separate processes timed one after the
 other move by 10-15 % with the load on the development VM; these ratios by
 a few percent.
 """
@@ -28,6 +33,9 @@ from diskpack_cl.device.cells import MAXC, MAXNEAR, CellMIC
 from diskpack_cl.domain import Domain
 from diskpack_cl.parallel_darts import parallel_darts
 from diskpack_cl.relax import _moved
+from diskpack_cl.schedule import default_band
+from diskpack_cl.stipple import stipple
+from stipple_large import picture
 from diskpack_cl.device.programs import inline_math, kernel_dir
 
 
@@ -43,12 +51,33 @@ def build(solver, spec, include, periodic):
 
 
 def sets(n, domain):
-    """The start set and the set after one over-relaxed move."""
+    """The start set and the set after one over-relaxed move, as ``(points, None)``."""
     X = parallel_darts(n, rel_radius=0.72, seed=2)
     if not domain.periodic:
         X = X * (domain.width, domain.height)
     res = CellMIC(domain).solve(X, certify=False)
-    return X, _moved(X, res, 0.72, domain, 1.5)
+    return [(X, None), (_moved(X, res, 0.72, domain, 1.5), None)]
+
+
+def stipple_sets(n, size, steps=4):
+    """``(points, weights)`` of the MIC solves of the last two of `steps` stippling steps
+    of `n` dots on the sample photograph at `size` x `size` (the default band's first
+    phase, cut short), as the stippling passed them to :meth:`CellMIC.solve`."""
+    phases, options = default_band(size / np.sqrt(n))
+    kind, _, *blend = phases[0]
+    seen = []
+    solve = CellMIC.solve
+
+    def record(self, points, weights=None, **kw):
+        seen.append((np.array(points), np.array(weights)))
+        return solve(self, points, weights, **kw)
+
+    CellMIC.solve = record
+    try:
+        stipple(picture(size), n, schedule=[(kind, steps, *blend)], backend="opencl", **options)
+    finally:
+        CellMIC.solve = solve
+    return seen[steps - 2:steps]
 
 
 def rotate(solver, kernels, points, rounds):
@@ -60,12 +89,13 @@ def rotate(solver, kernels, points, rounds):
     for r in range(rounds):
         for k in np.roll(np.arange(len(kernels)), r):
             solver._kernel = kernels[k]
-            for X in points:
+            for X, w in points:
                 mark, c0 = solver.timings.mark(), time.process_time()
-                res = solver.solve(X, certify=False)
+                res = solver.solve(X, w, certify=False)
                 cpu[k].append(time.process_time() - c0)
                 dev[k].append(solver.timings.since(mark)["kernel"])
-                digest[k].update(res.centers.tobytes() + res.radii.tobytes())
+                digest[k].update(res.centers.tobytes() + res.radii.tobytes() + res.nn.tobytes()
+                                 + repr(sorted(res.stats.items())).encode())
     return cpu, dev, [d.hexdigest() for d in digest]
 
 
@@ -75,12 +105,19 @@ def main():
     ap.add_argument("--n", type=int, default=1_000_000)
     ap.add_argument("--rounds", type=int, default=8)
     ap.add_argument("--box", action="store_true", help="a 2 x 1 box instead of the torus")
+    ap.add_argument("--stipple", type=int, metavar="SIZE",
+                    help="power cells of a stippling on SIZE x SIZE instead of the torus")
     ap.add_argument("--include", default=str(kernel_dir()))
     args = ap.parse_args()
-    domain = Domain.rect(2.0, 1.0) if args.box else Domain.torus()
+    if args.stipple:
+        domain = Domain.rect(float(args.stipple), float(args.stipple))
+        points = stipple_sets(args.n, args.stipple)
+    else:
+        domain = Domain.rect(2.0, 1.0) if args.box else Domain.torus()
+        points = sets(args.n, domain)
     solver = CellMIC(domain, profile=True)
     kernels = [build(solver, s, args.include, domain.periodic) for s in args.sources]
-    cpu, dev, digest = rotate(solver, kernels, sets(args.n, domain), args.rounds)
+    cpu, dev, digest = rotate(solver, kernels, points, args.rounds)
     for k, spec in enumerate(args.sources):
         rc, rd = np.array(cpu[k]) / cpu[0], np.array(dev[k]) / dev[0]
         q1, q3 = np.percentile(rc, [25, 75])

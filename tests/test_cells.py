@@ -547,3 +547,94 @@ def test_nearest_on_grids_of_one_or_two_buckets_across(solvers, periodic, n, lat
         pts = rng.random((n, 2))
     pts = pts * (dom.width, dom.height)
     assert np.abs(solvers(dom).nearest(pts) - _brute_nearest(pts, dom)).max() <= 1e-15
+
+
+def _brute_slacks(X, w, dom, p, q, R):
+    """Slack at the vertex (q relative to site p, radius R) of every half-plane of cell p,
+    by brute force: every other site and its images one period away (on a torus), and
+    the four edges (on a rectangle).  ``{code: (slack, |beta|)}`` with the kernel's codes
+    (beta grows like 1/|a| where sites nearly coincide, and the digits of the slack
+    and of a vertex it fixes go with it)."""
+    shifts = [(sx, sy) for sx in (-1, 0, 1) for sy in (-1, 0, 1)] if dom.periodic else [(0, 0)]
+    out = {}
+    for sx, sy in shifts:
+        a = X + (sx * dom.width, sy * dom.height) - X[p]
+        L = np.hypot(a[:, 0], a[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            be = (L * L - w + w[p]) / (2 * L)
+            s = be - (a @ q) / L - R
+        for j in np.flatnonzero(L > 0):
+            out[9 * j + 3 * (sx + 1) + (sy + 1)] = (s[j], abs(be[j]))
+    if not dom.periodic:
+        x, y = X[p] + q
+        for code, s in zip((-1, -2, -3, -4), (x, dom.width - x, y, dom.height - y)):
+            out[code] = (s - R, s)
+    return out
+
+
+@st.composite
+def kernel_sets(draw):
+    """cell_sets, and the degenerate sets where the kernel's ties and near-tight
+    constraints matter: lattices (exact ties), coincident and near-coincident sites."""
+    kind = draw(st.sampled_from(["cells", "lattice", "coincident"]))
+    if kind == "cells":
+        return draw(cell_sets())
+    periodic = draw(st.booleans())
+    dom = Domain.torus() if periodic else Domain.rect(1.0, 1.0)
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    if kind == "lattice":
+        k = draw(st.integers(2, 9))
+        g = (np.arange(k) + draw(st.sampled_from([0.0, 0.5]))) / k
+        pts = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+        pts[:, 1] += 0.5 / k * draw(st.sampled_from([0.0, 0.5])) * (np.arange(len(pts)) // k % 2)
+        pts = np.mod(pts, 1.0) if periodic else np.clip(pts, 0.0, 1.0)
+    else:
+        pts = rng.random((draw(st.integers(3, 40)), 2))
+        pts[1::3] = pts[::3][: len(pts[1::3])] + draw(st.sampled_from([0.0, 1e-12, 1e-7]))
+        pts = np.clip(pts, 0.0, 0.999)
+    w = None if draw(st.booleans()) else (0.3 / np.sqrt(len(pts)) * rng.random(len(pts))) ** 2
+    return dom, pts, w
+
+
+@settings(max_examples=60)
+@given(kernel_sets())
+def test_the_kernels_basis_and_near_tight_codes_by_brute_force(solvers, case):
+    """cell_mic's own outputs (before the host's re-solve): at each proven cell's vertex no
+    half-plane is violated, the three basic ones are tight, and the near-tight codes are
+    exactly the other half-planes within the near-tight tolerance, whatever the list
+    order, the pivots or the counts the kernel took on its way."""
+    dom, pts, w = case
+    X0 = np.unique(pts, axis=0)
+    assume(len(X0) >= 2 and len(pts) == len(X0))
+    solver = solvers(dom)
+    seen = {}
+    finish = solver._finish
+
+    def keep(X, w, out, pos, rows):
+        seen.update(X=np.array(X), w=np.array(w), mic=np.array(out["mic"]), codes=np.array(out["codes"]),
+                    pos=np.array(pos))
+        return finish(X, w, out, pos, rows)
+
+    solver._finish = keep   # on the instance, for this call (hypothesis: no function-scoped fixture)
+    try:
+        solver.solve(pts, w, certify=True)
+    finally:
+        del solver._finish
+    X, ws, mic, codes, pos = seen["X"], seen["w"], seen["mic"], seen["codes"], seen["pos"]
+    scale = max(dom.width, dom.height)
+    near_tol = 1e-7 * np.sqrt(dom.area / len(X))
+    for row, p in enumerate(pos):
+        if codes[row, 3] & ~FLAGS["nn"]:
+            continue   # not proven: exact_mic answers for it
+        slack = _brute_slacks(X, ws, dom, p, mic[row, :2] - X[p], mic[row, 2])
+        basis = set(codes[row, :3])
+        # rounding of either computation: of the constraint's own beta, and of the
+        # vertex, which the basis' betas fix
+        fixed = max(slack[c][1] for c in basis)
+        err = {c: 1e-10 * scale + 1e-11 * (b + fixed) for c, (s, b) in slack.items()}
+        assert all(s >= -err[c] for c, (s, b) in slack.items()), row
+        assert all(abs(slack[c][0]) <= err[c] for c in basis), row
+        near = set(codes[row, 4:]) - {NO_CODE}
+        # (the error either side of the tolerance: numpy's and the kernel's rounding differ)
+        assert {c for c, (s, b) in slack.items() if s < near_tol - err[c]} - basis <= near, row
+        assert all(slack[c][0] < near_tol + err[c] for c in near), row

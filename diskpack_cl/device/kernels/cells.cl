@@ -74,6 +74,7 @@ typedef struct {
     double d[MAXC];      /* distance of the site from x_i (0 for edges) */
     int code[MAXC];
     int m;
+    int raw;             /* entries raw .. m-1 still hold (a.x, a.y, len^2 - w_j + w_i, len^2) */
 } clist;
 
 /* Inverse of the 3x3 matrix with rows (nx_k, ny_k, 1); returns 0 if singular. */
@@ -92,23 +93,65 @@ static int inv3(const double *ax, const double *ay, double *inv)
     return 1;
 }
 
-/* Dual simplex on the list from basis b[3]; z = (qx, qy, R). Returns flag bits. */
-static int dual_simplex(const clist *L, int *b, double *z, double tol)
+/* Slack of constraint k of the list at z = (qx, qy, R). */
+static double slack(const clist *L, int k, const double *z)
+{
+    return L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
+}
+
+/* How many constraints have slack below `lim` at z, of the positions
+ * first.. other than b[0..2] (b: NULL for none); without branches. */
+static int count_tight(const clist *L, const double *z, double lim, int first, const int *b)
+{
+    const int b0 = b ? b[0] : -1, b1 = b ? b[1] : -1, b2 = b ? b[2] : -1;
+    int c = 0;
+    for (int k = first; k < L->m; ++k)
+        c += (slack(L, k, z) < lim) & (k != b0) & (k != b1) & (k != b2);
+    return c;
+}
+
+/* The most violated constraint at z (slack below -tol; the lowest index on
+ * ties), -1 for none.  Even and odd positions kept apart and merged at the
+ * end: one running minimum made each constraint wait for the last one's
+ * comparison. */
+static int most_violated(const clist *L, const double *z, double tol)
+{
+    int e0 = -1, e1 = -1;
+    double w0 = -tol, w1 = -tol;
+    int k = 0;
+    for (; k + 1 < L->m; k += 2) {
+        const double s0 = slack(L, k, z), s1 = slack(L, k + 1, z);
+        if (s0 < w0) { w0 = s0; e0 = k; }
+        if (s1 < w1) { w1 = s1; e1 = k + 1; }
+    }
+    if (k < L->m) {
+        const double s0 = slack(L, k, z);
+        if (s0 < w0) { w0 = s0; e0 = k; }
+    }
+    /* e1 >= 0 whenever w1 < -tol; on a tie the lower index (e0 >= 0 there) */
+    return w1 < w0 || (w1 == w0 && e1 >= 0 && e1 < e0) ? e1 : e0;
+}
+
+/* Dual simplex on the list from basis b[3]; z = (qx, qy, R). Returns flag bits.
+ * inv0: the basis' inverse where the caller has it (start_basis computed it
+ * to check the basis), else NULL. */
+static int dual_simplex(const clist *L, int *b, double *z, double tol, const double *inv0)
 {
     double inv[9], ax[3], ay[3], be[3];
     for (int it = 0; it < MAX_PIVOTS; ++it) {
         for (int k = 0; k < 3; ++k) { ax[k] = L->nx[b[k]]; ay[k] = L->ny[b[k]]; be[k] = L->be[b[k]]; }
-        if (!inv3(ax, ay, inv)) return F_PIVOTS;
+        if (it == 0 && inv0) {
+            for (int k = 0; k < 9; ++k) inv[k] = inv0[k];
+        } else if (!inv3(ax, ay, inv)) {
+            return F_PIVOTS;
+        }
         z[0] = inv[0] * be[0] + inv[1] * be[1] + inv[2] * be[2];
         z[1] = inv[3] * be[0] + inv[4] * be[1] + inv[5] * be[2];
         z[2] = inv[6] * be[0] + inv[7] * be[1] + inv[8] * be[2];
-        /* entering: the most violated constraint (lowest index on ties) */
-        int e = -1;
-        double worst = -tol;
-        for (int k = 0; k < L->m; ++k) {
-            const double s = L->be[k] - L->nx[k] * z[0] - L->ny[k] * z[1] - z[2];
-            if (s < worst) { worst = s; e = k; }
-        }
+        /* most calls end at a basis that is already optimal: a count first, which
+         * the compiler vectorizes, and the search only where something is violated */
+        if (!count_tight(L, z, -tol, 0, NULL)) return 0;
+        const int e = most_violated(L, z, tol);
         if (e < 0) return 0;
         /* ratio test: dual multipliers l = third row of inv, direction u = a_e^T inv */
         int out = -1;
@@ -131,11 +174,12 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol)
  * the nearest constraint of each sextant, -1 for none, `nbe` its beta, INFINITY
  * for none), when the three bound a triangle: their normals span the plane
  * positively, the dual multipliers (third row of the basis inverse) are > 0.
- * Returns whether it did. */
-static int sector_basis(const clist *L, const int *near, const double *nbe, int first, int *b)
+ * Returns whether it did; the basis' inverse (inv3) is then in `inv`. */
+static int sector_basis(const clist *L, const int *near, const double *nbe, int first, int *b,
+                        double *inv)
 {
     int c[3];
-    double ax[3], ay[3], inv[9];
+    double ax[3], ay[3];
     for (int k = 0; k < 3; ++k) {
         const int u = first + 2 * k, v = u == 5 ? 0 : u + 1;
         c[k] = nbe[v] < nbe[u] ? near[v] : near[u];   /* the nearer; the first on a tie */
@@ -153,22 +197,47 @@ static int sector_basis(const clist *L, const int *near, const double *nbe, int 
  * three do not bound a triangle, the sectors turned by 60 degrees); else `b` is
  * left as it is (the artificial triangle).  A relaxed cell's optimal basis is
  * mostly its nearest neighbours': from there the simplex needs about a third of
- * the pivots it needs from the artificial triangle, which it must pivot out first. */
-static void start_basis(const clist *L, int first, int *b)
+ * the pivots it needs from the artificial triangle, which it must pivot out first.
+ * Returns whether it found one; its inverse is then in `inv`. */
+static int start_basis(const clist *L, int first, int *b, double *inv)
 {
     int near[6] = {-1, -1, -1, -1, -1, -1};   /* nearest in each 60-degree sextant */
     double nbe[6] = {INFINITY, INFINITY, INFINITY, INFINITY, INFINITY, INFINITY};
     for (int k = first; k < L->m; ++k) {
         /* sextants 0 1 2 above the x axis from the right, 3 4 5 below from the left;
          * computed and kept without branches: the directions are random, and
-         * mispredicted branches here cost more than the simplex */
+         * mispredicted branches here cost more than the simplex.  Every sextant's
+         * minimum is updated (unrolled, in registers): indexing near[s] made the
+         * compiler branch on each comparison and keep the minima in memory */
         const double x = L->nx[k], be = L->be[k];
-        const int s = L->ny[k] >= 0.0 ? 2 - (x > 0.5) - (x > -0.5) : 3 + !(x < -0.5) + !(x < 0.5);
-        const int take = be < nbe[s];
-        near[s] = take ? k : near[s];
-        nbe[s] = take ? be : nbe[s];
+        const int up = L->ny[k] >= 0.0;
+        const int s = up * (2 - (x > 0.5) - (x > -0.5)) + (1 - up) * (3 + (x >= -0.5) + (x >= 0.5));
+#pragma unroll
+        for (int j = 0; j < 6; ++j) {
+            const double cand = s == j ? be : INFINITY;
+            const int take = cand < nbe[j];
+            near[j] = take ? k : near[j];
+            nbe[j] = take ? cand : nbe[j];
+        }
     }
-    if (!sector_basis(L, near, nbe, 0, b)) sector_basis(L, near, nbe, 1, b);
+    return sector_basis(L, near, nbe, 0, b, inv) || sector_basis(L, near, nbe, 1, b, inv);
+}
+
+/* Normalise the raw entries of the list (gather_run stores the offsets):
+ * n = a / |a|, beta = (|a|^2 - w_j + w_i) / (2 |a|), d = |a|, as set_site
+ * does one by one, with the same operations.  A loop of its own, without
+ * branches, so that the compiler can vectorize the square roots and
+ * divisions that cost most of the gather when done site by site. */
+static void normalise(clist *L)
+{
+    for (int k = L->raw; k < L->m; ++k) {
+        const double len = SQRT(L->d[k]), il = 1.0 / len;
+        L->nx[k] *= il;
+        L->ny[k] *= il;
+        L->be[k] = 0.5 * L->be[k] * il;
+        L->d[k] = len;
+    }
+    L->raw = L->m;
 }
 
 static void set_site(clist *L, int k, double ax, double ay, double len2, double wj, double wi,
@@ -249,25 +318,35 @@ static int is_artificial(const clist *L, const int *b)
 
 /* Add the sites t0 .. t1-1 (shifted by qx, qy periods) to the list, and track the
  * nearest one; a full list keeps the GATHER_CAP nearest (before the first solve:
- * `replace`; after it the basis indexes the list) and remembers the nearest dropped. */
-static void gather_run(__global const double2 *site, __global const double *weight,
+ * `replace`; after it the basis indexes the list) and remembers the nearest dropped.
+ * Inlined: a call per bucket run, with its many arguments, cost about a tenth
+ * of the kernel on the torus. */
+static inline __attribute__((always_inline)) void gather_run(__global const double2 *site, __global const double *weight,
                        int s, double2 xi, double wi, int t0, int t1, int qx, int qy,
                        double W, double H, int fixed, int replace, clist *L, double *nn2,
                        double *dropped, int *flag)
 {
+    /* the nearest distance and the list's length in registers: kept in memory,
+     * each site waited on the last one's store */
+    double nn = *nn2;
+    int m = L->m;
     for (int t = t0; t < t1; ++t) {
         if (t == s && qx == 0 && qy == 0) continue;
         const double ax = site[t].x + qx * W - xi.x, ay = site[t].y + qy * H - xi.y;
         const double len2 = ax * ax + ay * ay;
-        *nn2 = FMIN(*nn2, len2);
-        if (L->m < GATHER_CAP) {
-            push_site(L, ax, ay, weight[t], wi, site_code(t, qx, qy, flag));
+        nn = len2 < nn ? len2 : nn;   /* fmin: no NaN here (check_sites) */
+        if (m < GATHER_CAP) {
+            if (len2 == 0.0) continue;   /* coincides with the site: no bisector */
+            L->nx[m] = ax; L->ny[m] = ay; L->be[m] = len2 - weight[t] + wi; L->d[m] = len2;
+            L->code[m++] = site_code(t, qx, qy, flag);
             continue;
         }
+        L->m = m;
+        normalise(L);   /* the replacements below compare distances */
         const double len = SQRT(len2);
         if (!replace) { *dropped = FMIN(*dropped, len); continue; }
         int far = fixed;
-        for (int k = fixed + 1; k < L->m; ++k)
+        for (int k = fixed + 1; k < m; ++k)
             if (L->d[k] > L->d[far]) far = k;
         if (len < L->d[far]) {
             *dropped = FMIN(*dropped, L->d[far]);
@@ -276,6 +355,18 @@ static void gather_run(__global const double2 *site, __global const double *weig
             *dropped = FMIN(*dropped, len);
         }
     }
+    L->m = m;
+    *nn2 = nn;
+}
+
+/* wrap_bucket, without its integer divisions for a bucket on the grid (on a
+ * torus most are: they cost more than the sites of a ring's run). */
+static int grid_bucket(int *cx, int *cy, int *qx, int *qy, int nbx, int nby)
+{
+#if PERIODIC
+    if (*cx >= 0 && *cx < nbx && *cy >= 0 && *cy < nby) { *qx = 0; *qy = 0; return 1; }
+#endif
+    return wrap_bucket(cx, cy, qx, qy, nbx, nby);
 }
 
 /* Add the sites of the buckets at Chebyshev distance `ring` from the home
@@ -292,7 +383,7 @@ static void gather_ring(__global const double2 *site, __global const double *wei
         const int edge = dy == -ring || dy == ring;
         if (edge && hx - ring >= 0 && hx + ring < nbx) {
             int cx = hx, cy = hy + dy, qx, qy;
-            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+            if (!grid_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int row = cy * nbx;
             gather_run(site, weight, s, xi, wi, bstart[row + hx - ring], bstart[row + hx + ring + 1],
                        0, qy, W, H, fixed, replace, L, nn2, dropped, flag);
@@ -300,12 +391,13 @@ static void gather_ring(__global const double2 *site, __global const double *wei
         }
         for (int dx = -ring; dx <= ring; dx += edge ? 1 : imax(2 * ring, 1)) {
             int cx = hx + dx, cy = hy + dy, qx, qy;
-            if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+            if (!grid_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
             const int b = cy * nbx + cx;
             gather_run(site, weight, s, xi, wi, bstart[b], bstart[b + 1], qx, qy, W, H,
                        fixed, replace, L, nn2, dropped, flag);
         }
     }
+    normalise(L);
 }
 
 __kernel void cell_mic(
@@ -353,6 +445,7 @@ __kernel void cell_mic(
     L.m = 7;
 #endif
     const int fixed = L.m;
+    L.raw = L.m;
 
     /* 1. gather rings of buckets around the home bucket, and more while the
      *    cell is still unbounded by what was gathered */
@@ -365,15 +458,16 @@ __kernel void cell_mic(
         if ((L.m - fixed >= KMIN && ring >= 1) || ring == RMAX) break;
     }
     int b[3] = {0, 1, 2};
-    start_basis(&L, 3, b);
-    double z[3];
-    flag |= dual_simplex(&L, b, z, tol);
+    double inv0[9], z[3];
+    const int sector = start_basis(&L, 3, b, inv0);
+    flag |= dual_simplex(&L, b, z, tol, sector ? inv0 : NULL);
     /* 2. more rings while the cell is unbounded by the list, or its disk
      *    reaches past what the rings cover; no replacements once solved
      *    (the basis indexes the list), so this stops at the first dropped site */
-    double Rp, qn, reach2, G;
+    double Rp, qn, reach2, G, cut;
     for (;;) {
-        cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
+        /* (at the end, the cutter radius of the z that step 3 starts from) */
+        cut = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
         /* every site within G of x_i is in the list: the rings cover their
          * width, and a full list kept the nearest, none dropped closer */
         G = FMIN(ring * FMIN(bw, bh), dropped);
@@ -383,7 +477,7 @@ __kernel void cell_mic(
         if (ring >= RMAX_GROW || dropped < INFINITY || (flag & F_PIVOTS)) break;
         gather_ring(site, weight, bstart, s, xi, wi, hx, hy, ++ring, nbx, nby, W, H,
                     fixed, 0, &L, &nn2, &dropped, &flag);
-        flag |= dual_simplex(&L, b, z, tol);
+        flag |= dual_simplex(&L, b, z, tol, NULL);
     }
     const double Gnn = ring * FMIN(bw, bh);
 
@@ -398,8 +492,8 @@ __kernel void cell_mic(
                                      (hx + win + 1) * bw, (hy + win + 1) * bh);
     for (; round < MAX_ROUNDS && !(flag & (F_PIVOTS | F_LIST_FULL)); ++round) {
         const double cxp = xi.x + z[0], cyp = xi.y + z[1];
-        const double rad = local_reach(cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2), Rp, reach2,
-                          wloc, cxp, cyp, window);
+        if (round > 0) cut = cutter_reach(z, wi, wmax, near_tol, &Rp, &qn, &reach2);
+        const double rad = local_reach(cut, Rp, reach2, wloc, cxp, cyp, window);
         if (qn + rad <= G) break;
         const int partial = rad > box;
         const double reach = partial ? box : rad;
@@ -418,7 +512,7 @@ __kernel void cell_mic(
             for (int bx = x0; bx <= x1; ++bx) {
                 if (inner && iabs(bx - hx) <= ring && iabs(by - hy) <= ring) continue;
                 int cx = bx, cy = by, qx, qy;
-                if (!wrap_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
+                if (!grid_bucket(&cx, &cy, &qx, &qy, nbx, nby)) continue;
                 const int bb = cy * nbx + cx;
                 /* distance from the centre to this bucket (with its shift) */
                 const double ox = bx * bw, oy = by * bh;
@@ -459,7 +553,7 @@ __kernel void cell_mic(
             box *= 2.0;   /* nothing cuts within the box: look further */
             continue;
         }
-        flag |= dual_simplex(&L, b, z, tol);
+        flag |= dual_simplex(&L, b, z, tol, NULL);
     }
     if (round == MAX_ROUNDS) flag |= F_ROUNDS;
     if (is_artificial(&L, b)) flag |= F_UNBOUNDED;
@@ -469,11 +563,13 @@ __kernel void cell_mic(
 
     /* 4. outputs */
     __global int *out = codes + (size_t)i * (4 + MAXNEAR);
+    /* most cells have no near-tight constraint besides the basis: counted first
+     * (the count is the loop's, the same slacks) */
+    const int ntight = count_tight(&L, z, near_tol, 3, b);
     int nnear = 0;
-    for (int k = 3; k < L.m; ++k) {
+    for (int k = 3; k < L.m && nnear < ntight; ++k) {
         if (k == b[0] || k == b[1] || k == b[2]) continue;
-        const double sl = L.be[k] - L.nx[k] * z[0] - L.ny[k] * z[1] - z[2];
-        if (sl < near_tol) {
+        if (slack(&L, k, z) < near_tol) {
             if (nnear < MAXNEAR) out[4 + nnear] = L.code[k];
             nnear++;
         }
