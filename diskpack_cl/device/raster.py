@@ -251,6 +251,7 @@ class PowerRaster(DeviceStage):
             self._k_fused = sums["power_sums_tile"] if layout == "tile" else None
             self._real = np.float64 if fp64 else np.float32
         self._density = None
+        self._bucket_order = None   # the sites' last bucket order (_buckets)
         k = self.program("raster_mic", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._groups = {name: group_size(k[name], dev, REDUCE_GROUP) for name in k}
@@ -317,16 +318,21 @@ class PowerRaster(DeviceStage):
             bw = bh = max(bw, bh)
             nbx = max(1, int(np.ceil(dom.width / bw)))
             nby = max(1, int(np.ceil(dom.height / bh)))
-        bxi = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
-        byi = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
-        bid = byi * nbx + bxi
-        order = bucket_order(bid)
+        bid = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
+        bid *= nbx
+        bid += np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
+        # the last order is a hint (the same answer, found faster where the sites moved little)
+        order = self._bucket_order = bucket_order(bid, hint=self._bucket_order)
         counts = np.bincount(bid, minlength=nbx * nby)
         start = np.zeros(nbx * nby + 1, np.int32)
         np.cumsum(counts, out=start[1:])
-        wmax = np.zeros(nbx * nby, np.float32)
-        nonempty = counts > 0
-        wmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+        # the weights are at most 0 (shifted by their maximum): an empty bucket's 0 is above
+        # them all, as the kernels expect; maximum.at is several times faster than reduceat
+        # over a bucket grid of about two sites a bucket
+        wmax = np.full(nbx * nby, -np.inf, np.float32)
+        with np.errstate(invalid="ignore"):   # NaN only where a test bypassed check_sites
+            np.maximum.at(wmax, bid, w)
+        wmax[counts == 0] = 0.0
         return order, start, wmax, (nbx, nby, bw, bh)
 
     # -- work --------------------------------------------------------------
@@ -423,7 +429,7 @@ class PowerRaster(DeviceStage):
         # largest weight shifts all of them equally, so subtract it.
         w32 = (w - w.max()).astype(np.float32)
         order, start, wmax_b, grid = self._buckets(pts, w32)
-        host = {"site": np.take(pts, order, axis=0).astype(np.float32), "weight": w32[order],
+        host = {"site": np.take(pts.astype(np.float32), order, axis=0), "weight": w32[order],
                 "id": order.astype(np.int32), "start": start, "wmax": wmax_b}
         bufs = tuple(self.upload(name, a) for name, a in host.items())
         return pts, bufs, grid, float(wmax_b.max())
@@ -609,10 +615,16 @@ class PowerRaster(DeviceStage):
         dom = self.domain
         hx, hy = dom.width / nx, dom.height / ny
         cl.enqueue_copy(self.queue, acc, b_acc)
-        sums = acc / CELL_SUMS_FIX
-        mass = sums[:, 0]
+        sums = acc.astype(np.float64)
+        # FIX is a power of two: (sum / FIX) / (mass / FIX) is sum / mass exactly, the
+        # values of dividing every sum by FIX first, with fewer whole-set temporaries
+        mass = sums[:, 0] / CELL_SUMS_FIX
+        c = np.empty_like(sites)
         with np.errstate(invalid="ignore", divide="ignore"):
-            c = sites + np.stack([sums[:, 1] / mass * hx, sums[:, 2] / mass * hy], 1)
+            for k, h in enumerate((hx, hy)):
+                np.divide(sums[:, k + 1], sums[:, 0], out=c[:, k])
+                c[:, k] *= h
+        c += sites
         if dom.periodic:
             c = dom.wrap(c)
         return c, mass
