@@ -62,11 +62,36 @@ def test_wait_for_raises_the_wait_error(ctx):
     from diskpack_cl.device.context import wait_for
 
     class Broken:
+        command_execution_status = -5   # a failed command's status: an OpenCL error code
+
         def wait(self):
             raise RuntimeError("device lost")
 
     with pytest.raises(RuntimeError, match="device lost"):
         wait_for(Broken())
+
+
+def test_wait_for_a_finished_event_starts_no_helper(ctx, monkeypatch):
+    """An event already complete (a pass that ran beside another, a later band) is
+    answered at once; one still running is waited for by the helper thread."""
+    import threading
+
+    import pyopencl as cl
+
+    from diskpack_cl.device.context import wait_for
+
+    started = []
+    real = threading.Thread.start
+    monkeypatch.setattr(threading.Thread, "start", lambda t: (started.append(t.name), real(t)))
+    queue = cl.CommandQueue(ctx)
+    done = cl.enqueue_marker(queue)
+    queue.finish()
+    wait_for(done)
+    assert started == []
+    user = cl.UserEvent(ctx)   # complete only when set
+    threading.Timer(0.05, lambda: user.set_status(cl.command_execution_status.COMPLETE)).start()
+    wait_for(user)
+    assert "diskpack-opencl-wait" in started
 
 
 @pytest.mark.parametrize("max_groups", [1, 2, 5])

@@ -444,6 +444,10 @@ def wait_for(event):
     pyopencl.Error
         What ``event.wait()`` raised in the helper thread.
     """
+    import pyopencl as cl  # not loaded at start-up
+
+    if event.command_execution_status == cl.command_execution_status.COMPLETE:
+        return   # already done (a pass that ran beside another, a later band): no helper
     done = threading.Event()
     failed = []
 

@@ -487,7 +487,7 @@ class PowerRaster(DeviceStage):
         t0 = time.perf_counter()
         pts, bufs, grid, wmax = self._upload_sites(points, weights)
         b_density, b_pts, acc, b_acc = self._sums_buffers(pts, density)
-        b_status = self.upload("status", np.zeros(1, np.int32))
+        b_status = self.zeros("status", 4)
         uploads = self._uploads
         # every band queued now: the device works through them while the host goes on
         events = list(self._tile_bands(self._k_fused, bufs, grid, wmax, b_density, b_pts,
@@ -540,7 +540,7 @@ class PowerRaster(DeviceStage):
         and refuse the result if the kernel set a status bit."""
         ny, nx = self.shape
         dom = self.domain
-        b_status = self.upload("status", np.zeros(1, np.int32))
+        b_status = self.zeros("status", 4)
         if not distance and self.layout == "tile":
             self._run_tiles(self._k_tile, "power_labels_tile", bufs, grid, wmax,
                             maps["label"][0], b_status)
@@ -606,8 +606,8 @@ class PowerRaster(DeviceStage):
             self._density = (density, buf, d)
         cell = (self.domain.width / nx, self.domain.height / ny)
         b_pts = self.upload("grid_sites", np.ascontiguousarray(sites / cell, self._real))
-        acc = np.zeros((len(sites), 3), np.int64)
-        return self._density[1], b_pts, acc, self.upload("sums", acc)
+        acc = np.empty((len(sites), 3), np.int64)   # the sums come back into it
+        return self._density[1], b_pts, acc, self.zeros("sums", acc.nbytes)
 
     def _sums_to_centroids(self, acc, b_acc, sites):
         """``(centroids, mass)`` from the device's fixed-point sums."""

@@ -10,6 +10,7 @@ waits that let Ctrl-C through, and kernel profiling.
 
 from __future__ import annotations
 
+import numpy as np
 import pyopencl as cl
 
 from .context import describe, get_context, wait_for
@@ -130,6 +131,14 @@ class DeviceStage:
         buf = self.buffer(name, host.nbytes)
         if host.nbytes:
             cl.enqueue_copy(self.queue, buf, host, is_blocking=wait)
+        return buf
+
+    def zeros(self, name, nbytes):
+        """:meth:`buffer` `name` with its first `nbytes` set to zero on the device (queued: no
+        host array to make, zero and copy)."""
+        buf = self.buffer(name, nbytes)
+        if nbytes:
+            cl.enqueue_fill_buffer(self.queue, buf, np.zeros(1, np.int32), 0, nbytes)
         return buf
 
     def wait(self, event, name):
