@@ -431,7 +431,7 @@ class PowerRaster(DeviceStage):
         order, start, wmax_b, grid = self._buckets(pts, w32)
         host = {"site": np.take(pts.astype(np.float32), order, axis=0), "weight": w32[order],
                 "id": order.astype(np.int32), "start": start, "wmax": wmax_b}
-        bufs = tuple(self.upload(name, a) for name, a in host.items())
+        bufs = tuple(self.lend(name, a) for name, a in host.items())   # no copies on a CPU
         return pts, bufs, grid, float(wmax_b.max())
 
     def centroids(self, points, weights=None, density=None):
@@ -605,7 +605,7 @@ class PowerRaster(DeviceStage):
                 buf = self.upload("density", d)
             self._density = (density, buf, d)
         cell = (self.domain.width / nx, self.domain.height / ny)
-        b_pts = self.upload("grid_sites", np.ascontiguousarray(sites / cell, self._real))
+        b_pts = self.lend("grid_sites", np.ascontiguousarray(sites / cell, self._real))
         acc = np.empty((len(sites), 3), np.int64)   # the sums come back into it
         return self._density[1], b_pts, acc, self.zeros("sums", acc.nbytes)
 

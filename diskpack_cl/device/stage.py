@@ -88,6 +88,7 @@ class DeviceStage:
         #: Vector lanes of the CPU tile layout (:func:`tile_lanes`).
         self.lanes = tile_lanes(self.verdict)
         self._kept = {}
+        self._lent = {}   # lend's buffers, with their host arrays
 
     @property
     def device(self):
@@ -131,6 +132,22 @@ class DeviceStage:
         buf = self.buffer(name, host.nbytes)
         if host.nbytes:
             cl.enqueue_copy(self.queue, buf, host, is_blocking=wait)
+        return buf
+
+    def lend(self, name, host):
+        """A read-only buffer `name` of the host array `host` (C-contiguous), which must stay
+        unchanged until the kernels queued after this call are done.
+
+        On a CPU device the array itself (``USE_HOST_PTR``: no copy, and no wait for the
+        device's threads to make one, which a loaded machine stretches to milliseconds),
+        kept with its buffer until `name` is lent again (after the queue is done with it);
+        elsewhere :meth:`upload`."""
+        if not self.is_cpu or not host.nbytes:
+            return self.upload(name, host)
+        if name in self._lent:
+            self.queue.finish()   # idle but after a pass left unread: its kernels end first
+        buf = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
+        self._lent[name] = buf
         return buf
 
     def zeros(self, name, nbytes):
