@@ -302,7 +302,8 @@ def field_at(field, points):
     # a flat take: numpy's two-array index is about twice as slow (1M points: 30-40 against 80 ms)
     row *= W
     row += col
-    return np.take(field.reshape(-1), row).astype(np.float64, copy=False)
+    # the indices are in range (clipped): "clip" skips take's bounds check (1M: 9 -> 7.5 ms)
+    return np.take(field.reshape(-1), row, mode="clip").astype(np.float64, copy=False)
 
 
 def largest_valid_k(points, r, width, height):
