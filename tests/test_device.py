@@ -254,6 +254,13 @@ def test_lent_arrays_are_read_as_uploads_and_kept_until_lent_again(ctx):
     stage.lend("x", np.zeros(3, np.float32))
     gc.collect()
     assert ref() is None
+    b = np.ones(5, np.float32)
+    ref = weakref.ref(b)
+    stage.lend("y", b)
+    del b
+    stage.release_lent()   # the caller's kernels are done
+    gc.collect()
+    assert ref() is None
     z = stage.upload("z", np.full(16, 7, np.int32))
     assert stage.zeros("z", 32) is z
     back = np.empty(16, np.int32)

@@ -397,6 +397,7 @@ class PowerRaster(DeviceStage):
         maps = self._map_buffers(nx * ny)
         self._generation += 1
         self._label(distance, bufs, grid, wmax, maps)
+        self.release_lent()   # the labels are done: the site arrays are read
         t1 = time.perf_counter()
         self.timings.add("raster_labels", t1 - t0)
         if not (distance and neighbors):
@@ -501,6 +502,7 @@ class PowerRaster(DeviceStage):
             if self._uploads != uploads:
                 raise RuntimeError("the centroids' pass was overwritten by a later pass of this "
                                    "raster (it reuses its device buffers): read it first")
+            self.release_lent()
             self._check_status(b_status)
             self.timings.add("raster_labels", time.perf_counter() - t1)
             with self.timings("centroids"):
@@ -585,6 +587,7 @@ class PowerRaster(DeviceStage):
             self.wait(self._k_sums(self.queue, (seg, padded(min(band, ny - y0), g)), (1, g),
                                     label_buf, b_density, b_pts, np.int32(n),
                                     np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
+        self.release_lent()
         return self._sums_to_centroids(acc, b_acc, sites)
 
     def _sums_buffers(self, sites, density):

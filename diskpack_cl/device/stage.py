@@ -140,8 +140,8 @@ class DeviceStage:
 
         On a CPU device the array itself (``USE_HOST_PTR``: no copy, and no wait for the
         device's threads to make one, which a loaded machine stretches to milliseconds),
-        kept with its buffer until `name` is lent again (after the queue is done with it);
-        elsewhere :meth:`upload`."""
+        kept with its buffer until :meth:`release_lent`, or until `name` is lent again (after
+        the queue is done with it); elsewhere :meth:`upload`."""
         if not self.is_cpu or not host.nbytes:
             return self.upload(name, host)
         if name in self._lent:
@@ -149,6 +149,11 @@ class DeviceStage:
         buf = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
         self._lent[name] = buf
         return buf
+
+    def release_lent(self):
+        """Drop the lent arrays (:meth:`lend`): for a caller whose kernels that read them are
+        done, so that a step's arrays are not held beside the next step's work."""
+        self._lent.clear()
 
     def zeros(self, name, nbytes):
         """:meth:`buffer` `name` with its first `nbytes` set to zero on the device (queued: no
