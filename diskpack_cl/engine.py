@@ -12,8 +12,8 @@ protocol:
   the density-weighted centroids and masses of the power cells on the
   engine's grid (engines made with a ``grid``);
   ``engine.start_centroids(...)`` the same, begun: it returns the function
-  that gives them (on the ``cells`` route the device's pass runs while the
-  host asks for the MICs).
+  that gives them (on the ``cells`` route a helper thread prepares and queues
+  the device's pass while the host asks for the MICs).
 
 Every engine has ``name`` (its route), ``backend`` (``opencl`` or
 ``exact``), ``device``, ``fallback`` (None, or why ``auto`` chose the exact
@@ -52,6 +52,8 @@ sums over the labels); with ``profile``, ``kernel`` and ``kernel_<name>``
 """
 
 from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -284,6 +286,7 @@ class OpenCLEngine(_Engine):
         self._grid = grid if grid is not None else None if n is None else _auto_grid(n, domain)
         self._raster = None
         self._labelled = None   # (points, weights, raster result) of the last labels
+        self._helper = None     # start_centroids' thread, made on first use
         self.cells = None
         if route == "cells":
             self.cells = CellMIC(domain, device=ctx, profile=profile, timings=self.timings)
@@ -332,11 +335,18 @@ class OpenCLEngine(_Engine):
             return last[2].centroids(density)
 
     def start_centroids(self, points, weights, density):
-        """:meth:`centroids`, begun: on the ``cells`` route the raster's pass is queued
-        now (a :meth:`mic` there labels no grid), and runs beside the MICs' work."""
+        """:meth:`centroids`, begun: on the ``cells`` route the raster's pass (a :meth:`mic`
+        there labels no grid) is prepared and queued by a helper thread, whose host work
+        (buckets, buffers) runs beside the MICs' own, and its kernels beside theirs."""
         if self.cells is None:
             return super().start_centroids(points, weights, density)
-        return self.raster.start_centroids(points, weights, density)
+        raster = self.raster   # built here: its warm-up must not run beside another stage
+        if self._helper is None:
+            self._helper = ThreadPoolExecutor(1, thread_name_prefix="diskpack-centroids")
+        # copies: the caller may change its arrays once this returns (a step's worth of time)
+        points, weights = (None if a is None else np.array(a, dtype=np.float64) for a in (points, weights))
+        begun = self._helper.submit(raster.start_centroids, points, weights, density)
+        return lambda: begun.result()()
 
 
 def _auto_grid(n, domain):

@@ -474,20 +474,38 @@ def _candidate_ranges(flat, shape, periodic):
     return runs, ranges
 
 
-def bucket_order(bid):
+def bucket_order(bid, hint=None):
     """``np.argsort(bid, kind="stable")`` for non-negative integer bucket ids.
 
-    Below 2^32, as two passes of 16-bit keys (least significant first),
-    which numpy sorts stably by radix, several times faster than its merge
-    sort of 64-bit keys.
+    Below 2^16, one stable radix pass of 16-bit keys; below 2^32, two
+    (least significant first), which numpy sorts stably by radix, several
+    times faster than its merge sort of 64-bit keys. With `hint` (a
+    permutation of the ids' indices, such as the order of the same sites a
+    step before) and ids of 2^16 or more, the unique keys ``(id, index)``
+    are sorted in the hint's order instead: numpy's timsort merges the long
+    sorted runs of a set that moved little in about half the two passes'
+    time (1M sites). The keys being unique, any hint gives the same answer.
 
     Examples
     --------
     >>> bucket_order(np.array([70000, 3, 70000, 0, 3])).tolist()
     [3, 1, 4, 0, 2]
+    >>> bucket_order(np.array([70000, 3, 70000, 0, 3]), hint=np.array([4, 3, 2, 1, 0])).tolist()
+    [3, 1, 4, 0, 2]
     """
     bid = np.asarray(bid)
-    if not len(bid) or bid.max() >= 2 ** 32:
+    n = len(bid)
+    if not n:
+        return np.argsort(bid, kind="stable")
+    top = int(bid.max())
+    if top < 2 ** 16:
+        return np.argsort(bid.astype(np.uint16), kind="stable")
+    if hint is not None and len(hint) == n and top < 2 ** 62 // n:
+        key = bid.astype(np.int64) * n
+        key += np.arange(n)
+        hint = np.asarray(hint)
+        return hint[np.argsort(key[hint], kind="stable")]
+    if top >= 2 ** 32:
         return np.argsort(bid, kind="stable")
     low = np.argsort((bid & 0xFFFF).astype(np.uint16), kind="stable")
     return low[np.argsort((bid[low] >> 16).astype(np.uint16), kind="stable")]

@@ -98,9 +98,11 @@ def gaussian_blur(image, sigma, *, cols=64, rows=512):
 
 
 def _pixel_of(points, W, H):
-    col = np.clip(np.floor(points[:, 0]).astype(np.int64), 0, W - 1)
-    row = np.clip(np.floor(points[:, 1]).astype(np.int64), 0, H - 1)
-    return row, col
+    # the cast truncates, which is the floor wherever the clip keeps the value (x >= 0;
+    # between -1 and 0 both give 0): a pass over the points saved; clipped in place
+    col = points[:, 0].astype(np.int64)
+    row = points[:, 1].astype(np.int64)
+    return np.clip(row, 0, H - 1, out=row), np.clip(col, 0, W - 1, out=col)
 
 
 def base_radii(gray, points, *, gamma=3.0, floor=0.1):
@@ -300,7 +302,8 @@ def field_at(field, points):
     # a flat take: numpy's two-array index is about twice as slow (1M points: 30-40 against 80 ms)
     row *= W
     row += col
-    return np.take(field.reshape(-1), row).astype(np.float64, copy=False)
+    # the indices are in range (clipped): "clip" skips take's bounds check (1M: 9 -> 7.5 ms)
+    return np.take(field.reshape(-1), row, mode="clip").astype(np.float64, copy=False)
 
 
 def largest_valid_k(points, r, width, height):

@@ -290,7 +290,21 @@ def _finite_rows(a):
 
 
 def _moved(old, new):
-    return float(np.mean(np.hypot(*(new - old).T)))
+    """Mean displacement: ``sqrt(dx^2 + dy^2)``, not ``np.hypot`` (a few times slower; no
+    overflow to guard against at pixel coordinates, and within an ulp of it)."""
+    d = new - old
+    d *= d
+    s = d[:, 0] + d[:, 1]
+    return float(np.mean(np.sqrt(s, out=s)))
+
+
+def _where_rows(keep, a, b):
+    """``np.where(keep[:, None], a, b)`` for (n, 2) arrays, by a copy of `a` and its few rows
+    that are not kept (the broadcast where walks rows of two: several times slower)."""
+    out = a.copy()
+    drop = np.flatnonzero(~keep)
+    out[drop] = b[drop]
+    return out
 
 
 #: Blur (px) of the darkness that :func:`off_support` reads: a thin line's
@@ -465,8 +479,7 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     mic = stage.engine.mic(x, w, exact=refine, certify=False)   # the result is certified at the end
     entry = {}
     ok = ~mic.empty & _finite_rows(mic.centers)
-    # whole-array where, not row gathers and scatters: several times faster
-    newx = np.where(ok[:, None], mic.centers, x)
+    newx = _where_rows(ok, mic.centers, x)
     if need_power:
         power = power() if power is not None else stage.engine.centroids(x, w, stage.density)
     ink = state.ink
@@ -477,9 +490,12 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
         cen, mass = power if opt.blend_cell == "power" or blend == 0 else \
             stage.engine.centroids(x, np.zeros(len(x)), stage.density)
         okc = ok & (mass > 0) & _finite_rows(cen)
-        cen = np.where(okc[:, None], cen, newx)   # no move where the cell has no centroid
+        cen = _where_rows(okc, cen, newx)   # no move where the cell has no centroid
         a = _blend_weights(stage, x, newx, cen, blend)
-        newx += a[:, None] * (cen - newx)
+        step = cen - newx
+        for col in step.T:   # a column at a time: a (n, 2) by (n, 1) broadcast walks rows of two
+            col *= a
+        newx += step
     if opt.support > 0:
         entry["reseated"] = 0
         if reseat:
@@ -514,8 +530,7 @@ def lloyd_step(state, stage, new_k=True):
     cen, mass = stage.engine.centroids(x, np.zeros(len(x)), stage.density)
     entry = {}
     ok = (mass > 0) & _finite_rows(cen)
-    newx = x.copy()
-    newx[ok] = cen[ok]
+    newx = _where_rows(ok, cen, x)
     entry["moved"] = _moved(x, newx)
     entry["empty"] = int(np.count_nonzero(~ok))
     k = state.k

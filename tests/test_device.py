@@ -228,3 +228,41 @@ def test_a_device_given_as_an_argument_is_named_as_given(ctx, tmp_path, capsys, 
                      "-o", str(out)]) == 1
     assert ("diskpack: error: no OpenCL device matches 'no-such-device'"
             in capsys.readouterr().err)
+
+
+def test_lent_arrays_are_read_as_uploads_and_kept_until_lent_again(ctx):
+    """DeviceStage.lend: the kernels read the host array's values (on a CPU the array
+    itself, kept by the stage while the device may read it: until its name is lent again);
+    DeviceStage.zeros: a buffer of zeros, whatever it held."""
+    import gc
+    import weakref
+
+    import numpy as np
+
+    from diskpack_cl.device.stage import DeviceStage
+
+    stage = DeviceStage(ctx)
+    a = np.arange(1000, dtype=np.float32)
+    ref = weakref.ref(a)
+    buf = stage.lend("x", a)
+    out = np.empty_like(a)
+    cl.enqueue_copy(stage.queue, out, buf)
+    assert np.array_equal(out, np.arange(1000))
+    del a, buf
+    gc.collect()
+    assert (ref() is not None) == stage.is_cpu   # an upload keeps no host array
+    stage.lend("x", np.zeros(3, np.float32))
+    gc.collect()
+    assert ref() is None
+    b = np.ones(5, np.float32)
+    ref = weakref.ref(b)
+    stage.lend("y", b)
+    del b
+    stage.release_lent()   # the caller's kernels are done
+    gc.collect()
+    assert ref() is None
+    z = stage.upload("z", np.full(16, 7, np.int32))
+    assert stage.zeros("z", 32) is z
+    back = np.empty(16, np.int32)
+    cl.enqueue_copy(stage.queue, back, z)
+    assert back.tolist() == [0] * 8 + [7] * 8

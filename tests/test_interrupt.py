@@ -62,11 +62,84 @@ def test_wait_for_raises_the_wait_error(ctx):
     from diskpack_cl.device.context import wait_for
 
     class Broken:
+        command_execution_status = -5   # a failed command's status: an OpenCL error code
+
         def wait(self):
             raise RuntimeError("device lost")
 
     with pytest.raises(RuntimeError, match="device lost"):
         wait_for(Broken())
+
+
+class _Watched:
+    """An event whose waits are recorded: by which thread."""
+
+    def __init__(self, event):
+        self.event, self.waiters = event, []
+
+    @property
+    def command_execution_status(self):
+        return self.event.command_execution_status
+
+    def wait(self):
+        import threading
+
+        self.waiters.append(threading.current_thread().name)
+        self.event.wait()
+
+
+def test_wait_for_a_finished_event_needs_no_helper(ctx):
+    """An event already complete (a pass that ran beside another, a later band) is
+    answered at once; one still running is waited for by a helper thread of the pool,
+    the same one wait after wait."""
+    import threading
+
+    import pyopencl as cl
+
+    from diskpack_cl.device.context import wait_for
+
+    queue = cl.CommandQueue(ctx)
+    done = _Watched(cl.enqueue_marker(queue))
+    queue.finish()
+    wait_for(done)
+    assert done.waiters == []
+    names = []
+    for _ in range(3):
+        user = _Watched(cl.UserEvent(ctx))   # complete only when set
+        threading.Timer(0.05, lambda: user.event.set_status(cl.command_execution_status.COMPLETE)).start()
+        wait_for(user)
+        names += user.waiters
+    assert len(set(names)) == 1 and names[0].startswith("diskpack-opencl-wait")
+
+
+def test_wait_for_in_a_forked_child_makes_its_own_helpers(ctx):
+    """A child forked after the parent's waits (multiprocessing's default on Linux) has
+    none of the parent's helper threads: its waits start their own, and end."""
+    import multiprocessing
+
+    from diskpack_cl.device.context import wait_for
+
+    wait_for(_Watched(_SlowEvent()))   # the parent's pool made
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("no fork here")
+    child = multiprocessing.get_context("fork").Process(target=wait_for, args=(_SlowEvent(),))
+    child.start()
+    child.join(20)
+    if child.is_alive():   # its wait never ended: the test fails, the child goes
+        child.kill()
+        child.join()
+    assert child.exitcode == 0
+
+
+class _SlowEvent:
+    """Not complete until 0.05 s after its first wait begins."""
+
+    command_execution_status = 1   # CL_RUNNING
+
+    def wait(self):
+        import time
+
+        time.sleep(0.05)
 
 
 @pytest.mark.parametrize("max_groups", [1, 2, 5])

@@ -9,6 +9,7 @@ pictures with several bands, odd shapes and ties.
 
 import numpy as np
 import pytest
+from hypothesis import given, strategies as st
 from scipy import ndimage
 
 from diskpack_cl.dithering import least_k
@@ -38,6 +39,18 @@ def test_field_at_is_the_pixel_lookup():
     col = np.clip(np.floor(pts[:, 0]).astype(int), 0, 69)
     assert np.array_equal(field_at(field, pts), field[row, col])
     assert np.array_equal(field_at(field[:, ::2], pts), field[:, ::2][row, np.minimum(col, 34)])
+
+
+@given(st.lists(st.tuples(st.floats(-3, 12, allow_subnormal=True), st.floats(-3, 9)), min_size=1,
+                max_size=40), st.integers(1, 10), st.integers(1, 7))
+def test_field_at_is_the_floored_pixel_lookup(pts, W, H):
+    """The lookup truncates (a cast) where the plain one floors: the same pixel wherever
+    the clip to the image keeps it, and 0 for every coordinate below 0 (-0.5 and -1.5 too)."""
+    field = np.arange(W * H, dtype=np.float32).reshape(H, W)
+    pts = np.array(pts, dtype=np.float64)
+    row = np.clip(np.floor(pts[:, 1]).astype(int), 0, H - 1)
+    col = np.clip(np.floor(pts[:, 0]).astype(int), 0, W - 1)
+    assert np.array_equal(field_at(field, pts), field[row, col])
 
 
 @pytest.mark.parametrize("k", [1, 5, 17, 99, 100, 150])

@@ -336,6 +336,22 @@ def test_bucket_order_is_the_stable_argsort(ids, top):
     np.testing.assert_array_equal(bucket_order(bid), np.argsort(bid, kind="stable"))
 
 
+@settings(max_examples=200)
+@given(st.lists(st.integers(0, 2 ** 32 + 5), max_size=300), st.sampled_from([2 ** 8, 2 ** 17, 2 ** 33]),
+       st.randoms(use_true_random=False), st.booleans())
+def test_bucket_order_with_a_hint_is_the_stable_argsort(ids, top, rnd, near):
+    """A hint (a permutation: the previous step's order, or any other) never changes the
+    answer: numpy's stable argsort, ties in index order, whatever the hint."""
+    bid = np.array(ids, dtype=np.int64) % top
+    hint = np.argsort(bid, kind="stable") if near else np.arange(len(bid))
+    if near and len(bid) > 1:   # the order of a set that moved a little: a few swaps
+        i, j = rnd.randrange(len(bid)), rnd.randrange(len(bid))
+        hint[[i, j]] = hint[[j, i]]
+    else:
+        rnd.shuffle(hint)
+    np.testing.assert_array_equal(bucket_order(bid, hint=hint), np.argsort(bid, kind="stable"))
+
+
 def test_pairs_exactly_the_reach_apart_are_within_it():
     """An 8 x 8 lattice of spacing 1/8 on the torus, reach 1/8: its 128 lattice pairs, each
     at exactly the reach; a point moved to exactly the reach of one that stayed counts."""

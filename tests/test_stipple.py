@@ -619,3 +619,32 @@ def test_finite_rows_is_all_isfinite_along_rows(rows):
 
     a = np.array(rows, dtype=np.float64).reshape(-1, 2)
     np.testing.assert_array_equal(_finite_rows(a), np.all(np.isfinite(a), axis=1))
+
+
+@settings(max_examples=50)
+@given(st.lists(st.tuples(st.booleans(), st.sampled_from([0.0, -0.0, 2.5, np.nan, np.inf]),
+                          st.floats(-1e3, 1e3)), max_size=40))
+def test_where_rows_is_the_broadcast_where(rows):
+    """The steps' row choice (a copy and its dropped rows) against ``np.where`` broadcast
+    over the rows, bit for bit (signed zeros and NaN included)."""
+    from diskpack_cl.stipple import _where_rows
+
+    keep = np.array([r[0] for r in rows], dtype=bool)
+    a = np.array([[r[1], r[2]] for r in rows], dtype=np.float64).reshape(-1, 2)
+    b = np.array([[r[2], -r[1]] for r in rows], dtype=np.float64).reshape(-1, 2)
+    got, want = _where_rows(keep, a, b), np.where(keep[:, None], a, b)
+    assert got.tobytes() == want.tobytes()
+    assert got is not a
+
+
+@settings(max_examples=50)
+@given(st.lists(st.tuples(st.floats(0, 9000), st.floats(0, 9000), st.floats(-5, 5), st.floats(-5, 5)),
+                min_size=1, max_size=40))
+def test_moved_is_the_mean_hypot(rows):
+    """The steps' mean displacement against ``np.hypot``'s, to a few ulps (and within
+    1e-150 px: a move below 1e-154 px squares to 0, where hypot keeps it)."""
+    from diskpack_cl.stipple import _moved
+
+    a = np.array(rows, dtype=np.float64)
+    old, new = a[:, :2], a[:, :2] + a[:, 2:]
+    assert _moved(old, new) == pytest.approx(np.mean(np.hypot(*(new - old).T)), rel=1e-14, abs=1e-150)

@@ -175,3 +175,32 @@ def test_centroids_begun_before_the_mics_change_no_step(ctx, monkeypatch):
     def measures(entry):   # what a step found, not its seconds
         return {k: v for k, v in entry.items() if not (k.endswith("_s") or k == "seconds")}
     assert [measures(h) for h in begun.history] == [measures(h) for h in after.history]
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), weighted=st.booleans())
+def test_begun_centroids_ignore_the_callers_changes_meanwhile(ctx, seed, n, weighted):
+    """On the ``cells`` route a helper thread prepares the centroids' pass: it works on
+    copies, so the caller's arrays changed after ``start_centroids`` returns (here before
+    the helper even starts) change nothing; the answer is the raster's, bit for bit."""
+    import threading
+
+    dom = Domain.rect(40.0, 30.0)
+    eng = make_engine(dom, n, "opencl", device=ctx, grid=(48, 64))
+    if eng.name != "cells":
+        pytest.skip("the raster route begins nothing early")
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2)) * (40.0, 30.0)
+    w = (0.5 * np.sqrt(dom.area / n) * rng.random(n)) ** 2 if weighted else None
+    dens = rng.random((48, 64)).astype(np.float32)
+    want = eng.raster.centroids(pts, w, dens)
+    eng.start_centroids(pts, w, dens)()   # the helper made
+    hold = threading.Event()
+    eng._helper.submit(hold.wait)          # busy until the caller's arrays have changed
+    done = eng.start_centroids(pts, w, dens)
+    pts[:] = 1.0
+    if w is not None:
+        w[:] = 0.0
+    hold.set()
+    for got, ref_ in zip(done(), want):
+        np.testing.assert_array_equal(got, ref_)

@@ -251,6 +251,7 @@ class PowerRaster(DeviceStage):
             self._k_fused = sums["power_sums_tile"] if layout == "tile" else None
             self._real = np.float64 if fp64 else np.float32
         self._density = None
+        self._bucket_order = None   # the sites' last bucket order (_buckets)
         k = self.program("raster_mic", {"PERIODIC": periodic})
         self._k_max, self._k_argmax = k["cell_max"], k["cell_argmax"]
         self._groups = {name: group_size(k[name], dev, REDUCE_GROUP) for name in k}
@@ -317,16 +318,21 @@ class PowerRaster(DeviceStage):
             bw = bh = max(bw, bh)
             nbx = max(1, int(np.ceil(dom.width / bw)))
             nby = max(1, int(np.ceil(dom.height / bh)))
-        bxi = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
-        byi = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
-        bid = byi * nbx + bxi
-        order = bucket_order(bid)
+        bid = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
+        bid *= nbx
+        bid += np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
+        # the last order is a hint (the same answer, found faster where the sites moved little)
+        order = self._bucket_order = bucket_order(bid, hint=self._bucket_order)
         counts = np.bincount(bid, minlength=nbx * nby)
         start = np.zeros(nbx * nby + 1, np.int32)
         np.cumsum(counts, out=start[1:])
-        wmax = np.zeros(nbx * nby, np.float32)
-        nonempty = counts > 0
-        wmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+        # the weights are at most 0 (shifted by their maximum): an empty bucket's 0 is above
+        # them all, as the kernels expect; maximum.at is several times faster than reduceat
+        # over a bucket grid of about two sites a bucket
+        wmax = np.full(nbx * nby, -np.inf, np.float32)
+        with np.errstate(invalid="ignore"):   # NaN only where a test bypassed check_sites
+            np.maximum.at(wmax, bid, w)
+        wmax[counts == 0] = 0.0
         return order, start, wmax, (nbx, nby, bw, bh)
 
     # -- work --------------------------------------------------------------
@@ -391,6 +397,7 @@ class PowerRaster(DeviceStage):
         maps = self._map_buffers(nx * ny)
         self._generation += 1
         self._label(distance, bufs, grid, wmax, maps)
+        self.release_lent()   # the labels are done: the site arrays are read
         t1 = time.perf_counter()
         self.timings.add("raster_labels", t1 - t0)
         if not (distance and neighbors):
@@ -423,9 +430,9 @@ class PowerRaster(DeviceStage):
         # largest weight shifts all of them equally, so subtract it.
         w32 = (w - w.max()).astype(np.float32)
         order, start, wmax_b, grid = self._buckets(pts, w32)
-        host = {"site": np.take(pts, order, axis=0).astype(np.float32), "weight": w32[order],
+        host = {"site": np.take(pts.astype(np.float32), order, axis=0), "weight": w32[order],
                 "id": order.astype(np.int32), "start": start, "wmax": wmax_b}
-        bufs = tuple(self.upload(name, a) for name, a in host.items())
+        bufs = tuple(self.lend(name, a) for name, a in host.items())   # no copies on a CPU
         return pts, bufs, grid, float(wmax_b.max())
 
     def centroids(self, points, weights=None, density=None):
@@ -481,7 +488,7 @@ class PowerRaster(DeviceStage):
         t0 = time.perf_counter()
         pts, bufs, grid, wmax = self._upload_sites(points, weights)
         b_density, b_pts, acc, b_acc = self._sums_buffers(pts, density)
-        b_status = self.upload("status", np.zeros(1, np.int32))
+        b_status = self.zeros("status", 4)
         uploads = self._uploads
         # every band queued now: the device works through them while the host goes on
         events = list(self._tile_bands(self._k_fused, bufs, grid, wmax, b_density, b_pts,
@@ -495,6 +502,7 @@ class PowerRaster(DeviceStage):
             if self._uploads != uploads:
                 raise RuntimeError("the centroids' pass was overwritten by a later pass of this "
                                    "raster (it reuses its device buffers): read it first")
+            self.release_lent()
             self._check_status(b_status)
             self.timings.add("raster_labels", time.perf_counter() - t1)
             with self.timings("centroids"):
@@ -534,7 +542,7 @@ class PowerRaster(DeviceStage):
         and refuse the result if the kernel set a status bit."""
         ny, nx = self.shape
         dom = self.domain
-        b_status = self.upload("status", np.zeros(1, np.int32))
+        b_status = self.zeros("status", 4)
         if not distance and self.layout == "tile":
             self._run_tiles(self._k_tile, "power_labels_tile", bufs, grid, wmax,
                             maps["label"][0], b_status)
@@ -579,6 +587,7 @@ class PowerRaster(DeviceStage):
             self.wait(self._k_sums(self.queue, (seg, padded(min(band, ny - y0), g)), (1, g),
                                     label_buf, b_density, b_pts, np.int32(n),
                                     np.int32(nx), np.int32(ny), np.int32(y0), b_acc), "cell_sums")
+        self.release_lent()
         return self._sums_to_centroids(acc, b_acc, sites)
 
     def _sums_buffers(self, sites, density):
@@ -599,9 +608,9 @@ class PowerRaster(DeviceStage):
                 buf = self.upload("density", d)
             self._density = (density, buf, d)
         cell = (self.domain.width / nx, self.domain.height / ny)
-        b_pts = self.upload("grid_sites", np.ascontiguousarray(sites / cell, self._real))
-        acc = np.zeros((len(sites), 3), np.int64)
-        return self._density[1], b_pts, acc, self.upload("sums", acc)
+        b_pts = self.lend("grid_sites", np.ascontiguousarray(sites / cell, self._real))
+        acc = np.empty((len(sites), 3), np.int64)   # the sums come back into it
+        return self._density[1], b_pts, acc, self.zeros("sums", acc.nbytes)
 
     def _sums_to_centroids(self, acc, b_acc, sites):
         """``(centroids, mass)`` from the device's fixed-point sums."""
@@ -609,10 +618,16 @@ class PowerRaster(DeviceStage):
         dom = self.domain
         hx, hy = dom.width / nx, dom.height / ny
         cl.enqueue_copy(self.queue, acc, b_acc)
-        sums = acc / CELL_SUMS_FIX
-        mass = sums[:, 0]
+        sums = acc.astype(np.float64)
+        # FIX is a power of two: (sum / FIX) / (mass / FIX) is sum / mass exactly, the
+        # values of dividing every sum by FIX first, with fewer whole-set temporaries
+        mass = sums[:, 0] / CELL_SUMS_FIX
+        c = np.empty_like(sites)
         with np.errstate(invalid="ignore", divide="ignore"):
-            c = sites + np.stack([sums[:, 1] / mass * hx, sums[:, 2] / mass * hy], 1)
+            for k, h in enumerate((hx, hy)):
+                np.divide(sums[:, k + 1], sums[:, 0], out=c[:, k])
+                c[:, k] *= h
+        c += sites
         if dom.periodic:
             c = dom.wrap(c)
         return c, mass

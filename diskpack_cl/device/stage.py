@@ -10,6 +10,7 @@ waits that let Ctrl-C through, and kernel profiling.
 
 from __future__ import annotations
 
+import numpy as np
 import pyopencl as cl
 
 from .context import describe, get_context, wait_for
@@ -87,6 +88,7 @@ class DeviceStage:
         #: Vector lanes of the CPU tile layout (:func:`tile_lanes`).
         self.lanes = tile_lanes(self.verdict)
         self._kept = {}
+        self._lent = {}   # lend's buffers, with their host arrays
 
     @property
     def device(self):
@@ -130,6 +132,35 @@ class DeviceStage:
         buf = self.buffer(name, host.nbytes)
         if host.nbytes:
             cl.enqueue_copy(self.queue, buf, host, is_blocking=wait)
+        return buf
+
+    def lend(self, name, host):
+        """A read-only buffer `name` of the host array `host` (C-contiguous), which must stay
+        unchanged until the kernels queued after this call are done.
+
+        On a CPU device the array itself (``USE_HOST_PTR``: no copy, and no wait for the
+        device's threads to make one, which a loaded machine stretches to milliseconds),
+        kept with its buffer until :meth:`release_lent`, or until `name` is lent again (after
+        the queue is done with it); elsewhere :meth:`upload`."""
+        if not self.is_cpu or not host.nbytes:
+            return self.upload(name, host)
+        if name in self._lent:
+            self.queue.finish()   # idle but after a pass left unread: its kernels end first
+        buf = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
+        self._lent[name] = buf
+        return buf
+
+    def release_lent(self):
+        """Drop the lent arrays (:meth:`lend`): for a caller whose kernels that read them are
+        done, so that a step's arrays are not held beside the next step's work."""
+        self._lent.clear()
+
+    def zeros(self, name, nbytes):
+        """:meth:`buffer` `name` with its first `nbytes` set to zero on the device (queued: no
+        host array to make, zero and copy)."""
+        buf = self.buffer(name, nbytes)
+        if nbytes:
+            cl.enqueue_fill_buffer(self.queue, buf, np.zeros(1, np.int32), 0, nbytes)
         return buf
 
     def wait(self, event, name):
