@@ -845,12 +845,41 @@ def radius_octaves(r):
     return [np.flatnonzero(lr == c) for c in np.unique(lr)]
 
 
-def certify_disks(centers, radii, domain):
+def _octave_trees(classes, octaves, domain):
+    """The trees of `octaves` (``(classes, trees)``) where they are those of `classes`,
+    else a None for each class (made anew)."""
+    if octaves is None or domain.periodic or len(octaves[0]) != len(classes) \
+            or not all(np.array_equal(a, b) for a, b in zip(octaves[0], classes)):
+        return [None] * len(classes)
+    return list(octaves[1])
+
+
+def certify_disks(centers, radii, domain, *, octaves=None):
     """Certify closed disks: inside the domain and pairwise disjoint (exact float64).
 
     Every pair that could overlap is examined: for each radius octave a
     KD-tree returns, for each disk, all centres of that octave within
     ``r_i`` plus the octave's largest radius, so no overlapping pair escapes.
+
+    Parameters
+    ----------
+    centers : (n, 2) array_like
+        The disks' centres.
+    radii : (n,) array_like
+        Their radii.
+    domain : Domain
+        Where they must lie.
+    octaves : tuple, optional
+        ``(classes, trees)``: the centres' indices grouped by
+        :func:`radius_octaves` and a ``cKDTree`` of each group's centres, as
+        :func:`~diskpack_cl.radii.certified_k` has them from its search for
+        the largest k.  They serve where the groups are those of `radii`
+        (scaled radii can round across an octave's border) in a rectangle;
+        otherwise the trees are made here.  The certificate is the same.
+
+    Returns
+    -------
+    Certificate
 
     Examples
     --------
@@ -879,9 +908,11 @@ def certify_disks(centers, radii, domain):
     # smaller disks' queries stay within their own octaves' reach
     i, j = [], []
     below = np.zeros(len(C), bool)   # the disks of the octaves done
-    for cls in radius_octaves(r):   # ascending
+    classes = radius_octaves(r)   # ascending
+    for cls, tree_c in zip(classes, _octave_trees(classes, octaves, domain)):
         rows = np.concatenate([np.flatnonzero(below), cls])
-        _, tree_c = kdtree(C[cls], domain)
+        if tree_c is None:
+            tree_c = kdtree(C[cls], domain)[1]
         ii, jj = _query_pairs(tree_c, C[rows], r[rows] + r[cls].max())
         ii, jj = rows[ii], cls[jj]
         keep = below[ii] | (ii < jj)   # a pair from below is found once

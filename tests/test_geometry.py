@@ -361,3 +361,28 @@ def test_certify_disks_with_a_subnormal_radius():
     r = np.array([4.5e-320, 1.5, 1.5, 3.0])
     assert [c.tolist() for c in radius_octaves(r)] == [[0], [1, 2], [3]]
     assert certify_disks([[4, 4], [14, 4], [24, 4], [34, 9]], r, Domain.rect(40, 30)).valid
+
+
+def _spread_disks(seed, n, spread):
+    """Centres in a 3 x 2 rectangle and radii spanning `spread` (several octaves)."""
+    rng = np.random.default_rng(seed)
+    C = rng.random((n, 2)) * (3.0, 2.0)
+    return C, 0.3 / np.sqrt(n) * spread ** -rng.random(n) * rng.uniform(0.3, 2.0)
+
+
+@SETTINGS
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), spread=st.sampled_from([1.0, 30.0, 1000.0]),
+       scale=st.sampled_from([1.0, 0.5, 0.37, 1.0 - 4 * np.finfo(float).eps]), other=st.booleans())
+def test_certify_disks_with_octave_trees_is_the_same(seed, n, spread, scale, other):
+    """The octave trees certified_k hands over (of radii proportional to these, or with
+    `other` of unrelated radii, which must not be used) give the certificate made anew."""
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.geometry import radius_octaves
+
+    C, r = _spread_disks(seed, n, spread)
+    base = _spread_disks(seed + 1, n, 1000.0)[1] if other else r
+    classes = radius_octaves(base)
+    trees = [cKDTree(C[c]) for c in classes]
+    dom = Domain.rect(3.0, 2.0)
+    assert certify_disks(C, r * scale, dom, octaves=(classes, trees)) == certify_disks(C, r * scale, dom)
