@@ -338,14 +338,16 @@ def _largest_valid_k(points, r, width, height):
     k = float(np.min(edge / r))
     if len(p) < 2:
         return max(k, 0.0), None
-    tree = cKDTree(p)
+    classes = radius_octaves(r)
+    rmax = [r[c].max() for c in classes]
+    # the tree of all points and those of the octaves at once, on every core (cKDTree
+    # releases the GIL)
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        tree, *trees = pool.map(lambda c: cKDTree(p[c]), [slice(None), *classes])
     d, j = tree.query(p, k=2, workers=-1)
     k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
     if k <= 0:
         return 0.0, None
-
-    classes = radius_octaves(r)
-    rmax = [r[c].max() for c in classes]
 
     def pair_k(ab):
         # every pair of octaves (a, b) within the bound k has: a pair it misses has a
@@ -361,9 +363,8 @@ def _largest_valid_k(points, r, width, height):
         dij = np.hypot(p[i, 0] - p[jj, 0], p[i, 1] - p[jj, 1])
         return float(np.min(dij / (r[i] + r[jj])))
 
-    # the trees and the pairs of octaves on every core (cKDTree releases the GIL)
+    # the pairs of octaves on every core
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        trees = list(pool.map(lambda c: cKDTree(p[c]), classes))
         pairs = [(a, b) for a in range(len(classes)) for b in range(a, len(classes))]
         k = min(k, *pool.map(pair_k, pairs))
     return max(k, 0.0), (classes, trees)
