@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from itertools import combinations
 
@@ -845,12 +846,78 @@ def radius_octaves(r):
     return [np.flatnonzero(lr == c) for c in np.unique(lr)]
 
 
-def certify_disks(centers, radii, domain):
+def _octave_trees(classes, octaves, domain):
+    """The trees of `octaves` (``(classes, trees)``) where they are those of `classes`,
+    else a None for each class (made anew)."""
+    if octaves is None or domain.periodic or len(octaves[0]) != len(classes) \
+            or not all(np.array_equal(a, b) for a, b in zip(octaves[0], classes)):
+        return [None] * len(classes)
+    return list(octaves[1])
+
+
+def _octave_pairs(C, r, domain, octaves):
+    """``(i, j)``: every pair of disks that could overlap, each once.
+
+    One tree per radius octave: disk i meets the disks of octave c only
+    within ``r_i`` plus the largest radius of c, a short reach even when the
+    radii vary by orders of magnitude.  The pairs of two octaves a <= b come
+    from one dual-tree search of their trees (the disks of a within reach
+    of those of b; within one octave each pair once, from its lower index),
+    all pairs of octaves at once on every core (cKDTree releases the GIL):
+    the pairs that a query of each disk of a against the tree of b within
+    ``r_i`` plus the largest radius of b finds, without querying every disk
+    of the lower octaves again for each higher one.
+    """
+    from concurrent.futures import ThreadPoolExecutor   # (this module is read at start-up)
+
+    classes = radius_octaves(r)   # ascending
+    rmax = [r[c].max() for c in classes]
+
+    def pairs(ab):
+        a, b = ab
+        found = trees[a].sparse_distance_matrix(trees[b], (rmax[a] + rmax[b]) * (1 + 1e-9),
+                                                output_type="ndarray")
+        ii, jj = classes[a][found["i"]], classes[b][found["j"]]
+        keep = found["v"] <= (r[ii] + rmax[b]) * (1 + 1e-12)
+        if a == b:
+            keep &= ii < jj
+        return ii[keep], jj[keep]
+
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        trees = list(pool.map(lambda ct: kdtree(C[ct[0]], domain)[1] if ct[1] is None else ct[1],
+                              zip(classes, _octave_trees(classes, octaves, domain))))
+        found = list(pool.map(pairs, [(a, b) for b in range(len(classes)) for a in range(b + 1)]))
+    return (np.concatenate([f[0] for f in found]).astype(np.intp),
+            np.concatenate([f[1] for f in found]).astype(np.intp))
+
+
+def certify_disks(centers, radii, domain, *, octaves=None):
     """Certify closed disks: inside the domain and pairwise disjoint (exact float64).
 
-    Every pair that could overlap is examined: for each radius octave a
-    KD-tree returns, for each disk, all centres of that octave within
-    ``r_i`` plus the octave's largest radius, so no overlapping pair escapes.
+    Every pair that could overlap is examined: for each radius octave, the
+    centres of that octave within ``r_i`` plus the octave's largest radius of
+    each disk i of that octave or a lower one (:func:`_octave_pairs`), so no
+    overlapping pair escapes.
+
+    Parameters
+    ----------
+    centers : (n, 2) array_like
+        The disks' centres.
+    radii : (n,) array_like
+        Their radii.
+    domain : Domain
+        Where they must lie.
+    octaves : tuple, optional
+        ``(classes, trees)``: the centres' indices grouped by
+        :func:`radius_octaves` and a ``cKDTree`` of each group's centres, as
+        :func:`~diskpack_cl.radii.certified_k` has them from its search for
+        the largest k.  They serve where the groups are those of `radii`
+        (scaled radii can round across an octave's border) in a rectangle;
+        otherwise the trees are made here.  The certificate is the same.
+
+    Returns
+    -------
+    Certificate
 
     Examples
     --------
@@ -872,23 +939,7 @@ def certify_disks(centers, radii, domain):
         edge = np.minimum.reduce([C[:, 0], domain.width - C[:, 0], C[:, 1], domain.height - C[:, 1]])
         edge_gap = float(np.min(edge - r))
         inside = edge_gap >= 0
-    # one tree per radius octave: disk i meets the disks of octave c only
-    # within r_i + (largest radius of c), a short query even when the radii
-    # vary by orders of magnitude; a pair is asked for by its disk of the
-    # lower octave only (both ask within one octave: kept once), so the
-    # smaller disks' queries stay within their own octaves' reach
-    i, j = [], []
-    below = np.zeros(len(C), bool)   # the disks of the octaves done
-    for cls in radius_octaves(r):   # ascending
-        rows = np.concatenate([np.flatnonzero(below), cls])
-        _, tree_c = kdtree(C[cls], domain)
-        ii, jj = _query_pairs(tree_c, C[rows], r[rows] + r[cls].max())
-        ii, jj = rows[ii], cls[jj]
-        keep = below[ii] | (ii < jj)   # a pair from below is found once
-        i.append(ii[keep])
-        j.append(jj[keep])
-        below[cls] = True
-    i, j = np.concatenate(i), np.concatenate(j)
+    i, j = _octave_pairs(C, r, domain, octaves)
     d = domain.shortest(C[j] - C[i])
     gaps = np.hypot(d[:, 0], d[:, 1]) - r[i] - r[j]
     pair_gap = float(gaps.min()) if len(gaps) else np.inf

@@ -328,20 +328,29 @@ def largest_valid_k(points, r, width, height):
     >>> largest_valid_k(np.array([[1.0, 1.0], [3.0, 1.0]]), np.array([1.0, 1.0]), 4, 2)
     1.0
     """
+    return _largest_valid_k(points, r, width, height)[0]
+
+
+def _largest_valid_k(points, r, width, height):
+    """:func:`largest_valid_k` and the octaves it searched: ``(k, (classes, trees))``
+    (:func:`~diskpack_cl.geometry.radius_octaves` of `r`, a cKDTree of each class's
+    points), or ``(k, None)`` where it found k without them."""
     p = np.asarray(points, dtype=np.float64)
     r = np.asarray(r, dtype=np.float64)
     edge = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
     k = float(np.min(edge / r))
     if len(p) < 2:
-        return max(k, 0.0)
-    tree = cKDTree(p)
+        return max(k, 0.0), None
+    classes = radius_octaves(r)
+    rmax = [r[c].max() for c in classes]
+    # the tree of all points and those of the octaves at once, on every core (cKDTree
+    # releases the GIL)
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        tree, *trees = pool.map(lambda c: cKDTree(p[c]), [slice(None), *classes])
     d, j = tree.query(p, k=2, workers=-1)
     k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
     if k <= 0:
-        return 0.0
-
-    classes = radius_octaves(r)
-    rmax = [r[c].max() for c in classes]
+        return 0.0, None
 
     def pair_k(ab):
         # every pair of octaves (a, b) within the bound k has: a pair it misses has a
@@ -357,12 +366,11 @@ def largest_valid_k(points, r, width, height):
         dij = np.hypot(p[i, 0] - p[jj, 0], p[i, 1] - p[jj, 1])
         return float(np.min(dij / (r[i] + r[jj])))
 
-    # the trees and the pairs of octaves on every core (cKDTree releases the GIL)
+    # the pairs of octaves on every core
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        trees = list(pool.map(lambda c: cKDTree(p[c]), classes))
         pairs = [(a, b) for a in range(len(classes)) for b in range(a, len(classes))]
         k = min(k, *pool.map(pair_k, pairs))
-    return max(k, 0.0)
+    return max(k, 0.0), (classes, trees)
 
 
 def certified_k(points, r, width, height, domain):
@@ -387,14 +395,14 @@ def certified_k(points, r, width, height, domain):
     >>> round(float(k), 9), cert.valid
     (1.0, True)
     """
-    k = largest_valid_k(points, r, width, height)
+    k, octaves = _largest_valid_k(points, r, width, height)
     if not k > 0:
         raise ValueError("two stipples coincide or lie on the image border: no valid radius")
     shrink = 1.0 - 4 * np.finfo(float).eps
     for _ in range(8):
         k *= shrink
         radii = k * r
-        cert = certify_disks(points, radii, domain)
+        cert = certify_disks(points, radii, domain, octaves=octaves)   # its trees: the same pairs
         if cert.valid:
             return k, radii, cert
         shrink = shrink * shrink * shrink * (1 - 1e-12)

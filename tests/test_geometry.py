@@ -361,3 +361,55 @@ def test_certify_disks_with_a_subnormal_radius():
     r = np.array([4.5e-320, 1.5, 1.5, 3.0])
     assert [c.tolist() for c in radius_octaves(r)] == [[0], [1, 2], [3]]
     assert certify_disks([[4, 4], [14, 4], [24, 4], [34, 9]], r, Domain.rect(40, 30)).valid
+
+
+def _spread_disks(seed, n, spread):
+    """Centres in a 3 x 2 rectangle and radii spanning `spread` (several octaves)."""
+    rng = np.random.default_rng(seed)
+    C = rng.random((n, 2)) * (3.0, 2.0)
+    return C, 0.3 / np.sqrt(n) * spread ** -rng.random(n) * rng.uniform(0.3, 2.0)
+
+
+@SETTINGS
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), spread=st.sampled_from([1.0, 30.0, 1000.0]),
+       scale=st.sampled_from([1.0, 0.5, 0.37, 1.0 - 4 * np.finfo(float).eps]), other=st.booleans())
+def test_certify_disks_with_octave_trees_is_the_same(seed, n, spread, scale, other):
+    """The octave trees certified_k hands over (of radii proportional to these, or with
+    `other` of unrelated radii, which must not be used) give the certificate made anew."""
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.geometry import radius_octaves
+
+    C, r = _spread_disks(seed, n, spread)
+    base = _spread_disks(seed + 1, n, 1000.0)[1] if other else r
+    classes = radius_octaves(base)
+    trees = [cKDTree(C[c]) for c in classes]
+    dom = Domain.rect(3.0, 2.0)
+    assert certify_disks(C, r * scale, dom, octaves=(classes, trees)) == certify_disks(C, r * scale, dom)
+
+
+@SETTINGS
+@given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(2, 80),
+       spread=st.sampled_from([1.0, 30.0, 1000.0]))
+def test_certify_disks_checks_the_pairs_each_disk_asks_for(seed, periodic, n, spread):
+    """The pairs of the octaves' dual-tree searches are those a query of each disk finds
+    within its radius plus the largest radius of each octave not below its own (the
+    certificate's pairs_checked), each once, against a scan of all pairs."""
+    from diskpack_cl.geometry import radius_octaves
+
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(3.0, 2.0)
+    C = rng.random((n, 2)) * (dom.width, dom.height)
+    r = 0.3 / np.sqrt(n) * spread ** -rng.random(n) * rng.uniform(0.3, 2.0)
+    octave = np.empty(n, int)
+    for o, c in enumerate(radius_octaves(r)):
+        octave[c] = o
+    rmax = np.array([r[octave == o].max() for o in range(octave.max() + 1)])
+    d = C[:, None, :] - C[None, :, :]
+    if periodic:
+        d -= np.round(d)
+    dist = np.hypot(d[..., 0], d[..., 1])
+    i, j = np.indices((n, n))
+    asks = (octave[i] < octave[j]) | ((octave[i] == octave[j]) & (i < j))
+    within = dist <= (r[:, None] + rmax[octave][None, :]) * (1 + 1e-12)
+    assert certify_disks(C, r, dom).pairs_checked == int(np.sum(asks & within))

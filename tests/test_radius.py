@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from diskpack_cl.measures import hexagonal_radius, min_distance, normalized_radius
 from diskpack_cl.relax import max_points_for_radius
@@ -56,3 +58,23 @@ def test_an_invalid_certificate_raises(monkeypatch):
     with pytest.raises(CertificateError, match="failed their certificate") as info:
         certified_k([[1.0, 1.0], [3.0, 1.0]], np.ones(2), 4, 2, Domain.rect(4, 2))
     assert info.value.certificate is bad
+
+
+@settings(max_examples=30)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 400), spread=st.sampled_from([1.0, 30.0, 1000.0]))
+def test_certified_k_certificate_is_certify_disks_own(seed, n, spread):
+    """certified_k certifies with the trees of its search for k: the certificate of
+    certify_disks on its own, and k is largest_valid_k's shrunk by ulps."""
+    from diskpack_cl.domain import Domain
+    from diskpack_cl.geometry import certify_disks
+    from diskpack_cl.radii import certified_k, largest_valid_k
+
+    rng = np.random.default_rng(seed)
+    C = rng.random((n, 2)) * (3.0, 2.0)
+    r = spread ** -rng.random(n)
+    assume(np.unique(C, axis=0).shape[0] == n)
+    dom = Domain.rect(3.0, 2.0)
+    k, radii, cert = certified_k(C, r, 3.0, 2.0, dom)
+    assert cert == certify_disks(C, radii, dom)
+    assert cert.valid and np.array_equal(radii, k * r)
+    assert largest_valid_k(C, r, 3.0, 2.0) * (1 - 1e-12) <= k <= largest_valid_k(C, r, 3.0, 2.0)
