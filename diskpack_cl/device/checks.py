@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..io import atomic_write
-
+from .cache import cache_dir   # (one of the checks' names too: where the verdicts are)
 
 __all__ = ["PROGRAMS", "CORE", "VECTOR_PROGRAMS", "Verdict", "UntrustedProgram", "DeviceWarning",
            "cache_dir", "verdict_of", "warn_fallback", "check_table", "checks_enabled", "use_verdict"]
@@ -132,21 +132,6 @@ def checks_enabled():
 _CHILD = "DISKPACK_CL_IN_DEVICE_CHECK"
 #: In the child: the verdict under check (the build switches the stages read).
 _CHILD_VERDICT = None
-
-
-def cache_dir():
-    """The folder of the verdicts: ``$DISKPACK_CL_CACHE_DIR``, else ``$XDG_CACHE_HOME/diskpack_cl``
-    (``~/.cache/diskpack_cl``).
-
-    Examples
-    --------
-    >>> isinstance(cache_dir(), Path)
-    True
-    """
-    env = os.environ.get("DISKPACK_CL_CACHE_DIR")
-    if env:
-        return Path(env)
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "diskpack_cl"
 
 
 @dataclass

@@ -55,7 +55,8 @@ def _usable_pocl_cache():
     """PoCL refuses every context when ``POCL_CACHE_DIR`` is set empty: point it at a
     private folder of ours instead (before PoCL starts, which reads it once), with a note."""
     if os.environ.get("POCL_CACHE_DIR", None) == "":
-        from .checks import DeviceWarning, cache_dir
+        from .cache import cache_dir
+        from .checks import DeviceWarning
 
         os.environ["POCL_CACHE_DIR"] = str(cache_dir() / "pocl")
         warnings.warn(DeviceWarning(f"POCL_CACHE_DIR was set empty, which PoCL cannot use: "

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pyopencl as cl
 
+from .cache import cache_dir
+
 __all__ = ["kernel_dir", "build_program", "inline_math", "BuildError"]
 
 _PROGRAMS: dict = {}
@@ -35,8 +37,6 @@ def _kernels(prg):
 def _binary_path(ctx, src, opts):
     """Where the binary of `src` built with `opts` for the device of `ctx` is kept: a hash
     of the source, the kernel folder's headers, the options and the device and driver."""
-    from .checks import cache_dir   # the checks build programs: not at import
-
     dev = ctx.devices[0]
     key = hashlib.sha256("\0".join([src, *opts, dev.name, dev.platform.version,
                                      dev.driver_version, dev.version]).encode())
