@@ -145,9 +145,7 @@ def load_picture(path, *, allow_large=False):
     :func:`to_gray` then makes the gray of :func:`load_gray` from it, bit
     for bit.  Other files come back as :func:`load_gray`'s gray image.  A
     stippling that is handed the small array makes its own gray image, and
-    frees it when its fields are made.  Inside
-    :func:`~diskpack_cl.memory.freed_memory_kept`, the pages of that gray
-    image are touched on another core while the file decodes.
+    frees it when its fields are made.
 
     Parameters
     ----------
@@ -172,9 +170,7 @@ def load_picture(path, *, allow_large=False):
     >>> pic.dtype, bool((to_gray(pic) == load_gray(sample_image_path())).all())
     (dtype('uint8'), True)
     """
-    # inside the caller's freed_memory_kept, the pages of the pixels and of the gray image
-    # that a stippling makes of them are touched on another core while this one decodes
-    im, name = _open_image(path, allow_large, reserve=GRAY_BYTES_PER_PIXEL)
+    im, name = _open_image(path, allow_large)
     if im.mode in ("L", "LA", "RGB", "RGBA") and im.width and im.height:
         return np.asarray(im)
     return _pil_to_gray(im, name=name)

@@ -78,3 +78,24 @@ def test_certified_k_certificate_is_certify_disks_own(seed, n, spread):
     assert cert == certify_disks(C, radii, dom)
     assert cert.valid and np.array_equal(radii, k * r)
     assert largest_valid_k(C, r, 3.0, 2.0) * (1 - 1e-12) <= k <= largest_valid_k(C, r, 3.0, 2.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 40), st.integers(1, 40), st.integers(0, 2**32 - 1),
+       st.sampled_from(["random", "white", "black", "levels"]), st.integers(1, 64))
+def test_detail_ell_gathers_the_dark_pixels_as_a_mask_would(h, w, seed, kind, part):
+    """detail_ell's in-place gathering of the pixels darker than 0.05, a part at a time,
+    gives the scale of the masked copy (every part size, white and black pictures)."""
+    from diskpack_cl import radii
+
+    rng = np.random.default_rng(seed)
+    gray = {"random": rng.random((h, w)), "white": np.ones((h, w)), "black": np.zeros((h, w)),
+            "levels": rng.integers(0, 256, (h, w)) / 255.0}[kind]
+    d = 1.0 - gray
+    dark = d[d > 0.05]
+    dmed = float(np.median(dark)) if dark.size else float(d.mean())
+    expected = radii.detail_scale(float(d.sum()), 50, dmed)
+    flat = (1.0 - gray).reshape(-1)
+    gathered = radii._gathered_above(flat, 0.05, part=part)
+    assert gathered.tolist() == dark.tolist()
+    assert radii.detail_ell(gray, 50) == expected

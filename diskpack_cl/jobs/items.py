@@ -38,7 +38,7 @@ from ..drawing.writers import check_output_path, tone_dot_count, tone_dot_size, 
 from ..image import ToneOptions, gray_strips, load_picture, load_rgb, to_gray
 from ..io import (atomic_writes, box_record, check_not_inputs, check_points_path, read_points,
                  write_points)
-from ..memory import check_stipple_memory, freed_memory_kept
+from ..memory import check_stipple_memory
 from ..multipen import stipple_colors
 from ..options import changed
 from ..palette import grey_note
@@ -567,12 +567,9 @@ def stipple_item(item, *, device=None, callback=None, progress=None, verify=Fals
 
 def _stipple_item_run(item, device, callback, verify, profile, note):
     """The body of :func:`stipple_item`, in its run."""
-    # one block for the reading and the run: the pages touched while the picture decodes
-    # stay in the process for the run's gray image (image.load_picture)
-    with freed_memory_kept():
-        with stage("load"):
-            loaded = _stipple_item_load(item, device, note)
-        res = _stipple_item_stipple(item, loaded, device, callback, verify, profile)
+    with stage("load"):
+        loaded = _stipple_item_load(item, device, note)
+    res = _stipple_item_stipple(item, loaded, device, callback, verify, profile)
     grey = loaded.gray_sum is None and note is not None and grey_note(loaded.image, res.names, res.pen)
     if grey:
         note(grey)
