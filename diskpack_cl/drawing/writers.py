@@ -433,7 +433,9 @@ def write_npz(path, result):
     data.update(_certificate_fields(result))
     data.update(_pen_fields(result))
     with atomic_write(path, "wb") as fh:
-        np.savez_compressed(fh, **data)
+        # not compressed: float64 coordinates and radii shrink by 8 % in zlib, which takes
+        # 1.2 s for a million dots against 0.04 s
+        np.savez(fh, **data)
     return {"n": int(len(p))}
 
 
