@@ -80,7 +80,7 @@ def test_certified_k_certificate_is_certify_disks_own(seed, n, spread):
     assert largest_valid_k(C, r, 3.0, 2.0) * (1 - 1e-12) <= k <= largest_valid_k(C, r, 3.0, 2.0)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.integers(1, 40), st.integers(1, 40), st.integers(0, 2**32 - 1),
        st.sampled_from(["random", "white", "black", "levels"]), st.integers(1, 64))
 def test_detail_ell_gathers_the_dark_pixels_as_a_mask_would(h, w, seed, kind, part):

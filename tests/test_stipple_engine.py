@@ -177,7 +177,7 @@ def test_centroids_begun_before_the_mics_change_no_step(ctx, monkeypatch):
     assert [measures(h) for h in begun.history] == [measures(h) for h in after.history]
 
 
-@settings(max_examples=10, deadline=None)
+@settings(max_examples=10)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), weighted=st.booleans())
 def test_begun_centroids_ignore_the_callers_changes_meanwhile(ctx, seed, n, weighted):
     """On the ``cells`` route a helper thread prepares the centroids' pass: it works on
