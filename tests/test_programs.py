@@ -65,3 +65,12 @@ def test_a_cache_that_cannot_be_written_keeps_nothing_and_builds(ctx, kernels, t
     monkeypatch.setenv("DISKPACK_CL_CACHE_DIR", str(tmp_path / "blocked"))
     assert _value(ctx, "probe") == 4
     assert (tmp_path / "blocked").read_text() == "a file, not a folder"
+
+
+def test_a_build_log_is_not_shown(ctx, kernels, recwarn):
+    """A program whose build leaves a log (here a #warning) builds without pyopencl's
+    CompilerWarning: a log says nothing a user can act on, and a worker's broke the one
+    line of a Ctrl-C."""
+    (kernels / "probe.h").write_text('#warning "a note in the build log"\n#define VALUE 5\n')
+    assert _value(ctx, "probe") == 5
+    assert not [w for w in recwarn if issubclass(w.category, cl.CompilerWarning)]

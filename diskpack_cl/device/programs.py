@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import importlib.resources
 import os
+import warnings
 from pathlib import Path
 
 import pyopencl as cl
@@ -53,9 +54,19 @@ def _from_binary(ctx, path, opts):
     except OSError:
         return {}
     try:
-        return _kernels(cl.Program(ctx, ctx.devices[:1], [binary]).build(options=opts))
+        return _kernels(_quietly_built(cl.Program(ctx, ctx.devices[:1], [binary]), opts))
     except cl.Error:
         return {}
+
+
+def _quietly_built(prg, opts):
+    """`prg` built with `opts`, its driver's build log unshown: pyopencl warns of any log
+    that is not empty (a driver's notes, or the log of a worker interrupted mid-build, which
+    then broke a Ctrl-C's one line), and none says anything a user can act on; a build that
+    fails still raises."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cl.CompilerWarning)
+        return prg.build(options=opts)
 
 
 def _store(prg, path):
@@ -79,7 +90,7 @@ def _built(ctx, src, opts):
     path = _binary_path(ctx, src, opts)
     kernels = _from_binary(ctx, path, opts)
     if not kernels:
-        prg = cl.Program(ctx, src).build(options=opts)
+        prg = _quietly_built(cl.Program(ctx, src), opts)
         kernels = _kernels(prg)
         if kernels:
             _store(prg, path)
