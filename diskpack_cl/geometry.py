@@ -872,20 +872,25 @@ def _octave_pairs(C, r, domain, octaves):
 
     classes = radius_octaves(r)   # ascending
     rmax = [r[c].max() for c in classes]
+    err = np.geterr()   # the caller's handling of overflow (a reader's: none), in the pool too
+
+    def tree(ct):
+        with np.errstate(**err):
+            return kdtree(C[ct[0]], domain)[1] if ct[1] is None else ct[1]
 
     def pairs(ab):
         a, b = ab
-        found = trees[a].sparse_distance_matrix(trees[b], (rmax[a] + rmax[b]) * (1 + 1e-9),
-                                                output_type="ndarray")
-        ii, jj = classes[a][found["i"]], classes[b][found["j"]]
-        keep = found["v"] <= (r[ii] + rmax[b]) * (1 + 1e-12)
+        with np.errstate(**err):
+            found = trees[a].sparse_distance_matrix(trees[b], (rmax[a] + rmax[b]) * (1 + 1e-9),
+                                                    output_type="ndarray")
+            ii, jj = classes[a][found["i"]], classes[b][found["j"]]
+            keep = found["v"] <= (r[ii] + rmax[b]) * (1 + 1e-12)
         if a == b:
             keep &= ii < jj
         return ii[keep], jj[keep]
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        trees = list(pool.map(lambda ct: kdtree(C[ct[0]], domain)[1] if ct[1] is None else ct[1],
-                              zip(classes, _octave_trees(classes, octaves, domain))))
+        trees = list(pool.map(tree, zip(classes, _octave_trees(classes, octaves, domain))))
         found = list(pool.map(pairs, [(a, b) for b in range(len(classes)) for a in range(b + 1)]))
     return (np.concatenate([f[0] for f in found]).astype(np.intp),
             np.concatenate([f[1] for f in found]).astype(np.intp))

@@ -413,3 +413,19 @@ def test_certify_disks_checks_the_pairs_each_disk_asks_for(seed, periodic, n, sp
     asks = (octave[i] < octave[j]) | ((octave[i] == octave[j]) & (i < j))
     within = dist <= (r[:, None] + rmax[octave][None, :]) * (1 + 1e-12)
     assert certify_disks(C, r, dom).pairs_checked == int(np.sum(asks & within))
+
+
+def test_the_pair_search_keeps_the_callers_overflow_handling():
+    """certify_disks' pair search runs on a pool of threads; huge radii overflow there as in
+    the caller, under the caller's np.errstate (a reader's, which ignores it: numpy 1.x's
+    error state is per thread, and the pool's threads warned)."""
+    import warnings
+
+    from diskpack_cl import certify_disks
+    from diskpack_cl.domain import Domain
+
+    p = np.array([[1.0, 1.0], [3.0, 1.0], [2.0, 1.5]])
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cert = certify_disks(p, np.full(3, 1e308), Domain.rect(4, 2))
+    assert not cert.valid
