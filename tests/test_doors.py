@@ -34,7 +34,10 @@ def no_work(monkeypatch):
     def not_called(*args, **kwargs):
         raise AssertionError("the work started although an output is an input")
 
-    for module, name in [("diskpack_cl.jobs.items", "stipple"), ("diskpack_cl.jobs.items", "relax_poisson"),
+    # the subcommand's own name first (imported here with the real one: imported under the
+    # patch of reports.analyze, it kept the stub for the later tests)
+    for module, name in [("diskpack_cl.cli.analyze", "analyze"),
+                         ("diskpack_cl.jobs.items", "stipple"), ("diskpack_cl.jobs.items", "relax_poisson"),
                          ("diskpack_cl.poisson", "poisson_disk"), ("diskpack_cl.jobs.batch", "run_batch"),
                          ("diskpack_cl.drawing.writers", "read_stipple"), ("diskpack_cl.reports", "analyze")]:
         monkeypatch.setattr(importlib.import_module(module), name, not_called)
