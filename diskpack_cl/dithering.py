@@ -16,6 +16,25 @@ __all__ = ["error_diffusion"]
 PICK_CHUNK = 1 << 16
 
 
+def _wave(t, H, W):
+    """Rows ``r0..r1`` of anti-diagonal wavefront `t` (the pixels ``(r, t - 2 r)``) and
+    the slice that picks them from the flat row-major image (a row further is ``W - 2``
+    further: a strided view, not an index array).
+
+    Examples
+    --------
+    >>> r0, r1, sl = _wave(4, 3, 5)
+    >>> (r0, r1), np.arange(15)[sl].tolist()   # pixels (0, 4), (1, 2), (2, 0)
+    ((0, 2), [4, 7, 10])
+    """
+    r0 = max(0, -((W - 1 - t) // 2))  # ceil((t - W + 1) / 2)
+    r1 = min(H - 1, t // 2)
+    i0 = t + r0 * (W - 2)
+    if r1 == r0:   # (every wavefront of an image under 3 columns: its step would be 0 or less)
+        return r0, r1, slice(i0, i0 + 1)
+    return r0, r1, slice(i0, i0 + (r1 - r0) * (W - 2) + 1, W - 2)
+
+
 def _fs_wavefront(v):
     """Multi-level Floyd-Steinberg error diffusion of ``v >= 0``.
 
@@ -25,35 +44,49 @@ def _fs_wavefront(v):
     border is lost. Exactly the raster-order result, computed along
     anti-diagonal wavefronts: pixel (r, c) only depends on pixels with a
     smaller ``c + 2 r``, so each wavefront is one vectorized numpy step
-    (W + 2H steps instead of W * H Python iterations).
+    (W + 2H steps instead of W * H Python iterations). A pixel takes its
+    neighbours' errors in the order of their wavefronts: up-left, up, left,
+    then up-right.
+
+    The error owed to the next three wavefronts is kept in a ring of four
+    rows indexed by image row, so each step reads and writes contiguous
+    slices (and the image strided ones), not index arrays.
 
     Returns ``(counts, residual)``, both (H, W); residual is ``v + error - q``.
     """
     H, W = v.shape
-    Wp = W + 2  # one pad column each side absorbs the error lost at the border
-    buf = np.zeros((H + 1) * Wp)
-    buf.reshape(H + 1, Wp)[:H, 1 : W + 1] = v
-    q = np.zeros((H + 1) * Wp)
-    rows = np.arange(H)
+    flat = np.ascontiguousarray(v, dtype=np.float64).reshape(-1)
+    counts, resid = np.empty(H * W, np.int64), np.empty(H * W)
+    T = W + 2 * H - 2
+    # ring[t % 4][r]: pixel (r, t - 2 r) of wavefront t; row H and the rows off the
+    # image take the error lost at the border, and are never read
+    ring = np.zeros((4, H + 1))
+    for t in range(3):
+        _load_wave(ring, flat, t, T, (H, W))
     w7, w3, w5, w1 = 7 / 16, 3 / 16, 5 / 16, 1 / 16
-    for t in range(W + 2 * H - 2):
-        r0 = max(0, -((W - 1 - t) // 2))  # ceil((t - W + 1) / 2)
-        r1 = min(H - 1, t // 2)
-        r = rows[r0 : r1 + 1]
-        idx = r * Wp + (t - 2 * r + 1)
-        x = buf[idx]
+    for t in range(T):
+        _load_wave(ring, flat, t + 3, T, (H, W))   # its slot held wavefront t - 1
+        r0, r1, sl = _wave(t, H, W)
+        x = ring[t % 4, r0:r1 + 1]
         qq = np.floor(x + 0.5)
         np.maximum(qq, 0.0, out=qq)
         e = x - qq
-        buf[idx] = e
-        q[idx] = qq
-        buf[idx + 1] += e * w7
-        buf[idx + (Wp - 1)] += e * w3
-        buf[idx + Wp] += e * w5
-        buf[idx + (Wp + 1)] += e * w1
-    counts = q.reshape(H + 1, Wp)[:H, 1 : W + 1].astype(np.int64)
-    resid = buf.reshape(H + 1, Wp)[:H, 1 : W + 1].copy()
-    return counts, resid
+        resid[sl] = e
+        counts[sl] = qq
+        ring[(t + 1) % 4, r0:r1 + 1] += e * w7
+        ring[(t + 1) % 4, r0 + 1:r1 + 2] += e * w3
+        ring[(t + 2) % 4, r0 + 1:r1 + 2] += e * w5
+        ring[(t + 3) % 4, r0 + 1:r1 + 2] += e * w1
+    return counts.reshape(H, W), resid.reshape(H, W)
+
+
+def _load_wave(ring, flat, t, T, shape):
+    """Put wavefront `t`'s values of the image in its slot of the ring, before any error."""
+    slot = ring[t % 4]
+    slot[:] = 0.0
+    if t < T:
+        r0, r1, sl = _wave(t, *shape)
+        slot[r0:r1 + 1] = flat[sl]
 
 
 def least_k(values, k):
@@ -93,10 +126,11 @@ def _fix_count(counts, resid, n):
     return counts
 
 
-def _block_sums(blocks, dark, rows=64):
+def _block_sums(blocks, dark, rows=8):
     """``(Hc, Wc)`` sums of the ``(Hc, b, Wc, b)`` blocks of a density, each over its
     ``b * b`` pixels in row-major order, made `rows` block rows at a time (a copy of
-    the whole density with each block's pixels contiguous would be another image).
+    the whole density with each block's pixels contiguous would be another image; a
+    few rows' copy stays in the cache).
     With `dark`, the blocks hold gray and the density is its darkness ``1 - gray``,
     made a band at a time too.
 
