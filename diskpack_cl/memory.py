@@ -68,7 +68,7 @@ _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
 _MADV_DONTNEED = 4   # Linux
 _MMAP_AFTER, _TRIM_AFTER = 32 << 20, 64 << 20
 _KEEP = 2**31 - 1   # mallopt takes an int
-_kept = {"depth": 0, "lock": threading.Lock(), "libc": None}
+_kept = {"depth": 0, "lock": threading.Lock(), "libc": None, "advice": None}
 
 
 def _glibc():
@@ -87,6 +87,22 @@ def _set_thresholds(libc, mmap_bytes, trim_bytes):
     libc.mallopt(_M_TRIM_THRESHOLD, ctypes.c_int(trim_bytes))
 
 
+def _huge_page_advice(on):
+    """Turn numpy's advice to back its large arrays with transparent huge pages on or
+    off; returns the previous setting, or None where numpy has no such switch or the
+    user chose with numpy's ``NUMPY_MADVISE_HUGEPAGE`` (then nothing changes)."""
+    if on is None or "NUMPY_MADVISE_HUGEPAGE" in os.environ:
+        return None
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage
+    except ImportError:
+        try:
+            from numpy.core.multiarray import _set_madvise_hugepage   # numpy 1.x
+        except ImportError:
+            return None
+    return bool(_set_madvise_hugepage(bool(on)))
+
+
 @contextmanager
 def freed_memory_kept():
     """Keep the memory freed inside the block in the process, for its next arrays.
@@ -100,7 +116,13 @@ def freed_memory_kept():
     leaving it (the outermost block, when nested or in several threads)
     gives the free memory back (``malloc_trim``) and sets glibc's mmap and
     trim thresholds to the values its dynamic thresholds reach (32 and
-    64 MiB).  With another C library it does nothing.
+    64 MiB).  With another C library it does nothing of this.
+
+    Inside the block numpy does not ask for transparent huge pages for its
+    large arrays (on Linux it does by default): a run writes each whole-picture
+    array once and reads it in passes, and a fresh huge page can cost the
+    kernel a compaction or, on a virtual machine, the host's faults for all of
+    it.  Setting numpy's ``NUMPY_MADVISE_HUGEPAGE`` keeps the user's choice.
 
     Examples
     --------
@@ -112,12 +134,11 @@ def freed_memory_kept():
     1048576.0
     """
     libc = _glibc()
-    if libc is None:
-        yield
-        return
     with _kept["lock"]:
         if _kept["depth"] == 0:
-            _set_thresholds(libc, _KEEP, _KEEP)
+            _kept["advice"] = _huge_page_advice(False)
+            if libc is not None:
+                _set_thresholds(libc, _KEEP, _KEEP)
         _kept["depth"] += 1
     try:
         yield
@@ -125,8 +146,10 @@ def freed_memory_kept():
         with _kept["lock"]:
             _kept["depth"] -= 1
             if _kept["depth"] == 0:
-                _set_thresholds(libc, _MMAP_AFTER, _TRIM_AFTER)
-                libc.malloc_trim(ctypes.c_size_t(0))
+                _huge_page_advice(_kept["advice"])
+                if libc is not None:
+                    _set_thresholds(libc, _MMAP_AFTER, _TRIM_AFTER)
+                    libc.malloc_trim(ctypes.c_size_t(0))
 
 
 def give_back():

@@ -84,3 +84,39 @@ def test_leaving_the_block_restores_each_threshold(monkeypatch):
         assert libc.set == {memory._M_MMAP_THRESHOLD: memory._KEEP,
                             memory._M_TRIM_THRESHOLD: memory._KEEP}
     assert libc.set == {-3: 32 * MIB, -1: 64 * MIB}   # M_MMAP_THRESHOLD, M_TRIM_THRESHOLD
+
+
+def _numpy_switch():
+    """numpy's switch of its huge-page advice (numpy 2: ``numpy._core``; 1.x: ``numpy.core``)."""
+    module = "numpy._core.multiarray" if int(np.__version__.split(".")[0]) >= 2 else "numpy.core.multiarray"
+    return pytest.importorskip(module)._set_madvise_hugepage
+
+
+def _numpy_huge_page_advice():
+    previous = _numpy_switch()(True)
+    _numpy_switch()(previous)
+    return bool(previous)
+
+
+@pytest.mark.parametrize("outside", [True, False])
+def test_numpy_asks_for_no_huge_pages_inside_the_block_and_as_before_after(outside, monkeypatch):
+    monkeypatch.delenv("NUMPY_MADVISE_HUGEPAGE", raising=False)
+    before = _numpy_switch()(outside)
+    try:
+        with memory.freed_memory_kept():
+            with memory.freed_memory_kept():
+                assert _numpy_huge_page_advice() is False
+            assert _numpy_huge_page_advice() is False   # the inner block restores nothing
+        assert _numpy_huge_page_advice() is outside
+    finally:
+        _numpy_switch()(before)
+
+
+def test_the_users_numpy_huge_page_choice_is_kept(monkeypatch):
+    monkeypatch.setenv("NUMPY_MADVISE_HUGEPAGE", "1")
+    before = _numpy_switch()(True)
+    try:
+        with memory.freed_memory_kept():
+            assert _numpy_huge_page_advice() is True
+    finally:
+        _numpy_switch()(before)
