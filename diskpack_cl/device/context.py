@@ -16,7 +16,6 @@ platform name or platform vendor (``"pocl"``, ``"nvidia"``), or ``"cpu"``/``"gpu
 from __future__ import annotations
 
 import os
-import threading
 import warnings
 
 __all__ = ["NoOpenCLError", "get_context", "context_unchecked", "list_devices", "list_platforms",
