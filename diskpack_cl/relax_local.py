@@ -142,7 +142,7 @@ class _Neighbourhoods:
             return np.arange(self.n), True
         nx = self.nx
         dy, dx = self._stencil(self.side if radius is None else radius)
-        cy, cx = np.divmod(np.unique(self.flat[B]), nx)
+        cy, cx = np.divmod(_distinct(self.flat[B], nx * self.ny), nx)
         y = self._rows[cy[:, None] + (dy + FINE)]
         x = self._cols[cx[:, None] + (dx + FINE)]
         mark = np.zeros(nx * self.ny, dtype=bool)
@@ -275,7 +275,7 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None
     cells.moved(S[A[ok]], X)
     # a pass over all points: B moved, so S need not hold every point near it now
     i, j, d = _bad_pairs(X, B, d_eps, domain, cells)
-    return np.unique(np.concatenate([i, j])), float(d.min()) if len(d) else np.inf, held
+    return _distinct(np.concatenate([i, j]), n), float(d.min()) if len(d) else np.inf, held
 
 
 def _wide_enough(XS, A, BS, radii, d_eps, d_min, domain):
