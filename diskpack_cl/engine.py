@@ -283,7 +283,8 @@ class OpenCLEngine(_Engine):
         self.ctx, self.name, self.profile = ctx, route, profile
         self.device = describe(ctx)
         self.gives_nn = route == "cells"
-        self._grid = grid if grid is not None else None if n is None else _auto_grid(n, domain)
+        # the raster's shape, found where the raster is built: the cells route never is
+        self._grid, self._n = grid, n
         self._raster = None
         self._labelled = None   # (points, weights, raster result) of the last labels
         self._helper = None     # start_centroids' thread, made on first use
@@ -294,8 +295,10 @@ class OpenCLEngine(_Engine):
             self._build_raster()
 
     def _build_raster(self):
-        from .device.raster import PowerRaster  # not loaded at start-up
+        from .device.raster import PowerRaster, auto_grid  # not loaded at start-up
 
+        if self._grid is None and self._n is not None:
+            self._grid = auto_grid(self._n, self.domain)
         if self._grid is None:
             raise ValueError("this engine has no grid: make it with grid=(ny, nx) or n")
         self._raster = PowerRaster(self.domain, self._grid, device=self.ctx,
@@ -347,12 +350,6 @@ class OpenCLEngine(_Engine):
         points, weights = (None if a is None else np.array(a, dtype=np.float64) for a in (points, weights))
         begun = self._helper.submit(raster.start_centroids, points, weights, density)
         return lambda: begun.result()()
-
-
-def _auto_grid(n, domain):
-    from .device.raster import auto_grid  # not loaded at start-up
-
-    return auto_grid(n, domain)
 
 
 def make_engine(domain, n=None, backend="auto", *, device=None, grid=None, route="auto",

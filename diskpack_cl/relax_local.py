@@ -49,6 +49,10 @@ MOVE_RADIUS = 1.2
 HALO = 2.2
 #: The cells that find a local step's sub-problem are this many times finer than its reach.
 FINE = 4
+#: A search for the points of at most this share of the cells gathers them from lists of
+#: each cell's points (:class:`_CellLists`), a larger one passes over all points' cells:
+#: a pass over a million took about 3.5 ms, each of a local step's last steps two.
+SPARSE_CELLS = 1 / 8
 #: :func:`diskpack_cl.relax_poisson` with ``local=True`` goes local when at
 #: most this share of the points is bad (a local step costs about a hundred
 #: times a global one per bad point, counting its neighbourhood).  Before and
@@ -89,7 +93,8 @@ def _pairs_near(X, C, r, domain):
         found = np.repeat(C, lens), np.fromiter((k for lst in lists for k in lst),
                                                 dtype=np.int64, count=int(lens.sum()))
     i, j = found
-    return i, j, domain.shortest(X[i] - X[j])
+    # np.take: numpy's row gather X[i] is four to eight times slower
+    return i, j, domain.shortest(np.take(X, i, axis=0) - np.take(X, j, axis=0))
 
 
 class _Neighbourhoods:
@@ -103,6 +108,7 @@ class _Neighbourhoods:
         coarse = min(int(domain.width // side), int(domain.height // side))
         self.nx, self.ny = int(domain.width // (side / FINE)), int(domain.height // (side / FINE))
         self.flat = self._cells(X) if coarse >= 4 else None
+        self._lists = None   # _CellLists, made on the first search of few cells
         self._stencils = {}
         self._rows, self._cols = (_index_table(m, domain.periodic) for m in (self.ny, self.nx))
 
@@ -127,7 +133,9 @@ class _Neighbourhoods:
     def moved(self, idx, X):
         """The points `idx` of X moved: their cells again."""
         if self.flat is not None:
-            self.flat[idx] = self._cells(X[idx])
+            self.flat[idx] = self._cells(np.take(X, idx, axis=0))
+            if self._lists is not None:
+                self._lists.left(idx)
 
     def near(self, B, radius=None, among=None):
         """Indices of a superset of the points within `radius` (None: `side`) of the points
@@ -142,14 +150,54 @@ class _Neighbourhoods:
             return np.arange(self.n), True
         nx = self.nx
         dy, dx = self._stencil(self.side if radius is None else radius)
-        cy, cx = np.divmod(np.unique(self.flat[B]), nx)
+        cy, cx = np.divmod(_distinct(self.flat[B], nx * self.ny), nx)
         y = self._rows[cy[:, None] + (dy + FINE)]
         x = self._cols[cx[:, None] + (dx + FINE)]
         mark = np.zeros(nx * self.ny, dtype=bool)
         mark[(y * nx + x)[(y >= 0) & (x >= 0)]] = True
         if among is None:
-            return np.flatnonzero(mark[self.flat]), False
+            return self._marked_points(mark), False
         return among[mark[self.flat[among]]], False
+
+    def _marked_points(self, mark):
+        """Sorted indices of the points in the cells that `mark` marks: gathered from the
+        cells' lists where those are at most :data:`SPARSE_CELLS` of the cells, else by a
+        pass over every point's cell (the same points either way)."""
+        cells = np.flatnonzero(mark)
+        if len(cells) > SPARSE_CELLS * len(mark):
+            return np.flatnonzero(mark[self.flat])
+        if self._lists is None:
+            self._lists = _CellLists(self.flat, len(mark))
+        return self._lists.points(cells, mark, self.flat)
+
+
+class _CellLists:
+    """The points of each cell of a :class:`_Neighbourhoods` grid, listed once (sorted by
+    cell), and the points that left their listed cells since: the points of a few cells
+    without a pass over all of them."""
+
+    def __init__(self, flat, size):
+        self.order = np.argsort(flat, kind="stable")
+        self.count = np.bincount(flat, minlength=size)
+        self.start = np.cumsum(self.count) - self.count
+        self.moved = np.zeros(len(flat), dtype=bool)
+        self.gone = np.empty(0, dtype=np.int64)   # the moved points, each once
+
+    def left(self, idx):
+        """The distinct points `idx` moved (their cells may differ from the listed ones)."""
+        new = idx[~self.moved[idx]]
+        self.moved[new] = True
+        self.gone = np.concatenate([self.gone, new])
+
+    def points(self, cells, mark, flat):
+        """Sorted indices of the points now in `cells` (`mark`: those cells marked, `flat`:
+        every point's cell now): the listed ones that never moved, and the moved ones
+        whose cell now is marked (no point is both)."""
+        count = self.count[cells]
+        runs = np.repeat(self.start[cells] - np.cumsum(count) + count, count)
+        listed = self.order[runs + np.arange(len(runs))]
+        stayed = listed[~self.moved[listed]]
+        return np.sort(np.concatenate([stayed, self.gone[mark[flat[self.gone]]]]))
 
 
 def _index_table(m, periodic):
@@ -165,7 +213,7 @@ def _bad_pairs(X, B, d_eps, domain, cells=None):
     (with `cells`, a :class:`_Neighbourhoods` of X: searched among the points it finds
     near B only)."""
     C, B = _candidates(X, B, d_eps, cells)
-    i, j, q = _pairs_near(X[C], B, d_eps, domain)
+    i, j, q = _pairs_near(np.take(X, C, axis=0), B, d_eps, domain)
     d = np.hypot(*q.T)
     keep = (i != j) & (d < d_eps)
     return C[i[keep]], C[j[keep]], d[keep]
@@ -177,7 +225,7 @@ def _within(X, B, r, domain, cells=None, among=None):
     with `cells` as in :func:`_bad_pairs`, and `among` as in
     :meth:`_Neighbourhoods.near`)."""
     C, B = _candidates(X, B, r, cells, among)
-    _, j, q = _pairs_near(X[C], B, r, domain)
+    _, j, q = _pairs_near(np.take(X, C, axis=0), B, r, domain)
     return C[_distinct(j[(q * q).sum(axis=1) <= r * r], len(C))]
 
 
@@ -258,24 +306,24 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None
         cells = _Neighbourhoods(X, reach, domain)
     S, everything = cells.near(B)
     # S is sorted and holds every point within `move` of B: found among S, not all points
-    XS, BS = X[S], np.searchsorted(S, B)
+    XS, BS = np.take(X, S, axis=0), np.searchsorted(S, B)
     A = np.searchsorted(S, _within(X, B, move, domain, cells, S))
     if solver is None:
         mic = exact_mic(XS, domain=domain, cells=A)
     else:   # buckets as fine as the whole set's
         mic = solver.solve(XS, cells=A, density=n / domain.area)
-    q = domain.shortest(mic.centers - XS[A])
+    q = domain.shortest(mic.centers - np.take(XS, A, axis=0))
     ok = ~mic.empty & (everything | (2.0 * (np.hypot(*q.T) + mic.radii) <= halo * s))
     held = int((~ok).sum())
     d_eps = 2.0 * eps * hexagonal_radius(n, domain.area)
     if not domain.periodic:
         ok &= _wide_enough(XS, A, BS, mic.radii, d_eps, d_min, domain)
-    XS[A[ok]] = mic.centers[ok]
-    X[S] = XS
-    cells.moved(S[A[ok]], X)
+    moving = S[A[ok]]   # only these rows change: not all of S written back
+    X[moving] = mic.centers[ok]
+    cells.moved(moving, X)
     # a pass over all points: B moved, so S need not hold every point near it now
     i, j, d = _bad_pairs(X, B, d_eps, domain, cells)
-    return np.unique(np.concatenate([i, j])), float(d.min()) if len(d) else np.inf, held
+    return _distinct(np.concatenate([i, j]), n), float(d.min()) if len(d) else np.inf, held
 
 
 def _wide_enough(XS, A, BS, radii, d_eps, d_min, domain):

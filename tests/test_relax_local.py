@@ -170,6 +170,46 @@ def test_a_search_among_a_wider_ones_points_finds_what_a_search_of_all_finds(see
     np.testing.assert_array_equal(cells.near(B, radius, among=S)[0], cells.near(B, radius)[0])
 
 
+def _near_both_ways(cells, B, radius):
+    """:meth:`near` of `cells` from the cells' lists, and by a pass over every point."""
+    import diskpack_cl.relax_local as rl
+
+    saved = rl.SPARSE_CELLS
+    try:
+        rl.SPARSE_CELLS = 1.0    # the lists for any share of the cells
+        listed = cells.near(B, radius)[0]
+        rl.SPARSE_CELLS = -1.0   # a pass over all points for any
+        passed = cells.near(B, radius)[0]
+    finally:
+        rl.SPARSE_CELLS = saved
+    return listed, passed
+
+
+@settings(max_examples=60)
+@given(seed=st.integers(0, 2**32 - 1), step=st.floats(0.0, 0.1), k=st.integers(1, 30),
+       radius=st.floats(0.0, 0.08), rounds=st.integers(1, 4), periodic=st.booleans())
+def test_the_cells_lists_find_what_a_pass_over_all_points_finds(seed, step, k, radius, rounds,
+                                                                periodic):
+    """:meth:`near` of few cells gathers their points from lists made once, the points
+    moved since (some twice, some across cells) tracked: the points a pass finds."""
+    from diskpack_cl.relax_local import _Neighbourhoods
+
+    dom = TORUS if periodic else Domain.rect(1.0, 1.0)
+    rng = np.random.default_rng(seed)
+    X = rng.random((700, 2))
+    cells = _Neighbourhoods(X, 0.08, dom)
+    assume(cells.flat is not None)
+    for _ in range(rounds):   # the first search makes the lists; moves follow each
+        B = rng.choice(700, k, replace=False)
+        listed, passed = _near_both_ways(cells, B, radius)
+        np.testing.assert_array_equal(listed, passed)
+        moved = np.flatnonzero(rng.random(700) < 0.2)
+        X[moved] = np.clip(X[moved] + rng.normal(0, step, (len(moved), 2)), 0.0, np.nextafter(1, 0))
+        cells.moved(moved, X)
+    listed, passed = _near_both_ways(cells, rng.choice(700, k, replace=False), radius)
+    np.testing.assert_array_equal(listed, passed)
+
+
 @given(idx=st.lists(st.integers(0, 99), max_size=300), extra=st.integers(0, 5))
 def test_distinct_gives_the_values_np_unique_gives(idx, extra):
     """relax_local's marks give np.unique's sorted values of indices below a size."""

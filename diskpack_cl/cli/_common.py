@@ -8,7 +8,6 @@ import sys
 import re
 import textwrap
 
-from diskpack_cl.image import sample_image_path
 from diskpack_cl.io import check_not_inputs
 
 
@@ -307,6 +306,9 @@ SAMPLE = "sample"
 def image_path(text):
     """The word ``sample`` names the bundled sample photograph; anything else is a path."""
     if text == SAMPLE:
+        # not loaded at start-up: the image module (25 ms) serves the picture commands only
+        from diskpack_cl.image import sample_image_path
+
         return sample_image_path()
     return text
 

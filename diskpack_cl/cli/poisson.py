@@ -6,7 +6,6 @@ import argparse
 import json
 import sys
 
-from diskpack_cl.image import load_gray
 from diskpack_cl.io import (check_not_inputs, check_points_path, json_default, read_points,
                             write_points)
 from diskpack_cl.options import add_arguments, changed, from_namespace
@@ -125,6 +124,8 @@ def _run_poisson_file(args):
 def _field_image(args, path):
     """``(array, box)`` of a --mask or --density image: light 1, dark 0; the box by default
     has the image's aspect, longer side 1."""
+    from diskpack_cl.image import load_gray  # not loaded at start-up: --mask and --density only
+
     gray = load_gray(image_path(path))
     if args.box is not None:
         return gray, args.box
