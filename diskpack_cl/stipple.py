@@ -454,6 +454,46 @@ def reseat_dead(points, mass, disk, ink, size):
     return points, ink, int(dead.size)
 
 
+#: Values from which :func:`_quantile` looks for its two order statistics among a bracket.
+QUANTILE_BRACKET = 1 << 16
+
+
+def _quantile(values, q, *, small=QUANTILE_BRACKET):
+    """``np.quantile(values, q)`` (the linear method) of a 1-D float64 array, which it may
+    reorder: the same float, bit for bit.
+
+    np.quantile partitions all the values at the two order statistics it
+    interpolates (and at the least and the largest). Here, from `small` values on,
+    a strided sample of 16384 brackets them: the values within the bracket are
+    gathered (some 6% of them) and partitioned alone, and the values below
+    it counted (1M values: about 3 against 12 ms). A bracket that misses them (an
+    unlucky sample) or values with NaN go to np.quantile.
+
+    Examples
+    --------
+    >>> v = np.random.default_rng(0).random(100_000)
+    >>> _quantile(v.copy(), 0.15) == np.quantile(v, 0.15)
+    True
+    """
+    n = len(values)
+    virtual = (n - 1) * q   # numpy's virtual index and weight of the linear method
+    i = int(np.floor(virtual))
+    if n < max(small, 2) or not 0.0 < q < 1.0 or np.isnan(values).any():
+        return float(np.quantile(values, q, overwrite_input=True))
+    sample = np.sort(values[::max(n // 16384, 1)])
+    # the sample's rank of the quantile is off by at most sqrt(len(sample)) / 2 as a rule
+    at, margin = int(q * len(sample)), int(4 * np.sqrt(len(sample))) + 8
+    lo, hi = sample[max(at - margin, 0)], sample[min(at + margin, len(sample) - 1)]
+    below = int(np.count_nonzero(values < lo))
+    inside = values[(values >= lo) & (values <= hi)]
+    if not below <= i < below + len(inside) - 1:
+        return float(np.quantile(values, q, overwrite_input=True))
+    inside.partition([i - below, i + 1 - below])
+    a, b = float(inside[i - below]), float(inside[i + 1 - below])
+    gamma, diff = virtual - i, b - a   # numpy's _lerp: from the nearer end
+    return b - diff * (1.0 - gamma) if gamma >= 0.5 else a + diff * gamma
+
+
 def _blend_weights(stage, detail, mic_centers, cen, blend):
     """Per-dot move ``a`` of ``m + a (c - m)``: the blend, raised by detail (`detail`: the blend
     weight at the dots, None without one; it becomes ``a``) and by leaving the ink."""
@@ -529,9 +569,8 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     k = state.k
     if np.any(ok):
         ratio = mic.radii[ok] / r[ok]
-        # the ratios are this step's own: the quantile may reorder them (no copy)
-        k = float(np.quantile(ratio, opt.k_quantile, overwrite_input=True)) if opt.k_quantile > 0 \
-            else float(np.min(ratio))
+        # the ratios are this step's own: the quantile may reorder them
+        k = _quantile(ratio, opt.k_quantile) if opt.k_quantile > 0 else float(np.min(ratio))
     entry["empty"] = int(np.count_nonzero(~ok))
     return StippleState(newx, k, state.packs + 1, ink), entry
 

@@ -55,10 +55,11 @@ def test_field_at_is_the_floored_pixel_lookup(pts, W, H):
 
 @given(st.lists(st.tuples(st.floats(-3, 12), st.floats(-3, 9)), min_size=1, max_size=40),
        st.integers(1, 10), st.integers(1, 7),
-       st.lists(st.sampled_from(["float32", "float64", "strided", "none"]), min_size=1, max_size=4))
-def test_fields_at_is_the_pixel_lookup_of_each_field(pts, W, H, kinds):
+       st.lists(st.sampled_from(["float32", "float64", "strided", "none"]), min_size=1, max_size=4),
+       st.integers(1, 50))
+def test_fields_at_is_the_pixel_lookup_of_each_field(pts, W, H, kinds, part):
     """The pixels found once for several fields (C-contiguous, strided, None, of any
-    type): each field's plain lookup, as float64."""
+    type), in runs of `part` points on the cores: each field's plain lookup, as float64."""
     assume(kinds.count("none") < len(kinds))
     rng = np.random.default_rng(len(pts) * 7 + W)
     pts = np.array(pts, dtype=np.float64)
@@ -66,7 +67,7 @@ def test_fields_at_is_the_pixel_lookup_of_each_field(pts, W, H, kinds):
     col = np.clip(np.floor(pts[:, 0]).astype(int), 0, W - 1)
     fields = [None if k == "none" else rng.random((H, 2 * W))[:, ::2] if k == "strided"
               else rng.random((H, W)).astype(k) for k in kinds]
-    for f, got in zip(fields, fields_at(fields, pts)):
+    for f, got in zip(fields, fields_at(fields, pts, part=part)):
         if f is None:
             assert got is None
             continue
