@@ -441,8 +441,7 @@ def reseat_dead(points, mass, disk, ink, size):
     dead = np.flatnonzero(~live & (mass >= 0))
     if not dead.size:
         return points, ink, 0
-    live = np.flatnonzero(live)
-    order = live[least_k(-mass[live], dead.size)]   # heaviest first, ties in index order
+    order = _heaviest(mass, live, dead.size)
     heavy = order[np.arange(dead.size) % order.size]
     angle = _GOLDEN_ANGLE * np.arange(dead.size)
     step = 0.5 * disk[heavy, None] * np.column_stack([np.cos(angle), np.sin(angle)])
@@ -492,6 +491,30 @@ def _quantile(values, q, *, small=QUANTILE_BRACKET):
     a, b = float(inside[i - below]), float(inside[i + 1 - below])
     gamma, diff = virtual - i, b - a   # numpy's _lerp: from the nearer end
     return b - diff * (1.0 - gamma) if gamma >= 0.5 else a + diff * gamma
+
+
+def _heaviest(mass, live, k):
+    """The `k` heaviest dots of `live` (a mask), heaviest first, ties in index order: the
+    indices ``least_k(-mass[live], k)`` name among the live dots.
+
+    Where `k` is small, the dots at least as heavy as the `k`-th heaviest of every 8th
+    live dot are found first (the `k` heaviest of all are among them, in the same order),
+    and only these few are ranked: a partition of an eighth of the dots instead of all
+    (1M dots).
+
+    Examples
+    --------
+    >>> _heaviest(np.array([1.0, 5.0, 3.0, 5.0]), np.array([True, True, True, False]), 2).tolist()
+    [1, 2]
+    """
+    idx = np.flatnonzero(live)
+    m = mass[idx]
+    if 16 * k < len(m):
+        sample = m[::8]   # more than 2k: its k-th heaviest is at most all dots' k-th heaviest
+        least = np.partition(sample, len(sample) - k)[len(sample) - k]
+        keep = np.flatnonzero(m >= least)
+        idx, m = idx[keep], m[keep]
+    return idx[least_k(-m, k)]
 
 
 def _blend_weights(stage, detail, mic_centers, cen, blend):

@@ -159,3 +159,19 @@ def test_blend_weights_are_their_plain_formula_bit_for_bit(n, blend, detail, sup
     assert got.tobytes() == _plain_blend_weights(stage, x, m, c, blend).tobytes()
     if support > 0:
         assert off_support(ink, m, c, support).tobytes() == _plain_off_support(ink, m, c, support).tobytes()
+
+
+@given(st.integers(1, 400), st.integers(1, 60), st.sampled_from(["spread", "ties", "dead"]),
+       st.integers(0, 2**32 - 1))
+def test_heaviest_are_the_stable_ranking_of_all_live_dots(n, k, kind, seed):
+    """The heaviest live dots from a sampled few are the first k of the plain ranking of
+    every live dot (least_k of the negated masses), ties in index order."""
+    from diskpack_cl.dithering import least_k
+    from diskpack_cl.stipple import _heaviest
+
+    rng = np.random.default_rng(seed)
+    mass = {"spread": 10.0 ** rng.uniform(-3, 3, n), "ties": rng.integers(0, 3, n).astype(float),
+            "dead": rng.random(n) * (rng.random(n) < 0.3)}[kind]
+    live = rng.random(n) < 0.9
+    idx = np.flatnonzero(live)
+    assert np.array_equal(_heaviest(mass, live, k), idx[least_k(-mass[idx], k)])
