@@ -19,8 +19,9 @@ anchor:
   does beside the MICs' own;
 - ``anchor``: ``np.sort`` of a million uniform float64 numbers (seed 0).
 
-It prints the median seconds of each, and the median of each part's ratio to the anchor
-of its own repeat (a shared machine's load moves both). The seconds of the real steps are
+It prints the median seconds of each (and CPU seconds, of all the process's threads), and
+the median of each part's ratio to the anchor of its own repeat (a shared machine's load
+moves both; the lookups run on every core, the anchor on one). The seconds of the real steps are
 printed too (device and host together). Run it once on the tree before a change and once
 after, on a quiet machine, and compare the ratios.
 """
@@ -134,30 +135,33 @@ def main():
         real.append(time.perf_counter() - t)
     replay = dataclasses.replace(stage, engine=Replay(engine, rec.mic, rec.power))
     X, w = rec.cells_in
-    acc = np.zeros((opt.n, 3), np.int64)
+    # fixed-point sums of a run's size (a cell of ~64 pixels, 2^24 a unit): the division's
+    # cost, not 0 / 0's
+    acc = np.random.default_rng(0).integers(1, 2 ** 31, (opt.n, 3))
     sorted_ = np.random.default_rng(0).random(1_000_000)
     parts = {"anchor": lambda: np.sort(sorted_),
              "stipple": lambda: pack_step(last, replay, blend),
              "cells": lambda: cells_host(engine.cells, X, w),
              "raster": lambda: raster_host(engine.raster, *rec.raster_in, acc)}
-    secs = {name: [] for name in parts}
+    secs, cpu = ({name: [] for name in parts} for _ in range(2))
     for _ in range(args.repeats):
         for name, f in parts.items():
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             f()
             secs[name].append(time.perf_counter() - t)
+            cpu[name].append(time.process_time() - c)
     anchor = np.array(secs["anchor"])
     print(f"n={args.n} image={W}x{H}: {args.steps} real {kind} steps (blend {blend}), "
           f"seconds {', '.join(f'{s:.2f}' for s in real)}")
-    total = np.zeros(args.repeats)
+    total, total_cpu = np.zeros(args.repeats), np.zeros(args.repeats)
     for name, s in secs.items():
-        s = np.array(s)
+        s, c = np.array(s), np.array(cpu[name])
         if name != "anchor":
-            total += s
-        print(f"  {name:8s} median {np.median(s) * 1e3:7.1f} ms, ratio to the anchor "
-              f"{np.median(s / anchor):.3f}")
-    print(f"  {'host':8s} median {np.median(total) * 1e3:7.1f} ms, ratio to the anchor "
-          f"{np.median(total / anchor):.3f} (stipple + cells + raster)")
+            total, total_cpu = total + s, total_cpu + c
+        print(f"  {name:8s} median {np.median(s) * 1e3:7.1f} ms (CPU {np.median(c) * 1e3:7.1f} ms), "
+              f"ratio to the anchor {np.median(s / anchor):.3f}")
+    print(f"  {'host':8s} median {np.median(total) * 1e3:7.1f} ms (CPU {np.median(total_cpu) * 1e3:7.1f} "
+          f"ms), ratio to the anchor {np.median(total / anchor):.3f} (stipple + cells + raster)")
 
 
 if __name__ == "__main__":
