@@ -17,8 +17,8 @@ from scipy.spatial import cKDTree
 
 from .geometry import CertificateError, certify_disks, radius_octaves
 
-__all__ = ["base_radii", "radius_field", "detail_scale", "detail_ell", "detail_fields", "field_at", "largest_valid_k",
-           "certified_k", "in_bands", "gaussian_blur", "TRUNCATE"]
+__all__ = ["base_radii", "radius_field", "detail_scale", "detail_ell", "detail_fields", "field_at", "fields_at",
+           "largest_valid_k", "certified_k", "in_bands", "gaussian_blur", "TRUNCATE"]
 
 #: Gaussian blurs reach ``int(TRUNCATE * sigma + 0.5)`` pixels (scipy.ndimage's default).
 TRUNCATE = 4.0
@@ -313,15 +313,64 @@ def field_at(field, points):
     >>> field_at(np.arange(6.0).reshape(2, 3), [[2.5, 1.5], [-1.0, 0.2]]).tolist()
     [5.0, 0.0]
     """
-    H, W = field.shape
-    row, col = _pixel_of(np.asarray(points, dtype=np.float64), W, H)
-    if not field.flags.c_contiguous:   # (a flat view would be a copy of the whole field)
-        return field[row, col].astype(np.float64, copy=False)
-    # a flat take: numpy's two-array index is about twice as slow (1M points: 30-40 against 80 ms)
-    row *= W
-    row += col
-    # the indices are in range (clipped): "clip" skips take's bounds check (1M: 9 -> 7.5 ms)
-    return np.take(field.reshape(-1), row, mode="clip").astype(np.float64, copy=False)
+    return fields_at([field], points)[0]
+
+
+#: Points per core from which :func:`fields_at` splits its lookups over the cores.
+PARALLEL_POINTS = 1 << 17
+
+
+def fields_at(fields, points, *, part=PARALLEL_POINTS):
+    """:func:`field_at` of each of `fields` (one shape; None gives None) at `points`: the
+    pixels are found once for all of them (a third of a lookup's time at 1M points).
+
+    A million points take a field's value from as many cache lines: the lookups are
+    bound by the memory's latency, and run on every core in runs of points (at least
+    `part` each; numpy releases the GIL), each point's value the same.
+
+    Examples
+    --------
+    >>> f = np.arange(6.0).reshape(2, 3)
+    >>> [None if v is None else v.tolist() for v in fields_at([f, None, 2 * f], [[2.5, 1.5]])]
+    [[5.0], None, [10.0]]
+    """
+    shapes = {f.shape for f in fields if f is not None}
+    if len(shapes) != 1:
+        raise ValueError(f"fields_at needs fields of one shape, got {sorted(shapes)}")
+    points = np.asarray(points, dtype=np.float64)
+    out = [None if f is None else np.empty(len(points)) for f in fields]
+    runs = min(os.cpu_count() or 1, max(1, len(points) // max(int(part), 1)))
+    ends = [len(points) * k // runs for k in range(runs + 1)]
+
+    def run(k):
+        at = slice(ends[k], ends[k + 1])
+        _lookups(fields, points[at], [None if o is None else o[at] for o in out])
+
+    if runs == 1:
+        run(0)
+    else:
+        with ThreadPoolExecutor(runs) as pool:
+            list(pool.map(run, range(runs)))
+    return out
+
+
+def _lookups(fields, points, out):
+    """Each field's value at the pixel of each of `points`, written into `out` (float64)."""
+    H, W = next(f for f in fields if f is not None).shape
+    row, col = _pixel_of(points, W, H)
+    for f, o in zip(fields, out):   # a field that is not C-contiguous: by the two indices
+        if f is not None and not f.flags.c_contiguous:   # (a flat view would copy it whole)
+            o[...] = f[row, col]
+    if any(f is not None and f.flags.c_contiguous for f in fields):
+        # a flat take: numpy's two-array index is about twice as slow (1M points: 30-40
+        # against 80 ms); the flat index made in place, the two-index reads being done
+        row *= W
+        row += col
+        for f, o in zip(fields, out):
+            if f is not None and f.flags.c_contiguous:
+                # the indices are in range (clipped): "clip" skips take's bounds check
+                # (1M: 9 -> 7.5 ms); the float64 values as astype makes them
+                o[...] = np.take(f.reshape(-1), row, mode="clip")
 
 
 def largest_valid_k(points, r, width, height):

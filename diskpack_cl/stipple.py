@@ -92,7 +92,8 @@ from .preview import Previewable
 from .progress import running, stage as run_stage
 from .dithering import least_k, error_diffusion
 from .domain import Domain
-from .radii import certified_k, detail_ell, detail_fields, field_at, gaussian_blur, largest_valid_k, radius_field
+from .radii import (certified_k, detail_ell, detail_fields, field_at, fields_at, gaussian_blur, largest_valid_k,
+                    radius_field)
 from .schedule import StippleOptions, StipplePlan
 from .engine import HOST_DEVICE, engine_record, make_engine, stage_record
 from .image import to_gray
@@ -320,8 +321,14 @@ INK_STEP, INK_RANGE = 1.25, 4.0
 
 def dot_radii(state, stage, points):
     """Base radii at `points`: the radius field, times the state's ink factors."""
-    r = field_at(stage.radius_field, points)
-    return r if state.ink is None else r * state.ink
+    return _radii_and_detail(state, stage, points, False)[0]
+
+
+def _radii_and_detail(state, stage, points, detail):
+    """:func:`dot_radii` at `points` and, with `detail`, the blend weight there (else None):
+    the pixels found once for both fields."""
+    r, weight = fields_at([stage.radius_field, stage.blend_weight if detail else None], points)
+    return (r if state.ink is None else r * state.ink), weight
 
 
 def equal_ink(ink, mass, gain):
@@ -340,13 +347,22 @@ def equal_ink(ink, mass, gain):
     >>> equal_ink(np.ones(2), np.array([1.0, 4.0]), 0.5).round(4).tolist()
     [1.25, 0.8]
     """
-    ink = np.ones(len(mass)) if ink is None else ink
     mean = mass.sum() / len(mass)
     # the floor only keeps the ratio finite: the step bound clips it anyway
     floor = max(1e-12 * mean, np.finfo(float).tiny)   # also where every mass is subnormal
-    f = np.where(mass > 0, (mean / np.maximum(mass, floor)) ** gain, INK_STEP)
-    ink = np.clip(ink * np.clip(f, 1 / INK_STEP, INK_STEP), 1 / INK_RANGE, INK_RANGE)
-    return ink / np.exp(np.mean(np.log(ink)))
+    # the plain formula's values, each pass in place in one array (a few fewer whole-set
+    # temporaries): where(mass > 0, (mean / max(mass, floor)) ** gain, INK_STEP), clipped
+    # to the step bound, times the factors, clipped to the range, over its geometric mean
+    f = np.maximum(mass, floor)
+    np.divide(mean, f, out=f)
+    f **= gain
+    f[~(mass > 0)] = INK_STEP
+    np.clip(f, 1 / INK_STEP, INK_STEP, out=f)
+    if ink is not None:
+        f *= ink
+    np.clip(f, 1 / INK_RANGE, INK_RANGE, out=f)
+    f /= np.exp(np.mean(np.log(f)))
+    return f
 
 
 def off_support(ink, mic_centers, centroids, gain=1.0):
@@ -372,7 +388,10 @@ def off_support(ink, mic_centers, centroids, gain=1.0):
     dm, dc = field_at(ink, mic_centers), field_at(ink, centroids)
     # a centroid off the ink (the cell of a curved thin line): only a centre off the ink too moves
     ratio = np.divide(dm, dc, out=(dm > 0).astype(np.float64), where=dc > 0)
-    return np.clip(gain * (1.0 - ratio), 0.0, 1.0)
+    # clip(gain * (1 - ratio), 0, 1) in place
+    np.subtract(1.0, ratio, out=ratio)
+    ratio *= gain
+    return np.clip(ratio, 0.0, 1.0, out=ratio)
 
 
 #: A power cell holding less than this fraction of the mean ink per cell holds
@@ -422,8 +441,7 @@ def reseat_dead(points, mass, disk, ink, size):
     dead = np.flatnonzero(~live & (mass >= 0))
     if not dead.size:
         return points, ink, 0
-    live = np.flatnonzero(live)
-    order = live[least_k(-mass[live], dead.size)]   # heaviest first, ties in index order
+    order = _heaviest(mass, live, dead.size)
     heavy = order[np.arange(dead.size) % order.size]
     angle = _GOLDEN_ANGLE * np.arange(dead.size)
     step = 0.5 * disk[heavy, None] * np.column_stack([np.cos(angle), np.sin(angle)])
@@ -435,13 +453,82 @@ def reseat_dead(points, mass, disk, ink, size):
     return points, ink, int(dead.size)
 
 
-def _blend_weights(stage, x, mic_centers, cen, blend):
-    """Per-dot move ``a`` of ``m + a (c - m)``: the blend, raised by detail and by leaving the ink."""
-    a = np.full(len(x), float(blend))
-    if blend > 0 and stage.blend_weight is not None:
-        a = blend + (1.0 - blend) * field_at(stage.blend_weight, x)
+#: Values from which :func:`_quantile` looks for its two order statistics among a bracket.
+QUANTILE_BRACKET = 1 << 16
+
+
+def _quantile(values, q, *, small=QUANTILE_BRACKET):
+    """``np.quantile(values, q)`` (the linear method) of a 1-D float64 array, which it may
+    reorder: the same float, bit for bit.
+
+    np.quantile partitions all the values at the two order statistics it
+    interpolates (and at the least and the largest). Here, from `small` values on,
+    a strided sample of 16384 brackets them: the values within the bracket are
+    gathered (some 6% of them) and partitioned alone, and the values below
+    it counted (1M values: about 3 against 12 ms). A bracket that misses them (an
+    unlucky sample) or values with NaN go to np.quantile.
+
+    Examples
+    --------
+    >>> v = np.random.default_rng(0).random(100_000)
+    >>> _quantile(v.copy(), 0.15) == float(np.quantile(v, 0.15))
+    True
+    """
+    n = len(values)
+    virtual = (n - 1) * q   # numpy's virtual index and weight of the linear method
+    i = int(np.floor(virtual))
+    if n < max(small, 2) or not 0.0 < q < 1.0 or np.isnan(values).any():
+        return float(np.quantile(values, q, overwrite_input=True))
+    sample = np.sort(values[::max(n // 16384, 1)])
+    # the quantile's rank in the sample spreads by sqrt(len(sample) q (1 - q)) <= sqrt(len) / 2:
+    # the bracket reaches 8 of those either side
+    at, margin = int(q * len(sample)), int(4 * np.sqrt(len(sample))) + 8
+    lo, hi = sample[max(at - margin, 0)], sample[min(at + margin, len(sample) - 1)]
+    below = int(np.count_nonzero(values < lo))
+    inside = values[(values >= lo) & (values <= hi)]
+    if not below <= i < below + len(inside) - 1:
+        return float(np.quantile(values, q, overwrite_input=True))
+    inside.partition([i - below, i + 1 - below])
+    a, b = float(inside[i - below]), float(inside[i + 1 - below])
+    gamma, diff = virtual - i, b - a   # numpy's _lerp: from the nearer end
+    return b - diff * (1.0 - gamma) if gamma >= 0.5 else a + diff * gamma
+
+
+def _heaviest(mass, live, k):
+    """The `k` heaviest dots of `live` (a mask), heaviest first, ties in index order: the
+    indices ``least_k(-mass[live], k)`` name among the live dots.
+
+    Where `k` is small, the dots at least as heavy as the `k`-th heaviest of every 8th
+    live dot are found first (the `k` heaviest of all are among them, in the same order),
+    and only these few are ranked: a partition of an eighth of the dots instead of all
+    (1M dots).
+
+    Examples
+    --------
+    >>> _heaviest(np.array([1.0, 5.0, 3.0, 5.0]), np.array([True, True, True, False]), 2).tolist()
+    [1, 2]
+    """
+    idx = np.flatnonzero(live)
+    m = mass[idx]
+    if 16 * k < len(m):
+        sample = m[::8]   # more than 2k: its k-th heaviest is at most all dots' k-th heaviest
+        least = np.partition(sample, len(sample) - k)[len(sample) - k]
+        keep = np.flatnonzero(m >= least)
+        idx, m = idx[keep], m[keep]
+    return idx[least_k(-m, k)]
+
+
+def _blend_weights(stage, detail, mic_centers, cen, blend):
+    """Per-dot move ``a`` of ``m + a (c - m)``: the blend, raised by detail (`detail`: the blend
+    weight at the dots, None without one; it becomes ``a``) and by leaving the ink."""
+    if detail is None:
+        a = np.full(len(mic_centers), float(blend))
+    else:   # blend + (1 - blend) * detail, in place
+        a = detail
+        a *= 1.0 - blend
+        a += blend
     if stage.options.support > 0:
-        a = np.maximum(a, off_support(stage.ink, mic_centers, cen, gain=stage.options.support))
+        np.maximum(a, off_support(stage.ink, mic_centers, cen, gain=stage.options.support), out=a)
     return a
 
 
@@ -469,7 +556,8 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     (1, 0, True)
     """
     x, opt = state.points, stage.options
-    r = dot_radii(state, stage, x)
+    # the blend weight at the dots (features="detail") read with their radii
+    r, detail = _radii_and_detail(state, stage, x, blend > 0 and stage.blend_weight is not None)
     w = (state.k * r) ** 2
     refine = bool(opt.refine_every) and state.packs % opt.refine_every == 0
     need_power = opt.capacity > 0 or opt.support > 0 or (blend > 0 and opt.blend_cell == "power")
@@ -491,7 +579,7 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
             stage.engine.centroids(x, np.zeros(len(x)), stage.density)
         okc = ok & (mass > 0) & _finite_rows(cen)
         cen = _where_rows(okc, cen, newx)   # no move where the cell has no centroid
-        a = _blend_weights(stage, x, newx, cen, blend)
+        a = _blend_weights(stage, detail, newx, cen, blend)
         step = cen - newx
         for col in step.T:   # a column at a time: a (n, 2) by (n, 1) broadcast walks rows of two
             col *= a
@@ -505,7 +593,8 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     k = state.k
     if np.any(ok):
         ratio = mic.radii[ok] / r[ok]
-        k = float(np.quantile(ratio, opt.k_quantile)) if opt.k_quantile > 0 else float(np.min(ratio))
+        # the ratios are this step's own: the quantile may reorder them
+        k = _quantile(ratio, opt.k_quantile) if opt.k_quantile > 0 else float(np.min(ratio))
     entry["empty"] = int(np.count_nonzero(~ok))
     return StippleState(newx, k, state.packs + 1, ink), entry
 

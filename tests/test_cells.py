@@ -6,7 +6,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
-from diskpack_cl.device.cells import FLAGS, NO_CODE, CellMIC, _scatter, refine_active
+from diskpack_cl.device.cells import FLAGS, NO_CODE, CellMIC, _bucket_maxima, _scatter, refine_active
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.sampling import dart_throwing
@@ -638,3 +638,21 @@ def test_the_kernels_basis_and_near_tight_codes_by_brute_force(solvers, case):
         # (the error either side of the tolerance: numpy's and the kernel's rounding differ)
         assert {c for c, (s, b) in slack.items() if s < near_tol - err[c]} - basis <= near, row
         assert all(slack[c][0] < near_tol + err[c] for c in near), row
+
+
+@given(st.integers(1, 300), st.integers(1, 50), st.sampled_from(["spread", "zero", "ties"]),
+       st.integers(0, 2**32 - 1))
+def test_bucket_maxima_are_reduceats_over_the_sites_in_bucket_order(n, nb, kind, seed):
+    # the formula _bucket_maxima replaced: a maximum.reduceat over the sorted sites
+    rng = np.random.default_rng(seed)
+    bid = rng.integers(0, nb, n)
+    w = {"spread": rng.random(n) * 10.0 ** rng.integers(-3, 4), "zero": np.zeros(n),
+         "ties": rng.integers(0, 3, n).astype(float)}[kind]
+    w -= w.min()   # as CellMIC.solve shifts them
+    order = np.argsort(bid, kind="stable")
+    counts = np.bincount(bid, minlength=nb)
+    start = np.concatenate([[0], np.cumsum(counts)])
+    nonempty = counts > 0
+    expect = np.zeros(nb)
+    expect[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
+    assert np.array_equal(_bucket_maxima(w, bid, nb), expect)

@@ -9,11 +9,11 @@ pictures with several bands, odd shapes and ties.
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import assume, given, strategies as st
 from scipy import ndimage
 
 from diskpack_cl.dithering import least_k
-from diskpack_cl.radii import field_at, gaussian_blur, in_bands
+from diskpack_cl.radii import field_at, fields_at, gaussian_blur, in_bands
 
 
 @pytest.mark.parametrize("sigma", [0.0, 0.5, 1.0, 2.0, 4.3])
@@ -51,6 +51,32 @@ def test_field_at_is_the_floored_pixel_lookup(pts, W, H):
     row = np.clip(np.floor(pts[:, 1]).astype(int), 0, H - 1)
     col = np.clip(np.floor(pts[:, 0]).astype(int), 0, W - 1)
     assert np.array_equal(field_at(field, pts), field[row, col])
+
+
+@given(st.lists(st.tuples(st.floats(-3, 12), st.floats(-3, 9)), min_size=1, max_size=40),
+       st.integers(1, 10), st.integers(1, 7),
+       st.lists(st.sampled_from(["float32", "float64", "strided", "none"]), min_size=1, max_size=4),
+       st.integers(1, 50))
+def test_fields_at_is_the_pixel_lookup_of_each_field(pts, W, H, kinds, part):
+    """The pixels found once for several fields (C-contiguous, strided, None, of any
+    type), in runs of `part` points on the cores: each field's plain lookup, as float64."""
+    assume(kinds.count("none") < len(kinds))
+    rng = np.random.default_rng(len(pts) * 7 + W)
+    pts = np.array(pts, dtype=np.float64)
+    row = np.clip(np.floor(pts[:, 1]).astype(int), 0, H - 1)
+    col = np.clip(np.floor(pts[:, 0]).astype(int), 0, W - 1)
+    fields = [None if k == "none" else rng.random((H, 2 * W))[:, ::2] if k == "strided"
+              else rng.random((H, W)).astype(k) for k in kinds]
+    for f, got in zip(fields, fields_at(fields, pts, part=part)):
+        if f is None:
+            assert got is None
+            continue
+        assert got.dtype == np.float64 and np.array_equal(got, f[row, col])
+
+
+def test_fields_at_refuses_fields_of_two_shapes():
+    with pytest.raises(ValueError, match="fields of one shape"):
+        fields_at([np.zeros((2, 3)), np.zeros((3, 2))], [[0.5, 0.5]])
 
 
 @pytest.mark.parametrize("k", [1, 5, 17, 99, 100, 150])

@@ -636,3 +636,37 @@ def test_a_started_pass_overwritten_by_a_later_one_says_so(ctx):
         first()
     c, m = pr.start_centroids(rng.random((40, 2)), None, dens)()
     assert np.isclose(m.sum(), 32 * 32)
+
+
+@pytest.fixture(scope="module")
+def sums_rasters(ctx):
+    """A raster per domain kind, for the sums' conversion to centroids."""
+    from diskpack_cl.device.raster import PowerRaster
+
+    return {p: PowerRaster(Domain.torus() if p else Domain.rect(40.0, 30.0), (48, 64), device=ctx)
+            for p in (False, True)}
+
+
+@given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(1, 300),
+       bits=st.sampled_from([8, 40, 62]))
+def test_sums_become_centroids_as_the_plain_formula_makes_them(sums_rasters, seed, periodic, n, bits):
+    """The device's fixed-point sums (mass and first moments, some cells empty) become the
+    centroids and masses of the plain formula (every sum cast to float64 first), bit for bit."""
+    from diskpack_cl.device.raster import CELL_SUMS_FIX
+
+    pr = sums_rasters[periodic]
+    rng = np.random.default_rng(seed)
+    acc = rng.integers(0, 2 ** bits, (n, 3), dtype=np.int64)
+    acc[:, 0] += 1   # a cell with moments has mass
+    acc[rng.random(n) < 0.2] = 0   # empty cells: NaN centroids
+    sites = rng.random((n, 2)) * (pr.domain.width, pr.domain.height)
+    b_acc = pr.upload("test_sums", acc)
+    got_c, got_m = pr._sums_to_centroids(np.empty_like(acc), b_acc, sites)
+    sums = acc.astype(np.float64)
+    h = np.array([pr.domain.width / 64, pr.domain.height / 48])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        want_c = sums[:, 1:] / sums[:, :1] * h + sites
+    if periodic:
+        want_c = pr.domain.wrap(want_c)
+    assert got_c.tobytes() == want_c.tobytes()
+    assert got_m.tobytes() == (sums[:, 0] / CELL_SUMS_FIX).tobytes()

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl.dithering import _fs_wavefront, error_diffusion
@@ -10,7 +10,7 @@ from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.radii import base_radii, detail_fields, field_at, largest_valid_k, radius_field
 from diskpack_cl.schedule import SCHEDULE_OPTIONS, StippleOptions, auto_supersample, make_schedule
-from diskpack_cl.stipple import INK_RANGE, StippleStage, StippleState, lloyd_step, pack_step, stipple
+from diskpack_cl.stipple import INK_RANGE, StippleStage, StippleState, _quantile, lloyd_step, pack_step, stipple
 from diskpack_cl.engine import ExactEngine
 
 SHORT = [("pack", 6), ("lloyd", 3), ("pack", 4)]
@@ -649,3 +649,24 @@ def test_moved_is_the_mean_hypot(rows):
     a = np.array(rows, dtype=np.float64)
     old, new = a[:, :2], a[:, :2] + a[:, 2:]
     assert _moved(old, new) == pytest.approx(np.mean(np.hypot(*(new - old).T)), rel=1e-14, abs=1e-150)
+
+
+@given(st.integers(1, 100_000), st.floats(0.0, 1.0), st.sampled_from([1, 50, 1 << 16]),
+       st.sampled_from(["uniform", "spread", "ties", "sorted", "periodic", "spiky", "nan"]),
+       st.integers(0, 2**32 - 1))
+@example(1000, 0.15, 1, "spread", 3)   # interpolated from the upper end: not from the lower
+def test_quantile_is_numpys_bit_for_bit(n, q, small, kind, seed):
+    """The k quantile from a bracket of its order statistics (from `small` values on; any
+    order of the values, ties, infinities) or from np.quantile: np.quantile's float."""
+    rng = np.random.default_rng(seed)
+    v = {"uniform": rng.random(n), "spread": 10.0 ** rng.uniform(-5, 5, n),
+         "ties": rng.integers(0, 4, n).astype(float),
+         "sorted": np.sort(rng.exponential(size=n)), "periodic": np.tile([0.0, 1.0, 5.0], n)[:n],
+         "spiky": rng.choice([-np.inf, 1.0, 2.5, np.inf], n), "nan": rng.random(n)}[kind]
+    if kind == "nan":
+        v[rng.integers(0, n)] = np.nan
+    with np.errstate(invalid="ignore"):   # inf - inf in both
+        want = np.quantile(v, q)
+        got = _quantile(v.copy(), q, small=small)
+    assert type(got) is float
+    assert np.array_equal(got, want, equal_nan=True) and np.signbit(got) == np.signbit(want)

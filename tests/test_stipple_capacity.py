@@ -105,3 +105,27 @@ def test_final_radii_carry_the_equal_ink_factors():
     np.testing.assert_allclose(res.radii, res.k * res.base_radii, rtol=1e-12)
     flat = stipple(gray, 60, schedule=[("pack", 3)], backend="exact", seed=1)
     assert flat.base_radii.std() == 0
+
+
+def _plain_equal_ink(ink, mass, gain):
+    """equal_ink's formula as first written, one whole-set temporary a step."""
+    ink = np.ones(len(mass)) if ink is None else ink
+    mean = mass.sum() / len(mass)
+    floor = max(1e-12 * mean, np.finfo(float).tiny)
+    f = np.where(mass > 0, (mean / np.maximum(mass, floor)) ** gain, INK_STEP)
+    ink = np.clip(ink * np.clip(f, 1 / INK_STEP, INK_STEP), 1 / INK_RANGE, INK_RANGE)
+    return ink / np.exp(np.mean(np.log(ink)))
+
+
+@given(st.integers(1, 200), st.sampled_from([0.1, 0.25, 0.5, 1.0, 2.0, 0.37]), st.booleans(),
+       st.sampled_from(["smooth", "empty", "spread", "subnormal"]), st.integers(0, 2**32 - 1))
+def test_equal_ink_is_its_plain_formula_bit_for_bit(n, gain, start, kind, seed):
+    rng = np.random.default_rng(seed)
+    mass = {"smooth": 1.0 + rng.random(n), "empty": rng.random(n) * (rng.random(n) < 0.6),
+            "spread": 10.0 ** rng.uniform(-20, 20, n), "subnormal": rng.random(n) * 1e-310}[kind]
+    ink = np.exp(rng.uniform(-1.3, 1.3, n)) if start else None
+    kept = None if ink is None else ink.copy()
+    got = equal_ink(ink, mass, gain)
+    assert got.tobytes() == _plain_equal_ink(kept, mass, gain).tobytes()
+    if ink is not None:
+        assert np.array_equal(ink, kept)   # the caller's factors are not changed

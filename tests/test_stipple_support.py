@@ -1,11 +1,16 @@
 """support: dots stay on the ink (white paper stays white, outlines stay sharp); paper_tone."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from diskpack_cl.picture_measures import edge_fidelity, stray_dots
+from diskpack_cl.radii import field_at
 from diskpack_cl.schedule import StippleOptions
-from diskpack_cl.stipple import off_support, stipple
+from diskpack_cl.stipple import _blend_weights, off_support, stipple
 
 
 def drawing():
@@ -119,3 +124,54 @@ def test_dense_thin_lines_keep_their_dots_on_the_ink():
             (("default", res), ("lloyd", lloyd), ("page", page))}
     assert stray["default"] <= stray["lloyd"] + 5 < stray["page"]
     assert edge["default"] >= max(edge["lloyd"] - 0.01, edge["page"] + 0.005)
+
+
+def _plain_off_support(ink, m, c, gain):
+    """off_support's formula as first written."""
+    dm, dc = field_at(ink, m), field_at(ink, c)
+    ratio = np.divide(dm, dc, out=(dm > 0).astype(np.float64), where=dc > 0)
+    return np.clip(gain * (1.0 - ratio), 0.0, 1.0)
+
+
+def _plain_blend_weights(stage, x, m, c, blend):
+    """_blend_weights' formula as first written (the blend weight read at the dots `x`)."""
+    a = np.full(len(x), float(blend))
+    if blend > 0 and stage.blend_weight is not None:
+        a = blend + (1.0 - blend) * field_at(stage.blend_weight, x)
+    if stage.options.support > 0:
+        a = np.maximum(a, _plain_off_support(stage.ink, m, c, stage.options.support))
+    return a
+
+
+@given(st.integers(1, 60), st.sampled_from([0.0, 0.4, 0.6, 0.75]), st.booleans(),
+       st.sampled_from([0.0, 1.0, 8.0, 16.0]), st.integers(0, 2**32 - 1))
+def test_blend_weights_are_their_plain_formula_bit_for_bit(n, blend, detail, support, seed):
+    """The per-dot blend (in place, the blend weight read with the radii) and off_support
+    against the formulas as first written, on ink with white paper and thin lines."""
+    rng = np.random.default_rng(seed)
+    H, W = 12, 17
+    ink = (rng.random((H, W)) * (rng.random((H, W)) < 0.5)).astype(np.float32)
+    weight = rng.random((H, W)).astype(np.float32) if detail else None
+    stage = SimpleNamespace(ink=ink, blend_weight=weight, options=SimpleNamespace(support=support))
+    x, m, c = (rng.uniform(-1, 18, (n, 2)) for _ in range(3))
+    at_x = field_at(weight, x) if detail and blend > 0 else None
+    got = _blend_weights(stage, at_x, m, c, blend)
+    assert got.tobytes() == _plain_blend_weights(stage, x, m, c, blend).tobytes()
+    if support > 0:
+        assert off_support(ink, m, c, support).tobytes() == _plain_off_support(ink, m, c, support).tobytes()
+
+
+@given(st.integers(1, 400), st.integers(1, 60), st.sampled_from(["spread", "ties", "dead"]),
+       st.integers(0, 2**32 - 1))
+def test_heaviest_are_the_stable_ranking_of_all_live_dots(n, k, kind, seed):
+    """The heaviest live dots from a sampled few are the first k of the plain ranking of
+    every live dot (least_k of the negated masses), ties in index order."""
+    from diskpack_cl.dithering import least_k
+    from diskpack_cl.stipple import _heaviest
+
+    rng = np.random.default_rng(seed)
+    mass = {"spread": 10.0 ** rng.uniform(-3, 3, n), "ties": rng.integers(0, 3, n).astype(float),
+            "dead": rng.random(n) * (rng.random(n) < 0.3)}[kind]
+    live = rng.random(n) < 0.9
+    idx = np.flatnonzero(live)
+    assert np.array_equal(_heaviest(mass, live, k), idx[least_k(-mass[idx], k)])

