@@ -689,14 +689,13 @@ def _banded_stage(gray, opt, engine, bands):
     m, s = field_margin(opt, ell), opt.supersample
     blur, blur_record = bands.blur or _field_blur(engine)
     fields = _empty_fields(opt, len(rows), len(range(W)[cols]))
-    work = {}   # the bands' float64 temporaries, kept: a fresh one's first touch costs a pass
     for y0 in range(rows.start, rows.stop, bands.rows):
         y1 = min(y0 + bands.rows, rows.stop)
         lo, hi = max(0, y0 - m), min(H, y1 + m)
         band = slice(y0 - rows.start, y1 - rows.start)
         out = {name: None if f is None else f[band if name != "density" else slice(band.start * s, band.stop * s)]
                for name, f in fields.items()}
-        _make_fields(gray[lo:hi], opt, blur, ell, (slice(y0 - lo, y1 - lo), cols), out, work)
+        _make_fields(gray[lo:hi], opt, blur, ell, (slice(y0 - lo, y1 - lo), cols), out)
         if bands.consume:   # the fields grow as the picture shrinks: their sum stays the peak
             drop_pages(gray[max(0, y0 - m):max(0, y1 - m)])
     stages = {"engine": engine_record(engine), "blur": blur_record}
@@ -736,50 +735,35 @@ def _field_sigmas(opt, ell):
     return {name: sigma for name, sigma in sigmas.items() if sigma > 0}
 
 
-def _make_fields(gray, opt, blur, ell, window, out, work=None):
+def _make_fields(gray, opt, blur, ell, window, out):
     """Write the fields of `window` (``(rows, cols)`` slices) of the float64 picture `gray` to
     `out` (:func:`_empty_fields` of the window, or views of them), each from the blurs of one
-    darkness (:func:`~diskpack_cl.radii.blurs`: a device blur reads it once). `work`: a dict
-    whose float64 temporaries are kept for the next call (the next band)."""
-    scratch = _Scratch(gray.shape, {} if work is None else work)
-    darkness = np.subtract(1.0, gray, out=scratch("darkness"))
+    darkness (:func:`~diskpack_cl.radii.blurs`: a device blur reads it once), each temporary
+    dropped once its field is written (a band's peak memory: the darkness and its blurs)."""
+    darkness = 1.0 - gray
     sigmas = _field_sigmas(opt, ell)
-    blurred = dict(zip(sigmas, blurs(blur, darkness, list(sigmas.values()), [scratch(k) for k in sigmas])))
-
-    def own(name):
-        """The blur `name`, or where its sigma is 0 a copy of the darkness: changed in place."""
-        if name not in blurred:
-            blurred[name] = scratch(name)
-            np.copyto(blurred[name], darkness)
-        return blurred[name]
+    if "density" not in sigmas:
+        _density_of(darkness[window], opt.supersample, out["density"])
+    blurred = dict(zip(sigmas, blurs(blur, darkness, list(sigmas.values()))))
+    if "density" in blurred:
+        _density_of(blurred.pop("density")[window], opt.supersample, out["density"])
+    if opt.support > 0:   # off_support's
+        np.copyto(out["ink"], blurred.pop("ink")[window], casting="same_kind")
+    if opt.features == "detail":
+        sharp = blurred.pop("sharp") if "sharp" in blurred else darkness.copy()
+        weight = detail_weight(sharp, blurred.pop("coarse"), DETAIL_GAIN)
+        np.copyto(out["blend_weight"], weight[window], casting="same_kind")
+        del sharp, weight
     if opt.radii == "density":
-        rfield = density_radius(own("radius"), opt.floor)
+        rfield = density_radius(blurred.pop("radius") if "radius" in blurred else darkness, opt.floor)
     else:
         rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
+    del darkness
     if opt.features == "detail":
-        weight = detail_weight(own("sharp"), blurred["coarse"], DETAIL_GAIN)
-        np.copyto(out["blend_weight"], weight[window], casting="same_kind")
         # the field rounded to float32, then dilated: a maximum of the rounded values is
         # the rounded maximum, in half the bytes
         rfield = disk_dilation(rfield.astype(np.float32), dilation_radius(ell))
     np.copyto(out["radius_field"], rfield[window], casting="same_kind")
-    if opt.support > 0:   # off_support's
-        np.copyto(out["ink"], blurred["ink"][window], casting="same_kind")
-    s = opt.supersample
-    _density_of(blurred.get("density", darkness)[window], s, out["density"])
-
-
-class _Scratch:
-    """Float64 arrays of one `shape` by name, views of the larger ones kept in `work`."""
-
-    def __init__(self, shape, work):
-        self.shape, self.work = shape, work
-
-    def __call__(self, name):
-        size = int(np.prod(self.shape))
-        if name not in self.work or self.work[name].size < size:
-            self.work[name] = np.empty(size)
-        return self.work[name][:size].reshape(self.shape)
 
 
 def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None,

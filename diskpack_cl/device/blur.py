@@ -72,18 +72,13 @@ class DeviceBlur(DeviceStage):
     def many(self, image, sigmas, out=None):
         """``[self(image, s) for s in sigmas]``, with `image` sent to the device once (the
         stage's blurs of one darkness band); `out`: the arrays to write them to (C-contiguous
-        float64 of `image`'s shape, one a sigma), kept by a caller from band to band (on a CPU
-        the kernels write to them: a fresh array's first touch costs more than its blur)."""
+        float64 of `image`'s shape, one a sigma; None: new ones). On a CPU the kernels read
+        `image` and write the blurs where they are (no copy either way)."""
         image = np.ascontiguousarray(image, np.float64)
         if image.ndim != 2 or image.size == 0:
             raise ValueError(f"DeviceBlur blurs non-empty 2-D images, got shape {image.shape}")
         H, W = image.shape
-        pitch = line_pitch(W)
-        src = self.buffer("src", 8 * H * pitch)
-        cl.enqueue_copy(self.queue, src, image, buffer_origin=(0, 0), host_origin=(0, 0),
-                        region=(8 * W, H), buffer_pitches=(8 * pitch, 0), host_pitches=(8 * W, 0),
-                        is_blocking=False)
-        tmp = self.buffer("tmp", image.nbytes)
+        src, tmp = self._input(image), self.buffer("tmp", image.nbytes)
         outs = [np.empty_like(image) for _ in sigmas] if out is None else list(out)
         for sigma, blurred in zip(sigmas, outs):
             if not float(sigma) > 1e-15:   # as scipy: no blur
@@ -93,11 +88,18 @@ class DeviceBlur(DeviceStage):
             b_w = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=w)
             dst = self._output(blurred)
             size, shape = (-(-W // 8), H), (np.int32(len(w) // 2), np.int32(W), np.int32(H))
-            self._passes[0](self.queue, size, None, src, tmp, b_w, *shape, np.int32(pitch))
+            self._passes[0](self.queue, size, None, src, tmp, b_w, *shape)
             self._passes[1](self.queue, size, None, tmp, dst, b_w, *shape)
             self._read(blurred, dst)
         self.queue.finish()   # the maps and reads are done: the arrays hold the blurs
         return outs
+
+    def _input(self, image):
+        """The input's buffer: on a CPU the host's array itself."""
+        mf = cl.mem_flags
+        if self.is_cpu:
+            return cl.Buffer(self.ctx, mf.READ_ONLY | mf.USE_HOST_PTR, hostbuf=image)
+        return cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=image)
 
     def _output(self, out):
         """The buffer the row pass writes `out` to: on a CPU `out` itself (no copy back)."""
@@ -113,17 +115,4 @@ class DeviceBlur(DeviceStage):
             mapped.base.release(self.queue)
         else:
             cl.enqueue_copy(self.queue, out, dst, is_blocking=False)
-
-
-def line_pitch(width):
-    """Samples between the rows of ``blur_columns``' input: `width` rounded up to an odd
-    number of 64-byte lines (so that the rows of a column's taps fall in different cache sets).
-
-    Examples
-    --------
-    >>> line_pitch(8192), line_pitch(30), line_pitch(17)
-    (8200, 40, 24)
-    """
-    lines = -(-int(width) // 8)
-    return 8 * (lines | 1)
 

@@ -1,10 +1,7 @@
 /* Separable Gaussian blur of a float64 image, as scipy.ndimage.gaussian_filter1d
  * makes it along each axis in "reflect" mode (d c b a | a b c d | d c b a):
  * blur_columns along the rows' direction (axis 0), then blur_rows (axis 1),
- * each from its own input buffer.  blur_columns reads rows `pitch` samples apart:
- * with a pitch of an odd number of 64-byte lines the 2 r + 1 rows of a work item
- * fall in different cache sets (a power-of-two width puts them all in one, and
- * every tap then comes from the last-level cache).
+ * each from its own input buffer.
  *
  * The weights w[0..2r] are symmetric about w[r], and every output is summed
  * as scipy's correlate1d sums a symmetric kernel:
@@ -37,25 +34,24 @@ inline double line_blur(__global const double *line, size_t stride, int i, int n
     return acc;
 }
 
-/* out[y, x] for x = 8 g .. 8 g + 7 from the rows y - r .. y + r of `in` (rows `pitch` apart). */
+/* out[y, x] for x = 8 g .. 8 g + 7 from the rows y - r .. y + r of `in`. */
 __kernel void blur_columns(__global const double *in, __global double *out,
-                           __global const double *w, const int r, const int nx, const int ny,
-                           const int pitch)
+                           __global const double *w, const int r, const int nx, const int ny)
 {
     const int x0 = get_global_id(0) * 8, y = get_global_id(1);
     if (x0 >= nx || y >= ny) return;
     if (x0 + 8 <= nx) {
-        double8 acc = w[r] * VLOAD_D8(in + (size_t)y * pitch + x0);
+        double8 acc = w[r] * VLOAD_D8(in + (size_t)y * nx + x0);
         for (int j = r; j >= 1; --j) {
-            const double8 lo = VLOAD_D8(in + (size_t)reflect(y - j, ny) * pitch + x0);
-            const double8 hi = VLOAD_D8(in + (size_t)reflect(y + j, ny) * pitch + x0);
+            const double8 lo = VLOAD_D8(in + (size_t)reflect(y - j, ny) * nx + x0);
+            const double8 hi = VLOAD_D8(in + (size_t)reflect(y + j, ny) * nx + x0);
             acc += w[r - j] * (lo + hi);
         }
         VSTORE_D8(acc, out + (size_t)y * nx + x0);
         return;
     }
     for (int x = x0; x < nx; ++x)
-        out[(size_t)y * nx + x] = line_blur(in + x, pitch, y, ny, w, r);
+        out[(size_t)y * nx + x] = line_blur(in + x, nx, y, ny, w, r);
 }
 
 /* out[y, x] for x = 8 g .. 8 g + 7 from the columns x - r .. x + 7 + r of row y of `in`. */
