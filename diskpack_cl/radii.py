@@ -99,10 +99,9 @@ def gaussian_blur(image, sigma, *, cols=64, rows=512):
     return out
 
 
-def blurs(blur, image, sigmas, out=None):
+def blurs(blur, image, sigmas):
     """``[blur(image, s) for s in sigmas]``: a blur's ``many`` where it has one (a
-    :class:`~diskpack_cl.device.blur.DeviceBlur` sends `image` to its device once), with
-    `out` the arrays to write them to (float64, `image`'s shape; None: new ones).
+    :class:`~diskpack_cl.device.blur.DeviceBlur` sends `image` to its device once).
 
     Examples
     --------
@@ -112,14 +111,7 @@ def blurs(blur, image, sigmas, out=None):
     True
     """
     many = getattr(blur, "many", None)
-    if many is not None:
-        return many(image, sigmas, out)
-    made = [blur(image, s) for s in sigmas]
-    if out is None:
-        return made
-    for dst, src in zip(out, made):
-        np.copyto(dst, src)
-    return list(out)
+    return many(image, sigmas) if many is not None else [blur(image, s) for s in sigmas]
 
 
 def _pixel_of(points, W, H):

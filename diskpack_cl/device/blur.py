@@ -69,17 +69,16 @@ class DeviceBlur(DeviceStage):
         """The blurred float64 image (a new array; `image` is not changed)."""
         return self.many(image, [sigma])[0]
 
-    def many(self, image, sigmas, out=None):
+    def many(self, image, sigmas):
         """``[self(image, s) for s in sigmas]``, with `image` sent to the device once (the
-        stage's blurs of one darkness band); `out`: the arrays to write them to (C-contiguous
-        float64 of `image`'s shape, one a sigma; None: new ones). On a CPU the kernels read
-        `image` and write the blurs where they are (no copy either way)."""
+        stage's blurs of one darkness band). On a CPU the kernels read `image` and write the
+        blurs where they are (no copy either way)."""
         image = np.ascontiguousarray(image, np.float64)
         if image.ndim != 2 or image.size == 0:
             raise ValueError(f"DeviceBlur blurs non-empty 2-D images, got shape {image.shape}")
         H, W = image.shape
         src, tmp = self._input(image), self.buffer("tmp", image.nbytes)
-        outs = [np.empty_like(image) for _ in sigmas] if out is None else list(out)
+        outs = [np.empty_like(image) for _ in sigmas]
         for sigma, blurred in zip(sigmas, outs):
             if not float(sigma) > 1e-15:   # as scipy: no blur
                 np.copyto(blurred, image)
