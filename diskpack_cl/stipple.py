@@ -92,7 +92,8 @@ from .preview import Previewable
 from .progress import running, stage as run_stage
 from .dithering import least_k, error_diffusion
 from .domain import Domain
-from .radii import (certified_k, detail_ell, detail_fields, field_at, fields_at, gaussian_blur, largest_valid_k,
+from .radii import (DETAIL_FINE, DETAIL_GAIN, blurs, certified_k, density_radius, detail_ell, detail_weight,
+                    dilation_radius, disk_dilation, field_at, fields_at, gaussian_blur, largest_valid_k,
                     radius_field)
 from .schedule import StippleOptions, StipplePlan
 from .engine import HOST_DEVICE, engine_record, make_engine, stage_record
@@ -712,10 +713,18 @@ def _field_blur(engine):
 def centroid_density(darkness, opt, blur=gaussian_blur):
     """Density of the centroid integrals per grid cell: blurred darkness, upsampled; float32
     (half the memory and the reads of every step; the engines sum it in float64)."""
-    blurred = _blurred(darkness, opt.density_sigma, blur)
+    return _density_of(_blurred(darkness, opt.density_sigma, blur), opt.supersample)
+
+
+def _density_of(blurred, s, out=None):
+    """:func:`centroid_density` of the blurred darkness, upsampled `s` times (into `out`)."""
+    if s == 1:
+        return np.maximum(blurred, 1e-6, out=np.empty(blurred.shape, np.float32) if out is None else out)
     d = np.maximum(blurred, 1e-6, out=np.empty(blurred.shape, np.float32))
-    s = opt.supersample
-    return d if s == 1 else np.repeat(np.repeat(d, s, axis=0), s, axis=1)
+    d = np.repeat(np.repeat(d, s, axis=0), s, axis=1)
+    if out is not None:
+        out[...] = d
+    return d if out is None else out
 
 
 def _toned(gray, paper_tone):
@@ -752,7 +761,7 @@ def field_margin(plan, ell):
     dilation = 0
     if plan.features == "detail":
         sigmas.append(ell / 2.0)
-        dilation = max(1, int(round(ell / 4.0)))
+        dilation = dilation_radius(ell)
     return int(math.ceil(4.0 * max(sigmas) + 0.5)) + dilation + 2
 
 
@@ -767,28 +776,19 @@ def _banded_stage(gray, opt, engine, bands):
     if ell is None and opt.features == "detail":
         ell = detail_ell(gray, opt.n)
     m, s = field_margin(opt, ell), opt.supersample
-    blur = bands.blur or _field_blur(engine)
-    stages = None
-    names = ("radius_field", "density", "blend_weight", "ink")
-    fields = {}
+    blur, blur_record = bands.blur or _field_blur(engine)
+    fields = _empty_fields(opt, len(rows), len(range(W)[cols]))
     for y0 in range(rows.start, rows.stop, bands.rows):
         y1 = min(y0 + bands.rows, rows.stop)
         lo, hi = max(0, y0 - m), min(H, y1 + m)
-        part = make_stage(gray[lo:hi], opt, engine, window=(slice(y0 - lo, y1 - lo), cols),
-                           ell=ell, blur=blur)
-        stages = part.stages
-        for name in names:
-            f = getattr(part, name)
-            if f is None:
-                fields[name] = None
-                continue
-            scale = s if name == "density" else 1
-            if name not in fields:
-                fields[name] = np.empty((len(rows) * scale, f.shape[1]), f.dtype)
-            fields[name][(y0 - rows.start) * scale:(y1 - rows.start) * scale] = f
+        band = slice(y0 - rows.start, y1 - rows.start)
+        out = {name: None if f is None else f[band if name != "density" else slice(band.start * s, band.stop * s)]
+               for name, f in fields.items()}
+        _make_fields(gray[lo:hi], opt, blur, ell, (slice(y0 - lo, y1 - lo), cols), out)
         if bands.consume:   # the fields grow as the picture shrinks: their sum stays the peak
             drop_pages(gray[max(0, y0 - m):max(0, y1 - m)])
-    return StippleStage(engine, opt, *(fields[name] for name in names), stages=stages)
+    stages = {"engine": engine_record(engine), "blur": blur_record}
+    return StippleStage(engine, opt, *fields.values(), stages=stages)
 
 
 class _Bands(NamedTuple):
@@ -802,14 +802,62 @@ class _Bands(NamedTuple):
     consume: bool
 
 
-def _sampled(field):
-    """A field read only at the dots (:func:`~diskpack_cl.radii.field_at`), as it is kept."""
-    return None if field is None else field.astype(np.float32)
+def _empty_fields(opt, H, W):
+    """The stage's fields of an `H` x `W` picture, in :class:`StippleStage`'s order, unfilled
+    (None where the options make none). The fields read at the dots alone are float32 (half
+    the memory: 7 digits are more than a radius or a blend needs); so is the density
+    (:func:`centroid_density`)."""
+    s = opt.supersample
+    return {"radius_field": np.empty((H, W), np.float32),
+            "density": np.empty((H * s, W * s), np.float32),
+            "blend_weight": np.empty((H, W), np.float32) if opt.features == "detail" else None,
+            "ink": np.empty((H, W), np.float32) if opt.support > 0 else None}
+
+
+def _field_sigmas(opt, ell):
+    """``{name: sigma}``: the blurs of the darkness that the stage's fields are made of."""
+    sigmas = {"radius": opt.radius_sigma if opt.radii == "density" else 0.0,
+              "coarse": ell / 2.0 if opt.features == "detail" else 0.0,
+              "sharp": DETAIL_FINE if opt.features == "detail" else 0.0,
+              "ink": INK_SIGMA if opt.support > 0 else 0.0,
+              "density": opt.density_sigma}
+    return {name: sigma for name, sigma in sigmas.items() if sigma > 0}
+
+
+def _make_fields(gray, opt, blur, ell, window, out):
+    """Write the fields of `window` (``(rows, cols)`` slices) of the float64 picture `gray` to
+    `out` (:func:`_empty_fields` of the window, or views of them), each from the blurs of one
+    darkness (:func:`~diskpack_cl.radii.blurs`: a device blur reads it once), each temporary
+    dropped once its field is written (a band's peak memory: the darkness and its blurs)."""
+    darkness = 1.0 - gray
+    sigmas = _field_sigmas(opt, ell)
+    if "density" not in sigmas:
+        _density_of(darkness[window], opt.supersample, out["density"])
+    blurred = dict(zip(sigmas, blurs(blur, darkness, list(sigmas.values()))))
+    if "density" in blurred:
+        _density_of(blurred.pop("density")[window], opt.supersample, out["density"])
+    if opt.support > 0:   # off_support's
+        np.copyto(out["ink"], blurred.pop("ink")[window], casting="same_kind")
+    if opt.features == "detail":
+        sharp = blurred.pop("sharp") if "sharp" in blurred else darkness.copy()
+        weight = detail_weight(sharp, blurred.pop("coarse"), DETAIL_GAIN)
+        np.copyto(out["blend_weight"], weight[window], casting="same_kind")
+        del sharp, weight
+    if opt.radii == "density":
+        rfield = density_radius(blurred.pop("radius") if "radius" in blurred else darkness, opt.floor)
+    else:
+        rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
+    del darkness
+    if opt.features == "detail":
+        # the field rounded to float32, then dilated: a maximum of the rounded values is
+        # the rounded maximum, in half the bytes
+        rfield = disk_dilation(rfield.astype(np.float32), dilation_radius(ell))
+    np.copyto(out["radius_field"], rfield[window], casting="same_kind")
 
 
 def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None,
                consume=False):
-    """The :class:`StippleStage` of a gray image: radius field, centroid density, ink.
+    """The :class:`StippleStage` of a float64 gray image: radius field, centroid density, ink.
 
     With `window` (``(rows, cols)`` slices of `gray`) the fields are those
     of that part of `gray`, computed with the margin around it, and `ell`
@@ -821,27 +869,14 @@ def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND
     if len(range(gray.shape[0])[window[0] if window else slice(None)]) > 2 * band_rows:
         return _banded_stage(gray, opt, engine, _Bands(band_rows, window, ell, blur, consume))
     blur, blur_record = blur or _field_blur(engine)
+    H, W = gray.shape
+    window = window or (slice(0, H), slice(0, W))
+    if ell is None and opt.features == "detail":
+        ell = detail_ell(gray, opt.n)
+    fields = _empty_fields(opt, len(range(H)[window[0]]), len(range(W)[window[1]]))
+    _make_fields(gray, opt, blur, ell, window, fields)
     stages = {"engine": engine_record(engine), "blur": blur_record}
-    rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor, sigma=opt.radius_sigma,
-                          blur=blur)
-    weight = None
-    if opt.features == "detail":
-        rfield, weight = detail_fields(gray, opt.n, rfield, ell=ell, blur=blur)
-    # the fields read at the dots alone are kept in float32 (half the memory: 7 digits are
-    # more than a radius or a blend needs); so is the density (centroid_density)
-    rfield, weight = _sampled(rfield), _sampled(weight)
-    darkness = 1.0 - gray   # made here, not beside the detail fields' temporaries (peak memory)
-    ink = _sampled(_blurred(darkness, INK_SIGMA, blur)) if opt.support > 0 else None   # off_support's
-    density = centroid_density(darkness, opt, blur)
-    if window is None:
-        return StippleStage(engine, opt, rfield, density, weight, ink, stages)
-    s = opt.supersample
-    fine = tuple(slice(w.start * s, w.stop * s) for w in window)
-
-    def cut(f, part=window):
-        return None if f is None else np.ascontiguousarray(f[part])
-    return StippleStage(engine, opt, cut(rfield), cut(density, fine), cut(weight), cut(ink),
-                        stages)
+    return StippleStage(engine, opt, *fields.values(), stages=stages)
 
 
 def _certified_result(state, r, record, history, t_start, ink):

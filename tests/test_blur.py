@@ -64,6 +64,24 @@ def test_the_256_bit_build_is_scipys_bit_for_bit(blur_256, h, w, sigma, seed):
     assert len(differ) == 0, f"{len(differ)} outputs differ from scipy's, first at {differ[0]}"
 
 
+@settings(max_examples=40)
+@given(h=st.integers(1, 40), w=st.integers(1, 40),
+       sigmas=st.lists(st.sampled_from([0.0, 0.3, 0.5, 1.0, 2.0, 3.7, 9.0]), min_size=1, max_size=5),
+       seed=st.integers(0, 2**32 - 1))
+def test_many_blurs_of_one_upload_are_scipys_and_the_blurs_one_by_one(device_blur, h, w, sigmas, seed):
+    """``many``: the image sent once, each blur written to its own array (on a CPU by the
+    kernels themselves), the values of scipy's and of one call each."""
+    from diskpack_cl.radii import blurs
+
+    a = np.random.default_rng(seed).random((h, w))
+    got = blurs(device_blur, a, sigmas)
+    assert len(got) == len(sigmas) and len({id(x) for x in got}) == len(got)
+    for sigma, blurred in zip(sigmas, got):
+        want = ndimage.gaussian_filter(a, sigma, mode="reflect") if sigma > 0 else a
+        np.testing.assert_allclose(blurred, want, rtol=0, atol=1e-12)
+        assert np.array_equal(blurred, device_blur(a, sigma)), sigma
+
+
 def test_device_blur_of_a_band_of_a_large_picture_and_bad_shapes(device_blur):
     a = np.random.default_rng(1).random((70, 1030))
     np.testing.assert_allclose(device_blur(a, 4.2), gaussian_blur(a, 4.2), rtol=0, atol=1e-12)

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from diskpack_cl.dithering import _fs_wavefront, error_diffusion
@@ -609,6 +609,60 @@ def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
             assert (a is None) == (b is None), name
             if a is not None:
                 np.testing.assert_array_equal(b, a, err_msg=f"{name} of the window, bands of {rows}")
+
+
+def _plain_fields(g, plan, ell):
+    """The stage's fields as written out plainly with scipy: each blur of the darkness on
+    its own, the detail radius field dilated over the disk in float64, then rounded."""
+    from scipy import ndimage
+
+    from diskpack_cl.stipple import INK_SIGMA
+
+    d = 1.0 - g
+    blur = lambda sigma: ndimage.gaussian_filter(d, sigma, mode="reflect") if sigma > 0 else d.copy()   # noqa: E731
+    if plan.radii == "density":
+        r = np.sqrt(plan.floor / np.maximum(blur(plan.radius_sigma), plan.floor))
+    else:
+        r = np.maximum(g, plan.floor) ** (0.5 * plan.gamma)
+    weight = None
+    if plan.features == "detail":
+        coarse = blur(ell / 2.0)
+        weight = np.clip(1.5 * np.abs(blur(0.5) - coarse) / np.maximum(coarse, 0.1), 0.0, 1.0)
+        rad = max(1, int(round(ell / 4.0)))
+        disk = np.add.outer(np.arange(-rad, rad + 1) ** 2, np.arange(-rad, rad + 1) ** 2) <= rad * rad
+        r = ndimage.grey_dilation(r, footprint=disk, mode="reflect")
+    s = plan.supersample
+    density = np.maximum(blur(plan.density_sigma), 1e-6).astype(np.float32)
+    ink = blur(INK_SIGMA).astype(np.float32) if plan.support > 0 else None
+    return {"radius_field": r.astype(np.float32), "blend_weight": None if weight is None else weight.astype(np.float32),
+            "ink": ink, "density": np.repeat(np.repeat(density, s, axis=0), s, axis=1)}
+
+
+@settings(max_examples=25)
+@given(h=st.integers(8, 70), w=st.integers(8, 70), n=st.integers(20, 2000),
+       schedule=st.sampled_from(["default", "classic", "detail", "paper"]), supersample=st.sampled_from([None, 2]),
+       rows=st.sampled_from([3, 5, 1000]), seed=st.integers(0, 2**32 - 1))
+def test_stage_fields_are_the_plain_computations(h, w, n, schedule, supersample, rows, seed):
+    """The stage's fields (one darkness, its blurs at once, the radius field rounded before
+    its dilation by chords, whole or in bands of `rows`) against the plain computations,
+    bit for bit, for every schedule's options."""
+    from diskpack_cl.engine import make_engine
+    from diskpack_cl.radii import detail_ell
+    from diskpack_cl.stipple import make_stage
+
+    rng = np.random.default_rng(seed)
+    g = np.clip(rng.random((h, w)) * 1.3 - 0.1, 0.0, 1.0)
+    g[rng.integers(0, h):, :rng.integers(0, w)] = 1.0   # white paper, across band borders
+    assume(g.min() < 1.0 and 4 * n <= h * w)   # ink to stipple, and 4 grid cells a dot
+    options = StippleOptions(schedule=schedule, **({} if supersample is None else {"supersample": supersample}))
+    plan = options.plan(n, w, h, ink=float((1 - g).sum()))
+    stage = make_stage(g, plan, make_engine(Domain.rect(w, h), n, "exact"), band_rows=rows)
+    want = _plain_fields(g, plan, detail_ell(g, n))
+    for name, field in want.items():
+        got = getattr(stage, name)
+        assert (got is None) == (field is None), name
+        if field is not None:
+            assert got.dtype == np.float32 and np.array_equal(got, field), name
 
 
 @settings(max_examples=50)

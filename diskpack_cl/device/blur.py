@@ -64,35 +64,54 @@ class DeviceBlur(DeviceStage):
         super().__init__(device, fp64=True)
         k = self.program("blur")
         self._passes = (k["blur_columns"], k["blur_rows"])
-        self._pass_buffers = None
 
     def __call__(self, image, sigma):
         """The blurred float64 image (a new array; `image` is not changed)."""
+        return self.many(image, [sigma])[0]
+
+    def many(self, image, sigmas):
+        """``[self(image, s) for s in sigmas]``, with `image` sent to the device once (the
+        stage's blurs of one darkness band). On a CPU the kernels read `image` and write the
+        blurs where they are (no copy either way)."""
         image = np.ascontiguousarray(image, np.float64)
         if image.ndim != 2 or image.size == 0:
             raise ValueError(f"DeviceBlur blurs non-empty 2-D images, got shape {image.shape}")
-        if not float(sigma) > 1e-15:   # as scipy: no blur
-            return image.copy()
         H, W = image.shape
-        w = gaussian_weights(sigma)
-        r = len(w) // 2
-        src, tmp, dst = self._buffers(image)
-        b_w = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=w)
-        size = (-(-W // 8), H)
-        for kernel, (a, b) in zip(self._passes, ((src, tmp), (tmp, dst))):
-            kernel(self.queue, size, None, a, b, b_w, np.int32(r), np.int32(W), np.int32(H))
-        out = np.empty_like(image)
-        cl.enqueue_copy(self.queue, out, dst)
-        return out
+        src, tmp = self._input(image), self.buffer("tmp", image.nbytes)
+        outs = [np.empty_like(image) for _ in sigmas]
+        for sigma, blurred in zip(sigmas, outs):
+            if not float(sigma) > 1e-15:   # as scipy: no blur
+                np.copyto(blurred, image)
+                continue
+            w = gaussian_weights(sigma)
+            b_w = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=w)
+            dst = self._output(blurred)
+            size, shape = (-(-W // 8), H), (np.int32(len(w) // 2), np.int32(W), np.int32(H))
+            self._passes[0](self.queue, size, None, src, tmp, b_w, *shape)
+            self._passes[1](self.queue, size, None, tmp, dst, b_w, *shape)
+            self._read(blurred, dst)
+        self.queue.finish()   # the maps and reads are done: the arrays hold the blurs
+        return outs
 
-    def _buffers(self, image):
-        """The input's buffer (the host's array itself on a CPU), and the pass buffers,
-        kept from call to call while the size stays (the bands of a picture)."""
+    def _input(self, image):
+        """The input's buffer: on a CPU the host's array itself."""
         mf = cl.mem_flags
         if self.is_cpu:
-            src = cl.Buffer(self.ctx, mf.READ_ONLY | mf.USE_HOST_PTR, hostbuf=image)
+            return cl.Buffer(self.ctx, mf.READ_ONLY | mf.USE_HOST_PTR, hostbuf=image)
+        return cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=image)
+
+    def _output(self, out):
+        """The buffer the row pass writes `out` to: on a CPU `out` itself (no copy back)."""
+        if self.is_cpu:
+            return cl.Buffer(self.ctx, cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=out)
+        return self.buffer("dst", out.nbytes)
+
+    def _read(self, out, dst):
+        """Queue what brings the blur in `dst` to the host array `out`."""
+        if self.is_cpu:   # mapped and unmapped: the driver makes `out` hold the writes
+            mapped, _ = cl.enqueue_map_buffer(self.queue, dst, cl.map_flags.READ, 0, out.shape,
+                                              out.dtype, is_blocking=False)
+            mapped.base.release(self.queue)
         else:
-            src = cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=image)
-        if self._pass_buffers is None or self._pass_buffers[0].size < image.nbytes:
-            self._pass_buffers = tuple(cl.Buffer(self.ctx, mf.READ_WRITE, image.nbytes) for _ in range(2))
-        return (src,) + self._pass_buffers
+            cl.enqueue_copy(self.queue, out, dst, is_blocking=False)
+
