@@ -40,4 +40,6 @@ def test_a_poisson_run_loads_no_picture_raster_or_masked_arrays(tmp_path):
     loaded = _loaded_after("from diskpack_cl.cli import main; "
                            f"assert main(['poisson', '-n', '3000', '--seed', '1', '-q', '-o', {str(out)!r}]) == 0")
     assert out.exists()
-    assert not loaded & {"diskpack_cl.image", "diskpack_cl.device.raster", "numpy.ma"}
+    # what numpy and pyopencl load themselves is theirs (numpy 1.26 loads numpy.ma)
+    theirs = _loaded_after("import numpy, pyopencl")
+    assert not loaded & ({"diskpack_cl.image", "diskpack_cl.device.raster", "numpy.ma"} - theirs)
