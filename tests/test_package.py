@@ -34,8 +34,9 @@ def test_a_submodule_does_not_shadow_the_function_it_is_named_after():
     assert "diskpack_cl.stipple" in loaded
 
 
-def test_a_poisson_run_loads_no_picture_raster_or_masked_arrays(tmp_path):
-    # a whole run, local steps included (their distinct cells: numpy 2's np.unique loads numpy.ma)
+def test_a_poisson_run_loads_no_picture_raster_or_masked_arrays(ctx, tmp_path):
+    # a whole run on the device (ctx: the exact engine's own route takes np.unique), local
+    # steps included (their distinct cells: numpy 2's np.unique loads numpy.ma)
     out = tmp_path / "p.npz"
     loaded = _loaded_after("from diskpack_cl.cli import main; "
                            f"assert main(['poisson', '-n', '3000', '--seed', '1', '-q', '-o', {str(out)!r}]) == 0")
