@@ -23,8 +23,8 @@ import time
 
 from diskpack_cl import error_diffusion, load_gray, sample_image_path
 from diskpack_cl.drawing.page import plot_time
-from diskpack_cl.drawing.pen_path import (_greedy_order, _hilbert_order, path_travel, pen_path_order, two_opt,
-                                  two_opt_rounds)
+from diskpack_cl.drawing.pen_path import (greedy_order, hilbert_order, path_travel, pen_path_order, two_opt,
+                                          two_opt_rounds)
 
 WIDTH_MM = 190.0
 
@@ -39,10 +39,10 @@ def measure(p, rounds=None):
     """Rows (order name, travel mm, seconds) for one point set."""
     rows = []
     t = time.perf_counter()
-    hil = _hilbert_order(p)
+    hil = hilbert_order(p)
     rows.append(("hilbert", hil, time.perf_counter() - t))
     t = time.perf_counter()
-    gre = _greedy_order(p, (0.0, 0.0))
+    gre = greedy_order(p, (0.0, 0.0))
     rows.append(("greedy", gre, time.perf_counter() - t))
     for name, base, took in list(rows):
         t = time.perf_counter()

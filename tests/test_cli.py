@@ -341,7 +341,7 @@ def stippled(ctx, tmp_path_factory):
 
 
 def test_stipple_writes_every_format(stippled):
-    s, outs = stippled.summary, stippled.outs
+    outs = stippled.outs
     assert sorted(os.listdir(stippled.dir)) == sorted(["grad.png"] + [p.name for p in outs.values()])
     svg = outs["svg"].read_text()
     assert svg.count("<circle ") == 150 and 'inkscape:groupmode="layer"' in svg

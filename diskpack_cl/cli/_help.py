@@ -10,8 +10,6 @@ dataclass (the options reference of the docs shows it).
 
 from __future__ import annotations
 
-import argparse
-
 __all__ = ["LEADING", "EVERYDAY", "PLOTTER", "one_line_help", "lead_with", "with_examples"]
 
 #: Title of the first group of options (what most runs set).
@@ -70,6 +68,7 @@ def lead_with(parser, *, last=()):
 
     Examples
     --------
+    >>> import argparse
     >>> p = argparse.ArgumentParser(prog="x")
     >>> _ = p.add_argument_group("tuning").add_argument("--gamma")
     >>> _ = p.add_argument("-o", "--output")

@@ -53,10 +53,12 @@ def _run_poisson_radius(args):
     bar = terminal_bar(args, "radius search", "trial")
     callback = None
     if bar is not None:
-        def callback(trial):
+        def show(trial):
             bar.set_postfix_str(f"n={trial['n']} {'reached' if trial['reached'] else 'missed'}",
                                 refresh=False)
             bar.update(1)
+
+        callback = show
     try:
         # each trial: the search's relaxation, with the relaxation's flags given
         res = max_points_for_radius(args.radius, TRIAL_RELAX.replace(**changed(relax_options_of(args))),

@@ -16,8 +16,8 @@ from scipy.spatial import cKDTree
 
 from ..progress import stage
 
-__all__ = ["GREEDY_MAX", "PEN_PATHS", "TWO_OPT_WORK", "path_travel", "pen_path_order", "two_opt",
-           "two_opt_rounds"]
+__all__ = ["GREEDY_MAX", "PEN_PATHS", "TWO_OPT_WORK", "greedy_order", "hilbert_order", "path_travel",
+           "pen_path_order", "two_opt", "two_opt_rounds"]
 
 #: The ``method`` names of :func:`pen_path_order`.
 PEN_PATHS = ("auto", "hilbert", "greedy", "none")
@@ -62,7 +62,16 @@ def _hilbert_index(ix, iy, order):
     return d
 
 
-def _hilbert_order(p):
+def hilbert_order(points):
+    """The order of `points` along a Hilbert curve of 2^16 x 2^16 cells over their bounding
+    square (ties kept in the given order).
+
+    Examples
+    --------
+    >>> hilbert_order(np.array([[1.0, 1.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])).tolist()
+    [1, 3, 0, 2]
+    """
+    p = np.asarray(points, dtype=np.float64)
     lo = p.min(axis=0)
     span = max(float(np.max(p.max(axis=0) - lo)), 1e-300)
     order = 16
@@ -72,12 +81,19 @@ def _hilbert_order(p):
     return np.argsort(_hilbert_index(ix, iy, order), kind="stable")
 
 
-def _greedy_order(p, start):
-    """Greedy nearest-neighbour tour with a cKDTree of the unvisited points.
+def greedy_order(points, start=(0.0, 0.0)):
+    """Greedy nearest-neighbour tour of `points` from `start`, with a cKDTree of the
+    unvisited points.
 
     The tree is rebuilt whenever half of its points have been visited, so a
     query for the 16 nearest almost always finds an unvisited one.
+
+    Examples
+    --------
+    >>> greedy_order(np.array([[3.0, 0.0], [1.0, 0.0], [2.0, 0.0]])).tolist()
+    [1, 2, 0]
     """
+    p = np.asarray(points, dtype=np.float64)
     n = len(p)
     visited = np.zeros(n, dtype=bool)
     order = np.empty(n, dtype=np.int64)
@@ -308,9 +324,9 @@ def pen_path_order(points, *, method="auto", start=(0.0, 0.0), rounds=None):
     with stage("pen path", 1 + rounds) as advance:
         orders = [np.arange(n)]
         if n >= 2 and method in ("auto", "hilbert"):
-            orders.append(_hilbert_order(p))
+            orders.append(hilbert_order(p))
         if n >= 2 and (method == "greedy" or (method == "auto" and n <= GREEDY_MAX)):
-            orders.append(_greedy_order(p, start))
+            orders.append(greedy_order(p, start))
         order, before, after = _shortest(p, orders, start)
         advance(1)
         if rounds:

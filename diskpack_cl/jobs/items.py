@@ -615,9 +615,10 @@ def _stipple_item_stipple(item, loaded, device, callback, verify, profile):
     if callback is not None:
         total = sum(ph[1] for ph in options.plan(n, W, H).phases)
 
-        def each(entry):
+        def with_total(entry):
             callback(entry, total)
 
+        each = with_total
     extra = {} if gray_sum is None else {"verify": verify, "profile": profile}
     res = run(image, n, options, device=device, callback=each,
               backend=params.get("backend", "auto"), **extra)
@@ -630,9 +631,11 @@ def _stipple_item(item, device, progress):
     """A batch's stipple item: :func:`stipple_item`, its outputs written; its summary."""
     callback = None
     if progress is not None:
-        def callback(entry, total):
+        def show(entry, total):
             progress(int(entry.get("iteration", 0)) + 1,
                      f"{entry.get('kind', '?')} k={entry.get('k', float('nan')):.4g}")
+
+        callback = show
     with running(RunProgress()) as run:   # the item's own run: its seconds per stage
         res, summary = stipple_item(item, device=device, callback=callback)
         t = time.perf_counter()
