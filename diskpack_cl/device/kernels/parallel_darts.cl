@@ -71,10 +71,14 @@ static int closer(double2 p, double2 q, double d2)
 static int near_point(__global const double2 *pt, int r, int c, int g, double2 q, double d2)
 {
     if (inner(r, c, g)) {   /* the wrap's four tests a neighbour were most of the test */
-        const int at = r * g + c;
-        for (int k = 0; k < 24; ++k)
-            if (closer(pt[at + NEAR[k][0] * g + NEAR[k][1]], q, d2)) return 1;
-        return 0;
+        const __global double2 *p = pt + r * g + c;
+        int hit = 0;
+        /* blocks of 8 without a branch inside: a test stops at the end of the block of
+         * its first conflict (a branch a neighbour cost 1.2 times as much on PoCL) */
+        for (int b = 0; b < 24 && !hit; b += 8)
+            for (int k = b; k < b + 8; ++k)
+                hit |= closer(p[NEAR[k][0] * g + NEAR[k][1]], q, d2);
+        return hit;
     }
     for (int k = 0; k < 24; ++k)
         if (closer(at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g), q, d2)) return 1;
@@ -135,7 +139,7 @@ __kernel void dart_free(
 }
 
 __kernel void dart_keep(
-    __global const double2 *dart,   /* g*g: this round's free darts (read only where prio >= 0) */
+    __global const double2 *dart,   /* g*g: this round's free darts (counted only where prio >= 0) */
     __global const double *prio,    /* g*g: priority of each free dart (-1: none) */
     __global const int *cells,      /* m cells holding a free dart */
     const int m,                    /* number of those cells */
@@ -149,15 +153,27 @@ __kernel void dart_keep(
     const double mine = prio[k];
     const double2 q = dart[k];
     const int r = k / g, c = k % g;
-    const int plain = inner(r, c, g);
-    int ok = 1;
-    for (int j = 0; j < 24 && ok; ++j) {
-        double2 shift = (double2)(0.0, 0.0);
-        const int at = plain ? k + NEAR[j][0] * g + NEAR[j][1]
-                             : wrap_cell(r + NEAR[j][0], c + NEAR[j][1], g, &shift);
-        if (prio[at] > mine) ok = !closer(dart[at] + shift, q, d2);
+    int hit = 0;
+    if (inner(r, c, g)) {
+        /* plain offsets, in blocks of 8 without a branch inside (as near_point): every
+         * neighbour's dart is read (an old one, or the fill, where no priority was
+         * written this round) and the priority test masks it; one loop selecting
+         * between the plain and the wrapped cell took twice as long on PoCL */
+        const __global double2 *d = dart + k;
+        const __global double *p = prio + k;
+        for (int b = 0; b < 24 && !hit; b += 8)
+            for (int j = b; j < b + 8; ++j) {
+                const int o = NEAR[j][0] * g + NEAR[j][1];
+                hit |= (p[o] > mine) & closer(d[o], q, d2);
+            }
+    } else {
+        for (int j = 0; j < 24 && !hit; ++j) {
+            double2 shift;
+            const int at = wrap_cell(r + NEAR[j][0], c + NEAR[j][1], g, &shift);
+            if (prio[at] > mine) hit = closer(dart[at] + shift, q, d2);
+        }
     }
-    keep[i] = ok;
+    keep[i] = !hit;
 }
 
 __kernel void cell_covered(
@@ -182,8 +198,9 @@ __kernel void cell_covered(
     int all = 1;
     for (int s = 0; s < 5 && all; ++s) {
         const double2 q = (double2)((col + sx[s]) * c, (r + sy[s]) * c);
-        all = 0;
-        for (int k = 0; k < 8 && !all; ++k) all = closer(p[k], q, d2);
+        int any = 0;   /* all 8 without a branch: 0.85 of the time of stopping at the first */
+        for (int k = 0; k < 8; ++k) any |= closer(p[k], q, d2);
+        all = any;
     }
     covered[i] = all;
 }
