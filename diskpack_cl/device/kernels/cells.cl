@@ -221,14 +221,15 @@ static int start_basis(const clist *L, int first, int *b, double *inv)
         const double x = L->nx[k], be = L->be[k];
         const int up = L->ny[k] >= 0.0;
         const long s = up * (2 - (x > 0.5) - (x > -0.5)) + (1 - up) * (3 + (x >= -0.5) + (x >= 0.5));
-        const double4 cand_a = select((double4)(INFINITY), (double4)(be), (long4)(s) == (long4)(0, 1, 2, 3));
-        const double2 cand_c = select((double2)(INFINITY), (double2)(be), (long2)(s) == (long2)(4, 5));
+        /* (vector ?: rather than select: PoCL 3.0 calls its library for select) */
+        const double4 cand_a = (long4)(s) == (long4)(0, 1, 2, 3) ? (double4)(be) : (double4)(INFINITY);
+        const double2 cand_c = (long2)(s) == (long2)(4, 5) ? (double2)(be) : (double2)(INFINITY);
         const long4 take_a = cand_a < nbe_a;
         const long2 take_c = cand_c < nbe_c;
-        near_a = select(near_a, (long4)(k), take_a);
-        near_c = select(near_c, (long2)(k), take_c);
-        nbe_a = select(nbe_a, cand_a, take_a);
-        nbe_c = select(nbe_c, cand_c, take_c);
+        near_a = take_a ? (long4)(k) : near_a;
+        near_c = take_c ? (long2)(k) : near_c;
+        nbe_a = take_a ? cand_a : nbe_a;
+        nbe_c = take_c ? cand_c : nbe_c;
     }
     const int near[6] = {near_a.s0, near_a.s1, near_a.s2, near_a.s3, near_c.s0, near_c.s1};
     const double nbe[6] = {nbe_a.s0, nbe_a.s1, nbe_a.s2, nbe_a.s3, nbe_c.s0, nbe_c.s1};
