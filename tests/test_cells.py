@@ -640,6 +640,143 @@ def test_the_kernels_basis_and_near_tight_codes_by_brute_force(solvers, case):
         assert all(slack[c][0] < near_tol + err[c] for c in near), row
 
 
+def _sextant_start(X, w, dom, p, grid, box):
+    """The start basis cell_mic's start_basis takes for cell p, as numpy computes it:
+    the constraints of its first list (the rectangle's edges, then the sites of the
+    bucket box `box` = (x0, y0, x1, y1), inclusive, inside `grid`), the nearest of each
+    60-degree sextant, and the nearest of three 120-degree sectors where they bound a
+    triangle (else the sectors turned by 60 degrees).  ``(codes, inverse)`` of that
+    basis, or None where the kernel's start is the artificial triangle, or where
+    rounding could decide between sextants, nearest sites or the triangle test."""
+    a, codes = _first_list(X, w, dom, p, grid, box)
+    L = np.hypot(a[:, 0], a[:, 1])
+    il = 1.0 / L
+    nx, ny = a[:, 0] * il, a[:, 1] * il
+    be = np.where(codes < 0, a[:, 2], 0.5 * a[:, 2] * il)
+    site = codes >= 0
+    if np.any(site & ((np.abs(np.abs(nx) - 0.5) < 1e-9) | (np.abs(ny) < 1e-9))):
+        return None
+    up = ny >= 0.0
+    sext = np.where(up, 2 - (nx > 0.5) - (nx > -0.5), 3 + (nx >= -0.5) + (nx >= 0.5))
+    near = []
+    for j in range(6):
+        ks = np.flatnonzero(sext == j)
+        order = ks[np.argsort(be[ks], kind="stable")]
+        if len(order) > 1 and be[order[1]] - be[order[0]] < 1e-9 * (1 + abs(be[order[0]])):
+            return None   # a tie, which the list's order decides
+        near.append((order[0], be[order[0]]) if len(order) else (-1, np.inf))
+    for first in (0, 1):
+        pick = []
+        for k in range(3):
+            (ku, bu), (kv, bv) = near[(first + 2 * k) % 6], near[(first + 2 * k + 1) % 6]
+            pick.append(kv if bv < bu else ku)
+        if min(pick) < 0:
+            continue
+        M = np.column_stack([nx[pick], ny[pick], np.ones(3)])
+        if abs(np.linalg.det(M)) < 1e-9:
+            return None
+        inv = np.linalg.inv(M)
+        if np.any(np.abs(inv[2]) < 1e-9):
+            return None
+        if np.all(inv[2] > 0):
+            return codes[pick], inv @ be[pick]
+    return None
+
+
+def _first_list(X, w, dom, p, grid, box):
+    """The constraints of cell p's first list: rows ``(a_x, a_y, beta numerator)``
+    (sites: offset and ``|a|^2 - w_j + w_i``; edges: normal and distance) and codes."""
+    x0, y0, x1, y1 = box
+    bx = np.clip((X[:, 0] / grid[2]).astype(np.int64), 0, grid[0] - 1)
+    by = np.clip((X[:, 1] / grid[3]).astype(np.int64), 0, grid[1] - 1)
+    js = np.flatnonzero((bx >= x0) & (bx <= x1) & (by >= y0) & (by <= y1))
+    a = X[js] - X[p]
+    len2 = a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1]
+    keep = len2 > 0
+    rows = np.column_stack([a[keep], (len2 - w[js] + w[p])[keep]])
+    codes = 9 * js[keep] + 4
+    if not dom.periodic:
+        x, y = X[p]
+        edges = np.array([[-1.0, 0.0, x], [1.0, 0.0, dom.width - x], [0.0, -1.0, y],
+                          [0.0, 1.0, dom.height - y]])
+        rows, codes = np.vstack([edges, rows]), np.concatenate([[-1, -2, -3, -4], codes])
+    return rows, codes
+
+
+def _first_box(X, grid, p):
+    """The bucket box cell_mic gathers for cell p before its first solve (rings until
+    14 sites, at least one ring), or None where it reaches past the grid (wrapped
+    rings, shifted images) or its list would fill (48 sites)."""
+    nbx, nby, bw, bh = grid
+    hx, hy = min(int(X[p, 0] / bw), nbx - 1), min(int(X[p, 1] / bh), nby - 1)
+    bx = np.clip((X[:, 0] / bw).astype(np.int64), 0, nbx - 1)
+    by = np.clip((X[:, 1] / bh).astype(np.int64), 0, nby - 1)
+    for ring in range(1, 7):
+        box = (hx - ring, hy - ring, hx + ring, hy + ring)
+        if box[0] < 0 or box[1] < 0 or box[2] >= nbx or box[3] >= nby:
+            return None
+        inside = (np.abs(bx - hx) <= ring) & (np.abs(by - hy) <= ring)
+        count = np.count_nonzero(inside & np.any(X != X[p], axis=1))
+        if count >= 48:
+            return None
+        if count >= 14 or ring == 6:
+            return box
+    return None
+
+
+@st.composite
+def start_sets(draw):
+    """Random sites, many to a cell's rings: a torus or a rectangle, with or without weights."""
+    dom = Domain.torus() if draw(st.booleans()) else Domain.rect(draw(st.sampled_from([1.0, 3.0])), 1.0)
+    n = draw(st.integers(60, 400))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    w = None if draw(st.booleans()) else (0.3 * np.sqrt(dom.area / n) * rng.random(n)) ** 2
+    return dom, pts, w
+
+
+@settings(max_examples=25)
+@given(start_sets())
+def test_the_kernels_basis_is_its_sector_start_where_that_start_is_optimal(solvers, case):
+    """Where the start basis of the sextants' nearest constraints (numpy's, from the
+    list the kernel gathers first) is optimal over all sites, cell_mic pivots nowhere
+    and reports that basis in its start's order: the kernel's start (its sextant
+    minima, sector pairs, triangle test) is numpy's, constraint for constraint."""
+    dom, pts, w = case
+    solver = solvers(dom)
+    seen = {}
+    finish, buckets = solver._finish, solver._buckets
+
+    def keep(X, w, out, pos, rows):
+        seen.update(X=np.array(X), w=np.array(w), codes=np.array(out["codes"]), pos=np.array(pos))
+        return finish(X, w, out, pos, rows)
+
+    def grid(*args, **kw):
+        out = buckets(*args, **kw)
+        seen["grid"] = out[3]
+        return out
+
+    solver._finish, solver._buckets = keep, grid
+    try:
+        solver.solve(pts, w, certify=True)
+    finally:
+        del solver._finish, solver._buckets
+    X, ws, codes, pos = seen["X"], seen["w"], seen["codes"], seen["pos"]
+    checked = 0
+    for row, p in enumerate(pos):
+        box = _first_box(X, seen["grid"], p)
+        start = None if box is None else _sextant_start(X, ws, dom, p, seen["grid"], box)
+        if start is None:
+            continue
+        basis, z = start
+        slack = _brute_slacks(X, ws, dom, p, z[:2], z[2])
+        if min(s for c, (s, _) in slack.items() if c not in basis) < 1e-9 * max(dom.width, dom.height):
+            continue   # not optimal as it stands: the kernel pivots on
+        assert list(codes[row, :3]) == list(basis), row
+        checked += 1
+    assume(checked > 0)
+
+
 @given(st.integers(1, 300), st.integers(1, 50), st.sampled_from(["spread", "zero", "ties"]),
        st.integers(0, 2**32 - 1))
 def test_bucket_maxima_are_reduceats_over_the_sites_in_bucket_order(n, nb, kind, seed):

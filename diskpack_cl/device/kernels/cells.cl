@@ -77,19 +77,23 @@ typedef struct {
     int raw;             /* entries raw .. m-1 still hold (a.x, a.y, len^2 - w_j + w_i, len^2) */
 } clist;
 
-/* Inverse of the 3x3 matrix with rows (nx_k, ny_k, 1); returns 0 if singular. */
-static int inv3(const double *ax, const double *ay, double *inv)
+/* Inverse of the 3x3 matrix with rows (ax_k, ay_k, 1); returns 0 if singular.
+ * The rows come as scalars, not arrays: arrays filled element by element and
+ * read back as vectors stalled on store forwarding (sector_basis, which filled
+ * them, held a tenth of the kernel's profile). */
+static int inv3(double ax0, double ax1, double ax2, double ay0, double ay1, double ay2,
+                double *inv)
 {
-    const double c0 = ay[1] - ay[2], c1 = ay[2] - ay[0], c2 = ay[0] - ay[1];
-    const double det = ax[0] * c0 + ax[1] * c1 + ax[2] * c2;
+    const double c0 = ay1 - ay2, c1 = ay2 - ay0, c2 = ay0 - ay1;
+    const double det = ax0 * c0 + ax1 * c1 + ax2 * c2;
     if (FABS(det) < 1e-14) return 0;
     const double id = 1.0 / det;
     /* columns of the inverse follow the rows of the matrix */
-    inv[0] = c0 * id;                          inv[1] = c1 * id;                          inv[2] = c2 * id;
-    inv[3] = (ax[2] - ax[1]) * id;             inv[4] = (ax[0] - ax[2]) * id;             inv[5] = (ax[1] - ax[0]) * id;
-    inv[6] = (ax[1] * ay[2] - ax[2] * ay[1]) * id;
-    inv[7] = (ax[2] * ay[0] - ax[0] * ay[2]) * id;
-    inv[8] = (ax[0] * ay[1] - ax[1] * ay[0]) * id;
+    inv[0] = c0 * id;                inv[1] = c1 * id;                inv[2] = c2 * id;
+    inv[3] = (ax2 - ax1) * id;       inv[4] = (ax0 - ax2) * id;       inv[5] = (ax1 - ax0) * id;
+    inv[6] = (ax1 * ay2 - ax2 * ay1) * id;
+    inv[7] = (ax2 * ay0 - ax0 * ay2) * id;
+    inv[8] = (ax0 * ay1 - ax1 * ay0) * id;
     return 1;
 }
 
@@ -137,17 +141,19 @@ static int most_violated(const clist *L, const double *z, double tol)
  * to check the basis), else NULL. */
 static int dual_simplex(const clist *L, int *b, double *z, double tol, const double *inv0)
 {
-    double inv[9], ax[3], ay[3], be[3];
+    double own[9];
     for (int it = 0; it < MAX_PIVOTS; ++it) {
-        for (int k = 0; k < 3; ++k) { ax[k] = L->nx[b[k]]; ay[k] = L->ny[b[k]]; be[k] = L->be[b[k]]; }
-        if (it == 0 && inv0) {
-            for (int k = 0; k < 9; ++k) inv[k] = inv0[k];
-        } else if (!inv3(ax, ay, inv)) {
+        const double be0 = L->be[b[0]], be1 = L->be[b[1]], be2 = L->be[b[2]];
+        /* the start's inverse read where it is: copied, its scalar stores were
+         * read back as vectors, which stalled on store forwarding */
+        const double *inv = it == 0 && inv0 ? inv0 : own;
+        if (inv == own && !inv3(L->nx[b[0]], L->nx[b[1]], L->nx[b[2]],
+                                L->ny[b[0]], L->ny[b[1]], L->ny[b[2]], own)) {
             return F_PIVOTS;
         }
-        z[0] = inv[0] * be[0] + inv[1] * be[1] + inv[2] * be[2];
-        z[1] = inv[3] * be[0] + inv[4] * be[1] + inv[5] * be[2];
-        z[2] = inv[6] * be[0] + inv[7] * be[1] + inv[8] * be[2];
+        z[0] = inv[0] * be0 + inv[1] * be1 + inv[2] * be2;
+        z[1] = inv[3] * be0 + inv[4] * be1 + inv[5] * be2;
+        z[2] = inv[6] * be0 + inv[7] * be1 + inv[8] * be2;
         /* most calls end at a basis that is already optimal: a count first, which
          * the compiler vectorizes, and the search only where something is violated */
         if (!count_tight(L, z, -tol, 0, NULL)) return 0;
@@ -169,26 +175,24 @@ static int dual_simplex(const clist *L, int *b, double *z, double tol, const dou
     return F_PIVOTS;
 }
 
-/* Make b the basis of the nearest half-planes of three 120-degree sectors of
- * normal directions, made of the sextants `first` + 0..5 (mod 6) pairwise (`near`
- * the nearest constraint of each sextant, -1 for none, `nbe` its beta, INFINITY
- * for none), when the three bound a triangle: their normals span the plane
- * positively, the dual multipliers (third row of the basis inverse) are > 0.
- * Returns whether it did; the basis' inverse (inv3) is then in `inv`. */
-static int sector_basis(const clist *L, const int *near, const double *nbe, int first, int *b,
-                        double *inv)
+/* Make b the basis of constraints c0, c1, c2 (-1 for none), the nearest
+ * half-planes of three 120-degree sectors of normal directions, when the three
+ * bound a triangle: their normals span the plane positively, the dual
+ * multipliers (third row of the basis inverse) are > 0.  Returns whether it
+ * did; the basis' inverse (inv3) is then in `inv`. */
+static int sector_basis(const clist *L, int c0, int c1, int c2, int *b, double *inv)
 {
-    int c[3];
-    double ax[3], ay[3];
-    for (int k = 0; k < 3; ++k) {
-        const int u = first + 2 * k, v = u == 5 ? 0 : u + 1;
-        c[k] = nbe[v] < nbe[u] ? near[v] : near[u];   /* the nearer; the first on a tie */
-        if (c[k] < 0) return 0;
-        ax[k] = L->nx[c[k]]; ay[k] = L->ny[c[k]];
-    }
-    if (!inv3(ax, ay, inv) || !(inv[6] > 0.0 && inv[7] > 0.0 && inv[8] > 0.0)) return 0;
-    for (int k = 0; k < 3; ++k) b[k] = c[k];
+    if (c0 < 0 || c1 < 0 || c2 < 0) return 0;
+    if (!inv3(L->nx[c0], L->nx[c1], L->nx[c2], L->ny[c0], L->ny[c1], L->ny[c2], inv)
+        || !(inv[6] > 0.0 && inv[7] > 0.0 && inv[8] > 0.0)) return 0;
+    b[0] = c0; b[1] = c1; b[2] = c2;
     return 1;
+}
+
+/* The nearer of the sextants' constraints u and v (betas bu, bv); u on a tie. */
+static int nearer(int u, double bu, int v, double bv)
+{
+    return bv < bu ? v : u;
 }
 
 /* A dual feasible start basis for the dual simplex from the list's constraints
@@ -201,26 +205,41 @@ static int sector_basis(const clist *L, const int *near, const double *nbe, int 
  * Returns whether it found one; its inverse is then in `inv`. */
 static int start_basis(const clist *L, int first, int *b, double *inv)
 {
-    int near[6] = {-1, -1, -1, -1, -1, -1};   /* nearest in each 60-degree sextant */
-    double nbe[6] = {INFINITY, INFINITY, INFINITY, INFINITY, INFINITY, INFINITY};
+    /* the nearest constraint (-1: none) and its beta (INFINITY: none) in each
+     * 60-degree sextant: sextants 0-3 in the lanes of a (4), 4-5 in those of c (2) */
+    long4 near_a = (long4)(-1);
+    long2 near_c = (long2)(-1);
+    double4 nbe_a = (double4)(INFINITY);
+    double2 nbe_c = (double2)(INFINITY);
     for (int k = first; k < L->m; ++k) {
         /* sextants 0 1 2 above the x axis from the right, 3 4 5 below from the left;
          * computed and kept without branches: the directions are random, and
          * mispredicted branches here cost more than the simplex.  Every sextant's
-         * minimum is updated (unrolled, in registers): indexing near[s] made the
-         * compiler branch on each comparison and keep the minima in memory */
+         * minimum is updated, in two vectors of lanes (scalars unrolled took
+         * three 2-lane ones; indexing near[s] made the compiler branch on each
+         * comparison and keep the minima in memory) */
         const double x = L->nx[k], be = L->be[k];
         const int up = L->ny[k] >= 0.0;
-        const int s = up * (2 - (x > 0.5) - (x > -0.5)) + (1 - up) * (3 + (x >= -0.5) + (x >= 0.5));
-#pragma unroll
-        for (int j = 0; j < 6; ++j) {
-            const double cand = s == j ? be : INFINITY;
-            const int take = cand < nbe[j];
-            near[j] = take ? k : near[j];
-            nbe[j] = take ? cand : nbe[j];
-        }
+        const long s = up * (2 - (x > 0.5) - (x > -0.5)) + (1 - up) * (3 + (x >= -0.5) + (x >= 0.5));
+        /* (vector ?: rather than select: PoCL 3.0 calls its library for select) */
+        const double4 cand_a = (long4)(s) == (long4)(0, 1, 2, 3) ? (double4)(be) : (double4)(INFINITY);
+        const double2 cand_c = (long2)(s) == (long2)(4, 5) ? (double2)(be) : (double2)(INFINITY);
+        const long4 take_a = cand_a < nbe_a;
+        const long2 take_c = cand_c < nbe_c;
+        near_a = take_a ? (long4)(k) : near_a;
+        near_c = take_c ? (long2)(k) : near_c;
+        nbe_a = take_a ? cand_a : nbe_a;
+        nbe_c = take_c ? cand_c : nbe_c;
     }
-    return sector_basis(L, near, nbe, 0, b, inv) || sector_basis(L, near, nbe, 1, b, inv);
+    const int near[6] = {near_a.s0, near_a.s1, near_a.s2, near_a.s3, near_c.s0, near_c.s1};
+    const double nbe[6] = {nbe_a.s0, nbe_a.s1, nbe_a.s2, nbe_a.s3, nbe_c.s0, nbe_c.s1};
+    /* sectors of sextants (0, 1), (2, 3), (4, 5), else turned: (1, 2), (3, 4), (5, 0) */
+    return sector_basis(L, nearer(near[0], nbe[0], near[1], nbe[1]),
+                        nearer(near[2], nbe[2], near[3], nbe[3]),
+                        nearer(near[4], nbe[4], near[5], nbe[5]), b, inv)
+        || sector_basis(L, nearer(near[1], nbe[1], near[2], nbe[2]),
+                        nearer(near[3], nbe[3], near[4], nbe[4]),
+                        nearer(near[5], nbe[5], near[0], nbe[0]), b, inv);
 }
 
 /* Normalise the raw entries of the list (gather_run stores the offsets):
