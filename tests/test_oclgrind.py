@@ -132,10 +132,12 @@ def test_scenario_is_clean_on_oclgrind_and_matches(ctx, icd_dir, tmp_path, name,
     from diskpack_cl.device import stage as device_stage
     monkeypatch.setattr(device_stage, "tile_lanes", lambda verdict: 8)
     want = oclgrind_scenarios.SCENARIOS[name](ctx)
-    # 16-lane tiles where both devices are trusted with them (only Oclgrind's, where this
-    # host's driver is not: its memory checks above still ran)
-    assert sorted(want) == sorted(k for k in got if k in want or not k.startswith("tile16"))
+    # 16-lane tiles where both devices are trusted with them (only one side's where the
+    # other is not: Oclgrind's memory checks above still ran on its own)
+    assert all(k.startswith("tile16") for k in set(want) ^ set(got)), sorted(set(want) ^ set(got))
     for key, a in want.items():
+        if key not in got:
+            continue
         b = got[key]
         if a.dtype.kind == "f":
             np.testing.assert_allclose(b, a, rtol=1e-9, atol=0, err_msg=key)

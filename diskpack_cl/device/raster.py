@@ -227,7 +227,7 @@ class PowerRaster(DeviceStage):
         if lanes is not None:
             if int(lanes) not in (8, 16):
                 raise ValueError(f"lanes must be 8 or 16, got {lanes!r}")
-            if int(lanes) > self.lanes:
+            if int(lanes) == 16 and not self.verdict.wide:   # trust, not the default's choice
                 raise ValueError(f"{lanes} lanes take 512-bit vectors, which {self.device_name} "
                                  "was not trusted with (diskpack devices --check)")
             self.lanes = int(lanes)
