@@ -847,12 +847,25 @@ def radius_octaves(r):
 
 
 def _octave_trees(classes, octaves, domain):
-    """The trees of `octaves` (``(classes, trees)``) where they are those of `classes`,
-    else a None for each class (made anew)."""
+    """The trees and searches of `octaves` (``(classes, trees[, searched])``) where its
+    classes are those of `classes`, else a None for each class (made anew) and no search:
+    ``(trees, searched)``."""
     if octaves is None or domain.periodic or len(octaves[0]) != len(classes) \
             or not all(np.array_equal(a, b) for a, b in zip(octaves[0], classes)):
-        return [None] * len(classes)
-    return list(octaves[1])
+        return [None] * len(classes), {}
+    return list(octaves[1]), (octaves[2] if len(octaves) > 2 else {})
+
+
+def _searched_pairs(found, reach, trees, classes, a, b):
+    """``(i, j, distance)``: the pairs of octaves a and b within `reach`, the caller's
+    search `found` (``(its reach, i, j, distance)`` or None) where it reached as far,
+    else a dual-tree search of their trees. A wider search holds the pairs of this one
+    and more, whose distances (the same arithmetic on the same trees) the caller's
+    filter below `reach` drops."""
+    if found is not None and found[0] >= reach:
+        return found[1:]
+    sdm = trees[a].sparse_distance_matrix(trees[b], reach, output_type="ndarray")
+    return classes[a][sdm["i"]], classes[b][sdm["j"]], sdm["v"]
 
 
 def _octave_pairs(C, r, domain, octaves):
@@ -881,16 +894,16 @@ def _octave_pairs(C, r, domain, octaves):
     def pairs(ab):
         a, b = ab
         with np.errstate(**err):
-            found = trees[a].sparse_distance_matrix(trees[b], (rmax[a] + rmax[b]) * (1 + 1e-9),
-                                                    output_type="ndarray")
-            ii, jj = classes[a][found["i"]], classes[b][found["j"]]
-            keep = found["v"] <= (r[ii] + rmax[b]) * (1 + 1e-12)
+            ii, jj, v = _searched_pairs(searched.get(ab), (rmax[a] + rmax[b]) * (1 + 1e-9), trees,
+                                        classes, a, b)
+            keep = v <= (r[ii] + rmax[b]) * (1 + 1e-12)
         if a == b:
             keep &= ii < jj
         return ii[keep], jj[keep]
 
+    known, searched = _octave_trees(classes, octaves, domain)
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        trees = list(pool.map(tree, zip(classes, _octave_trees(classes, octaves, domain))))
+        trees = list(pool.map(tree, zip(classes, known)))
         found = list(pool.map(pairs, [(a, b) for b in range(len(classes)) for a in range(b + 1)]))
     return (np.concatenate([f[0] for f in found]).astype(np.intp),
             np.concatenate([f[1] for f in found]).astype(np.intp))
@@ -913,12 +926,17 @@ def certify_disks(centers, radii, domain, *, octaves=None):
     domain : Domain
         Where they must lie.
     octaves : tuple, optional
-        ``(classes, trees)``: the centres' indices grouped by
-        :func:`radius_octaves` and a ``cKDTree`` of each group's centres, as
-        :func:`~diskpack_cl.radii.certified_k` has them from its search for
-        the largest k.  They serve where the groups are those of `radii`
-        (scaled radii can round across an octave's border) in a rectangle;
-        otherwise the trees are made here.  The certificate is the same.
+        ``(classes, trees)`` or ``(classes, trees, searched)``: the centres'
+        indices grouped by :func:`radius_octaves`, a ``cKDTree`` of each
+        group's centres and, in `searched`, the pairs of octaves ``(a, b)``
+        (``a <= b``) already searched, each ``(reach, i, j, distance)``: every
+        pair of distinct centres of a and b (indices of `centers`) within
+        ``reach`` as ``trees[a].sparse_distance_matrix(trees[b], reach)``
+        finds them, as :func:`~diskpack_cl.radii.certified_k` has them from
+        its search for the largest k.  They serve where the groups are those
+        of `radii` (scaled radii can round across an octave's border) in a
+        rectangle, a search where it reached as far as this one; otherwise
+        the trees are made and searched here.  The certificate is the same.
 
     Returns
     -------

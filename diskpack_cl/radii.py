@@ -484,9 +484,11 @@ def largest_valid_k(points, r, width, height):
 
 
 def _largest_valid_k(points, r, width, height):
-    """:func:`largest_valid_k` and the octaves it searched: ``(k, (classes, trees))``
-    (:func:`~diskpack_cl.geometry.radius_octaves` of `r`, a cKDTree of each class's
-    points), or ``(k, None)`` where it found k without them."""
+    """:func:`largest_valid_k` and the octaves it searched: ``(k, (classes, trees,
+    searched))`` (:func:`~diskpack_cl.geometry.radius_octaves` of `r`, a cKDTree of each
+    class's points, and the pairs of each pair of octaves it found, as
+    :func:`~diskpack_cl.geometry.certify_disks` takes them), or ``(k, None)`` where it
+    found k without them."""
     p = np.asarray(points, dtype=np.float64)
     r = np.asarray(r, dtype=np.float64)
     edge = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
@@ -512,6 +514,9 @@ def _largest_valid_k(points, r, width, height):
         sdm = trees[a].sparse_distance_matrix(trees[b], reach, output_type="ndarray")
         i, jj = classes[a][sdm["i"]], classes[b][sdm["j"]]
         keep = i != jj
+        # the certificate's own search of these octaves reaches less far (its k is at
+        # most this bound): it takes these pairs (a few per thousand centres)
+        searched[ab] = (reach, i[keep], jj[keep], sdm["v"][keep])
         if not np.any(keep):
             return np.inf
         i, jj = i[keep], jj[keep]
@@ -519,10 +524,11 @@ def _largest_valid_k(points, r, width, height):
         return float(np.min(dij / (r[i] + r[jj])))
 
     # the pairs of octaves on every core
+    searched = {}
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
         pairs = [(a, b) for a in range(len(classes)) for b in range(a, len(classes))]
         k = min(k, *pool.map(pair_k, pairs))
-    return max(k, 0.0), (classes, trees)
+    return max(k, 0.0), (classes, trees, searched)
 
 
 def certified_k(points, r, width, height, domain):
@@ -554,7 +560,7 @@ def certified_k(points, r, width, height, domain):
     for _ in range(8):
         k *= shrink
         radii = k * r
-        cert = certify_disks(points, radii, domain, octaves=octaves)   # its trees: the same pairs
+        cert = certify_disks(points, radii, domain, octaves=octaves)   # its trees and pairs
         if cert.valid:
             return k, radii, cert
         shrink = shrink * shrink * shrink * (1 - 1e-12)

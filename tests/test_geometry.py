@@ -389,6 +389,49 @@ def test_certify_disks_with_octave_trees_is_the_same(seed, n, spread, scale, oth
 
 
 @SETTINGS
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), spread=st.sampled_from([1.0, 30.0, 1000.0]),
+       scale=st.sampled_from([1.0, 0.5, 0.37, 1.0 - 4 * np.finfo(float).eps]),
+       reach=st.sampled_from([1.0, 1.0 + 1e-9, 1.5, 3.0, 0.9, 0.5]))
+def test_certify_disks_with_searched_pairs_is_the_same(seed, n, spread, scale, reach):
+    """The pairs of the octaves certified_k searched (for disks of `reach` times the radii,
+    distinct centres only) give the certificate made anew: a search that reached further
+    is filtered to this one's, one that reached less far (reach < 1) is searched again."""
+    from scipy.spatial import cKDTree
+
+    from diskpack_cl.geometry import radius_octaves
+
+    C, r = _spread_disks(seed, n, spread)
+    classes = radius_octaves(r)
+    assume(len(classes) > 1 or spread == 1.0)
+    trees = [cKDTree(C[c]) for c in classes]
+    rmax = [reach * scale * r[c].max() for c in classes]
+    searched = {}
+    for a in range(len(classes)):
+        for b in range(a, len(classes)):
+            far = (rmax[a] + rmax[b]) * (1 + 1e-9)
+            sdm = trees[a].sparse_distance_matrix(trees[b], far, output_type="ndarray")
+            i, j = classes[a][sdm["i"]], classes[b][sdm["j"]]
+            searched[a, b] = (far, i[i != j], j[i != j], sdm["v"][i != j])
+    dom = Domain.rect(3.0, 2.0)
+    assert certify_disks(C, r * scale, dom, octaves=(classes, trees, searched)) == \
+        certify_disks(C, r * scale, dom)
+
+
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 400), spread=st.sampled_from([1.0, 30.0, 1000.0]))
+@settings(max_examples=30, deadline=None)
+def test_certified_k_has_the_certificate_made_anew(seed, n, spread):
+    """certified_k certifies with the pairs of its own search for k: the certificate of its
+    disks made anew is the same."""
+    from diskpack_cl.radii import certified_k
+
+    C, r = _spread_disks(seed, n, spread)
+    dom = Domain.rect(3.0, 2.0)
+    k, radii, cert = certified_k(C, r, 3.0, 2.0, dom)
+    assume(k > 0)
+    assert cert == certify_disks(C, radii, dom)
+
+
+@SETTINGS
 @given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(2, 80),
        spread=st.sampled_from([1.0, 30.0, 1000.0]))
 def test_certify_disks_checks_the_pairs_each_disk_asks_for(seed, periodic, n, spread):
