@@ -418,7 +418,7 @@ def test_certify_disks_with_searched_pairs_is_the_same(seed, n, spread, scale, r
 
 
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 400), spread=st.sampled_from([1.0, 30.0, 1000.0]))
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30)
 def test_certified_k_has_the_certificate_made_anew(seed, n, spread):
     """certified_k certifies with the pairs of its own search for k: the certificate of its
     disks made anew is the same."""
