@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from .geometry import CertificateError, certify_disks, radius_octaves
 
 __all__ = ["base_radii", "radius_field", "density_radius", "detail_scale", "detail_ell", "detail_fields",
-           "detail_weight", "dilation_radius", "DETAIL_GAIN", "DETAIL_FINE", "disk_dilation", "field_at",
+           "detail_sigmas", "detail_blend", "detail_weight", "dilation_radius", "DETAIL_GAIN", "DETAIL_FINE", "disk_dilation", "field_at",
            "fields_at", "largest_valid_k", "certified_k", "in_bands", "gaussian_blur", "blurs", "TRUNCATE"]
 
 #: Gaussian blurs reach ``int(TRUNCATE * sigma + 0.5)`` pixels (scipy.ndimage's default).
@@ -317,15 +317,39 @@ def detail_fields(gray, n, field, *, gain=DETAIL_GAIN, fine=DETAIL_FINE, ell=Non
     d = 1.0 - np.asarray(gray, dtype=np.float64)
     if ell is None:
         ell = _darkness_scale(d, n)
-    blur = blur or gaussian_blur
-    coarse = blur(d, ell / 2.0)
-    weight = blur(d, fine) if fine > 0 else d.copy()
+    sigmas = detail_sigmas(ell, fine)
+    weight = detail_blend(d, dict(zip(sigmas, blurs(blur or gaussian_blur, d, list(sigmas.values())))), gain)
     del d
-    weight = detail_weight(weight, coarse, gain)
-    del coarse
     rad = dilation_radius(ell)
     dilated = in_bands(lambda f: disk_dilation(f, rad), np.asarray(field, dtype=np.float64), rad)
     return dilated, weight
+
+
+def detail_sigmas(ell, fine=DETAIL_FINE):
+    """``{"coarse": ell / 2, "sharp": fine}``: the blurs (px) of the darkness that the blend
+    weight of :func:`detail_fields` is made of, at the detail scale `ell` (no ``"sharp"``
+    where `fine` is 0: the darkness itself is the sharp one).
+
+    Examples
+    --------
+    >>> detail_sigmas(8.0), detail_sigmas(8.0, 0)
+    ({'coarse': 4.0, 'sharp': 0.5}, {'coarse': 4.0})
+    """
+    return {"coarse": ell / 2.0, **({"sharp": fine} if fine > 0 else {})}
+
+
+def detail_blend(darkness, blurred, gain=DETAIL_GAIN):
+    """The blend weight of :func:`detail_fields` from the darkness and its blurs named as in
+    :func:`detail_sigmas` (`blurred`: ``{name: blur}``, which loses those two).
+
+    Examples
+    --------
+    >>> d = np.array([0.5, 0.25, 0.0])
+    >>> detail_blend(d, {"coarse": np.array([0.5, 0.5, 0.05])}, 1.0).tolist()
+    [0.0, 0.5, 0.5]
+    """
+    sharp = blurred.pop("sharp") if "sharp" in blurred else darkness.copy()
+    return detail_weight(sharp, blurred.pop("coarse"), gain)
 
 
 def detail_weight(sharp, coarse, gain):

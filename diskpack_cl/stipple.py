@@ -92,9 +92,8 @@ from .preview import Previewable
 from .progress import running, stage as run_stage
 from .dithering import least_k, error_diffusion
 from .domain import Domain
-from .radii import (DETAIL_FINE, DETAIL_GAIN, blurs, certified_k, density_radius, detail_ell, detail_weight,
-                    dilation_radius, disk_dilation, field_at, fields_at, gaussian_blur, largest_valid_k,
-                    radius_field)
+from .radii import (blurs, certified_k, density_radius, detail_blend, detail_ell, detail_sigmas, dilation_radius,
+                    disk_dilation, field_at, fields_at, gaussian_blur, largest_valid_k, radius_field)
 from .schedule import StippleOptions, StipplePlan
 from .engine import HOST_DEVICE, engine_record, make_engine, stage_record
 from .image import to_gray
@@ -820,8 +819,7 @@ def _empty_fields(opt, H, W):
 def _field_sigmas(opt, ell):
     """``{name: sigma}``: the blurs of the darkness that the stage's fields are made of."""
     sigmas = {"radius": opt.radius_sigma if opt.radii == "density" else 0.0,
-              "coarse": ell / 2.0 if opt.features == "detail" else 0.0,
-              "sharp": DETAIL_FINE if opt.features == "detail" else 0.0,
+              **(detail_sigmas(ell) if opt.features == "detail" else {}),
               "ink": INK_SIGMA if opt.support > 0 else 0.0,
               "density": opt.density_sigma}
     return {name: sigma for name, sigma in sigmas.items() if sigma > 0}
@@ -842,10 +840,9 @@ def _make_fields(gray, opt, blur, ell, window, out):
     if opt.support > 0:   # off_support's
         np.copyto(out["ink"], blurred.pop("ink")[window], casting="same_kind")
     if opt.features == "detail":
-        sharp = blurred.pop("sharp") if "sharp" in blurred else darkness.copy()
-        weight = detail_weight(sharp, blurred.pop("coarse"), DETAIL_GAIN)
+        weight = detail_blend(darkness, blurred)
         np.copyto(out["blend_weight"], weight[window], casting="same_kind")
-        del sharp, weight
+        del weight
     if opt.radii == "density":
         rfield = density_radius(blurred.pop("radius") if "radius" in blurred else darkness, opt.floor)
     else:
