@@ -115,6 +115,9 @@ class _Grid:
             allc &= ~self.free(flat, (col + sx) * self.c, (row + sy) * self.c, near_only=True)
         return allc
 
+    def hand_on(self):
+        """Nothing to hand on (:meth:`_DeviceGrid.hand_on`): the grid is host arrays."""
+
     def points(self):
         inner = np.zeros((self.G, self.G), dtype=bool)
         inner[_PAD:-_PAD, _PAD:-_PAD] = True
@@ -208,17 +211,18 @@ class _DeviceGrid(DeviceStage):
         # the host keeps the points it placed, by round (a full grid of 3.5M cells at 1M
         # points, filled on the host and copied over, took 0.2 s; the device fills its own)
         self.placed = []
-        self.b_pt = self._filled(2 * g * g, _EMPTY)
+        # the three grids in one buffer, handed on as one when the rounds are done (a
+        # relaxation's MIC outputs fit in it: DeviceStage.hand_on)
+        self.b_pt, self.b_dart, self.b_prio = self.regions("grids", (16 * g * g, 16 * g * g, 8 * g * g))
+        self._fill(self.b_pt, _EMPTY)
         # dart_keep reads every neighbour's dart and masks the ones without a priority:
         # filled, so that no read is of memory never written (one pass, about 5 ms at 1M)
-        self.b_dart = self._filled(2 * g * g, _EMPTY)
-        self.b_prio = self._filled(g * g, -1.0)
+        self._fill(self.b_dart, _EMPTY)
+        self._fill(self.b_prio, -1.0)
 
-    def _filled(self, m, value):
-        """A device buffer of `m` float64, each `value` (filled on the device)."""
-        buf = cl.Buffer(self.ctx, cl.mem_flags.READ_WRITE, 8 * m)
-        cl.enqueue_fill_buffer(self.queue, buf, np.float64(value), 0, 8 * m)
-        return buf
+    def _fill(self, buf, value):
+        """Set every float64 of the device buffer `buf` to `value` (on the device)."""
+        cl.enqueue_fill_buffer(self.queue, buf, np.float64(value), 0, buf.size)
 
     def _up(self, a):
         """A read-only device copy of the non-empty host array `a`."""
@@ -419,6 +423,7 @@ def parallel_darts(n, *, rel_radius=0.7, seed=None, max_rounds=16, device=None):
         if len(pts):
             grid.insert(grid.cells_of(pts), pts[:, 0], pts[:, 1])
         pts = _throw_rounds(grid, n, rng, max_rounds)
+        grid.hand_on()
         if len(pts) >= n:
             return pts[np.sort(rng.choice(len(pts), n, replace=False))] if len(pts) > n else pts
         rel *= 0.98

@@ -688,11 +688,15 @@ def _relaxed3(n, distance, box, seed, opt, options):
 def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
     """Start set, relaxation (`opt` to `eps`, the keywords `run` of the run), mask: the
     :class:`PoissonDiskResult` of one run."""
+    from .device.stage import buffers_handed_on
+
     t0 = time.perf_counter()
-    start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
-                         init=opt.init, dart_radius=opt.dart_radius)
-    t_start = time.perf_counter() - t0
-    res = relax_poisson(start, eps, opt, domain=domain, **run)
+    # the relaxation's MIC outputs take the dart grids' device pages, already touched
+    with buffers_handed_on():
+        start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
+                             init=opt.init, dart_radius=opt.dart_radius)
+        t_start = time.perf_counter() - t0
+        res = relax_poisson(start, eps, opt, domain=domain, **run)
     pts = res.points
     rho = float(res.rho[-1])   # certified by relax_poisson's KD-tree
     d_min = 2.0 * rho * hexagonal_radius(len(pts), domain.area)

@@ -157,6 +157,41 @@ def test_one_solver_for_sets_of_every_size_answers_as_a_fresh_one(ctx, calls, se
             assert a.tobytes() == b.tobytes()
 
 
+@settings(max_examples=15)
+@given(st.sampled_from([Domain.torus(), Domain.rect(30.0, 20.0)]),
+       st.lists(st.tuples(st.sampled_from([3, 40, 300, 3000]),
+                          st.sampled_from(["all", "some", "nearest"]), st.booleans(), st.booleans()),
+                min_size=2, max_size=5), st.integers(0, 2**32 - 1))
+def test_lent_inputs_answer_as_copied_ones(ctx, dom, calls, seed):
+    """On a CPU device the kernels read the packed inputs where the host wrote them
+    (``LEND_BYTES`` 0 here: every pack lent) instead of a device copy (no pack lent):
+    a solver called with sets of varied sizes and weights, lists of cells and
+    nearest-neighbour queries in between answers bit for bit as the copying one."""
+    from unittest import mock
+    from diskpack_cl.device import cells as cells_mod
+
+    lent, copied = CellMIC(dom, device=ctx), CellMIC(dom, device=ctx)
+    if not lent.is_cpu:
+        pytest.skip("inputs are lent to CPU devices only")
+    rng = np.random.default_rng(seed)
+    for n, kind, weighted, certify in calls:
+        pts = np.unique(rng.random((n, 2)) * (dom.width, dom.height), axis=0)
+        w = (0.3 * rng.random(len(pts)) * np.sqrt(dom.area / n)) ** 2 if weighted else None
+        cells = rng.integers(0, len(pts), rng.integers(1, len(pts) + 1)) if kind == "some" else None
+        answers = []
+        for solver, bytes_lent in ((lent, 0), (copied, 1 << 62)):
+            with mock.patch.object(cells_mod, "LEND_BYTES", bytes_lent):
+                answers.append(solver.nearest(pts) if kind == "nearest" else
+                               solver.solve(pts, w, certify=certify, cells=cells))
+            assert solver._packs["inputs"].lent == (bytes_lent == 0)
+        got, want = answers
+        if kind == "nearest":
+            assert got.tobytes() == want.tobytes()
+            continue
+        for name in ("centers", "radii", "nn", "empty"):
+            assert getattr(got, name).tobytes() == getattr(want, name).tobytes()
+
+
 @pytest.mark.parametrize("certify", [True, False])
 @pytest.mark.parametrize("start", ["dart", "random", "relaxed"])
 def test_large_sets_match_exact_mic_bit_for_bit_radii(solvers, start, certify):

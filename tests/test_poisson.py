@@ -324,3 +324,55 @@ def test_stall_counts_only_real_progress():
     x = 0.5 + 1e-6 * np.random.default_rng(1).random((60, 2))
     res = relax.relax_poisson(x, 0.8, patience=10, max_iter=300, backend="exact")
     assert res.stop_reason == "eps" and res.rho[0] < 1e-5
+
+
+@settings(max_examples=8)
+@given(st.integers(2_000, 30_000), st.sampled_from([None, "2x1", "1x5"]), st.integers(0, 2**32 - 1))
+def test_a_set_whose_relaxation_takes_the_dart_grids_buffer_is_the_same(ctx, n, box, seed):
+    """Inside poisson_disk the relaxation's MIC outputs take the dart grids' device
+    buffer, handed on (``device.stage.buffers_handed_on``): the same points, bit for
+    bit, as with every buffer made anew (no buffer claimed)."""
+    from unittest import mock
+    from diskpack_cl.device import stage
+
+    claimed = []
+
+    def claim(ctx, nbytes):
+        buf = take(ctx, nbytes)
+        claimed.append(buf is not None)
+        return buf
+
+    take = stage._claim
+    with mock.patch.object(stage, "_claim", claim):
+        got = poisson_disk(n, box=box, seed=seed, device=ctx)
+    assume(any(claimed))   # a box's darts may leave no buffer the outputs fit
+    with mock.patch.object(stage, "_claim", lambda ctx, nbytes: None):
+        want = poisson_disk(n, box=box, seed=seed, device=ctx)
+    assert got.points.tobytes() == want.points.tobytes()
+    assert (got.rho, got.iterations) == (want.rho, want.iterations)
+
+
+def test_a_buffer_handed_on_goes_to_a_stage_it_fits_inside_the_block_only(ctx):
+    """A buffer handed on serves a later request of half its size up to its size, once,
+    inside the block; outside one, or for a request it cannot hold or would hold twice
+    over, a new buffer is made.  Regions lie side by side, each aligned."""
+    from diskpack_cl.device.stage import DeviceStage, buffers_handed_on
+
+    first, second = DeviceStage(ctx), DeviceStage(ctx)
+    align = first.device.mem_base_addr_align // 8
+    with buffers_handed_on():
+        parts = first.regions("grids", (1000, 3, 5000))
+        handed = first._kept["grids"]
+        assert handed.size >= 6003 and all(p.offset % align == 0 for p in parts)
+        assert [p.size for p in parts] == [1000, 3, 5000]
+        assert all(a.offset + a.size <= b.offset for a, b in zip(parts, parts[1:]))
+        first.hand_on()
+        assert first._kept == {}
+        assert second.buffer("small", handed.size // 2 - 8) is not handed
+        assert second.buffer("large", handed.size + 8) is not handed
+        assert second.buffer("fits", handed.size - 8) is handed
+        assert DeviceStage(ctx).buffer("again", handed.size - 8) is not handed
+    first.regions("grids", (8000,))
+    kept = first._kept["grids"]
+    first.hand_on()
+    assert second.buffer("outside", kept.size) is not kept

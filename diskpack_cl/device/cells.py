@@ -45,6 +45,11 @@ CHUNK = 1 << 17  # work items per enqueue (rounded down to whole groups): each w
 # the cores.
 GROUP = 16
 _MAX_WINDOW = 8  # widest weight window of the proof scan, in buckets (CellMIC._local_wmax)
+# Inputs of at least this many bytes go to a CPU device as their host array itself
+# (DeviceStage.lend): at a million sites a device copy of the 42 MB of inputs costs 10 000
+# fresh pages on the first call and a copy on every call; below it the new buffer's
+# sub-buffers and kernel arguments (some 100 us) cost more than the copy saves.
+LEND_BYTES = 1 << 20
 
 #: Flag bits of the kernel (``diskpack_cl/device/kernels/cells.cl``): why a cell was not proven.
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
@@ -255,7 +260,8 @@ class CellMIC(DeviceStage):
         n, dom = len(X), self.domain
         with self.timings("buckets"):
             order, start, _, (nbx, nby, bw, bh) = self._buckets(X, w)
-            up = self._pack("inputs", (("site", np.float64, (n, 2)), ("start", np.int32, start.shape)))
+            up = self._pack("inputs", (("site", np.float64, (n, 2)), ("start", np.int32, start.shape)),
+                            lend=True)
             Xs = _take(X, order, up.views["site"])
             up.views["start"][...] = start
         with self.timings("device"):
@@ -271,12 +277,13 @@ class CellMIC(DeviceStage):
             nn[far] = _nearest(Xs, dom, far)
         return _scatter(nn, order)
 
-    def _pack(self, name, fields):
-        """The :class:`_Packed` arrays `fields` in device buffer `name`: the last one made
-        under that name where its fields are the same (a relaxation's every step)."""
+    def _pack(self, name, fields, lend=False):
+        """The :class:`_Packed` arrays `fields` in device buffer `name` (`lend`: inputs the
+        kernels only read): the last one made under that name where its fields are the
+        same (a relaxation's every step)."""
         pack = self._packs.get(name)
         if pack is None or pack.fields != fields:
-            pack = _Packed(self, name, fields, None if pack is None else pack.room)
+            pack = _Packed(self, name, fields, None if pack is None else pack.room, lend)
             self._packs[name] = pack
         return pack
 
@@ -290,7 +297,7 @@ class CellMIC(DeviceStage):
         up = self._pack("inputs", (("site", np.float64, (n, 2)), ("weight", np.float64, (n,)),
                                    ("start", np.int32, start.shape), ("bwmax", np.float64, bwmax.shape),
                                    ("bwloc", np.float64, bwmax.shape), ("cells", np.int32, (m,)),
-                                   ("rows", np.int32, (m,))))
+                                   ("rows", np.int32, (m,))), lend=True)
         v = up.views
         _take(X, order, v["site"])
         _take(w, order, v["weight"])
@@ -473,18 +480,29 @@ class _Packed:
     on first use (the outputs come back into a new array every call, :meth:`receive`),
     in ``room``, the host memory of the last layout (`room`) where it is large
     enough: a local step's sub-problem has a size of its own every call, and new
-    pages for it each time cost more than its copy.
+    pages for it each time cost more than its copy.  `lend`: inputs that the kernels
+    only read, which a CPU device takes as the host array itself where they fill
+    :data:`LEND_BYTES` (:meth:`send`: no device buffer, no copy).
     """
 
-    def __init__(self, stage, name, fields, room=None):
-        self.fields = fields
-        self.offsets, self.total = _layout(fields, stage.device.mem_base_addr_align // 8)
-        self.buffer = stage.buffer(name, self.total)
-        ends = list(self.offsets.values())[1:] + [self.total]
-        self.parts = {f: self.buffer.get_sub_region(o, e - o)
-                      for (f, o), e in zip(self.offsets.items(), ends)}
+    def __init__(self, stage, name, fields, room=None, lend=False):
+        self.stage, self.name, self.fields = stage, name, fields
+        align = stage.device.mem_base_addr_align // 8
+        self.offsets, self.total = _layout(fields, align)
+        self.lent = lend and stage.is_cpu and self.total >= LEND_BYTES
+        self.parts = {}
+        self.buffer = None if self.lent else stage.buffer(name, self.total)
+        if not self.lent:
+            self._split()
         self.room = room if room is not None and len(room) >= self.total else None
         self._host = self._sent = self._all = None
+
+    def _split(self):
+        """``parts``: the sub-buffers of ``buffer`` at the fields' offsets (in place: a
+        caller may hold the dict)."""
+        ends = list(self.offsets.values())[1:] + [self.total]
+        self.parts.update({f: self.buffer.get_sub_region(o, e - o)
+                           for (f, o), e in zip(self.offsets.items(), ends)})
 
     def _views(self, host, names):
         return {f: host[self.offsets[f]:].view(dtype)[:int(np.prod(shape))].reshape(shape)
@@ -494,7 +512,7 @@ class _Packed:
     def views(self):
         if self._host is None:
             if self.room is None:
-                self.room = np.empty(self.total, np.uint8)
+                self.room = _aligned(self.total, self.stage.device.mem_base_addr_align // 8)
             self._host = self.room[:self.total]
             self._all = self._views(self._host, self.offsets)
         return self._all
@@ -504,10 +522,15 @@ class _Packed:
         return _nbytes(self.views)
 
     def send(self, queue):
-        """Queue the copy of the host array to the device; the host array must not change
-        until the queue has read it (its event is kept till the next send: pyopencl waits
-        for a host copy whose event goes)."""
-        self._sent = cl.enqueue_copy(queue, self.buffer, self._host, is_blocking=False)
+        """Queue the copy of the host array to the device, or lend it (``lent``: its
+        sub-buffers new in ``parts``); the host array must not change until the queue
+        has read it (a copy's event is kept till the next send: pyopencl waits for a host
+        copy whose event goes)."""
+        if self.lent:
+            self.buffer = self.stage.lend(self.name, self._host)
+            self._split()
+        else:
+            self._sent = cl.enqueue_copy(queue, self.buffer, self._host, is_blocking=False)
 
     def receive(self, queue, upto=None):
         """Queue the copy of the device buffer (the fields before `upto`; None: all) into
@@ -517,6 +540,14 @@ class _Packed:
         names = names[:names.index(upto)] if upto else names
         host = np.empty(self.offsets[upto] if upto else self.total, np.uint8)
         return self._views(host, names), cl.enqueue_copy(queue, host, self.buffer, is_blocking=False)
+
+
+def _aligned(nbytes, align):
+    """An uninitialized uint8 array of `nbytes` whose start is a multiple of `align` bytes
+    (a lent host array's sub-buffers start at the same offsets as a device buffer's)."""
+    raw = np.empty(nbytes + align, np.uint8)
+    skip = -raw.ctypes.data % align
+    return raw[skip:skip + nbytes]
 
 
 def _nbytes(views):
