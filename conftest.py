@@ -50,6 +50,7 @@ OPENCL_DOCTESTS = {
     "diskpack_cl.device.raster.PowerRaster",
     "diskpack_cl.device.raster.RasterResult",
     "diskpack_cl.device.stage.has_fp64",
+    "diskpack_cl.device.stage.buffers_handed_on",
     "diskpack_cl.device.stage.DeviceStage",
     "diskpack_cl.device.checks",
     "diskpack_cl.device.known_answers",
