@@ -16,6 +16,7 @@ import os
 import threading
 from contextlib import contextmanager
 
+from ._nesting import Outermost
 from .options import NamedOptionError
 
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
@@ -68,7 +69,7 @@ _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
 _MADV_DONTNEED = 4   # Linux
 _MMAP_AFTER, _TRIM_AFTER = 32 << 20, 64 << 20
 _KEEP = 2**31 - 1   # mallopt takes an int
-_kept = {"depth": 0, "lock": threading.Lock(), "libc": None, "advice": None}
+_kept = {"libc": None, "advice": None}
 
 
 def _glibc():
@@ -103,6 +104,25 @@ def _huge_page_advice(on):
     return bool(_set_madvise_hugepage(bool(on)))
 
 
+def _keep_freed():
+    _kept["advice"] = _huge_page_advice(False)
+    libc = _glibc()
+    if libc is not None:
+        _set_thresholds(libc, _KEEP, _KEEP)
+
+
+def _give_freed_back():
+    _huge_page_advice(_kept["advice"])
+    libc = _glibc()
+    if libc is not None:
+        _set_thresholds(libc, _MMAP_AFTER, _TRIM_AFTER)
+        libc.malloc_trim(ctypes.c_size_t(0))
+
+
+# The outermost freed_memory_kept block, of any thread, sets and resets the switches.
+_keeping = Outermost(_keep_freed, _give_freed_back)
+
+
 @contextmanager
 def freed_memory_kept():
     """Keep the memory freed inside the block in the process, for its next arrays.
@@ -133,23 +153,8 @@ def freed_memory_kept():
     >>> float(b.sum())
     1048576.0
     """
-    libc = _glibc()
-    with _kept["lock"]:
-        if _kept["depth"] == 0:
-            _kept["advice"] = _huge_page_advice(False)
-            if libc is not None:
-                _set_thresholds(libc, _KEEP, _KEEP)
-        _kept["depth"] += 1
-    try:
+    with _keeping.block():
         yield
-    finally:
-        with _kept["lock"]:
-            _kept["depth"] -= 1
-            if _kept["depth"] == 0:
-                _huge_page_advice(_kept["advice"])
-                if libc is not None:
-                    _set_thresholds(libc, _MMAP_AFTER, _TRIM_AFTER)
-                    libc.malloc_trim(ctypes.c_size_t(0))
 
 
 def give_back():
@@ -217,7 +222,7 @@ class PageReserve:
 
     def __init__(self, nbytes):
         self._block = self._thread = None
-        if nbytes > 0 and _kept["depth"] > 0 and _glibc() is not None:
+        if nbytes > 0 and _keeping.on and _glibc() is not None:
             import numpy as np   # (this module is read at start-up without numpy)
 
             self._block = np.empty(int(nbytes), np.uint8)

@@ -10,7 +10,6 @@ waits that let Ctrl-C through, and kernel profiling.
 
 from __future__ import annotations
 
-import threading
 from contextlib import contextmanager
 
 import numpy as np
@@ -18,13 +17,15 @@ import pyopencl as cl
 
 from .context import describe, get_context, wait_for
 from .programs import build_program
+from .._nesting import Outermost
 from .._timing import Stopwatch
 from .checks import UntrustedProgram, verdict_of
 
 __all__ = ["DeviceStage", "buffers_handed_on", "has_fp64", "tile_lanes"]
 
 # The buffers handed on inside buffers_handed_on blocks (None outside any), by context.
-_handed = {"depth": 0, "lock": threading.Lock(), "spare": None}
+_handed = {"spare": None}
+_handing = Outermost(lambda: _handed.update(spare={}), lambda: _handed.update(spare=None))
 
 
 @contextmanager
@@ -48,23 +49,14 @@ def buffers_handed_on():
     ...     DeviceStage().buffer("b", 800) is first
     True
     """
-    with _handed["lock"]:
-        if _handed["depth"] == 0:
-            _handed["spare"] = {}
-        _handed["depth"] += 1
-    try:
+    with _handing.block():
         yield
-    finally:
-        with _handed["lock"]:
-            _handed["depth"] -= 1
-            if _handed["depth"] == 0:
-                _handed["spare"] = None
 
 
 def _claim(ctx, nbytes):
     """The smallest buffer handed on for `ctx` that holds `nbytes` and is at most twice
     as large (so that no stage keeps much more than it asked for), taken; else None."""
-    with _handed["lock"]:
+    with _handing.lock:
         spare = (_handed["spare"] or {}).get(ctx, [])
         fits = [buf for buf in spare if nbytes <= buf.size <= 2 * nbytes]
         if not fits:
@@ -196,7 +188,7 @@ class DeviceStage:
         system.  The stage must not run again."""
         self.queue.finish()
         kept, self._kept = list(self._kept.values()), {}
-        with _handed["lock"]:
+        with _handing.lock:
             if _handed["spare"] is not None:
                 _handed["spare"].setdefault(self.ctx, []).extend(kept)
 
