@@ -1,5 +1,8 @@
 """device.programs: built programs come from a binary cache that follows their sources."""
 
+import os
+import time
+
 import numpy as np
 import pyopencl as cl
 import pytest
@@ -74,3 +77,51 @@ def test_a_build_log_is_not_shown(ctx, kernels, recwarn):
     (kernels / "probe.h").write_text('#warning "a note in the build log"\n#define VALUE 5\n')
     assert _value(ctx, "probe") == 5
     assert not [w for w in recwarn if issubclass(w.category, cl.CompilerWarning)]
+
+
+def _aged(folder, name, days, size=16, now=None):
+    """A file `name` of `size` bytes in `folder`, last changed `days` days before `now`."""
+    path = folder / name
+    path.write_bytes(b"x" * size)
+    stamp = (now or time.time()) - days * 86400
+    os.utime(path, (stamp, stamp))
+    return path
+
+
+def test_keeping_a_binary_removes_the_unused_ones_and_dead_parts(ctx, kernels, tmp_path):
+    """A new binary kept removes binaries unused for KEEP_DAYS and part files a killed
+    process left; recent binaries, a part file being written and other files stay."""
+    folder = tmp_path / "cache" / "programs"
+    folder.mkdir(parents=True)
+    old = _aged(folder, "old.bin", programs.KEEP_DAYS + 1)
+    recent = _aged(folder, "recent.bin", programs.KEEP_DAYS - 1)
+    dead = _aged(folder, "x.123.part", 1)
+    writing = _aged(folder, "y.456.part", 0)
+    other = _aged(folder, "notes.txt", 400)
+    (kernels / "probe.h").write_text("#define VALUE 6\n")
+    assert _value(ctx, "probe") == 6
+    assert not old.exists() and not dead.exists()
+    assert recent.exists() and writing.exists() and other.exists()
+    assert len(list(folder.glob("*.bin"))) == 2
+
+
+def test_the_newest_binaries_are_kept_up_to_the_byte_cap(tmp_path, monkeypatch):
+    """Over KEEP_BYTES, the least recently used binaries go first."""
+    monkeypatch.setattr(programs, "KEEP_BYTES", 100)
+    now = time.time()
+    paths = [_aged(tmp_path, f"{i}.bin", days=i, size=40, now=now) for i in range(5)]
+    programs.prune(tmp_path, now=now)
+    assert [p.exists() for p in paths] == [True, True, False, False, False]
+
+
+def test_a_binary_read_is_marked_used(ctx, kernels, tmp_path):
+    """A process that builds from a kept binary dates it as used, so that a binary in use
+    every day is never pruned however old its file."""
+    (kernels / "probe.h").write_text("#define VALUE 7\n")
+    assert _value(ctx, "probe") == 7
+    (path,) = (tmp_path / "cache" / "programs").glob("*.bin")
+    stamp = time.time() - (programs.KEEP_DAYS + 5) * 86400
+    os.utime(path, (stamp, stamp))
+    assert _value(ctx, "probe") == 7
+    programs.prune(path.parent)
+    assert path.exists()

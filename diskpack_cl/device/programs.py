@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import importlib.resources
 import os
+import time
 import warnings
 from pathlib import Path
 
@@ -12,9 +13,19 @@ import pyopencl as cl
 
 from .cache import cache_dir
 
-__all__ = ["kernel_dir", "build_program", "inline_math", "BuildError"]
+__all__ = ["kernel_dir", "build_program", "inline_math", "prune", "BuildError", "KEEP_BYTES", "KEEP_DAYS"]
 
 _PROGRAMS: dict = {}
+
+#: Kept binaries not used for this many days are removed when a new one is kept (each
+#: release of the kernels, driver or device keys new ones, and the old ones would stay).
+KEEP_DAYS = 30
+
+#: Of the rest, the newest are kept up to this many bytes in all.
+KEEP_BYTES = 256 << 20
+
+#: A part file older than this (seconds) was left by a process killed while writing it.
+_PART_AGE = 3600
 
 
 class BuildError(RuntimeError):
@@ -54,9 +65,19 @@ def _from_binary(ctx, path, opts):
     except OSError:
         return {}
     try:
-        return _kernels(_quietly_built(cl.Program(ctx, ctx.devices[:1], [binary]), opts))
+        kernels = _kernels(_quietly_built(cl.Program(ctx, ctx.devices[:1], [binary]), opts))
     except cl.Error:
         return {}
+    _mark_used(path)
+    return kernels
+
+
+def _mark_used(path):
+    """Date the binary at `path` as used now (its time decides how long it is kept)."""
+    try:
+        os.utime(path)
+    except OSError:
+        pass   # a read-only cache: its binaries are kept as they are
 
 
 def _quietly_built(prg, opts):
@@ -79,7 +100,52 @@ def _store(prg, path):
         part.write_bytes(prg.get_info(cl.program_info.BINARIES)[0])
         os.replace(part, path)
     except OSError:
-        pass   # the program was built: the next process builds it again
+        return   # the program was built: the next process builds it again
+    prune(path.parent)
+
+
+def prune(folder, now=None):
+    """Remove from the binary folder `folder` what no process is likely to read again.
+
+    Binaries unused for :data:`KEEP_DAYS` days go, then the oldest used until those left
+    hold at most :data:`KEEP_BYTES`; part files older than an hour (a process killed while
+    writing) go too.  Runs where a new binary is kept, so a cache that only serves pays
+    nothing; a file another process removes first is skipped.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> _ = (folder / "old.bin").write_bytes(b"x")
+    >>> os.utime(folder / "old.bin", (0, 0))   # last used in 1970
+    >>> prune(folder)
+    >>> list(folder.iterdir())
+    []
+    """
+    now = time.time() if now is None else now
+    files = []
+    for path in folder.iterdir():
+        try:
+            st = path.stat()
+        except OSError:
+            continue
+        if path.suffix == ".part":
+            if now - st.st_mtime > _PART_AGE:
+                _remove(path)
+        elif path.suffix == ".bin":
+            files.append((st.st_mtime, st.st_size, path))
+    kept = 0
+    for mtime, size, path in sorted(files, reverse=True):
+        kept += size
+        if now - mtime > KEEP_DAYS * 86400 or kept > KEEP_BYTES:
+            _remove(path)
+
+
+def _remove(path):
+    try:
+        path.unlink()
+    except OSError:
+        pass   # gone already, or a folder this user cannot change
 
 
 def _built(ctx, src, opts):
