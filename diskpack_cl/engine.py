@@ -3,11 +3,14 @@
 Relaxation and stippling ask their engine the same questions, through one
 protocol:
 
-- ``engine.mic(points, weights=None, *, exact=True, certify=True)``: the
-  certified MIC of every power cell, a :class:`~diskpack_cl.geometry.MIC`
+- ``engine.mic(points, weights=None, *, exact=True, certify=True, warm=False)``:
+  the certified MIC of every power cell, a :class:`~diskpack_cl.geometry.MIC`
   (``exact=False``: the raster estimate alone, where the engine has one;
   ``certify=False``: the ``cells`` route takes the device's proven MICs
-  without the host's re-solve, for a caller that certifies what it returns);
+  without the host's re-solve, for a caller that certifies what it returns;
+  ``warm=True``: the ``cells`` route starts each cell's simplex from its basis
+  of the last warm call, for the steps of a relaxation: the same MICs, up to
+  the last bits of the centres where a cell's basis is solved in another order);
 - ``engine.centroids(points, weights, density)``: ``(centroids, mass)``,
   the density-weighted centroids and masses of the power cells on the
   engine's grid (engines made with a ``grid``);
@@ -171,11 +174,12 @@ class _Engine:
             self.fallback = fallback   # why ``auto`` chose this engine
         self.timings = Stopwatch() if timings is None else timings
 
-    def mic(self, points, weights=None, *, exact=True, certify=True):
+    def mic(self, points, weights=None, *, exact=True, certify=True, warm=False):
         """MICs of the power cells (a :class:`~diskpack_cl.geometry.MIC`); with
         ``verify``, checked against :func:`exact_mic` (RuntimeError on a mismatch).
-        ``certify=False`` spares the ``cells`` route its host re-solve (verify overrides)."""
-        m = self._mic(points, weights, exact, certify or self.verify)
+        ``certify=False`` spares the ``cells`` route its host re-solve (verify overrides);
+        ``warm=True`` starts its simplex from the last warm call's bases."""
+        m = self._mic(points, weights, exact, certify or self.verify, warm)
         if self.verify and exact:
             check_against_exact(points, weights, self.domain, m.radii, m.empty)
         return m
@@ -221,8 +225,9 @@ class ExactEngine(_Engine):
         super().__init__(domain, verify=verify, fallback=fallback, timings=timings)
         self.grid = None if grid is None else tuple(grid)
 
-    def _mic(self, points, weights, exact, certify):
-        # there is no estimate to stop at, and exact_mic certifies: neither flag changes anything
+    def _mic(self, points, weights, exact, certify, warm):
+        # there is no estimate to stop at, exact_mic certifies and has no simplex to start:
+        # no flag changes anything
         check_sites(points, weights, self.domain)
         with self.timings("exact"):
             m = exact_mic(points, weights, self.domain)
@@ -316,9 +321,9 @@ class OpenCLEngine(_Engine):
         self._labelled = (np.array(points), np.array(weights), est)
         return est
 
-    def _mic(self, points, weights, exact, certify):
+    def _mic(self, points, weights, exact, certify, warm):
         if exact and self.cells is not None:
-            r = self.cells.solve(points, weights, certify=certify)
+            r = self.cells.solve(points, weights, certify=certify, warm=warm)
             return _answer(r, "cells", r.nn)
         est = self._label(points, weights, True)
         if not exact:

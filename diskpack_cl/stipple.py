@@ -564,7 +564,8 @@ def pack_step(state, stage, blend=0.0, *, reseat=True):
     # the centroids' pass begun before an exact MIC step (on the cells route it runs
     # beside the MICs' work); after an estimate, which may label the grid for it
     power = stage.engine.start_centroids(x, w, stage.density) if need_power and refine else None
-    mic = stage.engine.mic(x, w, exact=refine, certify=False)   # the result is certified at the end
+    # the result is certified at the end; each step starts from the last one's bases
+    mic = stage.engine.mic(x, w, exact=refine, certify=False, warm=True)
     entry = {}
     ok = ~mic.empty & _finite_rows(mic.centers)
     newx = _where_rows(ok, mic.centers, x)

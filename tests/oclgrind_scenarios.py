@@ -103,6 +103,20 @@ def cells_list(ctx):
     return {"centers": r.centers, "radii": r.radii, "nn": r.nn}
 
 
+def cells_warm(ctx):
+    """cell_mic started warm: a weighted rectangle's set, then the set moved a little
+    (the bases read through the map of sorted positions), in several enqueues."""
+    from diskpack_cl.device import cells
+    dom = Domain.rect(30.0, 20.0)
+    pts, w = _sites(dom, 40, 3, 0.5)
+    solver = cells.CellMIC(dom, device=ctx)
+    solver.chunk = 2 * solver.group
+    solver.solve(pts, w, warm=True)
+    moved = np.clip(pts + 0.3 * np.random.default_rng(4).standard_normal(pts.shape), 0.0, 19.99)
+    r = solver.solve(moved, w, warm=True)
+    return {"centers": r.centers, "radii": r.radii, "nn": r.nn}
+
+
 def nearest(ctx):
     """nearest (the nearest-neighbour distances alone) on the torus and on a rectangle."""
     from diskpack_cl.device import cells
@@ -256,7 +270,7 @@ def blur(ctx):
 
 
 SCENARIOS = {f.__name__: f for f in (blur, raster_rect, raster_torus, raster_streamed, cells_rect,
-                                     cells_torus, cells_list, nearest, cells_full, cells3_box,
+                                     cells_torus, cells_list, cells_warm, nearest, cells_full, cells3_box,
                                      cells3_torus, dart_round, end_to_end, refused, bad_labels,
                                      unowned)}
 

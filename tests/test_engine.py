@@ -61,8 +61,8 @@ def _radii_off(monkeypatch, engine_class):
     cls = getattr(engine_mod, engine_class)
     real = cls._mic
 
-    def off(self, points, weights, exact, certify):
-        m = real(self, points, weights, exact, certify)
+    def off(self, points, weights, exact, certify, warm):
+        m = real(self, points, weights, exact, certify, warm)
         m.radii = m.radii * (1 + 1e-6)
         return m
 

@@ -112,6 +112,10 @@ class CellMIC(DeviceStage):
         self.chunk = CHUNK - CHUNK % self.group
         self._order = None
         self._packs = {}
+        self._perm = None     # the last sort's move of sorted positions (_buckets), or None
+        self._sorts = 0       # sorts so far (_buckets)
+        self._basis = None    # (sort, flip): the sort of the last warm call, which of the
+                              # two basis buffers holds its bases
         self._warm()
 
     def _warm(self):
@@ -140,9 +144,12 @@ class CellMIC(DeviceStage):
         bx = np.clip((pts[:, 0] / bw).astype(np.int64), 0, nbx - 1)
         by = np.clip((pts[:, 1] / bh).astype(np.int64), 0, nby - 1)
         bid = by * nbx + bx
-        prev = self._order if self._order is not None and len(self._order) == n else np.arange(n)
-        order = prev[np.argsort(bid[prev], kind="stable")]
-        self._order = order
+        reuse = self._order is not None and len(self._order) == n
+        prev = self._order if reuse else np.arange(n)
+        perm = np.argsort(bid[prev], kind="stable")
+        order = prev[perm]
+        self._order, self._perm = order, perm if reuse else None
+        self._sorts += 1
         counts = np.bincount(bid, minlength=nbx * nby)
         start = np.zeros(nbx * nby + 1, np.int32)
         np.cumsum(counts, out=start[1:])
@@ -170,7 +177,7 @@ class CellMIC(DeviceStage):
         return loc.ravel(), win
 
     # -- work --------------------------------------------------------------
-    def solve(self, points, weights=None, *, certify=True, cells=None, density=None):
+    def solve(self, points, weights=None, *, certify=True, cells=None, density=None, warm=False):
         """MIC of every power cell, or of the cells `cells`, certified as by :func:`exact_mic`.
 
         Parameters
@@ -199,6 +206,15 @@ class CellMIC(DeviceStage):
             local step's) passes its whole set's: a grid sized for its own
             count would put tens of sites in each bucket there, and every
             cell's scan would go through them.
+        warm : bool, optional
+            Start each cell's simplex from its optimal basis of the last call,
+            where that was a warm call on as many sites (its bases are kept on
+            the device) and the basis is in the cell's list and dual feasible,
+            else from the sectors' nearest sites; only for all cells (`cells`
+            None).  For the steps of a relaxation, whose sites move by a
+            fraction of their spacing: the same optimum, found with fewer
+            pivots (the centres may differ in the last bits where the basis
+            is solved in another order).
 
         Returns
         -------
@@ -213,8 +229,8 @@ class CellMIC(DeviceStage):
         ------
         ValueError
             Fewer than two sites, sites or weights that
-            :func:`diskpack_cl._checks.check_sites` refuses, or cells not
-            integer indices of sites.
+            :func:`diskpack_cl._checks.check_sites` refuses, cells not
+            integer indices of sites, or `warm` with `cells`.
 
         Examples
         --------
@@ -229,9 +245,10 @@ class CellMIC(DeviceStage):
         with self.timings("buckets"):
             order, start, bwmax, grid = self._buckets(X, w, density)
             pos, rows = _positions(order, None if cells is None else checked_cells(cells, len(X)))
-            up, win = self._inputs(X, w, order, start, bwmax, grid, pos, rows)
+            warm = self._warm_mode(warm, cells)
+            up, win = self._inputs(X, w, order, start, bwmax, grid, pos, rows, warm)
         with self.timings("device"):
-            out = self._run(up, grid, win, w.max(), len(pos), certify)
+            out = self._run(up, grid, win, w.max(), len(pos), certify, warm)
         return self._finish(up.views["site"], up.views["weight"], out, pos, rows)
 
     def nearest(self, points):
@@ -287,27 +304,45 @@ class CellMIC(DeviceStage):
             self._packs[name] = pack
         return pack
 
-    def _inputs(self, X, w, order, start, bwmax, grid, pos, rows):
+    def _inputs(self, X, w, order, start, bwmax, grid, pos, rows, warm):
         """The kernels' inputs, written into their packed host array (sites and weights in
         bucket order, the buckets' start and weight maxima, the cells' sorted positions
-        and result rows): one copy to the device.  ``(packed, win)``, `win` the window
-        of :meth:`_local_wmax`."""
+        and result rows; with `warm` bits, the last sort's move of sorted positions and its
+        inverse): one copy to the device.
+        ``(packed, win)``, `win` the window of :meth:`_local_wmax`."""
         n, m = len(X), len(pos)
         bwloc, win = self._local_wmax(bwmax, grid, w.max())
+        moves = (("prevpos", np.int32, (n,)), ("newpos", np.int32, (n,))) if warm else ()
         up = self._pack("inputs", (("site", np.float64, (n, 2)), ("weight", np.float64, (n,)),
                                    ("start", np.int32, start.shape), ("bwmax", np.float64, bwmax.shape),
                                    ("bwloc", np.float64, bwmax.shape), ("cells", np.int32, (m,)),
-                                   ("rows", np.int32, (m,))), lend=True)
+                                   ("rows", np.int32, (m,))) + moves, lend=True)
         v = up.views
         _take(X, order, v["site"])
         _take(w, order, v["weight"])
         v["start"][...], v["bwmax"][...], v["bwloc"][...] = start, bwmax, bwloc
         v["cells"][...], v["rows"][...] = pos, rows
+        if warm & 1:   # (the positions move little: both passes run through memory in order)
+            v["prevpos"][...] = self._perm
+            v["newpos"][self._perm] = np.arange(n, dtype=np.int32)
         return up, win
 
-    def _run(self, up, grid, win, wmax, n, codes):
+    def _warm_mode(self, warm, cells):
+        """cell_mic's ``warm`` bits for this call (after its sort): none without `warm`;
+        else write the bases, and read them too where the call before was warm and its
+        sort's positions are the ones this sort moved."""
+        if not warm:
+            return 0
+        if cells is not None:
+            raise ValueError("a warm start solves all cells: no cells with warm")
+        held = self._perm is not None and self._basis is not None and self._basis[0] == self._sorts - 1
+        self._basis = (self._sorts, 1 - self._basis[1] if held else 0)
+        return 3 if held else 2
+
+    def _run(self, up, grid, win, wmax, n, codes, warm=0):
         """The kernels on the `n` cells of the packed inputs `up` (:meth:`_inputs`, with
-        its `win`; `wmax` the largest weight).  With `codes`, cell_mic's ``mic`` and
+        its `win`; `wmax` the largest weight; `warm` the kernel's bits, :meth:`_warm_mode`).
+        With `codes`, cell_mic's ``mic`` and
         ``codes`` in the order of the cells, for the host's re-solve (which puts them by
         row itself); else ``center``, ``radius`` and ``nn`` by result row and ``flags`` in
         the order of the cells, as ``mic_rows`` puts them (32 of the 80 bytes a cell).
@@ -320,7 +355,7 @@ class CellMIC(DeviceStage):
         down = self._pack("outputs", mine if codes else rowed + mine)
         out = down.parts
         up.send(self.queue)
-        events = self._solve_cells(b, out, n, len(up.views["site"]), grid, win, wmax)
+        events = self._solve_cells(b, out, n, len(up.views["site"]), grid, win, wmax, warm)
         if not codes:
             self._rows_kernel(self.queue, (padded(n, self._rows_group),), (self._rows_group,),
                               b["site"], b["cells"], b["rows"], np.int32(n), np.float64(dom.width),
@@ -339,10 +374,16 @@ class CellMIC(DeviceStage):
         self.transfers = {"bytes_to_device": up.nbytes, "bytes_from_device": _nbytes(views)}
         return views
 
-    def _solve_cells(self, b, bufs, n, n_sites, grid, win, wmax):
+    def _solve_cells(self, b, bufs, n, n_sites, grid, win, wmax, warm):
         """Enqueue cell_mic on the `n` cells of ``b["cells"]`` (uploaded inputs `b`,
-        outputs ``bufs["mic"]`` and ``bufs["codes"]``), a chunk of work items an enqueue;
-        their events."""
+        outputs ``bufs["mic"]`` and ``bufs["codes"]``; `warm` its bits, with ``b["order"]``
+        and ``b["inv"]`` where set), a chunk of work items an enqueue; their events."""
+        # without warm bits the kernel reads none of these: any buffer will do; the
+        # bases alternate between two buffers, read from one, written to the other
+        flip = self._basis[1] if warm else 0
+        size = 12 * n_sites if warm else 8
+        basis = [self.buffer(f"basis{k}", size) for k in (1 - flip, flip)]
+        moves = (b["prevpos"], b["newpos"]) if warm else (basis[0], basis[0])
         nbx, nby, bw, bh = grid
         dom = self.domain
         tol = 1e-12 * max(dom.width, dom.height)
@@ -352,7 +393,8 @@ class CellMIC(DeviceStage):
             b["site"], b["weight"], b["start"], b["bwmax"], b["bwloc"], np.int32(win),
             b["cells"], np.int32(n), np.int32(nbx), np.int32(nby), np.float64(bw),
             np.float64(bh), np.float64(dom.width), np.float64(dom.height), np.float64(wmax),
-            np.float64(tol), np.float64(near_tol), np.int32(off), bufs["mic"], bufs["codes"])
+            np.float64(tol), np.float64(near_tol), np.int32(off), bufs["mic"], bufs["codes"],
+            np.int32(warm), *moves, *basis)
             for off in range(0, n, self.chunk)]
 
     def _refine(self, X, w, out, pos):

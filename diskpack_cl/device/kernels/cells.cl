@@ -12,11 +12,14 @@
  *      holds at least KMIN of them (or RMAX rings), into a private list, and
  *      more rings while the cell is unbounded by them;
  *   2. solves the LP on the list by the dual simplex method, starting from
- *      the nearest half-planes of three sectors of directions where they
- *      bound a triangle (dual feasible; the optimum's basis, or a pivot or
- *      two from it, in most cells), else from three artificial half-planes
- *      that bound a large triangle (dual feasible by construction), and
- *      pivoting in the most violated constraint each step;
+ *      the cell's optimal basis of the previous call where the host asks for
+ *      it (warm) and it is in the list and dual feasible (a relaxation's step:
+ *      the optimum's basis in most cells), else from the nearest half-planes
+ *      of three sectors of directions where they bound a triangle (dual
+ *      feasible; the optimum's basis, or a pivot or two from it, in most
+ *      cells), else from three artificial half-planes that bound a large
+ *      triangle (dual feasible by construction), and pivoting in the most
+ *      violated constraint each step;
  *   3. proves the answer for *all* sites: a site can only violate the
  *      solution if it lies within the cutter radius of the centre (derived
  *      from the power distance; per-bucket weight maxima prune the scan).
@@ -32,7 +35,9 @@
  *   4. writes, in the order of the list of cells (sorted positions, ascending
  *      for sequential writes), the centre, the radius, the three basic (active)
  *      constraints, the other near-tight ones, the nearest-neighbour distance
- *      of the site and a flag word, non-zero where it could not prove its answer.
+ *      of the site and a flag word, non-zero where it could not prove its answer;
+ *      where the host asks for it, the basis again by sorted position, for the
+ *      next call's warm start.
  *
  * Constraint codes: 9 * j + 3 * (sx + 1) + (sy + 1) for sorted site j shifted by
  * (sx, sy) periods (|sx|, |sy| <= 1); -1..-4 for the left, right, top and
@@ -242,6 +247,32 @@ static int start_basis(const clist *L, int first, int *b, double *inv)
                         nearer(near[5], nbe[5], near[0], nbe[0]), b, inv);
 }
 
+/* The previous step's optimal basis of this cell as a start basis: `prev` its three
+ * constraint codes (9 * j + shift with j a sorted position of the previous step, an
+ * edge's code as it is), `newpos` the sorted position now of each previous one.
+ * Where all three are in the list and bound a triangle (dual feasible:
+ * sector_basis' check), b holds their list positions and `binv` their inverse;
+ * returns whether.  The dots of a stippling step move by a fraction of their
+ * spacing: most cells keep their basis, or lie a pivot from it, and finding it
+ * costs three comparisons a site, not start_basis' sextants. */
+static int warm_basis(const clist *L, __global const int *newpos, const int *prev, int *b,
+                      double *binv)
+{
+    int c[3], f[3] = {-1, -1, -1};
+    for (int k = 0; k < 3; ++k) {
+        if (prev[k] < -4) return 0;   /* none, or an artificial half-plane */
+        c[k] = prev[k] < 0 ? prev[k] : 9 * newpos[prev[k] / 9] + prev[k] % 9;
+    }
+    /* codes are unique in the list: the last match is the only one (no branches) */
+    for (int k = 3; k < L->m; ++k) {
+        const int code = L->code[k];
+        f[0] = code == c[0] ? k : f[0];
+        f[1] = code == c[1] ? k : f[1];
+        f[2] = code == c[2] ? k : f[2];
+    }
+    return sector_basis(L, f[0], f[1], f[2], b, binv);
+}
+
 /* Normalise the raw entries of the list (gather_run stores the offsets):
  * n = a / |a|, beta = (|a|^2 - w_j + w_i) / (2 |a|), d = |a|, as set_site
  * does one by one, with the same operations.  A loop of its own, without
@@ -437,8 +468,14 @@ __kernel void cell_mic(
     const int offset,                /* first list position of this enqueue */
     __global double4 *mic,           /* out, by list position: MIC centre x, y, radius
                                         (negative: empty power cell), nearest-neighbour distance */
-    __global int *codes)             /* out: NCODES a cell: three basic constraint codes,
+    __global int *codes,             /* out: NCODES a cell: three basic constraint codes,
                                         the flag word, MAXNEAR near-tight codes (-9 = none) */
+    const int warm,                  /* bit 1: start from the basis in basis_in where it is
+                                        dual feasible; bit 2: write this one's to basis_out */
+    __global const int *prevpos,     /* (warm) the previous sorted position of each one now */
+    __global const int *newpos,      /* (warm) the sorted position now of each previous one */
+    __global const int *basis_in,    /* (warm) by previous sorted position: three basis codes */
+    __global int *basis_out)         /* (warm) by sorted position: this call's, alike */
 {
     const int i = offset + get_global_id(0);
     if (i >= m) return;
@@ -478,8 +515,10 @@ __kernel void cell_mic(
     }
     int b[3] = {0, 1, 2};
     double inv0[9], z[3];
-    const int sector = start_basis(&L, 3, b, inv0);
-    flag |= dual_simplex(&L, b, z, tol, sector ? inv0 : NULL);
+    int prev[3] = {-9, -9, -9};
+    if (warm & 1) for (int k = 0; k < 3; ++k) prev[k] = basis_in[3 * prevpos[s] + k];
+    const int start = ((warm & 1) && warm_basis(&L, newpos, prev, b, inv0)) || start_basis(&L, 3, b, inv0);
+    flag |= dual_simplex(&L, b, z, tol, start ? inv0 : NULL);
     /* 2. more rings while the cell is unbounded by the list, or its disk
      *    reaches past what the rings cover; no replacements once solved
      *    (the basis indexes the list), so this stops at the first dropped site */
@@ -596,6 +635,8 @@ __kernel void cell_mic(
     if (nnear > MAXNEAR) flag |= F_NEAR_FULL;
     for (int k = nnear; k < MAXNEAR; ++k) out[4 + k] = -9;
     out[0] = L.code[b[0]]; out[1] = L.code[b[1]]; out[2] = L.code[b[2]]; out[3] = flag;
+    if (warm & 2)
+        for (int k = 0; k < 3; ++k) basis_out[3 * s + k] = out[k] < -4 ? -9 : out[k];
     mic[i] = (double4)(xi.x + z[0], xi.y + z[1], z[2], SQRT(nn2));
 }
 
