@@ -6,8 +6,8 @@
 Each file is built as :class:`diskpack_cl.device.cells.CellMIC` builds
 ``kernels/cells.cl`` (with ``kernels/`` on the include path, or
 ``--include``; a ``FILE.cl@DIR`` argument takes its own).  A dart-throwing
-start of ``--n`` points and that set moved once (over-relaxed, as the
-relaxation's first move) are solved with each version in turn, the order
+start of ``--n`` points moved once and twice to its MIC centres
+(Algorithm 1's moves) are solved with each version in turn, the order
 rotating every round, so that the load of a shared machine falls on all
 versions alike.  ``--stipple SIZE`` solves power cells on a SIZE x SIZE
 rectangle instead: the points and weights of the last two steps of a short
@@ -37,7 +37,6 @@ import numpy as np
 from diskpack_cl.device.cells import MAXC, MAXNEAR, CellMIC
 from diskpack_cl.domain import Domain
 from diskpack_cl.parallel_darts import parallel_darts
-from diskpack_cl.relax import _moved
 from diskpack_cl.schedule import default_band
 from diskpack_cl.stipple import stipple
 from stipple_large import picture
@@ -56,14 +55,14 @@ def build(solver, spec, include, periodic):
 
 
 def sets(n, domain):
-    """The start set and the set after one and two over-relaxed moves, as ``(points, None)``
-    (the timed sets: the last two)."""
+    """The start set and the set after one and two moves to the MIC centres (Algorithm
+    1's), as ``(points, None)`` (the timed sets: the last two)."""
     X = parallel_darts(n, rel_radius=0.72, seed=2)
     if not domain.periodic:
         X = X * (domain.width, domain.height)
     solver, out = CellMIC(domain), [(X, None)]
     for _ in range(2):
-        X = _moved(X, solver.solve(X, certify=False), 0.72, domain, 1.5)
+        X = solver.solve(X, certify=False).centers
         out.append((X, None))
     return out
 
