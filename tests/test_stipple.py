@@ -611,6 +611,97 @@ def test_fields_made_in_bands_are_the_whole_pictures(n, shape, supersample):
                 np.testing.assert_array_equal(b, a, err_msg=f"{name} of the window, bands of {rows}")
 
 
+def _page_rows(h):
+    """An uninitialised `h`-row picture whose rows are its memory's pages (float64), from a page
+    border: :func:`~diskpack_cl.memory.drop_pages` of rows drops exactly those rows."""
+    import mmap
+
+    w = mmap.PAGESIZE // 8
+    buf = np.empty((h + 1) * w)
+    skip = (-buf.ctypes.data % mmap.PAGESIZE) // 8
+    return buf[skip:skip + h * w].reshape(h, w)
+
+
+def _banded_case(h, seed):
+    """``(g, plan, engine, whole)``: a picture of `h` page rows, no pixel white or black (a
+    dropped row reads 0), its plan for 300 dots, the exact engine and its stage made whole."""
+    from diskpack_cl.engine import make_engine
+    from diskpack_cl.stipple import make_stage
+
+    g = _page_rows(h)
+    rng = np.random.default_rng(seed)
+    g[...] = np.clip(rng.random(g.shape) * 0.3 + np.linspace(0.05, 0.6, g.shape[1]), 0.05, 0.95)
+    plan = StippleOptions().plan(300, g.shape[1], h, ink=float((1 - g).sum()))
+    engine = make_engine(Domain.rect(g.shape[1], h), 300, "exact")
+    return g, plan, engine, make_stage(g, plan, engine, band_rows=h)
+
+
+def _assert_same_fields(part, whole):
+    for name in ("radius_field", "density", "blend_weight", "ink"):
+        a, b = getattr(whole, name), getattr(part, name)
+        assert (a is None) == (b is None), name
+        if a is not None:
+            np.testing.assert_array_equal(b, a, err_msg=name)
+
+
+@settings(max_examples=12, deadline=None)
+@given(h=st.integers(24, 120), rows=st.integers(4, 24), wait=st.integers(0, 12),
+       seed=st.integers(0, 2**16))
+def test_bands_consume_the_picture_once_let(h, rows, wait, seed):
+    """Bands that may consume the picture only once a function lets them (the start still
+    reads it on another thread): nothing of it changes before, every row the bands passed
+    goes after, and the fields are those of the whole picture."""
+    from diskpack_cl import memory
+    from diskpack_cl.radii import detail_ell
+    from diskpack_cl.stipple import field_margin, make_stage
+
+    assume(h > 2 * rows and memory._glibc() is not None)
+    g, plan, engine, whole = _banded_case(h, seed)
+    picture = _page_rows(h)
+    picture[...] = g
+    asked = []
+
+    def let():
+        asked.append(True)
+        if len(asked) <= wait + 1:   # untouched while the start reads it
+            np.testing.assert_array_equal(picture, g)
+        return len(asked) > wait
+
+    _assert_same_fields(make_stage(picture, plan, engine, band_rows=rows, consume=let), whole)
+    passed = max(0, h - field_margin(plan, detail_ell(g, plan.n)))   # the rows no band reads again
+    expect = g.copy()
+    if len(asked) > wait:
+        expect[:passed] = 0.0
+    np.testing.assert_array_equal(picture, expect)
+
+
+@pytest.mark.parametrize("late", [0.0, 0.3])
+def test_start_beside_the_setup_is_the_start_alone(monkeypatch, late):
+    """The start on its helper thread beside the setup, whose bands consume the run's own gray
+    picture once the start is done (here `late` seconds late, so that they pass it first): the
+    result of the caller's gray picture, which no band consumes."""
+    import sys
+    import time
+
+    from diskpack_cl.image import to_gray
+
+    module = sys.modules["diskpack_cl.stipple"]
+    diffuse = module.error_diffusion
+
+    def late_diffusion(*args, **kw):
+        time.sleep(late)
+        return diffuse(*args, **kw)
+
+    rng = np.random.default_rng(1)   # more than twice FIELD_BAND_ROWS rows: fields in bands
+    pic = (np.clip(rng.random((1100, 256)) * 0.3 + np.linspace(0.05, 0.6, 256), 0.05, 0.95) * 255).astype(np.uint8)
+    kw = dict(schedule=[("mix", 1, 0.5)], backend="exact")
+    want = stipple(to_gray(pic), 400, **kw)
+    monkeypatch.setattr(module, "error_diffusion", late_diffusion)
+    got = stipple(pic, 400, **kw)
+    np.testing.assert_array_equal(got.points, want.points)
+    np.testing.assert_array_equal(got.radii, want.radii)
+
+
 def _plain_fields(g, plan, ell):
     """The stage's fields as written out plainly with scipy: each blur of the darkness on
     its own, the detail radius field dilated over the disk in float64, then rounded."""
