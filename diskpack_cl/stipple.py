@@ -78,7 +78,7 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, wait as futures_wait
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -701,6 +701,16 @@ def _begin_start(gray, opt, start):
         helper.shutdown(wait=False)   # the thread ends with its one task
 
 
+def _when_done(future):
+    """``consume(wait)`` of :func:`make_stage` for `future`: whether it is done, with `wait`
+    once it is."""
+    def done(wait):
+        if wait:
+            futures_wait([future])
+        return future.done()
+    return done
+
+
 def _blurred(darkness, sigma, blur):
     return blur(darkness, sigma) if sigma > 0 else darkness
 
@@ -805,15 +815,18 @@ def _banded_stage(gray, opt, engine, bands):
                for name, f in fields.items()}
         _make_fields(gray[lo:hi], opt, blur, ell, (slice(y0 - lo, y1 - lo), cols), out)
         # the fields grow as the picture shrinks: their sum stays the peak
-        kept = _consumed(gray, kept, max(0, y1 - m), bands.consume)
+        kept = _consumed(gray, kept, max(0, y1 - m), bands)
     stages = {"engine": engine_record(engine), "blur": blur_record}
     return StippleStage(engine, opt, *fields.values(), stages=stages)
 
 
-def _consumed(gray, kept, upto, consume):
-    """Drop the rows ``kept:upto`` of `gray`, which no later band reads, where `consume` lets
-    (:func:`make_stage`'s); returns the first row not dropped."""
-    if upto <= kept or not (consume() if callable(consume) else consume):
+def _consumed(gray, kept, upto, bands):
+    """Drop the rows ``kept:upto`` of `gray`, which no later band reads, where ``bands.consume``
+    lets (:func:`make_stage`'s); returns the first row not dropped."""
+    consume = bands.consume
+    if callable(consume):   # made to wait once two bands' rows are held back (peak memory)
+        consume = consume(upto - kept > 2 * bands.rows)
+    if upto <= kept or not consume:
         return kept
     drop_pages(gray[kept:upto])
     return upto
@@ -822,7 +835,7 @@ def _consumed(gray, kept, upto, consume):
 class _Bands(NamedTuple):
     """How :func:`_banded_stage` goes: `rows` a band, the `window` of the picture and its
     detail scale `ell` (None: the whole picture's), the `blur`, whether to `consume` it (a
-    bool, or a function saying whether yet)."""
+    bool, or :func:`make_stage`'s function)."""
 
     rows: int
     window: tuple
@@ -891,8 +904,9 @@ def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND
     is the detail scale of the whole picture (:func:`~diskpack_cl.jobs.tiles.stipple_tiled`).
     A picture, or a window, of more than twice `band_rows` rows has its fields made in bands;
     `consume`: `gray` is the caller's to lose (its pages are given back, as zeros, as the
-    bands no longer read them), or a function saying whether it is yet (while another
-    thread reads `gray`: the rows are dropped once it says so).
+    bands no longer read them), or ``consume(wait)``, saying whether it is yet (while another
+    thread reads `gray`: the rows are dropped once it says so), which the bands ask to
+    wait until it is once they hold back more than two bands' rows.
     `blur`: the ``(blur, record)`` of :func:`_field_blur` (default: the engine's)."""
     if len(range(gray.shape[0])[window[0] if window else slice(None)]) > 2 * band_rows:
         return _banded_stage(gray, opt, engine, _Bands(band_rows, window, ell, blur, consume))
@@ -1038,7 +1052,7 @@ def _stipple(image, n, options, start, callback, engine_args):
             # the run's own gray image (made from 8-bit pixels, or toned) is consumed, once the
             # start no longer reads it
             owned = gray is not image and gray.flags.owndata
-            stage = make_stage(gray, opt, engine, consume=owned and starting.done)
+            stage = make_stage(gray, opt, engine, consume=owned and _when_done(starting))
     with watch("start"), run_stage("start", 0):   # what the setup did not hide of the start
         x = starting.result()
     del gray   # the stage holds every field the steps read

@@ -645,34 +645,52 @@ def _assert_same_fields(part, whole):
 
 
 @settings(max_examples=12, deadline=None)
-@given(h=st.integers(24, 120), rows=st.integers(4, 24), wait=st.integers(0, 12),
+@given(h=st.integers(24, 120), rows=st.integers(4, 24), later=st.integers(0, 12),
        seed=st.integers(0, 2**16))
-def test_bands_consume_the_picture_once_let(h, rows, wait, seed):
+def test_bands_consume_the_picture_once_let(h, rows, later, seed):
     """Bands that may consume the picture only once a function lets them (the start still
-    reads it on another thread): nothing of it changes before, every row the bands passed
-    goes after, and the fields are those of the whole picture."""
+    reads it on another thread), `later` bands late or when they ask it to wait, which they do
+    once they hold back more than two bands' rows: nothing of it changes before, every row
+    the bands passed goes after, and the fields are those of the whole picture."""
     from diskpack_cl import memory
     from diskpack_cl.radii import detail_ell
     from diskpack_cl.stipple import field_margin, make_stage
 
     assume(h > 2 * rows and memory._glibc() is not None)
     g, plan, engine, whole = _banded_case(h, seed)
+    m = field_margin(plan, detail_ell(g, plan.n))
     picture = _page_rows(h)
     picture[...] = g
-    asked = []
+    calls, let_yet = [0], [False]
 
-    def let():
-        asked.append(True)
-        if len(asked) <= wait + 1:   # untouched while the start reads it
+    def let(wait):   # the bands call it after each band
+        calls[0] += 1
+        if not let_yet[0]:
             np.testing.assert_array_equal(picture, g)
-        return len(asked) > wait
+            passed = max(0, min(calls[0] * rows, h) - m)   # the rows no later band reads
+            assert wait == (passed > 2 * rows)
+            let_yet[0] = wait or calls[0] > later
+        return let_yet[0]
 
     _assert_same_fields(make_stage(picture, plan, engine, band_rows=rows, consume=let), whole)
-    passed = max(0, h - field_margin(plan, detail_ell(g, plan.n)))   # the rows no band reads again
     expect = g.copy()
-    if len(asked) > wait:
-        expect[:passed] = 0.0
+    if let_yet[0]:
+        expect[:max(0, h - m)] = 0.0
     np.testing.assert_array_equal(picture, expect)
+
+
+def test_the_start_is_waited_for_when_the_bands_ask():
+    """The bands' ``consume(wait)`` of the start: not done while it runs, done once asked to wait."""
+    import time
+    from concurrent.futures import ThreadPoolExecutor
+
+    from diskpack_cl.stipple import _when_done
+
+    with ThreadPoolExecutor(1) as pool:
+        starting = pool.submit(time.sleep, 0.2)
+        consume = _when_done(starting)
+        assert not consume(False)
+        assert consume(True) and starting.done()
 
 
 @pytest.mark.parametrize("late", [0.0, 0.3])
