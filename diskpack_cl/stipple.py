@@ -78,7 +78,6 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import Future, ThreadPoolExecutor, wait as futures_wait
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -686,31 +685,6 @@ def _start_points(gray, opt, start):
     return x
 
 
-def _begin_start(gray, opt, start):
-    """:func:`_start_points` as a future: the error diffusion on a helper thread, beside the
-    setup, whose host work leaves the second core idle (the same points); a given `start`
-    checked at once."""
-    if start is not None:
-        done = Future()
-        done.set_result(_start_points(gray, opt, start))
-        return done
-    helper = ThreadPoolExecutor(1, thread_name_prefix="diskpack-start")
-    try:
-        return helper.submit(_start_points, gray, opt, start)
-    finally:
-        helper.shutdown(wait=False)   # the thread ends with its one task
-
-
-def _when_done(future):
-    """``consume(wait)`` of :func:`make_stage` for `future`: whether it is done, with `wait`
-    once it is."""
-    def done(wait):
-        if wait:
-            futures_wait([future])
-        return future.done()
-    return done
-
-
 def _blurred(darkness, sigma, blur):
     return blur(darkness, sigma) if sigma > 0 else darkness
 
@@ -806,7 +780,6 @@ def _banded_stage(gray, opt, engine, bands):
     m, s = field_margin(opt, ell), opt.supersample
     blur, blur_record = bands.blur or _field_blur(engine)
     fields = _empty_fields(opt, len(rows), len(range(W)[cols]))
-    kept = max(0, rows.start - m)   # the first row of `gray` not dropped
     for y0 in range(rows.start, rows.stop, bands.rows):
         y1 = min(y0 + bands.rows, rows.stop)
         lo, hi = max(0, y0 - m), min(H, y1 + m)
@@ -814,34 +787,21 @@ def _banded_stage(gray, opt, engine, bands):
         out = {name: None if f is None else f[band if name != "density" else slice(band.start * s, band.stop * s)]
                for name, f in fields.items()}
         _make_fields(gray[lo:hi], opt, blur, ell, (slice(y0 - lo, y1 - lo), cols), out)
-        # the fields grow as the picture shrinks: their sum stays the peak
-        kept = _consumed(gray, kept, max(0, y1 - m), bands)
+        if bands.consume:   # the fields grow as the picture shrinks: their sum stays the peak
+            drop_pages(gray[max(0, y0 - m):max(0, y1 - m)])
     stages = {"engine": engine_record(engine), "blur": blur_record}
     return StippleStage(engine, opt, *fields.values(), stages=stages)
 
 
-def _consumed(gray, kept, upto, bands):
-    """Drop the rows ``kept:upto`` of `gray`, which no later band reads, where ``bands.consume``
-    lets (:func:`make_stage`'s); returns the first row not dropped."""
-    consume = bands.consume
-    if callable(consume):   # made to wait once two bands' rows are held back (peak memory)
-        consume = consume(upto - kept > 2 * bands.rows)
-    if upto <= kept or not consume:
-        return kept
-    drop_pages(gray[kept:upto])
-    return upto
-
-
 class _Bands(NamedTuple):
     """How :func:`_banded_stage` goes: `rows` a band, the `window` of the picture and its
-    detail scale `ell` (None: the whole picture's), the `blur`, whether to `consume` it (a
-    bool, or :func:`make_stage`'s function)."""
+    detail scale `ell` (None: the whole picture's), the `blur`, whether to `consume` it."""
 
     rows: int
     window: tuple
     ell: float
     blur: tuple
-    consume: object
+    consume: bool
 
 
 def _empty_fields(opt, H, W):
@@ -904,9 +864,7 @@ def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND
     is the detail scale of the whole picture (:func:`~diskpack_cl.jobs.tiles.stipple_tiled`).
     A picture, or a window, of more than twice `band_rows` rows has its fields made in bands;
     `consume`: `gray` is the caller's to lose (its pages are given back, as zeros, as the
-    bands no longer read them), or ``consume(wait)``, saying whether it is yet (while another
-    thread reads `gray`: the rows are dropped once it says so), which the bands ask to
-    wait until it is once they hold back more than two bands' rows.
+    bands no longer read them).
     `blur`: the ``(blur, record)`` of :func:`_field_blur` (default: the engine's)."""
     if len(range(gray.shape[0])[window[0] if window else slice(None)]) > 2 * band_rows:
         return _banded_stage(gray, opt, engine, _Bands(band_rows, window, ell, blur, consume))
@@ -1041,7 +999,7 @@ def _stipple(image, n, options, start, callback, engine_args):
         gray, toned_ink, ink = _toned(gray, options.paper_tone)
         opt = options.plan(n, W, H, ink=toned_ink)
     with watch("start"), run_stage("start"):
-        starting = _begin_start(gray, opt, start)
+        x = _start_points(gray, opt, start)
     with watch("setup"):
         reserve.release()
         exact = engine_args["backend"] == "exact"   # no device: the engine is part of the setup
@@ -1049,12 +1007,8 @@ def _stipple(image, n, options, start, callback, engine_args):
             engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H), timings=watch,
                                  **engine_args)
         with run_stage("setup", 0 if exact else 1):
-            # the run's own gray image (made from 8-bit pixels, or toned) is consumed, once the
-            # start no longer reads it
-            owned = gray is not image and gray.flags.owndata
-            stage = make_stage(gray, opt, engine, consume=owned and _when_done(starting))
-    with watch("start"), run_stage("start", 0):   # what the setup did not hide of the start
-        x = starting.result()
+            # the run's own gray image (made from 8-bit pixels, or toned) is consumed
+            stage = make_stage(gray, opt, engine, consume=gray is not image and gray.flags.owndata)
     del gray   # the stage holds every field the steps read
     give_back()   # the gray image where the run made it (from 8-bit pixels), and the bands'
     state, history = run_schedule(StippleState(x, float(opt.k0)), stage, callback)
