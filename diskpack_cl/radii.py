@@ -16,6 +16,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from ._cores import on_cores
 from .geometry import CertificateError, certify_disks, radius_octaves
 
 __all__ = ["base_radii", "radius_field", "density_radius", "detail_scale", "detail_ell", "detail_fields",
@@ -448,18 +449,11 @@ def fields_at(fields, points, *, part=PARALLEL_POINTS):
         raise ValueError(f"fields_at needs fields of one shape, got {sorted(shapes)}")
     points = np.asarray(points, dtype=np.float64)
     out = [None if f is None else np.empty(len(points)) for f in fields]
-    runs = min(os.cpu_count() or 1, max(1, len(points) // max(int(part), 1)))
-    ends = [len(points) * k // runs for k in range(runs + 1)]
 
-    def run(k):
-        at = slice(ends[k], ends[k + 1])
+    def run(at):
         _lookups(fields, points[at], [None if o is None else o[at] for o in out])
 
-    if runs == 1:
-        run(0)
-    else:
-        with ThreadPoolExecutor(runs) as pool:
-            list(pool.map(run, range(runs)))
+    on_cores(run, len(points), len(points), part)
     return out
 
 

@@ -4,6 +4,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from PIL import Image
 
 from diskpack_cl.image import adjust_tone, load_gray, sample_image_path, to_gray
@@ -141,6 +143,21 @@ def test_adjust_tone_in_place_equals_the_copy(controls):
     np.testing.assert_array_equal(same, new)
     if not controls:
         np.testing.assert_array_equal(same, kept)        # the identity controls change nothing
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(1, 40), w=st.integers(1, 30), bands=st.sampled_from([0, 2, 3, 4]),
+       part=st.integers(1, 2000), seed=st.integers(0, 2**16))
+def test_uint8_gray_in_bands_is_the_whole_arrays(h, w, bands, part, seed):
+    """The uint8 pixels made float64 in row bands on the cores: the values of the whole array
+    cast and divided at once, whatever the bands."""
+    from diskpack_cl.image import _uint8_gray
+
+    shape = (h, w) if bands == 0 else (h, w, bands)
+    a = np.random.default_rng(seed).integers(0, 256, shape, dtype=np.uint8)
+    got = _uint8_gray(a, part=part)
+    assert got.dtype == np.float64 and got.shape == a.shape
+    np.testing.assert_array_equal(got, a.astype(np.float64) / 255.0)
 
 
 # -- the smallest array of a picture ---------------------------------------------
