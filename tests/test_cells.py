@@ -1,5 +1,9 @@
 """The float64 per-cell MIC kernel against linprog, exact_mic and brute force."""
 
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -828,3 +832,32 @@ def test_bucket_maxima_are_reduceats_over_the_sites_in_bucket_order(n, nb, kind,
     expect = np.zeros(nb)
     expect[nonempty] = np.maximum.reduceat(w[order], start[:-1][nonempty])
     assert np.array_equal(_bucket_maxima(w, bid, nb), expect)
+
+
+_EMPTY_FAR = textwrap.dedent("""
+    import numpy as np
+    from diskpack_cl.device.cells import CellMIC
+    from diskpack_cl.domain import Domain
+    from diskpack_cl.geometry import exact_mic
+    pts = np.array([[0.03056459710235948, 0.5534426318376761],
+                    [0.03056459710335948, 0.553442631838676],
+                    [0.3804227502986096, 0.4081990975562555]])
+    w = np.array([0.02940231276327682, 0.00023778427364327, 0.01045311859950472])
+    for dom in (Domain.torus(), Domain.rect(1.0, 1.0)):
+        got, want = CellMIC(dom).solve(pts, w, certify=True), exact_mic(pts, w, domain=dom)
+        assert got.radii[1] < -1e9, got.radii   # the lighter twin's cell is empty
+        assert np.allclose(got.radii, want.radii, rtol=1e-9, atol=1e-12), (got.radii, want.radii)
+        assert np.allclose(got.centers, want.centers, rtol=0, atol=1e-9)
+    print("ok")
+""")
+
+
+def test_an_empty_cell_whose_centre_lies_far_away_ends(ctx):
+    """Two sites 1e-12 apart with unequal weights (hypothesis found them): the lighter
+    one's power cell is empty, its LP's centre lies some 1e10 bucket widths away, and the
+    proof scan's bucket bounds, clamped on one side only, overflowed int there (INT_MIN
+    on x86): the kernel scanned from INT_MIN and never ended.  In a child process, so
+    that a hang fails the test instead of holding up the suite."""
+    proc = subprocess.run([sys.executable, "-c", _EMPTY_FAR], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-3000:]

@@ -345,6 +345,15 @@ static double local_reach(double rad, double Rp, double reach2, double wloc,
     return rad <= inside ? FMIN(rad, Rp + SQRT(FMAX(reach2 + wloc, 0.0))) : rad;
 }
 
+/* The bucket of lattice coordinate v (in bucket widths), clamped to +-1e8 on both
+ * sides before the conversion: the centre of an empty power cell can lie 1e10
+ * widths away, and a conversion out of int's range (undefined; INT_MIN on x86)
+ * made a scan from INT_MIN that never ended. */
+static int bucket_index(double v)
+{
+    return (int)FLOOR(FMIN(FMAX(v, -1e8), 1e8));
+}
+
 /* Add site (xj + shift) as a constraint of cell i, unless it coincides with
  * the site (no bisector).  The callers make sure the list has room. */
 static void push_site(clist *L, double ax, double ay, double wj, double wi, int code)
@@ -555,9 +564,8 @@ __kernel void cell_mic(
         if (qn + rad <= G) break;
         const int partial = rad > box;
         const double reach = partial ? box : rad;
-        /* (clamped before the conversion: a huge ball must not overflow int) */
-        int x0 = (int)FLOOR(FMAX((cxp - reach) / bw, -1e8)), x1 = (int)FLOOR(FMIN((cxp + reach) / bw, 1e8));
-        int y0 = (int)FLOOR(FMAX((cyp - reach) / bh, -1e8)), y1 = (int)FLOOR(FMIN((cyp + reach) / bh, 1e8));
+        int x0 = bucket_index((cxp - reach) / bw), x1 = bucket_index((cxp + reach) / bw);
+        int y0 = bucket_index((cyp - reach) / bh), y1 = bucket_index((cyp + reach) / bh);
 #if PERIODIC
         /* past one period the images repeat: the scan would only grow */
         if (x1 - x0 > MAX_SCAN || y1 - y0 > MAX_SCAN) { flag |= F_SCAN_WIDE; break; }
