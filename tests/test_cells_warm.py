@@ -104,7 +104,7 @@ def warm_pairs(draw):
     return dom, a, b, w
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(warm_pairs(), st.booleans())
 def test_a_warm_start_finds_the_cold_starts_mics(solvers, case, certify):
     dom, a, b, w = case

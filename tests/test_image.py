@@ -145,7 +145,7 @@ def test_adjust_tone_in_place_equals_the_copy(controls):
         np.testing.assert_array_equal(same, kept)        # the identity controls change nothing
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(h=st.integers(1, 40), w=st.integers(1, 30), bands=st.sampled_from([0, 2, 3, 4]),
        part=st.integers(1, 2000), seed=st.integers(0, 2**16))
 def test_uint8_gray_in_bands_is_the_whole_arrays(h, w, bands, part, seed):
