@@ -376,8 +376,8 @@ class CellMIC(DeviceStage):
 
     def _solve_cells(self, b, bufs, n, n_sites, grid, win, wmax, warm):
         """Enqueue cell_mic on the `n` cells of ``b["cells"]`` (uploaded inputs `b`,
-        outputs ``bufs["mic"]`` and ``bufs["codes"]``; `warm` its bits, with ``b["order"]``
-        and ``b["inv"]`` where set), a chunk of work items an enqueue; their events."""
+        outputs ``bufs["mic"]`` and ``bufs["codes"]``; `warm` its bits, with ``b["prevpos"]``
+        and ``b["newpos"]`` where set), a chunk of work items an enqueue; their events."""
         # without warm bits the kernel reads none of these: any buffer will do; the
         # bases alternate between two buffers, read from one, written to the other
         flip = self._basis[1] if warm else 0
