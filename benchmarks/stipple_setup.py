@@ -35,7 +35,7 @@ def setup_seconds(gray, n):
     opt = stipple_module.StippleOptions().plan(n, W, H, ink=float(gray.size - gray.sum()))
     engine = make_engine(Domain.rect(W, H), opt.n, grid=opt.grid_shape(W, H))
     with freed_memory_kept():
-        PageReserve(stipple_module.STAGE_BYTES_PER_PIXEL * W * H).release()
+        PageReserve(stipple_module.RESERVED_BYTES_PER_PIXEL * W * H).release()
         t = time.perf_counter()
         stipple_module.make_stage(gray, opt, engine)
         return time.perf_counter() - t

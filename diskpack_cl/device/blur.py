@@ -17,6 +17,10 @@ from ..radii import TRUNCATE
 
 __all__ = ["DeviceBlur", "gaussian_weights"]
 
+#: Output rows of a work item of the column pass (blur.cl's ``ROWS``), whose taps it
+#: shares; 8 was the fastest on both CPU builds (docs/guide/performance.md).
+COLUMN_ROWS = 8
+
 
 def gaussian_weights(sigma):
     """The 2 r + 1 weights of scipy.ndimage's Gaussian of `sigma` (``r = int(4 sigma + 0.5)``).
@@ -38,8 +42,10 @@ class DeviceBlur(DeviceStage):
     with float64, as :func:`~diskpack_cl.radii.gaussian_blur` makes it on the host.
 
     Both passes (along the columns, then the rows) run on the device, eight
-    outputs a work item in double vectors, and every output is summed in the
-    order and rounding of scipy's symmetric correlation.
+    outputs of a row a work item in double vectors (the column pass takes
+    :data:`COLUMN_ROWS` such runs, one under the other, sharing their taps), and
+    every output is summed in the order and rounding of scipy's symmetric
+    correlation.
 
     Parameters
     ----------
@@ -62,7 +68,7 @@ class DeviceBlur(DeviceStage):
 
     def __init__(self, device=None):
         super().__init__(device, fp64=True)
-        k = self.program("blur")
+        k = self.program("blur", {"ROWS": COLUMN_ROWS})
         self._passes = (k["blur_columns"], k["blur_rows"])
 
     def __call__(self, image, sigma):
@@ -86,9 +92,10 @@ class DeviceBlur(DeviceStage):
             w = gaussian_weights(sigma)
             b_w = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=w)
             dst = self._output(blurred)
-            size, shape = (-(-W // 8), H), (np.int32(len(w) // 2), np.int32(W), np.int32(H))
-            self._passes[0](self.queue, size, None, src, tmp, b_w, *shape)
-            self._passes[1](self.queue, size, None, tmp, dst, b_w, *shape)
+            shape = (np.int32(len(w) // 2), np.int32(W), np.int32(H))
+            self._passes[0](self.queue, (-(-W // 8), -(-H // COLUMN_ROWS)), None, src, tmp, b_w,
+                            *shape)
+            self._passes[1](self.queue, (-(-W // 8), H), None, tmp, dst, b_w, *shape)
             self._read(blurred, dst)
         self.queue.finish()   # the maps and reads are done: the arrays hold the blurs
         return outs

@@ -8,8 +8,9 @@
  *     w[r] * in[i]  +  sum over j = r, r-1, ..., 1 of  w[r - j] * (in[i - j] + in[i + j]),
  * with contraction into fused multiply-adds switched off, so that the sums
  * round as scipy's do.  A work item makes 8 neighbouring outputs of a row
- * with double8 vectors; those whose taps leave the image take the reflected
- * index one by one.  Build-time switch: WIDE_BUILTINS (wide.h).
+ * with double8 vectors (blur_columns: of ROWS rows); taps past the image's
+ * ends take the reflected index.  Build-time switches: WIDE_BUILTINS
+ * (wide.h), ROWS.
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #include "wide.h"
@@ -34,24 +35,52 @@ inline double line_blur(__global const double *line, size_t stride, int i, int n
     return acc;
 }
 
-/* out[y, x] for x = 8 g .. 8 g + 7 from the rows y - r .. y + r of `in`. */
+/* out[y, x] for x = 8 g .. 8 g + 7 and y = ROWS h .. ROWS h + ROWS - 1 from the
+ * rows y - r .. y + r of `in`.  Neighbouring outputs of a column share most of
+ * their taps: tap j of output o reads rows o - j and o + j, which are taps j + 1
+ * of output o + 1 and j - 1 of output o - 1, so the ROWS outputs keep the rows
+ * of one j in windows that slide by a row per j, and load two rows a j instead
+ * of 2 ROWS (the pass had been bound by those loads).  Each output still sums
+ * its taps in scipy's order. */
+#ifndef ROWS
+#define ROWS 8
+#endif
 __kernel void blur_columns(__global const double *in, __global double *out,
                            __global const double *w, const int r, const int nx, const int ny)
 {
-    const int x0 = get_global_id(0) * 8, y = get_global_id(1);
-    if (x0 >= nx || y >= ny) return;
-    if (x0 + 8 <= nx) {
-        double8 acc = w[r] * VLOAD_D8(in + (size_t)y * nx + x0);
-        for (int j = r; j >= 1; --j) {
-            const double8 lo = VLOAD_D8(in + (size_t)reflect(y - j, ny) * nx + x0);
-            const double8 hi = VLOAD_D8(in + (size_t)reflect(y + j, ny) * nx + x0);
-            acc += w[r - j] * (lo + hi);
-        }
-        VSTORE_D8(acc, out + (size_t)y * nx + x0);
+    const int x0 = get_global_id(0) * 8, y0 = get_global_id(1) * ROWS;
+    if (x0 >= nx || y0 >= ny) return;
+    if (x0 + 8 > nx) {
+        for (int y = y0; y < min(y0 + ROWS, ny); ++y)
+            for (int x = x0; x < nx; ++x)
+                out[(size_t)y * nx + x] = line_blur(in + x, nx, y, ny, w, r);
         return;
     }
-    for (int x = x0; x < nx; ++x)
-        out[(size_t)y * nx + x] = line_blur(in + x, nx, y, ny, w, r);
+    in += x0;
+    double8 acc[ROWS], lo[ROWS], hi[ROWS];   /* lo[o], hi[o]: rows y0 + o - j, y0 + o + j */
+#pragma unroll
+    for (int o = 0; o < ROWS; ++o) {
+        acc[o] = w[r] * VLOAD_D8(in + (size_t)reflect(y0 + o, ny) * nx);
+        lo[o] = VLOAD_D8(in + (size_t)reflect(y0 + o - r, ny) * nx);
+        hi[o] = VLOAD_D8(in + (size_t)reflect(y0 + o + r, ny) * nx);
+    }
+    for (int j = r; j >= 1; --j) {
+        const double wj = w[r - j];
+#pragma unroll
+        for (int o = 0; o < ROWS; ++o) acc[o] += wj * (lo[o] + hi[o]);
+        if (j == 1) break;
+        /* to j - 1: lo moves down a row, hi up a row, each taking one new row */
+#pragma unroll
+        for (int o = 0; o < ROWS - 1; ++o) {
+            lo[o] = lo[o + 1];
+            hi[ROWS - 1 - o] = hi[ROWS - 2 - o];
+        }
+        lo[ROWS - 1] = VLOAD_D8(in + (size_t)reflect(y0 + ROWS - j, ny) * nx);
+        hi[0] = VLOAD_D8(in + (size_t)reflect(y0 + j - 1, ny) * nx);
+    }
+#pragma unroll
+    for (int o = 0; o < ROWS; ++o)
+        if (y0 + o < ny) VSTORE_D8(acc[o], out + (size_t)(y0 + o) * nx + x0);
 }
 
 /* out[y, x] for x = 8 g .. 8 g + 7 from the columns x - r .. x + 7 + r of row y of `in`. */

@@ -62,12 +62,12 @@ inline int owned(int label, int nsite) { return label >= 0 && label < nsite; }
 /* Squared length of a 2-vector. */
 inline float len2(float dx, float dy) { return dx * dx + dy * dy; }
 
-/* Distance from point (px,py) to the axis-aligned box [x0,x1] x [y0,y1]. */
-inline float box_dist(float px, float py, float x0, float y0, float x1, float y1)
+/* Squared distance from point (px,py) to the axis-aligned box [x0,x1] x [y0,y1]. */
+inline float box_dist2(float px, float py, float x0, float y0, float x1, float y1)
 {
     float dx = FMAX(FMAX(x0 - px, px - x1), 0.0f);
     float dy = FMAX(FMAX(y0 - py, py - y1), 0.0f);
-    return SQRT(dx * dx + dy * dy);
+    return dx * dx + dy * dy;
 }
 
 /* Floor division for bucket indices that may leave the grid on a torus. */
