@@ -83,6 +83,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ._cores import on_cores
 from ._timing import Stopwatch
 from .device.blur import DeviceBlur
 from .device.checks import UntrustedProgram, warn_fallback
@@ -826,34 +827,79 @@ def _field_sigmas(opt, ell):
     return {name: sigma for name, sigma in sigmas.items() if sigma > 0}
 
 
+#: Values of a band from which :func:`_make_fields` shares its arithmetic between the cores.
+FIELD_PART = 1 << 21
+
+
 def _make_fields(gray, opt, blur, ell, window, out):
     """Write the fields of `window` (``(rows, cols)`` slices) of the float64 picture `gray` to
     `out` (:func:`_empty_fields` of the window, or views of them), each from the blurs of one
-    darkness (:func:`~diskpack_cl.radii.blurs`: a device blur reads it once), each temporary
-    dropped once its field is written (a band's peak memory: the darkness and its blurs)."""
-    darkness = 1.0 - gray
+    darkness (:func:`~diskpack_cl.radii.blurs`: a device blur reads it once).
+
+    The arithmetic after the blurs is shared by the cores, in row runs of at least
+    :data:`FIELD_PART` values (:func:`~diskpack_cl._cores.on_cores`; it had left a core idle while the device
+    waited): pixel by pixel (:func:`_pixel_fields`), then the radius field's dilation, whose
+    runs read the radius rows around them (:func:`_dilated_rows`). The same values as one run."""
+    H, W = gray.shape
+    part = FIELD_PART
+    darkness = np.empty(gray.shape, np.result_type(gray, 1.0))
+    on_cores(lambda r: np.subtract(1.0, gray[r], out=darkness[r]), H, gray.size, part)
     sigmas = _field_sigmas(opt, ell)
-    if "density" not in sigmas:
-        _density_of(darkness[window], opt.supersample, out["density"])
     blurred = dict(zip(sigmas, blurs(blur, darkness, list(sigmas.values()))))
-    if "density" in blurred:
-        _density_of(blurred.pop("density")[window], opt.supersample, out["density"])
-    if opt.support > 0:   # off_support's
-        np.copyto(out["ink"], blurred.pop("ink")[window], casting="same_kind")
-    if opt.features == "detail":
-        weight = detail_blend(darkness, blurred)
-        np.copyto(out["blend_weight"], weight[window], casting="same_kind")
-        del weight
-    if opt.radii == "density":
-        rfield = density_radius(blurred.pop("radius") if "radius" in blurred else darkness, opt.floor)
+    rows = window[0]
+    rad = dilation_radius(ell) if opt.features == "detail" else 0
+    # the radius rows that the dilation reads: the window's and rad more on each side
+    lo, hi = max(rows.start - rad, 0), min(rows.stop + rad, H)
+    rfield = np.empty((hi - lo, W), np.float32) if rad else None
+    on_cores(lambda r: _pixel_fields(gray, darkness, blurred, opt, window, out, rfield,
+                                     slice(lo + r.start, lo + r.stop), lo),
+             hi - lo, (hi - lo) * W, part)
+    del darkness, blurred
+    if rad:
+        n = len(range(H)[rows])
+        on_cores(lambda r: _dilated_rows(rfield, lo, rad, rows.start + r.start, rows.start + r.stop, H,
+                                         out["radius_field"][r], window[1]), n, n * W, part)
+
+
+def _pixel_fields(gray, darkness, blurred, opt, window, out, rfield, band, lo):
+    """:func:`_make_fields`' pixel-by-pixel work on the picture's rows `band`: the density,
+    ink and blend weight of the window's rows among them, and the radius of each (into
+    `rfield`, whose first row is row `lo`, for the dilation; straight into the radius field
+    without one). The darkness and blurs of those rows are lost (made in place)."""
+    rows, cols = window
+    s = opt.supersample
+    a, b = max(band.start, rows.start), min(band.stop, rows.stop)   # the window's rows here
+    if a < b:
+        src, dst = slice(a, b), slice(a - rows.start, b - rows.start)
+        _density_of(blurred.get("density", darkness)[src, cols], s,
+                    out["density"][dst.start * s:dst.stop * s])
+        if opt.support > 0:   # off_support's
+            np.copyto(out["ink"][dst], blurred["ink"][src, cols], casting="same_kind")
+        if opt.features == "detail":
+            pair = {name: blurred[name][src] for name in ("sharp", "coarse") if name in blurred}
+            np.copyto(out["blend_weight"][dst], detail_blend(darkness[src], pair)[:, cols],
+                      casting="same_kind")
+    if opt.radii == "density":   # the darkness's last use: made in place
+        r = density_radius(blurred["radius"][band] if "radius" in blurred else darkness[band], opt.floor)
     else:
-        rfield = radius_field(gray, radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
-    del darkness
-    if opt.features == "detail":
-        # the field rounded to float32, then dilated: a maximum of the rounded values is
-        # the rounded maximum, in half the bytes
-        rfield = disk_dilation(rfield.astype(np.float32), dilation_radius(ell))
-    np.copyto(out["radius_field"], rfield[window], casting="same_kind")
+        r = radius_field(gray[band], radii=opt.radii, gamma=opt.gamma, floor=opt.floor)
+    if rfield is not None:
+        # rounded to float32, then dilated: a maximum of the rounded values is the rounded
+        # maximum, in half the bytes
+        np.copyto(rfield[band.start - lo:band.stop - lo], r, casting="same_kind")
+    elif a < b:
+        np.copyto(out["radius_field"][a - rows.start:b - rows.start], r[a - band.start:b - band.start, cols],
+                  casting="same_kind")
+
+
+def _dilated_rows(rfield, lo, rad, a, b, H, out, cols):
+    """Rows `a` .. `b` of the picture's radius field dilated (:func:`disk_dilation`), into
+    `out`: from the radius rows within `rad` of them (`rfield`, from row `lo`), which the
+    dilation reflects only at the picture's (or band's) edges, rows 0 and `H`, as one
+    dilation of all of them does."""
+    s0, s1 = max(a - rad, 0), min(b + rad, H)
+    d = disk_dilation(rfield[s0 - lo:s1 - lo], rad)
+    np.copyto(out, d[a - s0:b - s0, cols], casting="same_kind")
 
 
 def make_stage(gray, opt, engine, *, window=None, ell=None, band_rows=FIELD_BAND_ROWS, blur=None,

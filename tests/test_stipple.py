@@ -1,5 +1,7 @@
 """Algorithm 2 (stippling) and the error-diffusion start, on small images."""
 
+import importlib
+
 import numpy as np
 import pytest
 from hypothesis import assume, example, given, settings
@@ -641,11 +643,14 @@ def _plain_fields(g, plan, ell):
 @settings(max_examples=25)
 @given(h=st.integers(8, 70), w=st.integers(8, 70), n=st.integers(20, 2000),
        schedule=st.sampled_from(["default", "classic", "detail", "paper"]), supersample=st.sampled_from([None, 2]),
-       rows=st.sampled_from([3, 5, 1000]), seed=st.integers(0, 2**32 - 1))
-def test_stage_fields_are_the_plain_computations(h, w, n, schedule, supersample, rows, seed):
+       rows=st.sampled_from([3, 5, 1000]), cores=st.integers(1, 4), seed=st.integers(0, 2**32 - 1))
+def test_stage_fields_are_the_plain_computations(h, w, n, schedule, supersample, rows, cores, seed):
     """The stage's fields (one darkness, its blurs at once, the radius field rounded before
-    its dilation by chords, whole or in bands of `rows`) against the plain computations,
-    bit for bit, for every schedule's options."""
+    its dilation by chords, whole or in bands of `rows`, the arithmetic shared by `cores`
+    cores in runs of rows as short as one) against the plain computations, bit for bit,
+    for every schedule's options."""
+    from unittest import mock
+
     from diskpack_cl.engine import make_engine
     from diskpack_cl.radii import detail_ell
     from diskpack_cl.stipple import make_stage
@@ -656,7 +661,9 @@ def test_stage_fields_are_the_plain_computations(h, w, n, schedule, supersample,
     assume(g.min() < 1.0 and 4 * n <= h * w)   # ink to stipple, and 4 grid cells a dot
     options = StippleOptions(schedule=schedule, **({} if supersample is None else {"supersample": supersample}))
     plan = options.plan(n, w, h, ink=float((1 - g).sum()))
-    stage = make_stage(g, plan, make_engine(Domain.rect(w, h), n, "exact"), band_rows=rows)
+    with mock.patch.object(importlib.import_module("diskpack_cl.stipple"), "FIELD_PART", 1), \
+            mock.patch("os.cpu_count", return_value=cores):
+        stage = make_stage(g, plan, make_engine(Domain.rect(w, h), n, "exact"), band_rows=rows)
     want = _plain_fields(g, plan, detail_ell(g, n))
     for name, field in want.items():
         got = getattr(stage, name)
