@@ -236,23 +236,78 @@ def detail_ell(gray, n):
     """
     d = 1.0 - np.asarray(gray, dtype=np.float64)
     total = float(d.sum())
-    # the pixels darker than 0.05 gathered at the front of d itself, a part at a time: no
-    # mask and no copy of a whole picture beside it (the peak of a large run's setup);
-    # with none, d is as it was
-    dark = _gathered_above(d.reshape(-1), 0.05)
-    dmed = float(np.median(dark, overwrite_input=True)) if dark.size else float(d.mean())
-    return detail_scale(total, n, dmed)
+    dmed = median_above(d.reshape(-1), 0.05)
+    return detail_scale(total, n, float(d.mean()) if dmed is None else dmed)
 
 
-def _gathered_above(flat, lo, part=1 << 20):
-    """The values of `flat` above `lo`, moved to its front in their order (a view of it)."""
-    kept = 0
-    for i in range(0, flat.size, part):
-        chunk = flat[i:i + part]
-        above = chunk[chunk > lo]
-        flat[kept:kept + above.size] = above   # never past the parts still to read
-        kept += above.size
-    return flat[:kept]
+#: Values a run of :func:`median_above` reads at a time (its temporaries' size), and
+#: the values it samples for its bracket.
+MEDIAN_PART, MEDIAN_SAMPLE = 1 << 20, 1 << 16
+
+
+def median_above(flat, lo, *, part=MEDIAN_PART, sample=MEDIAN_SAMPLE):
+    """``np.median(flat[flat > lo])``, the same value, or None where no value is above `lo`.
+
+    No copy of the values is gathered (a whole picture's, at the detail scale
+    of a large one): the values above `lo` are counted, a bracket around the
+    median's rank is read off an even sample of `sample` of them, and the
+    values below the bracket are counted while those inside are gathered, on
+    every core (:func:`~diskpack_cl._cores.on_cores`), `part` values at a time;
+    the median is then selected among the bracket's.  A bracket that misses
+    the median's rank (an uneven picture) falls back to gathering them all.
+
+    Examples
+    --------
+    >>> median_above(np.array([0.0, 0.3, 0.9, 0.2, 0.5]), 0.1)
+    0.4
+    """
+    flat = np.asarray(flat).reshape(-1)
+    n = _count_above(flat, lo, part)
+    if n == 0:
+        return None
+    ranks = sorted({(n - 1) // 2, n // 2})
+    # a random sample (seeded: the same bracket every run), not a stride, which a
+    # picture's columns could bias
+    pick = flat[np.random.default_rng(0).integers(0, flat.size, min(sample, flat.size))]
+    pick = np.sort(pick[pick > lo])
+    if pick.size:
+        at = [r * pick.size // n for r in ranks]
+        reach = 4 * int(np.sqrt(pick.size)) + 2
+        low, high = pick[max(at[0] - reach, 0)], pick[min(at[-1] + reach, pick.size - 1)]
+        below, inside = _bracketed(flat, lo, low, high, part)
+        if below <= ranks[0] and ranks[-1] < below + inside.size:
+            return _middle(np.partition(inside, [r - below for r in ranks]), [r - below for r in ranks])
+    dark = flat[flat > lo]
+    return _middle(np.partition(dark, ranks), ranks)
+
+
+def _middle(part, ranks):
+    """np.median's value from the values at `ranks` of a partitioned array: their mean."""
+    return float(np.mean(part[ranks]))
+
+
+def _count_above(flat, lo, part):
+    """How many values of `flat` are above `lo`, `part` values at a time on every core."""
+    counts = []
+    on_cores(lambda rows: counts.append(sum(int(np.count_nonzero(flat[i:min(i + part, rows.stop)] > lo))
+                                            for i in range(rows.start, rows.stop, part))),
+             flat.size, flat.size, part)
+    return sum(counts)
+
+
+def _bracketed(flat, lo, low, high, part):
+    """``(below, inside)``: how many values of `flat` are above `lo` and below `low`, and the
+    values from `low` to `high` (``lo < low``)."""
+    below, inside = [], []
+
+    def run(rows):
+        for i in range(rows.start, rows.stop, part):
+            x = flat[i:min(i + part, rows.stop)]
+            below.append(int(np.count_nonzero(x > lo)) - int(np.count_nonzero(x >= low)))
+            inside.append(x[(x >= low) & (x <= high)])
+
+    on_cores(run, flat.size, flat.size, part)
+    return sum(below), np.concatenate(inside)
 
 
 #: :func:`detail_fields`' defaults: the factor on the relative detail, and the blur (px) of

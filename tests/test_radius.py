@@ -82,10 +82,11 @@ def test_certified_k_certificate_is_certify_disks_own(seed, n, spread):
 
 @settings(max_examples=60)
 @given(st.integers(1, 40), st.integers(1, 40), st.integers(0, 2**32 - 1),
-       st.sampled_from(["random", "white", "black", "levels"]), st.integers(1, 64))
-def test_detail_ell_gathers_the_dark_pixels_as_a_mask_would(h, w, seed, kind, part):
-    """detail_ell's in-place gathering of the pixels darker than 0.05, a part at a time,
-    gives the scale of the masked copy (every part size, white and black pictures)."""
+       st.sampled_from(["random", "white", "black", "levels"]))
+def test_detail_ell_is_the_scale_of_the_masked_copy(h, w, seed, kind):
+    """detail_ell (the median of the pixels darker than 0.05 counted and bracketed,
+    :func:`median_above`) gives the scale of the masked copy (white and black pictures
+    too)."""
     from diskpack_cl import radii
 
     rng = np.random.default_rng(seed)
@@ -95,7 +96,30 @@ def test_detail_ell_gathers_the_dark_pixels_as_a_mask_would(h, w, seed, kind, pa
     dark = d[d > 0.05]
     dmed = float(np.median(dark)) if dark.size else float(d.mean())
     expected = radii.detail_scale(float(d.sum()), 50, dmed)
-    flat = (1.0 - gray).reshape(-1)
-    gathered = radii._gathered_above(flat, 0.05, part=part)
-    assert gathered.tolist() == dark.tolist()
     assert radii.detail_ell(gray, 50) == expected
+
+
+@settings(max_examples=200)
+@given(st.integers(0, 3000), st.integers(0, 2**32 - 1),
+       st.sampled_from(["random", "levels", "ties", "skewed", "sorted", "nan"]),
+       st.integers(1, 300), st.integers(1, 200), st.integers(1, 4), st.sampled_from([-1.0, 0.05, 0.5]))
+def test_median_above_is_numpys_median_of_the_masked_copy(size, seed, kind, part, sample, cores, lo):
+    """The bracketed median is np.median of the values above `lo`, bit for bit: runs of
+    any length on one to four cores, samples from one value (brackets that miss the
+    median's rank, and fall back) to many, ties at the median, NaN (never above `lo`)."""
+    from unittest import mock
+
+    from diskpack_cl.radii import median_above
+
+    rng = np.random.default_rng(seed)
+    x = {"random": lambda: rng.random(size), "levels": lambda: rng.integers(0, 4, size) / 3.0,
+         "ties": lambda: np.where(rng.random(size) < 0.5, 0.5, rng.random(size)),
+         "skewed": lambda: rng.random(size) ** 8, "sorted": lambda: np.sort(rng.random(size)),
+         "nan": lambda: np.where(rng.random(size) < 0.2, np.nan, rng.random(size))}[kind]()
+    want = x[x > lo]
+    with mock.patch("os.cpu_count", return_value=cores):
+        got = median_above(x, lo, part=part, sample=sample)
+    if want.size == 0:
+        assert got is None
+    else:
+        assert got == float(np.median(want))
