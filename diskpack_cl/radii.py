@@ -21,7 +21,8 @@ from .geometry import CertificateError, certify_disks, radius_octaves
 
 __all__ = ["base_radii", "radius_field", "density_radius", "detail_scale", "detail_ell", "detail_fields",
            "detail_sigmas", "detail_blend", "detail_weight", "dilation_radius", "DETAIL_GAIN", "DETAIL_FINE", "disk_dilation", "field_at",
-           "fields_at", "largest_valid_k", "certified_k", "in_bands", "gaussian_blur", "blurs", "TRUNCATE"]
+           "fields_at", "largest_valid_k", "certified_k", "in_bands", "gaussian_blur", "blurs", "median_above",
+           "TRUNCATE"]
 
 #: Gaussian blurs reach ``int(TRUNCATE * sigma + 0.5)`` pixels (scipy.ndimage's default).
 TRUNCATE = 4.0
