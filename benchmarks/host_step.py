@@ -88,12 +88,14 @@ class Recorder:
 
 
 def cells_host(cells, X, w):
-    """The host work of ``CellMIC.solve(X, w, certify=False)`` less the device's: buckets,
-    packed inputs, the answers (kept from the real call) put in order."""
+    """The host work of ``CellMIC.solve(X, w, certify=False, warm=True)`` less the device's:
+    buckets, packed inputs, the answers (kept from the real call) put in order."""
     w = w - w.min()
     order, start, bwmax, grid = cells._buckets(X, w)
     pos, rows = np.arange(len(X), dtype=np.int32), order
-    up, _ = cells._inputs(X, w, order, start, bwmax, grid, pos, rows)
+    # a warm step's inputs (the run's steps are warm): with the moves of the sorted
+    # positions where this sort moved the last one's
+    up, _ = cells._inputs(X, w, order, start, bwmax, grid, pos, rows, 3 if cells._perm is not None else 2)
     return up, pos, rows
 
 
