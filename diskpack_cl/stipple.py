@@ -841,24 +841,29 @@ def _make_fields(gray, opt, blur, ell, window, out):
     waited): pixel by pixel (:func:`_pixel_fields`), then the radius field's dilation, whose
     runs read the radius rows around them (:func:`_dilated_rows`). The same values as one run."""
     H, W = gray.shape
-    part = FIELD_PART
-    darkness = np.empty(gray.shape, np.result_type(gray, 1.0))
-    on_cores(lambda r: np.subtract(1.0, gray[r], out=darkness[r]), H, gray.size, part)
-    sigmas = _field_sigmas(opt, ell)
-    blurred = dict(zip(sigmas, blurs(blur, darkness, list(sigmas.values()))))
     rows = window[0]
     rad = dilation_radius(ell) if opt.features == "detail" else 0
     # the radius rows that the dilation reads: the window's and rad more on each side
     lo, hi = max(rows.start - rad, 0), min(rows.stop + rad, H)
     rfield = np.empty((hi - lo, W), np.float32) if rad else None
-    on_cores(lambda r: _pixel_fields(gray, darkness, blurred, opt, window, out, rfield,
-                                     slice(lo + r.start, lo + r.stop), lo),
-             hi - lo, (hi - lo) * W, part)
-    del darkness, blurred
+    _blurred_pixels(gray, opt, blur, ell, window, out, rfield, lo, hi)
     if rad:
         n = len(range(H)[rows])
         on_cores(lambda r: _dilated_rows(rfield, lo, rad, rows.start + r.start, rows.start + r.stop, H,
-                                         out["radius_field"][r], window[1]), n, n * W, part)
+                                         out["radius_field"][r], window[1]), n, n * W, FIELD_PART)
+
+
+def _blurred_pixels(gray, opt, blur, ell, window, out, rfield, lo, hi):
+    """The darkness of `gray` and its blurs, then :func:`_pixel_fields` of rows `lo` ..
+    `hi` on every core (the darkness and blurs are dropped on return, before the
+    dilation)."""
+    darkness = np.empty(gray.shape, np.result_type(gray, 1.0))
+    on_cores(lambda r: np.subtract(1.0, gray[r], out=darkness[r]), len(gray), gray.size, FIELD_PART)
+    sigmas = _field_sigmas(opt, ell)
+    blurred = dict(zip(sigmas, blurs(blur, darkness, list(sigmas.values()))))
+    on_cores(lambda r: _pixel_fields(gray, darkness, blurred, opt, window, out, rfield,
+                                     slice(lo + r.start, lo + r.stop), lo),
+             hi - lo, (hi - lo) * gray.shape[1], FIELD_PART)
 
 
 def _pixel_fields(gray, darkness, blurred, opt, window, out, rfield, band, lo):
