@@ -590,7 +590,8 @@ def test_power_ties_go_to_the_lowest_index(ctx, order, layout, lanes):
        lanes=st.sampled_from([8, 16]))
 def test_tile_layouts_skip_no_owner_among_dense_sites(ctx, periodic, n, seed, heavy, per_site, lanes):
     """The tile layouts skip the candidates that cannot beat any grid cell's best
-    (``tile_reach`` in power_gather.h); among many sites, where most are skipped,
+    (``tile_reach`` in power_gather.h, from the end of the tile's own buckets on:
+    the reach starts infinite); among many sites, where most are skipped,
     their labels stay bit for bit those of the item layout, which scans every
     candidate, and the masses of the one-pass sums those of its labels."""
     from diskpack_cl.device.raster import PowerRaster

@@ -94,7 +94,8 @@ struct tile_scan {
 };
 
 /* One candidate at (xs, ys) with weight wc and index id, scanned over the
- * tile's grid cells; every REACH_EVERY candidates the reach is tightened. */
+ * tile's grid cells; every REACH_EVERY candidates the reach is tightened
+ * (and after each ring of the gather). */
 inline void scan_site(struct tile_scan *t, float xs, float ys, float wc, int id)
 {
     const intT vid = (intT)(id);
@@ -144,7 +145,8 @@ inline int gather_limit(int nbx, int nby, int span)
  *   GATHER_DIST:  boxdist <= bound + sqrt(bound2 + w)   (bound2 >= -w)
  *   GATHER_SCAN:  boxdist^2 - w <= scan->reach, each such site scanned at
  *                 once (scan_site) and no list kept: the reach tightens as
- *                 the rings go out, and the walk stops at it */
+ *                 the rings go out (every REACH_EVERY sites and at each
+ *                 ring's end), and the walk stops at it */
 inline int gather(int mode, float bound, float bound2, int skip,
                   float x0, float y0, float x1, float y1,
                   __global const float2 *site, __global const float *weight,
@@ -231,6 +233,12 @@ inline int gather(int mode, float bound, float bound2, int skip,
                 }
             }
         }
+        if (mode == GATHER_SCAN) {
+            /* a ring's sites scanned: the reach they give bounds the rings
+               beyond (the first, the tile's own buckets, sets it) */
+            scan->reach = FMIN(scan->reach, tile_reach(scan->best, scan->pad));
+            lim = scan->reach;
+        }
     }
     if (r > rmax) atomic_or(status, ST_RING_LIMIT);
     return total;
@@ -304,7 +312,10 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
  * row r's, caller's indices (lanes past the raster repeat its last column).
  * The candidates are those of power_labels' pass 1 but for the ones that
  * cannot own a grid cell of the tile (GATHER_SCAN), so both give the same
- * labels.  A grid cell of the raster left without one sets ST_NO_OWNER. */
+ * labels.  The reach starts infinite: the tile's own buckets (ring 0) set it
+ * (a seed from tile_bound, its walk of 3 x 3 buckets, cost a tenth of the
+ * pass and pruned little more).  A grid cell of the raster left without an
+ * owner sets ST_NO_OWNER. */
 inline void tile_owners(int gx0, int gy0, LABEL_ARGS, __global int *status, intT *best_id)
 {
     const float hx = W / nx, hy = H / ny;
@@ -312,7 +323,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS, __global int *status, intT
     const float x1 = (imin(gx0 + TW, nx) - 0.5f) * hx, y1 = (imin(gy0 + TH, ny) - 0.5f) * hy;
     struct tile_scan t;
     t.pad = 1e-4f * (hx * hx + hy * hy);
-    t.reach = tile_bound(x0, y0, x1, y1, t.pad, site, weight, bucket_start, nbx, nby, bw, bh, W, H);
+    t.reach = INFINITY;
     t.seen = 0;
     /* columns past the raster shadow its last column */
     t.px = (convert_floatT(min(gx0 + LANES, (intT)(nx - 1))) + 0.5f) * hx;
@@ -324,10 +335,14 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS, __global int *status, intT
     /* (no local list: the candidates are scanned as they are found) */
     gather(GATHER_SCAN, t.reach, 0.0f, 0, x0, y0, x1, y1, site, weight, site_id, bucket_start,
            bucket_wmax, nbx, nby, bw, bh, W, H, wmax, 0, 0, 0, status, &t);
+    /* the largest owner over the raster's rows: INT_MAX where a cell has none
+       (one test a tile: any() is a chain of shuffles a row) */
+    intT last = (intT)(INT_MIN);
     for (int r = 0; r < TH; ++r) {
         best_id[r] = t.best_id[r];
-        if (gy0 + r < ny && any(best_id[r] == (intT)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
+        if (gy0 + r < ny) last = max(last, best_id[r]);
     }
+    if (any(last == (intT)(INT_MAX))) atomic_or(status, ST_NO_OWNER);
 }
 
 #endif

@@ -175,8 +175,10 @@ void power_sums_tile(
     const int rows = imin(TH, ny - gy0);
     /* lanes past the raster repeat its last column's owner and read no
        density (density_row), so they add nothing */
-    int l = INT_MAX;
-    for (int r = 0; r < rows; ++r) l = imin(l, hmin(best_id[r]));
+    /* the least owner first: a vector min over the rows, then across the lanes */
+    intT first = best_id[0];
+    for (int r = 1; r < rows; ++r) first = min(first, best_id[r]);
+    int l = hmin(first);
     const realT cx = convert_realT(gx0 + LANES) + (real)0.5;
     while (l != INT_MAX) {
         const int ok = owned(l, nsite);
