@@ -251,11 +251,12 @@ def median_above(flat, lo, *, part=MEDIAN_PART, sample=MEDIAN_SAMPLE):
 
     No copy of the values is gathered (a whole picture's, at the detail scale
     of a large one): the values above `lo` are counted, a bracket around the
-    median's rank is read off an even sample of `sample` of them, and the
-    values below the bracket are counted while those inside are gathered, on
-    every core (:func:`~diskpack_cl._cores.on_cores`), `part` values at a time;
-    the median is then selected among the bracket's.  A bracket that misses
-    the median's rank (an uneven picture) falls back to gathering them all.
+    median's rank is read off a seeded random sample of `sample` values, and
+    the values below the bracket are counted while those inside are gathered,
+    on every core (:func:`~diskpack_cl._cores.on_cores`), `part` values at a
+    time; the median is then selected among the bracket's.  A bracket that
+    misses the median's rank (about eight standard deviations of the sample's
+    rank away) falls back to gathering them all.
 
     Examples
     --------
