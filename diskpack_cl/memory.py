@@ -210,7 +210,9 @@ class PageReserve:
     these pages: the first touch of each page (a page fault, far dearer on
     virtual machines that hand freed pages back to their host) is paid on an
     idle core while the caller goes on with work of one core (reading the
-    picture, the error diffusion). Outside such a block, or with another C
+    picture, the error diffusion). The pages are touched a chunk at a time,
+    and :meth:`release` touches those the thread has not reached beside it
+    rather than waiting for it. Outside such a block, or with another C
     library, it reserves nothing.
 
     Examples
@@ -220,8 +222,13 @@ class PageReserve:
     ...     reserve.release()                # ... then the arrays that reuse its pages
     """
 
+    #: Bytes touched at a time (a whole number of pages): the thread and the caller take
+    #: chunks in turn.
+    CHUNK = 8 << 20
+
     def __init__(self, nbytes):
         self._block = self._thread = None
+        self._next, self._lock = 0, threading.Lock()
         if nbytes > 0 and _keeping.on and _glibc() is not None:
             import numpy as np   # (this module is read at start-up without numpy)
 
@@ -230,11 +237,23 @@ class PageReserve:
             self._thread.start()
 
     def _touch(self):
-        self._block[::mmap.PAGESIZE] = 0   # numpy lets the other threads run meanwhile
+        """Touch the pages of the chunks not yet taken, until none is left."""
+        while (at := self._take()) is not None:
+            self._block[at:at + self.CHUNK:mmap.PAGESIZE] = 0   # numpy lets the other threads run
+
+    def _take(self):
+        """The start of the next chunk to touch, or None."""
+        with self._lock:
+            at = self._next
+            if at >= len(self._block):
+                return None
+            self._next = at + self.CHUNK
+            return at
 
     def release(self):
-        """Wait for the touching thread and give the memory to the heap."""
+        """Touch the pages the thread has not reached, beside it; then give the memory to the heap."""
         if self._thread is not None:
+            self._touch()
             self._thread.join()
         self._block = self._thread = None
 

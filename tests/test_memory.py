@@ -56,6 +56,31 @@ def test_a_page_reserve_is_touched_and_its_pages_reused():
     assert reused - touched < 32 * MIB
 
 
+class _IdleThread:
+    """A thread that never runs its target (a core too busy to touch a page)."""
+
+    def __init__(self, target, **kw):
+        pass
+
+    def start(self):
+        pass
+
+    def join(self):
+        pass
+
+
+def test_a_page_reserve_release_touches_the_pages_its_thread_did_not(monkeypatch):
+    monkeypatch.setattr(memory.threading, "Thread", _IdleThread)
+    with memory.freed_memory_kept():
+        before = _rss()
+        reserve = memory.PageReserve(256 * MIB + 12345)   # not a whole number of chunks
+        untouched = _rss()
+        reserve.release()
+        touched = _rss()
+    assert untouched - before < 32 * MIB
+    assert touched - before > 250 * MIB
+
+
 def test_a_page_reserve_outside_the_block_reserves_nothing():
     before = _rss()
     reserve = memory.PageReserve(256 * MIB)
