@@ -250,11 +250,11 @@ def median_above(flat, lo, *, part=MEDIAN_PART, sample=MEDIAN_SAMPLE):
     """``np.median(flat[flat > lo])``, the same value, or None where no value is above `lo`.
 
     No copy of the values is gathered (a whole picture's, at the detail scale
-    of a large one): the values above `lo` are counted, a bracket around the
-    median's rank is read off a seeded random sample of `sample` values, and
-    the values below the bracket are counted while those inside are gathered,
-    on every core (:func:`~diskpack_cl._cores.on_cores`), `part` values at a
-    time; the median is then selected among the bracket's.  A bracket that
+    of a large one): a bracket around the median is read off a seeded random
+    sample of `sample` values, then one pass, on every core
+    (:func:`~diskpack_cl._cores.on_cores`) and `part` values at a time, counts
+    the values above `lo` and those below the bracket and gathers those
+    inside; the median is then selected among the bracket's.  A bracket that
     misses the median's rank (about eight standard deviations of the sample's
     rank away) falls back to gathering them all.
 
@@ -264,21 +264,22 @@ def median_above(flat, lo, *, part=MEDIAN_PART, sample=MEDIAN_SAMPLE):
     0.4
     """
     flat = np.asarray(flat).reshape(-1)
-    n = _count_above(flat, lo, part)
-    if n == 0:
-        return None
-    ranks = sorted({(n - 1) // 2, n // 2})
     # a random sample (seeded: the same bracket every run), not a stride, which a
     # picture's columns could bias
     pick = flat[np.random.default_rng(0).integers(0, flat.size, min(sample, flat.size))]
     pick = np.sort(pick[pick > lo])
+    # the bracket at the sample's middle (the median's rank needs the count of the pass)
+    low = high = np.inf   # no value of the sample above lo: the bracket holds none
     if pick.size:
-        at = [r * pick.size // n for r in ranks]
         reach = 4 * int(np.sqrt(pick.size)) + 2
-        low, high = pick[max(at[0] - reach, 0)], pick[min(at[-1] + reach, pick.size - 1)]
-        below, inside = _bracketed(flat, lo, low, high, part)
-        if below <= ranks[0] and ranks[-1] < below + inside.size:
-            return _middle(np.partition(inside, [r - below for r in ranks]), [r - below for r in ranks])
+        low = pick[max((pick.size - 1) // 2 - reach, 0)]
+        high = pick[min(pick.size // 2 + reach, pick.size - 1)]
+    n, below, inside = _bracketed(flat, lo, low, high, part)
+    if n == 0:
+        return None
+    ranks = sorted({(n - 1) // 2, n // 2})
+    if below <= ranks[0] and ranks[-1] < below + inside.size:
+        return _middle(np.partition(inside, [r - below for r in ranks]), [r - below for r in ranks])
     dark = flat[flat > lo]
     return _middle(np.partition(dark, ranks), ranks)
 
@@ -288,28 +289,21 @@ def _middle(part, ranks):
     return float(np.mean(part[ranks]))
 
 
-def _count_above(flat, lo, part):
-    """How many values of `flat` are above `lo`, `part` values at a time on every core."""
-    counts = []
-    on_cores(lambda rows: counts.append(sum(int(np.count_nonzero(flat[i:min(i + part, rows.stop)] > lo))
-                                            for i in range(rows.start, rows.stop, part))),
-             flat.size, flat.size, part)
-    return sum(counts)
-
-
 def _bracketed(flat, lo, low, high, part):
-    """``(below, inside)``: how many values of `flat` are above `lo` and below `low`, and the
-    values from `low` to `high` (``lo < low``)."""
-    below, inside = [], []
+    """``(above, below, inside)``: how many values of `flat` are above `lo`, how many of
+    those are below `low`, and the values from `low` to `high` (``lo < low``)."""
+    above, below, inside = [], [], []
 
     def run(rows):
         for i in range(rows.start, rows.stop, part):
             x = flat[i:min(i + part, rows.stop)]
-            below.append(int(np.count_nonzero(x > lo)) - int(np.count_nonzero(x >= low)))
+            n = int(np.count_nonzero(x > lo))
+            above.append(n)
+            below.append(n - int(np.count_nonzero(x >= low)))
             inside.append(x[(x >= low) & (x <= high)])
 
     on_cores(run, flat.size, flat.size, part)
-    return sum(below), np.concatenate(inside)
+    return sum(above), sum(below), np.concatenate([flat[:0], *inside])   # (none: an empty flat)
 
 
 #: :func:`detail_fields`' defaults: the factor on the relative detail, and the blur (px) of

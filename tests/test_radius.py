@@ -101,12 +101,13 @@ def test_detail_ell_is_the_scale_of_the_masked_copy(h, w, seed, kind):
 
 @settings(max_examples=200)
 @given(st.integers(0, 3000), st.integers(0, 2**32 - 1),
-       st.sampled_from(["random", "levels", "ties", "skewed", "sorted", "nan"]),
+       st.sampled_from(["random", "levels", "ties", "skewed", "sorted", "nan", "inf"]),
        st.integers(1, 300), st.integers(1, 200), st.integers(1, 4), st.sampled_from([-1.0, 0.05, 0.5]))
 def test_median_above_is_numpys_median_of_the_masked_copy(size, seed, kind, part, sample, cores, lo):
     """The bracketed median is np.median of the values above `lo`, bit for bit: runs of
     any length on one to four cores, samples from one value (brackets that miss the
-    median's rank, and fall back) to many, ties at the median, NaN (never above `lo`)."""
+    median's rank, and fall back) to many, ties at the median, NaN (never above `lo`),
+    infinities (a sample with none above `lo` brackets them alone)."""
     from unittest import mock
 
     from diskpack_cl.radii import median_above
@@ -115,7 +116,8 @@ def test_median_above_is_numpys_median_of_the_masked_copy(size, seed, kind, part
     x = {"random": lambda: rng.random(size), "levels": lambda: rng.integers(0, 4, size) / 3.0,
          "ties": lambda: np.where(rng.random(size) < 0.5, 0.5, rng.random(size)),
          "skewed": lambda: rng.random(size) ** 8, "sorted": lambda: np.sort(rng.random(size)),
-         "nan": lambda: np.where(rng.random(size) < 0.2, np.nan, rng.random(size))}[kind]()
+         "nan": lambda: np.where(rng.random(size) < 0.2, np.nan, rng.random(size)),
+         "inf": lambda: np.where(rng.random(size) < 0.1, np.inf, rng.random(size))}[kind]()
     want = x[x > lo]
     with mock.patch("os.cpu_count", return_value=cores):
         got = median_above(x, lo, part=part, sample=sample)
