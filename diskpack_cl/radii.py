@@ -532,9 +532,11 @@ def largest_valid_k(points, r, width, height):
 
     Exact in float64 over all binding candidates: the edge constraints
     ``k r_i <= min(x_i, W - x_i, y_i, H - y_i)`` and every pair with
-    ``d_ij <= k_u (r_i + r_j)``, where ``k_u`` is an upper bound from the
-    nearest neighbours; pairs are found with cKDTrees per radius octave, so
-    the search stays local even when the radii vary by orders of magnitude.
+    ``d_ij <= k_u (r_i + r_j)``, where ``k_u`` is an upper bound from
+    consecutive points and a sample's nearest neighbours; pairs are found
+    with cKDTrees per radius octave, so the search stays local even when the
+    radii vary by orders of magnitude. Every ratio is ``np.hypot``'s, as a
+    brute force over all pairs computes it.
 
     Returns
     -------
@@ -552,6 +554,35 @@ def largest_valid_k(points, r, width, height):
     return _largest_valid_k(points, r, width, height)[0]
 
 
+#: Points whose nearest neighbours bound :func:`largest_valid_k`'s pair search whatever
+#: the points' order (:func:`_pair_bound`).
+BOUND_SAMPLE = 4096
+
+
+def _pair_bound(p, r, classes, trees):
+    """An upper bound of the least ``d_ij / (r_i + r_j)``: the least ratio of the pairs of
+    consecutive points and of a seeded sample's nearest neighbours in each octave.
+
+    Any pair's ratio bounds the least one; the bound sets how far the octaves' search
+    reaches. Consecutive points are neighbours where the points come in a spatial order
+    (a stippling's, row by row from the error diffusion: there the binding pair is often
+    among them), and the sample keeps the bound among the lowest ratios in any order.
+    Each ratio is the exact pair search's own (``np.hypot``), so that the least is the
+    same whichever pairs it comes from.
+    """
+    d = np.diff(p, axis=0)
+    bound = float(np.min(np.hypot(d[:, 0], d[:, 1]) / (r[1:] + r[:-1])))
+    sample = np.random.default_rng(0).integers(0, len(p), min(BOUND_SAMPLE, len(p)))
+    for c, tree in zip(classes, trees):
+        _, jj = tree.query(p[sample], k=min(2, len(c)))
+        # the two nearest: one is the point itself where it is of this octave
+        for j in c[np.asarray(jj).reshape(len(sample), -1).T]:
+            i, j = sample[j != sample], j[j != sample]
+            ratio = np.hypot(p[i, 0] - p[j, 0], p[i, 1] - p[j, 1]) / (r[i] + r[j])
+            bound = min(bound, float(np.min(ratio, initial=np.inf)))
+    return bound
+
+
 def _largest_valid_k(points, r, width, height):
     """:func:`largest_valid_k` and the octaves it searched: ``(k, (classes, trees,
     searched))`` (:func:`~diskpack_cl.geometry.radius_octaves` of `r`, a cKDTree of each
@@ -566,12 +597,10 @@ def _largest_valid_k(points, r, width, height):
         return max(k, 0.0), None
     classes = radius_octaves(r)
     rmax = [r[c].max() for c in classes]
-    # the tree of all points and those of the octaves at once, on every core (cKDTree
-    # releases the GIL)
+    # the octaves' trees at once, on every core (cKDTree releases the GIL)
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-        tree, *trees = pool.map(lambda c: cKDTree(p[c]), [slice(None), *classes])
-    d, j = tree.query(p, k=2, workers=-1)
-    k = min(k, float(np.min(d[:, 1] / (r + r[j[:, 1]]))))
+        trees = list(pool.map(lambda c: cKDTree(p[c]), classes))
+    k = min(k, _pair_bound(p, r, classes, trees))
     if k <= 0:
         return 0.0, None
 

@@ -135,6 +135,38 @@ def test_largest_valid_k_matches_brute_force():
     assert k == k_bf
 
 
+@settings(max_examples=150)
+@given(st.integers(2, 120), st.integers(0, 2**32 - 1),
+       st.sampled_from(["random", "lattice", "clusters", "coincident", "border"]),
+       st.sampled_from(["as made", "shuffled", "reversed"]), st.floats(0.0, 6.0))
+def test_largest_valid_k_is_the_brute_force_least_ratio(n, seed, kind, order, spread):
+    """largest_valid_k is the least of the edge ratios and of every pair's ratio, the same
+    float as a brute force over all pairs, whatever the points' order (the bound of its
+    pair search comes from consecutive points and a sample's neighbours): lattices,
+    clusters, coincident points and points on the border (k = 0), radii over many octaves."""
+    rng = np.random.default_rng(seed)
+    if kind == "lattice":
+        side = int(np.ceil(np.sqrt(n)))
+        p = 1.0 + 2.0 * np.column_stack(np.divmod(np.arange(n), side)).astype(float)
+    elif kind == "clusters":
+        p = rng.uniform(5, 45, (3, 2))[rng.integers(0, 3, n)] + rng.normal(0, 0.01, (n, 2))
+    else:
+        p = rng.uniform(1, 49, (n, 2))
+    if kind == "coincident":
+        p[rng.integers(0, n)] = p[rng.integers(0, n)]
+    if kind == "border":
+        p[rng.integers(0, n), 0] = 0.0
+    r = 2.0 ** -rng.uniform(0, spread, n)
+    at = {"as made": np.arange(n), "shuffled": rng.permutation(n), "reversed": np.arange(n)[::-1]}[order]
+    p, r = p[at], r[at]
+    side = max(50.0, float(p.max()) + 1.0)
+    d = np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    edge = np.minimum.reduce([p[:, 0], side - p[:, 0], p[:, 1], side - p[:, 1]])
+    brute = min(float(np.min(d / (r[:, None] + r[None, :]))), float(np.min(edge / r)))
+    assert largest_valid_k(p, r, side, side) == max(brute, 0.0)
+
+
 # ---------------------------------------------------------------- stipple
 
 
