@@ -22,7 +22,7 @@ from .options import NamedOptionError
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
            "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_png_memory",
            "check_poisson_memory",
-           "check_stipple_memory", "drop_pages", "freed_memory_kept", "give_back", "PageReserve"]
+           "check_stipple_memory", "drop_pages", "freed_memory_kept", "give_back", "PageReserve", "share_main_arena"]
 
 # Peak bytes per unit of a stippling run (default schedule; PNG writer)
 HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
@@ -65,7 +65,7 @@ def available_memory():
 
 # glibc's mallopt parameters, and the thresholds its dynamic ones reach on
 # 64-bit systems (DEFAULT_MMAP_THRESHOLD_MAX and twice that)
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD, _M_ARENA_MAX = -1, -3, -8
 _MADV_DONTNEED = 4   # Linux
 _MMAP_AFTER, _TRIM_AFTER = 32 << 20, 64 << 20
 _KEEP = 2**31 - 1   # mallopt takes an int
@@ -75,12 +75,43 @@ _kept = {"libc": None, "advice": None}
 def _glibc():
     """The C library when it is glibc (it has mallopt and malloc_trim), else None."""
     if _kept["libc"] is None:
-        try:
-            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-            _kept["libc"] = libc if hasattr(libc, "malloc_trim") and hasattr(libc, "mallopt") else False
-        except OSError:
-            _kept["libc"] = False
+        _kept["libc"] = _load_glibc() or False
     return _kept["libc"] or None
+
+
+def _load_glibc():
+    """glibc by its name (no ``ldconfig`` run: 17 ms), else the C library ctypes finds, where
+    it is glibc (it has mallopt and malloc_trim); else None."""
+    for name in ("libc.so.6", None):
+        try:
+            libc = ctypes.CDLL(name or ctypes.util.find_library("c") or "libc.so.6")
+        except OSError:
+            continue
+        if hasattr(libc, "malloc_trim") and hasattr(libc, "mallopt"):
+            return libc
+    return None
+
+
+def share_main_arena():
+    """Have the threads started from now on allocate from glibc's main arena.
+
+    glibc gives a new thread an arena of heaps of its own, and hands a heap
+    back to the system as soon as all of it is free, whatever
+    :func:`freed_memory_kept` asks: the arrays that the worker threads of a
+    stippling's steps make and drop would pay all their page faults again at
+    every step.  In the main arena they take the pages the block keeps.
+    glibc fixes its limit of arenas when it first needs one more, so the
+    setting holds for the rest of the process (the command line sets it
+    before the OpenCL driver starts its threads; :func:`freed_memory_kept`
+    sets it too).  With another C library it does nothing.
+
+    Examples
+    --------
+    >>> share_main_arena()
+    """
+    libc = _glibc()
+    if libc is not None:
+        libc.mallopt(_M_ARENA_MAX, ctypes.c_int(1))
 
 
 def _set_thresholds(libc, mmap_bytes, trim_bytes):
@@ -109,6 +140,7 @@ def _keep_freed():
     libc = _glibc()
     if libc is not None:
         _set_thresholds(libc, _KEEP, _KEEP)
+        share_main_arena()
 
 
 def _give_freed_back():

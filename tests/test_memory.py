@@ -88,6 +88,45 @@ def test_a_page_reserve_outside_the_block_reserves_nothing():
     assert _rss() - before < 32 * MIB
 
 
+_THREAD_CHURN = """
+import threading
+import numpy as np
+from diskpack_cl import memory
+
+def faults():
+    with open("/proc/self/stat") as f:
+        return int(f.read().rsplit(")", 1)[1].split()[7])
+
+def churn():
+    a = np.ones(100 << 17)   # 100 MiB, every page written
+    del a
+
+with memory.freed_memory_kept():
+    counts = []
+    for _ in range(3):
+        before = faults()
+        t = threading.Thread(target=churn)
+        t.start()
+        t.join()
+        counts.append(faults() - before)
+print(*counts)
+"""
+
+
+def test_arrays_of_new_threads_reuse_the_kept_pages():
+    """Inside the block each new thread's array takes the pages the last one freed (glibc
+    would give each thread an arena of its own and unmap its freed heaps: a stippling's
+    worker threads paid their page faults again every step). In a fresh process: glibc
+    fixes its arena limit once."""
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", _THREAD_CHURN], capture_output=True, text=True,
+                         check=True).stdout
+    first, *again = map(int, out.split())
+    assert first > 20_000   # 100 MiB of fresh pages
+    assert max(again) < first // 10
+
+
 class _Mallopt:
     """A C library that records the thresholds set through mallopt."""
 
@@ -102,13 +141,15 @@ class _Mallopt:
 
 
 def test_leaving_the_block_restores_each_threshold(monkeypatch):
-    """glibc's mmap threshold 32 MiB and trim threshold 64 MiB, not the other way round."""
+    """glibc's mmap threshold 32 MiB and trim threshold 64 MiB, not the other way round; the
+    one arena stays (glibc fixes its arena limit once)."""
     libc = _Mallopt()
     monkeypatch.setitem(memory._kept, "libc", libc)
     with memory.freed_memory_kept():
         assert libc.set == {memory._M_MMAP_THRESHOLD: memory._KEEP,
-                            memory._M_TRIM_THRESHOLD: memory._KEEP}
-    assert libc.set == {-3: 32 * MIB, -1: 64 * MIB}   # M_MMAP_THRESHOLD, M_TRIM_THRESHOLD
+                            memory._M_TRIM_THRESHOLD: memory._KEEP, memory._M_ARENA_MAX: 1}
+    # M_MMAP_THRESHOLD, M_TRIM_THRESHOLD, M_ARENA_MAX
+    assert libc.set == {-3: 32 * MIB, -1: 64 * MIB, -8: 1}
 
 
 def _numpy_switch():

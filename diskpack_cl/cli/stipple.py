@@ -11,6 +11,7 @@ from ._common import (PROG, UsageError, terminal_bar, checked_outputs, device_op
                       command_run, note_fallbacks, where_ran)
 from ._drawing import drawing_options, write_and_report
 from diskpack_cl.image import ToneOptions
+from diskpack_cl.memory import share_main_arena
 from ._help import lead_with, with_examples
 from diskpack_cl.options import add_arguments, changed, flag_name, from_namespace
 
@@ -152,6 +153,7 @@ def _refuse_mixed(args, options, tone, write, separation):
 
 
 def _run_stipple(args):
+    share_main_arena()   # before the OpenCL driver's threads: the steps' arrays reuse their pages
     options, tone, write, color = _stipple_objects(args)
     separation = color.separation()
     _refuse_mixed(args, options, tone, write, separation)
