@@ -576,8 +576,9 @@ def _pair_bound(p, r, classes, trees):
     for c, tree in zip(classes, trees):
         _, jj = tree.query(p[sample], k=min(2, len(c)))
         # the two nearest: one is the point itself where it is of this octave
-        for j in c[np.asarray(jj).reshape(len(sample), -1).T]:
-            i, j = sample[j != sample], j[j != sample]
+        for near in c[np.asarray(jj).reshape(len(sample), -1).T]:
+            other = near != sample
+            i, j = sample[other], near[other]
             ratio = np.hypot(p[i, 0] - p[j, 0], p[i, 1] - p[j, 1]) / (r[i] + r[j])
             bound = min(bound, float(np.min(ratio, initial=np.inf)))
     return bound
