@@ -585,6 +585,13 @@ def _crowded(X, domain):
     col = np.fmin(np.fmax(X[:, 0] * (nx / domain.width), 0), nx - 1).astype(np.int64)
     row = np.fmin(np.fmax(X[:, 1] * (ny / domain.height), 0), ny - 1).astype(np.int64)
     cells = row * nx + col
+    # first whether every point has a cell of its own: a mark a cell (a byte; no count,
+    # and no read back at every point): 7.5 against 17 ms at 1M, 10 against 107 ms in a
+    # process's first call (the counts' 32 MB of fresh pages)
+    taken = np.zeros(nx * ny, np.bool_)
+    taken[cells] = True
+    if np.count_nonzero(taken) == len(cells):
+        return np.zeros(len(cells), np.bool_)
     return np.bincount(cells, minlength=nx * ny)[cells] > 1
 
 
