@@ -615,6 +615,56 @@ def test_tile_layouts_skip_no_owner_among_dense_sites(ctx, periodic, n, seed, he
         np.testing.assert_allclose(mass, want, rtol=0, atol=1e-6 * max(want.max(), 1))
 
 
+@settings(max_examples=15)
+@given(periodic=st.booleans(), n=st.integers(200, 2500), seed=st.integers(0, 2**32 - 1),
+       heavy=st.integers(1, 4), reach=st.sampled_from([3.0, 8.0, 15.0]),
+       lanes=st.sampled_from([8, 16]))
+def test_tile_layouts_see_heavy_sites_beyond_the_near_rings(ctx, periodic, n, seed, heavy, reach, lanes):
+    """A few sites far heavier than the rest (a picture's largest dots) own grid
+    cells `reach` spacings away, past the NEAR_RINGS buckets of a tile's
+    near_wmax (power_gather.h): the tile walks, which stop where the nearby
+    weights and those beyond pass no site, must still find them, and give the
+    item layout's labels bit for bit (and the one-pass sums its masses)."""
+    from diskpack_cl.device.raster import NEAR_RINGS, PowerRaster
+
+    if lanes == 16 and not _wide(ctx):
+        lanes = 8
+    rng = np.random.default_rng(seed)
+    dom = Domain.torus() if periodic else Domain.rect(float(rng.integers(20, 90)), float(rng.integers(20, 90)))
+    pts = rng.random((n, 2)) * (dom.width, dom.height)
+    spacing = np.sqrt(dom.area / n)
+    w = (0.3 * spacing * rng.random(n)) ** 2
+    w[rng.choice(n, heavy, replace=False)] = (reach * spacing) ** 2
+    side = np.sqrt(n * 6 / dom.area)
+    shape = (max(4, int(side * dom.height)), max(4, int(side * dom.width)))
+    dens = rng.random(shape)
+    item = PowerRaster(dom, shape, device=ctx, layout="item").compute(pts, w, distance=False).labels.copy()
+    tile = PowerRaster(dom, shape, device=ctx, layout="tile", lanes=lanes)
+    assert NEAR_RINGS > 0 and np.array_equal(tile.compute(pts, w, distance=False).labels, item)
+    if tile._k_fused is not None:
+        _, mass = tile.centroids(pts, w, dens)
+        want = np.bincount(item.ravel(), dens.ravel(), minlength=n)
+        np.testing.assert_allclose(mass, want, rtol=0, atol=1e-6 * max(want.max(), 1))
+
+
+@pytest.mark.parametrize("shape", [(707, 707), (3, 5), (1, 1), (10, 2), (1, 9)])
+@pytest.mark.parametrize("k", [0, 1, 2, 4, 5])
+@pytest.mark.parametrize("periodic", [False, True])
+def test_near_max_is_a_maximum_filter(shape, k, periodic):
+    """near_max (the host's near_wmax of the tile walks) is scipy's maximum filter over
+    2k + 1 cells, -inf past a rectangle's edges and wrapped on a torus, even where the
+    window is wider than the grid."""
+    from scipy.ndimage import maximum_filter
+    from diskpack_cl.device.raster import near_max
+
+    rng = np.random.default_rng(k)
+    a = rng.random(shape).astype(np.float32)
+    a[rng.random(shape) < 0.2] = -np.inf
+    want = maximum_filter(a, size=2 * k + 1, mode="wrap" if periodic else "constant", cval=-np.inf)
+    got = near_max(a, k, periodic)
+    assert got.dtype == a.dtype and np.array_equal(got, want)
+
+
 @settings(max_examples=10)
 @given(seed=st.integers(0, 2**32 - 1), periodic=st.booleans(), n=st.integers(2, 400))
 def test_started_centroids_are_the_centroids(ctx, seed, periodic, n):

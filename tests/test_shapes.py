@@ -17,7 +17,7 @@ def test_bucket_grid_is_square_and_covers_a_rectangle(ctx, width, height):
 
     pr = PowerRaster(Domain.rect(width, height), (4, 4), device=ctx)
     pts = np.random.default_rng(0).random((100, 2)) * (width, height)
-    order, start, _, (nbx, nby, bw, bh) = pr._buckets(pts, np.zeros(100, np.float32))
+    order, start, _, _, (nbx, nby, bw, bh) = pr._buckets(pts, np.zeros(100, np.float32))
     assert bw == bh
     assert nbx * bw >= width and nby * bh >= height
     assert (nbx - 1) * bw < width and (nby - 1) * bh < height

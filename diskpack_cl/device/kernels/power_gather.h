@@ -6,7 +6,9 @@
  * Build-time switches: PERIODIC (common.h); TW, the CPU tile's lanes (8 or
  * 16, see tile_owners); CAP, power_labels' local candidate list
  * (default 256; longer lists are streamed in chunks; the CPU tiles scan
- * their candidates as they find them and keep no list).
+ * their candidates as they find them and keep no list); NEAR_RINGS, the
+ * rings of the host's near_wmax (0: the CPU tiles' walks bound the weights
+ * of the rings left by wmax alone, see gather).
  */
 #ifndef DISKPACK_POWER_GATHER_H
 #define DISKPACK_POWER_GATHER_H
@@ -16,6 +18,10 @@
 
 #ifndef CAP
 #define CAP 256
+#endif
+
+#ifndef NEAR_RINGS
+#define NEAR_RINGS 0
 #endif
 
 #define GATHER_OWNER 0
@@ -91,6 +97,7 @@ struct tile_scan {
     float pad;            /* rounding pad of the bounds (tile_bound's) */
     float reach;          /* candidates with boxdist^2 - w above it own no grid cell */
     int seen;             /* candidates scanned */
+    __global const float *near_wmax;   /* largest weight within NEAR_RINGS buckets of each */
 };
 
 /* One candidate at (xs, ys) with weight wc and index id, scanned over the
@@ -122,6 +129,23 @@ inline float boxbox2(float ax0, float ay0, float ax1, float ay1,
     return dx * dx + dy * dy;
 }
 
+/* Distance from the tile [x0,x1] x [y0,y1] to the buckets of rings >= r
+ * (r > 0) around its bucket block [bx0,bx1] x [by0,by1]; in a rectangle a
+ * side past the grid's edge has no buckets left, and no bound. */
+inline float ring_gap(int r, int bx0, int by0, int bx1, int by1, float x0, float y0,
+                      float x1, float y1, int nbx, int nby, float bw, float bh)
+{
+    float gl = x0 - (bx0 - r + 1) * bw, gr = (bx1 + r) * bw - x1;
+    float gb = y0 - (by0 - r + 1) * bh, gt = (by1 + r) * bh - y1;
+#if !PERIODIC
+    if (bx0 - r < 0) gl = INFINITY;
+    if (bx1 + r >= nbx) gr = INFINITY;
+    if (by0 - r < 0) gb = INFINITY;
+    if (by1 + r >= nby) gt = INFINITY;
+#endif
+    return FMIN(FMIN(gl, gr), FMIN(gb, gt));
+}
+
 /* Rings a gather walks at most.  A rectangle's rings leave the grid after
  * max(nbx, nby) + 1.  On a torus the bound U (tile_bound) reaches from the
  * tile's far corner to a runner-up found up to half the grid away, and the
@@ -146,7 +170,13 @@ inline int gather_limit(int nbx, int nby, int span)
  *   GATHER_SCAN:  boxdist^2 - w <= scan->reach, each such site scanned at
  *                 once (scan_site) and no list kept: the reach tightens as
  *                 the rings go out (every REACH_EVERY sites and at each
- *                 ring's end), and the walk stops at it */
+ *                 ring's end), and the walk stops at it.  With NEAR_RINGS,
+ *                 the walk also stops at a ring r <= NEAR_RINGS where the
+ *                 weights left within NEAR_RINGS rings (near_wmax, at most
+ *                 wnear) and those beyond (at most wmax, at ring
+ *                 NEAR_RINGS + 1's gap) pass no site: a picture's few
+ *                 largest dots set wmax, and made every tile walk the rings
+ *                 out to their radius */
 inline int gather(int mode, float bound, float bound2, int skip,
                   float x0, float y0, float x1, float y1,
                   __global const float2 *site, __global const float *weight,
@@ -161,23 +191,33 @@ inline int gather(int mode, float bound, float bound2, int skip,
     const int by0 = iclamp((int)FLOOR(y0 / bh), -(1 << 20), 1 << 20);
     const int bx1 = (int)FLOOR(x1 / bw), by1 = (int)FLOOR(y1 / bh);
     const int rmax = gather_limit(nbx, nby, imax(bx1 - bx0, by1 - by0));
+#if NEAR_RINGS
+    /* the largest weight within NEAR_RINGS rings of the block, and the gap
+       to the rings beyond (GATHER_SCAN) */
+    float wnear = wmax, gfar = 0.0f;
+    if (mode == GATHER_SCAN) {
+        wnear = -INFINITY;
+        for (int cy0 = by0; cy0 <= by1; ++cy0)
+            for (int cx0 = bx0; cx0 <= bx1; ++cx0) {
+                int cx = cx0, cy = cy0;
+                float sx, sy;
+                if (locate_bucket(&cx, &cy, &sx, &sy, nbx, nby, W, H))
+                    wnear = FMAX(wnear, scan->near_wmax[cy * nbx + cx]);
+            }
+        gfar = ring_gap(NEAR_RINGS + 1, bx0, by0, bx1, by1, x0, y0, x1, y1, nbx, nby, bw, bh);
+    }
+#endif
     int total = 0;
     int r = 0;
     for (; r <= rmax; ++r) {
         if (r > 0) {
-            /* distance from the tile to buckets of ring >= r */
-            float gl = x0 - (bx0 - r + 1) * bw, gr = (bx1 + r) * bw - x1;
-            float gb = y0 - (by0 - r + 1) * bh, gt = (by1 + r) * bh - y1;
-#if !PERIODIC
-            /* a side past the grid's edge has no buckets left: no bound */
-            if (bx0 - r < 0) gl = INFINITY;
-            if (bx1 + r >= nbx) gr = INFINITY;
-            if (by0 - r < 0) gb = INFINITY;
-            if (by1 + r >= nby) gt = INFINITY;
-#endif
-            const float gap = FMIN(FMIN(gl, gr), FMIN(gb, gt));
+            const float gap = ring_gap(r, bx0, by0, bx1, by1, x0, y0, x1, y1, nbx, nby, bw, bh);
             if (gap > 0.0f) {
                 if (mode != GATHER_DIST && gap * gap - wmax > lim) break;
+#if NEAR_RINGS
+                if (mode == GATHER_SCAN && r <= NEAR_RINGS && gap * gap - wnear > lim
+                    && gfar * gfar - wmax > lim) break;
+#endif
                 if (mode == GATHER_DIST && gap > bound + SQRT(FMAX(bound2 + wmax, 0.0f))) break;
             }
 #if !PERIODIC
@@ -299,6 +339,7 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
     __global const int *site_id,        /* sorted position -> caller's index */ \
     __global const int *bucket_start,   /* nbx*nby + 1 offsets into site[] */ \
     __global const float *bucket_wmax,  /* largest weight in each bucket */ \
+    __global const float *near_wmax,    /* largest within NEAR_RINGS buckets of each (-inf: none) */ \
     const int nbx, const int nby,       /* bucket grid size */ \
     const float bw, const float bh,     /* bucket size */ \
     const float W, const float H,       /* domain size */ \
@@ -306,7 +347,7 @@ inline float tile_bound(float x0, float y0, float x1, float y1, float pad,
     const int nx, const int ny          /* raster size */
 
 /* The arguments of LABEL_ARGS, passed on. */
-#define LABEL_PASS site, weight, site_id, bucket_start, bucket_wmax, nbx, nby, bw, bh, W, H, wmax, nx, ny
+#define LABEL_PASS site, weight, site_id, bucket_start, bucket_wmax, near_wmax, nbx, nby, bw, bh, W, H, wmax, nx, ny
 
 /* Owners of the tile whose first grid cell is (gx0, gy0): best_id[r] holds
  * row r's, caller's indices (lanes past the raster repeat its last column).
@@ -325,6 +366,7 @@ inline void tile_owners(int gx0, int gy0, LABEL_ARGS, __global int *status, intT
     t.pad = 1e-4f * (hx * hx + hy * hy);
     t.reach = INFINITY;
     t.seen = 0;
+    t.near_wmax = near_wmax;
     /* columns past the raster shadow its last column */
     t.px = (convert_floatT(min(gx0 + LANES, (intT)(nx - 1))) + 0.5f) * hx;
     for (int r = 0; r < TH; ++r) {
