@@ -861,3 +861,68 @@ def test_an_empty_cell_whose_centre_lies_far_away_ends(ctx):
     proc = subprocess.run([sys.executable, "-c", _EMPTY_FAR], capture_output=True, text=True,
                           timeout=300)
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-3000:]
+
+
+_REPLACE_PROBE = """
+/* replace_slackest on a list the host fills: where the new constraint (code 12345)
+ * went, -1 where it found no place */
+__kernel void probe_replace(__global const double *nx, __global const double *ny,
+                            __global const double *be, __global const int *code, const int m,
+                            __global const int *basis, __global const double *zin,
+                            const double sl, __global int *out)
+{
+    clist L;
+    for (int k = 0; k < m; ++k) {
+        L.nx[k] = nx[k]; L.ny[k] = ny[k]; L.be[k] = be[k]; L.d[k] = 1.0; L.code[k] = code[k];
+    }
+    L.m = m; L.raw = m;
+    const int b[3] = {basis[0], basis[1], basis[2]};
+    const double z[3] = {zin[0], zin[1], zin[2]};
+    int pos = -1;
+    if (replace_slackest(&L, b, z, sl, 3.0, 4.0, 25.0, 0.0, 0.0, 12345))
+        for (int k = 0; k < m; ++k) pos = L.code[k] == 12345 ? k : pos;
+    out[0] = pos;
+}
+"""
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_full_list_evicts_its_slackest_non_basic_site(ctx, seed):
+    """replace_slackest (cells.cl) puts the new constraint in place of the non-basic site
+    (code >= 0) with the most slack, when that has more than the new one, the lowest
+    position on ties; its two lanes of even and odd positions must merge to exactly
+    that.  Slacks drawn from a few values, so that ties and equal lane maxima are common,
+    on lists of both parities."""
+    import pyopencl as cl
+
+    from diskpack_cl.device import programs as _kernels
+    from diskpack_cl.device.cells import MAXC, MAXNEAR
+    from diskpack_cl.device.programs import kernel_dir
+
+    defines = {"INLINE_MATH": _kernels.inline_math(ctx), "PERIODIC": 0, "MAXC": MAXC,
+               "MAXNEAR": MAXNEAR}
+    src = (kernel_dir() / "cells.cl").read_text() + _REPLACE_PROBE
+    opts = ["-I", str(kernel_dir())] + [f"-D{k}={v}" for k, v in defines.items()]
+    probe = cl.Program(ctx, src).build(options=opts).probe_replace
+    queue = cl.CommandQueue(ctx)
+    mf = cl.mem_flags
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        m = int(rng.integers(4, MAXC + 1))
+        nx, ny = np.zeros(m), np.zeros(m)
+        z = np.array([0.0, 0.0, 1.0])
+        be = 1.0 + rng.integers(0, 4, m).astype(float)      # slack be - 1: 0, 1, 2 or 3
+        code = np.where(rng.random(m) < 0.15, -1 - rng.integers(0, 7, m), 9 * np.arange(m) + 4)
+        basis = rng.choice(np.arange(3, m), size=min(3, m - 3), replace=False)
+        basis = np.concatenate([basis, [0, 1, 2]])[:3].astype(np.int32)
+        sl = float(rng.integers(-1, 3))
+        slack = be - 1.0
+        ok = (np.arange(m) >= 3) & (code >= 0) & ~np.isin(np.arange(m), basis) & (slack > sl)
+        want = int(np.flatnonzero(ok & (slack == slack[ok].max()))[0]) if ok.any() else -1
+        bufs = [cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=a) for a in
+                (nx, ny, be, code.astype(np.int32), basis, z)]
+        out = np.zeros(1, np.int32)
+        obuf = cl.Buffer(ctx, mf.WRITE_ONLY, out.nbytes)
+        probe(queue, (1,), None, *bufs[:4], np.int32(m), bufs[4], bufs[5], np.float64(sl), obuf)
+        cl.enqueue_copy(queue, out, obuf)
+        assert out[0] == want, (m, sl, slack.tolist(), code.tolist(), basis.tolist())
