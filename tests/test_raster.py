@@ -584,6 +584,31 @@ def test_power_ties_go_to_the_lowest_index(ctx, order, layout, lanes):
     assert np.all(lab[:, :2] == left) and np.all(lab[:, 3:] == 1 - left)
 
 
+def _random_sites(rng, periodic, n):
+    """``(domain, points, spacing)``: n uniform sites on the torus or a random rectangle."""
+    dom = Domain.torus() if periodic else Domain.rect(float(rng.integers(20, 90)), float(rng.integers(20, 90)))
+    return dom, rng.random((n, 2)) * (dom.width, dom.height), np.sqrt(dom.area / n)
+
+
+def _tile_layout_matches_item(ctx, rng, dom, pts, w, per_site, lanes):
+    """The tile layout's labels on a raster of about `per_site` grid cells a site are the
+    item layout's bit for bit, and its one-pass sums' masses those of the item labels."""
+    from diskpack_cl.device.raster import PowerRaster
+
+    if lanes == 16 and not _wide(ctx):
+        lanes = 8
+    side = np.sqrt(len(pts) * per_site / dom.area)
+    shape = (max(4, int(side * dom.height)), max(4, int(side * dom.width)))
+    dens = rng.random(shape)
+    item = PowerRaster(dom, shape, device=ctx, layout="item").compute(pts, w, distance=False).labels.copy()
+    tile = PowerRaster(dom, shape, device=ctx, layout="tile", lanes=lanes)
+    assert np.array_equal(tile.compute(pts, w, distance=False).labels, item)
+    if tile._k_fused is not None:
+        _, mass = tile.centroids(pts, w, dens)
+        want = np.bincount(item.ravel(), dens.ravel(), minlength=len(pts))
+        np.testing.assert_allclose(mass, want, rtol=0, atol=1e-6 * max(want.max(), 1))
+
+
 @settings(max_examples=15)
 @given(periodic=st.booleans(), n=st.integers(50, 2500), seed=st.integers(0, 2**32 - 1),
        heavy=st.sampled_from([0.0, 0.4, 1.2]), per_site=st.sampled_from([2, 6, 21]),
@@ -594,25 +619,10 @@ def test_tile_layouts_skip_no_owner_among_dense_sites(ctx, periodic, n, seed, he
     the reach starts infinite); among many sites, where most are skipped,
     their labels stay bit for bit those of the item layout, which scans every
     candidate, and the masses of the one-pass sums those of its labels."""
-    from diskpack_cl.device.raster import PowerRaster
-
-    if lanes == 16 and not _wide(ctx):
-        lanes = 8
     rng = np.random.default_rng(seed)
-    dom = Domain.torus() if periodic else Domain.rect(float(rng.integers(20, 90)), float(rng.integers(20, 90)))
-    pts = rng.random((n, 2)) * (dom.width, dom.height)
-    spacing = np.sqrt(dom.area / n)
+    dom, pts, spacing = _random_sites(rng, periodic, n)
     w = (heavy * spacing * rng.random(n)) ** 2
-    side = np.sqrt(n * per_site / dom.area)
-    shape = (max(4, int(side * dom.height)), max(4, int(side * dom.width)))
-    dens = rng.random(shape)
-    item = PowerRaster(dom, shape, device=ctx, layout="item").compute(pts, w, distance=False).labels.copy()
-    tile = PowerRaster(dom, shape, device=ctx, layout="tile", lanes=lanes)
-    assert np.array_equal(tile.compute(pts, w, distance=False).labels, item)
-    if tile._k_fused is not None:
-        _, mass = tile.centroids(pts, w, dens)
-        want = np.bincount(item.ravel(), dens.ravel(), minlength=n)
-        np.testing.assert_allclose(mass, want, rtol=0, atol=1e-6 * max(want.max(), 1))
+    _tile_layout_matches_item(ctx, rng, dom, pts, w, per_site, lanes)
 
 
 @settings(max_examples=15)
@@ -625,26 +635,14 @@ def test_tile_layouts_see_heavy_sites_beyond_the_near_rings(ctx, periodic, n, se
     near_wmax (power_gather.h): the tile walks, which stop where the nearby
     weights and those beyond pass no site, must still find them, and give the
     item layout's labels bit for bit (and the one-pass sums its masses)."""
-    from diskpack_cl.device.raster import NEAR_RINGS, PowerRaster
+    from diskpack_cl.device.raster import NEAR_RINGS
 
-    if lanes == 16 and not _wide(ctx):
-        lanes = 8
     rng = np.random.default_rng(seed)
-    dom = Domain.torus() if periodic else Domain.rect(float(rng.integers(20, 90)), float(rng.integers(20, 90)))
-    pts = rng.random((n, 2)) * (dom.width, dom.height)
-    spacing = np.sqrt(dom.area / n)
+    dom, pts, spacing = _random_sites(rng, periodic, n)
     w = (0.3 * spacing * rng.random(n)) ** 2
     w[rng.choice(n, heavy, replace=False)] = (reach * spacing) ** 2
-    side = np.sqrt(n * 6 / dom.area)
-    shape = (max(4, int(side * dom.height)), max(4, int(side * dom.width)))
-    dens = rng.random(shape)
-    item = PowerRaster(dom, shape, device=ctx, layout="item").compute(pts, w, distance=False).labels.copy()
-    tile = PowerRaster(dom, shape, device=ctx, layout="tile", lanes=lanes)
-    assert NEAR_RINGS > 0 and np.array_equal(tile.compute(pts, w, distance=False).labels, item)
-    if tile._k_fused is not None:
-        _, mass = tile.centroids(pts, w, dens)
-        want = np.bincount(item.ravel(), dens.ravel(), minlength=n)
-        np.testing.assert_allclose(mass, want, rtol=0, atol=1e-6 * max(want.max(), 1))
+    assert NEAR_RINGS > 0
+    _tile_layout_matches_item(ctx, rng, dom, pts, w, 6, lanes)
 
 
 @pytest.mark.parametrize("shape", [(707, 707), (3, 5), (1, 1), (10, 2), (1, 9)])
