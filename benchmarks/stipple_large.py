@@ -9,7 +9,8 @@ options), or with --full the whole default schedule, and prints seconds per
 iteration by stage, the time to the certified result, and the peak resident
 memory of the process.  ``--command`` times the whole default run as a user
 gets it instead: ``diskpack stipple PICTURE.png -n N -o OUT.npz`` in a child
-process (the picture saved as a PNG in the temporary folder first), from
+process (the package's bytecode compiled first, as ``pip install .`` leaves
+it; the picture saved as a PNG in the temporary folder first), from
 the interpreter's start to its exit (loading, the start, every step, the
 certificate, writing the ``.npz``), its peak resident memory (``wait4``'s
 ``ru_maxrss`` of the child), where the time goes (the run's stages from its
@@ -43,7 +44,7 @@ from scipy.spatial import Voronoi
 from diskpack_cl.image import load_gray, sample_image_path
 from diskpack_cl.schedule import SCHEDULE_OPTIONS
 from diskpack_cl.stipple import stipple
-from perf_rows import append, count, medians, num
+from perf_rows import append, count, installed_bytecode, medians, num
 
 #: The engine's stages of the steps (their sum per step is the table's s/iter of a command row).
 ENGINE_STAGES = ("buckets", "device", "refine", "fallback", "raster_labels", "mic_estimate", "exact",
@@ -156,6 +157,7 @@ def main():
     ap.add_argument("--json", default=None, help="append the run as a JSON line to this file")
     args = ap.parse_args()
     if args.command:
+        installed_bytecode()
         append(args.json, command_row(args.size, args.n, args.label))
         return
     gray = np.asarray(picture(args.size), np.float64) / 255.0
