@@ -863,6 +863,22 @@ def test_an_empty_cell_whose_centre_lies_far_away_ends(ctx):
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-3000:]
 
 
+def _probe(ctx, source, name):
+    """Kernel `name` of cells.cl with the probe `source` appended (it calls cells.cl's
+    static functions on lists the host fills), and a queue."""
+    import pyopencl as cl
+
+    from diskpack_cl.device import programs as _kernels
+    from diskpack_cl.device.cells import MAXC, MAXNEAR
+    from diskpack_cl.device.programs import kernel_dir
+
+    defines = {"INLINE_MATH": _kernels.inline_math(ctx), "PERIODIC": 0, "MAXC": MAXC,
+               "MAXNEAR": MAXNEAR}
+    src = (kernel_dir() / "cells.cl").read_text() + source
+    opts = ["-I", str(kernel_dir())] + [f"-D{k}={v}" for k, v in defines.items()]
+    return getattr(cl.Program(ctx, src).build(options=opts), name), cl.CommandQueue(ctx)
+
+
 _REPLACE_PROBE = """
 /* replace_slackest on a list the host fills: where the new constraint (code 12345)
  * went, -1 where it found no place */
@@ -895,16 +911,9 @@ def test_a_full_list_evicts_its_slackest_non_basic_site(ctx, seed):
     on lists of both parities."""
     import pyopencl as cl
 
-    from diskpack_cl.device import programs as _kernels
-    from diskpack_cl.device.cells import MAXC, MAXNEAR
-    from diskpack_cl.device.programs import kernel_dir
+    from diskpack_cl.device.cells import MAXC
 
-    defines = {"INLINE_MATH": _kernels.inline_math(ctx), "PERIODIC": 0, "MAXC": MAXC,
-               "MAXNEAR": MAXNEAR}
-    src = (kernel_dir() / "cells.cl").read_text() + _REPLACE_PROBE
-    opts = ["-I", str(kernel_dir())] + [f"-D{k}={v}" for k, v in defines.items()]
-    probe = cl.Program(ctx, src).build(options=opts).probe_replace
-    queue = cl.CommandQueue(ctx)
+    probe, queue = _probe(ctx, _REPLACE_PROBE, "probe_replace")
     mf = cl.mem_flags
     rng = np.random.default_rng(seed)
     for _ in range(200):
@@ -926,3 +935,102 @@ def test_a_full_list_evicts_its_slackest_non_basic_site(ctx, seed):
         probe(queue, (1,), None, *bufs[:4], np.int32(m), bufs[4], bufs[5], np.float64(sl), obuf)
         cl.enqueue_copy(queue, out, obuf)
         assert out[0] == want, (m, sl, slack.tolist(), code.tolist(), basis.tolist())
+
+
+_WARM_PROBE = """
+/* warm_basis on a list the host fills: whether it found a basis, and the basis
+ * (b as it was, -100s, where it found none) */
+__kernel void probe_warm(__global const double *nx, __global const double *ny,
+                         __global const int *code, const int m, __global const int *newpos,
+                         __global const int *prev_in, __global int *out)
+{
+    clist L;
+    for (int k = 0; k < m; ++k) {
+        L.nx[k] = nx[k]; L.ny[k] = ny[k]; L.be[k] = 1.0; L.d[k] = 1.0; L.code[k] = code[k];
+    }
+    L.m = m; L.raw = m;
+    const int prev[3] = {prev_in[0], prev_in[1], prev_in[2]};
+    int b[3] = {-100, -100, -100};
+    double inv[9];
+    out[0] = warm_basis(&L, newpos, prev, b, inv);
+    out[1] = b[0]; out[2] = b[1]; out[3] = b[2];
+}
+"""
+
+
+def _warm_case(rng, maxc):
+    """A cell's list (the artificial triangle, then walls and sites of distinct codes
+    ``9 pos + image`` by the new sort's positions), the sort's move `newpos` (old position
+    to new), and a last basis `prev` in old positions: mostly constraints of the list,
+    some sites it lacks, now and then none or an artificial half-plane."""
+    m, sites = int(rng.integers(6, maxc + 1)), 2 * maxc
+    newpos = rng.permutation(sites).astype(np.int32)
+    oldpos = np.argsort(newpos)
+    sites_in = rng.choice(sites, m - 3, replace=False)
+    code = 9 * sites_in + rng.integers(0, 9, m - 3)
+    walls = rng.choice(m - 3, int(rng.integers(0, 4)), replace=False)
+    code[walls] = -1 - np.arange(len(walls))
+    code = np.concatenate([[-5, -6, -7], code]).astype(np.int32)
+    theta = rng.random(m) * 2 * np.pi
+    picks = rng.choice(np.arange(3, m), 3, replace=False)
+    if rng.random() < 0.5:   # normals about 120 degrees apart: a triangle, mostly
+        theta[picks] = theta[picks[0]] + np.array([0.0, 2.1, 4.2]) + rng.normal(0, 0.3, 3)
+    prev = []
+    for j in picks:
+        u = rng.random()
+        c = int(code[j])
+        if u < 0.8:      # a constraint of the list, as the last sort numbered it
+            prev.append(c if c < 0 else 9 * int(oldpos[c // 9]) + c % 9)
+        elif u < 0.93:    # a site the list does not hold
+            out = np.setdiff1d(np.arange(sites), sites_in)
+            prev.append(9 * int(oldpos[rng.choice(out)]) + int(rng.integers(0, 9)))
+        else:             # none, or an artificial half-plane
+            prev.append(int(rng.choice([-9, -5, -6, -7])))
+    return code, np.cos(theta), np.sin(theta), newpos, np.array(prev, np.int32)
+
+
+def _warm_want(code, nx, ny, newpos, prev):
+    """warm_basis by numpy: the list positions of the last basis' constraints renumbered
+    by the move, where all three are there and their normals span the plane positively
+    (the dual multipliers of the 3 x 3 system are > 0)."""
+    if (prev < -4).any():
+        return 0, [-100] * 3
+    c = np.where(prev < 0, prev, 9 * newpos[np.maximum(prev, 0) // 9] + prev % 9)
+    f = [int(np.flatnonzero(code[3:] == ck)[-1]) + 3 if (code[3:] == ck).any() else -1 for ck in c]
+    if min(f) < 0:
+        return 0, [-100] * 3
+    M = np.array([nx[f], ny[f], np.ones(3)])
+    if abs(np.linalg.det(M)) < 1e-12:
+        return None, None   # singular to rounding: either answer
+    lam = np.linalg.solve(M, [0.0, 0.0, 1.0])
+    return (1, f) if (lam > 0).all() else (0, [-100] * 3)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_warm_start_takes_the_last_basis_renumbered_by_the_sort(ctx, seed):
+    """warm_basis (cells.cl) finds the last call's basis in the cell's new list: each
+    site's code renumbered from the last sort's position to this one's (``newpos``), walls
+    as they are, and takes it where the three bound a triangle; no basis where one is
+    missing, was none or artificial.  A wrong renumbering only costs pivots (the simplex
+    still reaches the optimum), so no answer of the kernel shows it: this probe does."""
+    import pyopencl as cl
+
+    from diskpack_cl.device.cells import MAXC
+
+    probe, queue = _probe(ctx, _WARM_PROBE, "probe_warm")
+    mf = cl.mem_flags
+    rng = np.random.default_rng(seed)
+    found = 0
+    for _ in range(300):
+        code, nx, ny, newpos, prev = _warm_case(rng, MAXC)
+        want, basis = _warm_want(code, nx, ny, newpos, prev)
+        if want is None:
+            continue
+        bufs = [cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=a) for a in (nx, ny, code, newpos, prev)]
+        out = np.zeros(4, np.int32)
+        obuf = cl.Buffer(ctx, mf.WRITE_ONLY, out.nbytes)
+        probe(queue, (1,), None, *bufs[:3], np.int32(len(code)), bufs[3], bufs[4], obuf)
+        cl.enqueue_copy(queue, out, obuf)
+        assert out.tolist() == [want, *basis], (code.tolist(), newpos.tolist(), prev.tolist())
+        found += want
+    assert found >= 30   # the cases reach the basis often enough to test it
