@@ -21,8 +21,8 @@ from .options import NamedOptionError
 
 __all__ = ["HOST_BYTES_PER_CELL", "DEVICE_BYTES_PER_CELL", "HOST_BYTES_PER_PNG_PIXEL",
            "HOST_BYTES_PER_POINT", "MemoryLimit", "available_memory", "check_png_memory",
-           "check_poisson_memory",
-           "check_stipple_memory", "drop_pages", "freed_memory_kept", "give_back", "PageReserve", "share_main_arena"]
+           "check_poisson_memory", "check_stipple_memory", "drop_pages", "freed_memory_kept",
+           "give_back", "PageReserve", "share_main_arena"]
 
 # Peak bytes per unit of a stippling run (default schedule; PNG writer)
 HOST_BYTES_PER_CELL = 64       # one raster cell: maps, density, centroid sums
