@@ -284,10 +284,10 @@ def _trust_wide():
 
     from diskpack_cl.device import checks, stage
 
-    told = checks.verdict_of
+    checked = checks.verdict_of
 
     def wide(ctx, **kw):
-        return dataclasses.replace(told(ctx, **kw), wide=True)
+        return dataclasses.replace(checked(ctx, **kw), wide=True)
 
     checks.verdict_of = stage.verdict_of = wide
 
