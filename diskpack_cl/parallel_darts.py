@@ -221,8 +221,9 @@ class _DeviceGrid(DeviceStage):
         self._fill(self.b_prio, -1.0)
 
     def _fill(self, buf, value):
-        """Set every float64 of the device buffer `buf` to `value` (on the device)."""
-        cl.enqueue_fill_buffer(self.queue, buf, np.float64(value), 0, buf.size)
+        """Set every float64 of the device buffer `buf` to `value` (kernel ``fill``)."""
+        m = np.int32(buf.size // 8)
+        self._launch("fill", m, buf, np.float64(value), m)
 
     def _up(self, a):
         """A read-only device copy of the non-empty host array `a`."""

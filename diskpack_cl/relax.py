@@ -338,8 +338,8 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, p
     """The relaxation loop of :func:`relax_poisson`: ``(X, rho list, iterations, stop reason,
     nearest-neighbour distances, before)``; the reason ``"local"`` hands over to local
     iterations.  `pairs` (None: no local iterations) starts the search of an iterate's
-    close pairs, ``(X, future)``: from the iterate that will probably go local, alongside
-    its nearest neighbours (`before`, None where none did)."""
+    close pairs, ``(X, future)``: from the iterate that will probably go local, once its
+    nearest neighbours are in (their kernel has both cores: `before`, None where none did)."""
     local = pairs is not None
     # an engine that gives nearest-neighbour distances gives rho with the MICs
     # the local route measures the rho it returns on the host: its global iterates need
@@ -364,8 +364,8 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, p
         step = step or _mic(engine, X, stats, certify)
         omega = OVER_RELAX[it - 1] if local and it <= len(OVER_RELAX) else 1.0
         X = _moved(X, step, rho[-1], dom, omega)
-        before = pairs(X) if soon and guess else None
         step, nn = _after_move(engine, X, stats, certify, soon and guess)
+        before = pairs(X) if soon and guess else None
         rho.append(_rho(X, nn, verify, dom))
         if callback is not None:
             callback(it, rho[-1])

@@ -20,7 +20,8 @@
  *   dart_keep    a free dart is kept when no free dart of higher priority lies within d;
  *   cell_covered a live cell is covered when its corners and centre all lie within d
  *                of a point of the 8 cells around it;
- *   put_pair     writes points (or given darts) into grid cells.
+ *   put_pair     writes points (or given darts) into grid cells;
+ *   fill         sets every double of a grid to one value (empty cells, no priority).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
@@ -213,4 +214,15 @@ __kernel void put_pair(
 {
     const int i = get_global_id(0);
     if (i < m) grid[cells[i]] = value[i];
+}
+
+/* One work item a double: the grids' first writes, on every core (a CPU device's
+ * buffer pages are fresh, and enqueue_fill_buffer takes their faults on one thread). */
+__kernel void fill(
+    __global double *a,             /* m: set to `value` */
+    const double value,
+    const int m)                    /* number of doubles */
+{
+    const int i = get_global_id(0);
+    if (i < m) a[i] = value;
 }
