@@ -175,7 +175,7 @@ def cells3_torus(ctx):
 
 
 def dart_round(ctx):
-    """dart_place, set_prio, dart_free, dart_keep, cell_covered and put_pair: parallel dart
+    """fill, dart_place, set_prio, dart_free, dart_keep, cell_covered and put_pair: parallel dart
     throwing on a 68 x 68 grid (edge cells wrap)."""
     from diskpack_cl.parallel_darts import parallel_darts
 
