@@ -4,18 +4,23 @@ Usage: python benchmarks/bench_cli_poisson.py [--n 1000000] [--repeat 3] [--json
 
 The package's bytecode is compiled first (as ``pip install .`` leaves it) and
 one warm-up run builds the kernels (PoCL caches them on disk); then each of
-`--repeat` rounds times ``diskpack poisson -n N --seed 1 -o m.npz`` as a
-whole process (interpreter start, imports, device set-up, start set,
+`--repeat` rounds times ``diskpack poisson -n N --seed 1 --json -o m.npz``
+as a whole process (interpreter start, imports, device set-up, start set,
 relaxation, writing) and ``scipy.spatial.Delaunay`` of N uniform random
 points in this process, one after the other, so that both see the same
 load.  It prints each round and the medians of the times and of the
-per-round ratio, and checks that the file holds the points of
-``poisson_disk(N, seed=1)`` (computed in a fresh process, so that the
+per-round ratio, and where each process's time went, from the summary it
+printed: the start set (``init_seconds``), the global iterations
+(``seconds`` less the local route's ``stage_seconds``), the local steps with
+the last rho, and the rest (interpreter, imports, device and programs, the
+input check, writing, exit: the process's wall time less those).  It checks
+that the file holds the points of ``poisson_disk(N, seed=1)`` (computed in a fresh process, so that the
 comparison is of the doors, not of a warm cache).  ``--json`` appends a row
 per round with the context of :mod:`perf_rows`.
 """
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -32,12 +37,22 @@ from perf_rows import append, count, installed_bytecode, medians, num
 DISKPACK = [sys.executable, "-m", "diskpack_cl.cli"]
 
 
-def cli_seconds(n, out):
-    """Wall seconds of one whole ``diskpack poisson`` process."""
+#: The stages of a process, as :func:`cli_run` names them, in their order.
+STAGES = ("start", "global", "local", "rest")
+
+
+def cli_run(n, out):
+    """Wall seconds of one whole ``diskpack poisson`` process, and its stages' seconds
+    (:data:`STAGES`) from the summary it prints with ``--json``."""
     t0 = time.perf_counter()
-    subprocess.run([*DISKPACK, "poisson", "-n", str(n), "--seed", "1", "-q", "-o", out],
-                   check=True)
-    return time.perf_counter() - t0
+    run = subprocess.run([*DISKPACK, "poisson", "-n", str(n), "--seed", "1", "-q", "--json",
+                          "-o", out], check=True, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    told = json.loads(run.stdout)
+    local = told["stage_seconds"].get("local", 0.0)
+    stages = {"start": told["init_seconds"], "global": told["seconds"] - local, "local": local}
+    stages["rest"] = wall - told["init_seconds"] - told["seconds"]
+    return wall, stages
 
 
 def delaunay_seconds(n, seed):
@@ -67,6 +82,17 @@ def summary(rows):
                     for r in medians(runs, ("n",), ["cli", "delaunay", "ratio"])]
 
 
+def stages(rows):
+    """``(header, rows)`` of the docs' table of where a process's time goes: per n, the
+    median seconds of each of :data:`STAGES` and of the whole process, over the rounds
+    that recorded them."""
+    runs = [r for r in rows if r["kind"] == "cli_poisson" and "start" in r]
+    header = ["n", "rounds", "start set (darts)", "global iterations",
+              "local steps and last rho", "the rest of the process", "whole process"]
+    return header, [[count(r["n"]), str(r["repeats"]), *(num(r[k], " s") for k in (*STAGES, "cli"))]
+                    for r in medians(runs, ("n",), [*STAGES, "cli"])]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -74,21 +100,28 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--json", default=None, help="append one JSON line per round to this file")
     args = ap.parse_args()
-    out = str(Path(tempfile.mkdtemp()) / "m.npz")
     installed_bytecode()
-    cli_seconds(args.n, out)   # builds the kernels
+    with tempfile.TemporaryDirectory(prefix="diskpack-cli-poisson-") as tmp:   # (16 MB at 1M)
+        rounds(args, str(Path(tmp) / "m.npz"))
+
+
+def rounds(args, out):
+    """The warm-up and the timed rounds of :func:`main`, each writing the file `out`."""
+    cli_run(args.n, out)   # builds the kernels
     rows = []
     for r in range(args.repeat):
         load = os.getloadavg()[0]
-        row = {"cli": cli_seconds(args.n, out), "delaunay": delaunay_seconds(args.n, r)}
+        wall, parts = cli_run(args.n, out)
+        row = {"cli": wall, "delaunay": delaunay_seconds(args.n, r), **parts}
         row["ratio"] = row["cli"] / row["delaunay"]
         rows.append(row)
         append(args.json, {"kind": "cli_poisson", "n": args.n, "round": r, **row})
         print(f"round {r}: load {load:.2f} diskpack poisson {row['cli']:.2f} s, "
-              f"Delaunay {row['delaunay']:.2f} s, ratio {row['ratio']:.3f}", flush=True)
+              f"Delaunay {row['delaunay']:.2f} s, ratio {row['ratio']:.3f}; "
+              + ", ".join(f"{k} {row[k]:.2f} s" for k in STAGES), flush=True)
     med = {k: statistics.median(row[k] for row in rows) for k in rows[0]}
     print(f"median: diskpack poisson {med['cli']:.2f} s, Delaunay {med['delaunay']:.2f} s, "
-          f"ratio {med['ratio']:.3f}")
+          f"ratio {med['ratio']:.3f}; " + ", ".join(f"{k} {med[k]:.2f} s" for k in STAGES))
     same = same_as_library(args.n, out)
     append(args.json, {"kind": "cli_poisson_same", "n": args.n, "same": same})
     print("same points as poisson_disk(n, seed=1):", same)

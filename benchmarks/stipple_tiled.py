@@ -131,6 +131,13 @@ def main():
     args = ap.parse_args()
     installed_bytecode()
     image = picture(args.size)
+    with tempfile.TemporaryDirectory(prefix="diskpack-tiled-") as out:   # both runs' outputs
+        measure(args, image, out)
+
+
+def measure(args, image, out):
+    """The runs of :func:`main` on the picture file `image`, their outputs in the folder
+    `out`: the row, printed and appended to ``--json``."""
     W = H = args.size
     rows, cols = tile_grid(args.tiles, W, H)
     spacing = np.sqrt(W * H / args.n)
@@ -138,7 +145,6 @@ def main():
     ys = [round(i * H / rows) for i in range(1, rows)]
     mid_x = [round((i + 0.5) * W / cols) for i in range(cols)]
     mid_y = [round((i + 0.5) * H / rows) for i in range(rows)]
-    out = tempfile.mkdtemp(prefix="diskpack-tiled-")
     cmd = [sys.executable, "-m", "diskpack_cl.cli", "stipple", image, "-n", str(args.n),
            "--allow-large", "--json", "--quiet"]
     row = {"size": args.size, "n": args.n, "tiles": args.tiles, "jobs": args.jobs,

@@ -95,7 +95,8 @@ def test_guide_commands_parse():
 #: A column each performance table must have (the one that names what it measures).
 PERF_COLUMNS = {"relax": "cells (opencl default)", "peers-2d": "low", "peers-3d": "rho", "paper": "the paper",
                 "qmc": "share farther than radius diskpack / scipy",
-                "million": "total / Delaunay", "cli-poisson": "process / Delaunay", "stipple": "default mix s/iter (MIC / labels and centroids)",
+                "million": "total / Delaunay", "cli-poisson": "process / Delaunay",
+                "cli-poisson-stages": "the rest of the process", "stipple": "default mix s/iter (MIC / labels and centroids)",
                 "stipple-end-to-end": "seconds to the certified result", "stipple-large": "peak resident memory",
                 "stipple-tiled": "seam NN 1st percentile tiled / untiled",
                 "batch": "images per minute", "batch-memory": "peak resident memory"}

@@ -228,6 +228,7 @@ PERF_TABLES = {
     "paper": ("bench_paper", "paper.jsonl", "summary", {}),
     "million": ("bench_million", "million.jsonl", "summary", {}),
     "cli-poisson": ("bench_cli_poisson", "cli_poisson.jsonl", "summary", {}),
+    "cli-poisson-stages": ("bench_cli_poisson", "cli_poisson.jsonl", "stages", {}),
     "stipple": ("bench_stipple", "stipple.jsonl", "summary", {}),
     "stipple-end-to-end": ("bench_stipple", "stipple.jsonl", "summary_end_to_end", {}),
     "stipple-large": ("stipple_large", "stipple_large.jsonl", "summary", {}),
