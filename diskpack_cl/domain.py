@@ -82,8 +82,7 @@ class Domain:
         """
         q = np.array(points, dtype=np.float64) if copy else points
         q += 0.0   # -0.0 becomes 0.0, as np.mod makes it; every other value stays
-        flat = q.ravel()
-        if len(flat) and flat.min() >= 0.0 and flat.max() < min(self.width, self.height):   # NaN fails both
+        if self.holds(q):
             return q
         for col, s in self._axes(q):
             out = np.flatnonzero(~((col >= 0.0) & (col < s)))   # NaN too, as np.mod has it
@@ -92,6 +91,20 @@ class Domain:
                 v[v >= s] = 0.0  # mod of -tiny can round to exactly `size`
                 col[out] = v
         return q
+
+    def holds(self, points):
+        """Whether every coordinate of the float64 array `points` lies in ``[0, min(W, H))``
+        (two reductions, no copy; NaN fails): points a wrap leaves as they are (but -0.0).
+
+        Examples
+        --------
+        >>> Domain.torus().holds(np.array([[0.5, 0.0], [0.25, 0.75]]))
+        True
+        >>> Domain.torus().holds(np.array([[0.5, 1.0]]))
+        False
+        """
+        flat = np.ravel(points)
+        return bool(len(flat) and flat.min() >= 0.0 and flat.max() < min(self.width, self.height))
 
     def shortest(self, offsets):
         """The offsets `offsets` (``(..., 2)`` float64) made shortest over the periods, in
