@@ -3,7 +3,7 @@ seeds, small grids, and no lattice in the spectrum."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
@@ -152,6 +152,10 @@ def test_the_list_kernels_answer_as_every_pair_does(ctx, g, seed, coarse, fill):
 
 @settings(max_examples=20)
 @given(g=st.integers(5, 8), cell=st.integers(0, 63), u=st.tuples(*[st.floats(0, 0.999)] * 2))
+@example(g=9, cell=40, u=(0.0, 0.0))   # the point in the middle cell at each corner:
+@example(g=9, cell=40, u=(0.999, 0.0))  # every dart's cell is an inner one (no wrap), and
+@example(g=9, cell=40, u=(0.0, 0.999))  # each corner cell of the ring decides for one
+@example(g=9, cell=40, u=(0.999, 0.999))
 def test_every_cell_of_the_ring_is_looked_at(ctx, g, cell, u):
     """One point, and a dart in each of the 24 cells around its own (wrapping at the edges)
     at the spot of that cell nearest the point: the corner cells of the ring decide only

@@ -54,6 +54,16 @@ __constant int NEAR[24][2] = {
     {-2, -2}, {-2, -1}, {-2, 0}, {-2, 1}, {-2, 2}, {-1, -2}, {-1, 2}, {0, -2},
     {0, 2}, {1, -2}, {1, 2}, {2, -2}, {2, -1}, {2, 0}, {2, 1}, {2, 2}};
 
+/* The same cells as NEAR, as a branch-free OR of `test(dy, dx)` over them: the inner
+ * cells' tests, with their offsets written out (indexing the __constant table, and
+ * keeping the points in a private array, took three times as long on PoCL). */
+#define NEAR_8(test) (test(-1, -1) | test(-1, 0) | test(-1, 1) | test(0, -1) | test(0, 1) \
+                      | test(1, -1) | test(1, 0) | test(1, 1))
+#define FAR_16(test) (test(-2, -2) | test(-2, -1) | test(-2, 0) | test(-2, 1) | test(-2, 2) \
+                      | test(-1, -2) | test(-1, 2) | test(0, -2) | test(0, 2) | test(1, -2) \
+                      | test(1, 2) | test(2, -2) | test(2, -1) | test(2, 0) | test(2, 1) \
+                      | test(2, 2))
+
 /* Is cell (r, c) two cells or more from every edge?  Then its 24 neighbours are plain
  * offsets in the grid, with no wrap (most cells: all but 8 g of the g * g). */
 static int inner(int r, int c, int g)
@@ -73,13 +83,11 @@ static int near_point(__global const double2 *pt, int r, int c, int g, double2 q
 {
     if (inner(r, c, g)) {   /* the wrap's four tests a neighbour were most of the test */
         const __global double2 *p = pt + r * g + c;
-        int hit = 0;
-        /* blocks of 8 without a branch inside: a test stops at the end of the block of
-         * its first conflict (a branch a neighbour cost 1.2 times as much on PoCL) */
-        for (int b = 0; b < 24 && !hit; b += 8)
-            for (int k = b; k < b + 8; ++k)
-                hit |= closer(p[NEAR[k][0] * g + NEAR[k][1]], q, d2);
-        return hit;
+        /* the 8 nearest, then the 16 others, each block without a branch inside (a
+         * branch a neighbour cost 1.2 times as much on PoCL) */
+#define PT_NEAR(dy, dx) closer(p[(dy) * g + (dx)], q, d2)
+        return NEAR_8(PT_NEAR) || FAR_16(PT_NEAR);
+#undef PT_NEAR
     }
     for (int k = 0; k < 24; ++k)
         if (closer(at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g), q, d2)) return 1;
@@ -156,17 +164,15 @@ __kernel void dart_keep(
     const int r = k / g, c = k % g;
     int hit = 0;
     if (inner(r, c, g)) {
-        /* plain offsets, in blocks of 8 without a branch inside (as near_point): every
+        /* plain offsets, in two blocks without a branch inside (as near_point): every
          * neighbour's dart is read (an old one, or the fill, where no priority was
          * written this round) and the priority test masks it; one loop selecting
          * between the plain and the wrapped cell took twice as long on PoCL */
         const __global double2 *d = dart + k;
         const __global double *p = prio + k;
-        for (int b = 0; b < 24 && !hit; b += 8)
-            for (int j = b; j < b + 8; ++j) {
-                const int o = NEAR[j][0] * g + NEAR[j][1];
-                hit |= (p[o] > mine) & closer(d[o], q, d2);
-            }
+#define DART_NEAR(dy, dx) ((p[(dy) * g + (dx)] > mine) & closer(d[(dy) * g + (dx)], q, d2))
+        hit = NEAR_8(DART_NEAR) || FAR_16(DART_NEAR);
+#undef DART_NEAR
     } else {
         for (int j = 0; j < 24 && !hit; ++j) {
             double2 shift;
@@ -175,6 +181,15 @@ __kernel void dart_keep(
         }
     }
     keep[i] = !hit;
+}
+
+/* Is one of the points p0 .. p7 closer than sqrt(d2) to q?  All 8 without a branch
+ * (0.85 of the time of stopping at the first). */
+static int any_of_8(double2 p0, double2 p1, double2 p2, double2 p3, double2 p4, double2 p5,
+                    double2 p6, double2 p7, double2 q, double d2)
+{
+    return closer(p0, q, d2) | closer(p1, q, d2) | closer(p2, q, d2) | closer(p3, q, d2)
+         | closer(p4, q, d2) | closer(p5, q, d2) | closer(p6, q, d2) | closer(p7, q, d2);
 }
 
 __kernel void cell_covered(
@@ -189,21 +204,26 @@ __kernel void cell_covered(
     const int i = get_global_id(0);
     if (i >= m) return;
     const int r = cells[i] / g, col = cells[i] % g;
-    /* the 8 points around, loaded once for the 5 samples */
-    double2 p[8];
-    if (inner(r, col, g))
-        for (int k = 0; k < 8; ++k) p[k] = pt[cells[i] + NEAR[k][0] * g + NEAR[k][1]];
-    else
-        for (int k = 0; k < 8; ++k) p[k] = at_cell(pt, r + NEAR[k][0], col + NEAR[k][1], g);
-    const double sx[5] = {0.0, 1.0, 0.0, 1.0, 0.5}, sy[5] = {0.0, 0.0, 1.0, 1.0, 0.5};
-    int all = 1;
-    for (int s = 0; s < 5 && all; ++s) {
-        const double2 q = (double2)((col + sx[s]) * c, (r + sy[s]) * c);
-        int any = 0;   /* all 8 without a branch: 0.85 of the time of stopping at the first */
-        for (int k = 0; k < 8; ++k) any |= closer(p[k], q, d2);
-        all = any;
+    /* the 8 points around, loaded once for the 5 samples, in variables of their own
+     * (a private array of them took three times as long on PoCL) */
+    double2 p0, p1, p2, p3, p4, p5, p6, p7;
+    if (inner(r, col, g)) {
+        const __global double2 *p = pt + cells[i];
+        p0 = p[-g - 1]; p1 = p[-g]; p2 = p[-g + 1]; p3 = p[-1];
+        p4 = p[1]; p5 = p[g - 1]; p6 = p[g]; p7 = p[g + 1];
+    } else {
+        p0 = at_cell(pt, r - 1, col - 1, g); p1 = at_cell(pt, r - 1, col, g);
+        p2 = at_cell(pt, r - 1, col + 1, g); p3 = at_cell(pt, r, col - 1, g);
+        p4 = at_cell(pt, r, col + 1, g); p5 = at_cell(pt, r + 1, col - 1, g);
+        p6 = at_cell(pt, r + 1, col, g); p7 = at_cell(pt, r + 1, col + 1, g);
     }
-    covered[i] = all;
+    /* the corners and the centre, ((col + sx) c, (r + sy) c) as the numpy path has them;
+     * all five and all 8 points without a branch */
+#define ANY_NEAR(sx, sy) any_of_8(p0, p1, p2, p3, p4, p5, p6, p7, \
+                                  (double2)((col + sx) * c, (r + sy) * c), d2)
+    covered[i] = ANY_NEAR(0.0, 0.0) & ANY_NEAR(1.0, 0.0) & ANY_NEAR(0.0, 1.0)
+               & ANY_NEAR(1.0, 1.0) & ANY_NEAR(0.5, 0.5);
+#undef ANY_NEAR
 }
 
 __kernel void put_pair(
