@@ -222,7 +222,7 @@ class _DeviceGrid(DeviceStage):
 
     def _fill(self, buf, value):
         """Set every float64 of the device buffer `buf` to `value` (kernel ``fill``)."""
-        m = np.int32(buf.size // 8)
+        m = np.int64(buf.size // 8)   # 2 g * g passes 2**31 at g = 32768
         self._launch("fill", m, buf, np.float64(value), m)
 
     def _up(self, a):
