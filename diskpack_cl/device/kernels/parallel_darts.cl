@@ -47,16 +47,11 @@ static double2 at_cell(__global const double2 *a, int r, int c, int g)
     return a[at] + shift;
 }
 
-/* The 24 cells around a cell, the 8 nearest first: most rejected darts meet their
- * conflict there, and a test stops at its first conflict. */
-__constant int NEAR[24][2] = {
-    {-1, -1}, {-1, 0}, {-1, 1}, {0, -1}, {0, 1}, {1, -1}, {1, 0}, {1, 1},
-    {-2, -2}, {-2, -1}, {-2, 0}, {-2, 1}, {-2, 2}, {-1, -2}, {-1, 2}, {0, -2},
-    {0, 2}, {1, -2}, {1, 2}, {2, -2}, {2, -1}, {2, 0}, {2, 1}, {2, 2}};
-
-/* The same cells as NEAR, as a branch-free OR of `test(dy, dx)` over them: the inner
- * cells' tests, with their offsets written out (indexed from the __constant table, the
- * tests took 1.1 to 1.5 times as long on PoCL). */
+/* The 24 cells around a cell, as a branch-free OR of `test(dy, dx)` over them: the 8
+ * nearest first (most rejected darts meet their conflict there, and a test stops at
+ * the end of the block of its first conflict), then the 16 others.  Offsets written
+ * out: indexed from a __constant table, the inner cells' tests took 1.1 to 1.5 times
+ * as long on PoCL. */
 #define NEAR_8(test) (test(-1, -1) | test(-1, 0) | test(-1, 1) | test(0, -1) | test(0, 1) \
                       | test(1, -1) | test(1, 0) | test(1, 1))
 #define FAR_16(test) (test(-2, -2) | test(-2, -1) | test(-2, 0) | test(-2, 1) | test(-2, 2) \
@@ -89,9 +84,9 @@ static int near_point(__global const double2 *pt, int r, int c, int g, double2 q
         return NEAR_8(PT_NEAR) || FAR_16(PT_NEAR);
 #undef PT_NEAR
     }
-    for (int k = 0; k < 24; ++k)
-        if (closer(at_cell(pt, r + NEAR[k][0], c + NEAR[k][1], g), q, d2)) return 1;
-    return 0;
+#define PT_WRAPPED(dy, dx) closer(at_cell(pt, r + (dy), c + (dx), g), q, d2)
+    return NEAR_8(PT_WRAPPED) || FAR_16(PT_WRAPPED);
+#undef PT_WRAPPED
 }
 
 /* A uniform double in [0, 1): the top 53 bits of splitmix64's output number n + 1
@@ -147,6 +142,16 @@ __kernel void dart_free(
     free_out[i] = !near_point(pt, k / g, k % g, g, dart[k], d2);
 }
 
+/* Does the dart of cell (r, c) of the unbounded cell lattice (one period at most off
+ * the grid) have a priority above `mine` and lie closer than sqrt(d2) to q? */
+static int beats(__global const double2 *dart, __global const double *prio, int r, int c,
+                 int g, double mine, double2 q, double d2)
+{
+    double2 shift;
+    const int at = wrap_cell(r, c, g, &shift);
+    return (prio[at] > mine) & closer(dart[at] + shift, q, d2);
+}
+
 __kernel void dart_keep(
     __global const double2 *dart,   /* g*g: this round's free darts (counted only where prio >= 0) */
     __global const double *prio,    /* g*g: priority of each free dart (-1: none) */
@@ -174,11 +179,9 @@ __kernel void dart_keep(
         hit = NEAR_8(DART_NEAR) || FAR_16(DART_NEAR);
 #undef DART_NEAR
     } else {
-        for (int j = 0; j < 24 && !hit; ++j) {
-            double2 shift;
-            const int at = wrap_cell(r + NEAR[j][0], c + NEAR[j][1], g, &shift);
-            if (prio[at] > mine) hit = closer(dart[at] + shift, q, d2);
-        }
+#define DART_WRAPPED(dy, dx) beats(dart, prio, r + (dy), c + (dx), g, mine, q, d2)
+        hit = NEAR_8(DART_WRAPPED) || FAR_16(DART_WRAPPED);
+#undef DART_WRAPPED
     }
     keep[i] = !hit;
 }
@@ -205,8 +208,8 @@ __kernel void cell_covered(
     if (i >= m) return;
     const int r = cells[i] / g, col = cells[i] % g;
     /* the 8 points around, loaded once for the 5 samples, in variables of their own
-     * (in a private array, filled from the __constant table, the kernel took 1.6 to 2.9
-     * times as long on PoCL) */
+     * (in a private array filled in a loop over a table of offsets, the kernel took 1.6
+     * to 2.9 times as long on PoCL) */
     double2 p0, p1, p2, p3, p4, p5, p6, p7;
     if (inner(r, col, g)) {
         const __global double2 *p = pt + cells[i];
