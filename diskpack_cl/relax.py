@@ -364,6 +364,7 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, p
         step = step or _mic(engine, X, stats, certify)
         omega = OVER_RELAX[it - 1] if local and it <= len(OVER_RELAX) else 1.0
         X = _moved(X, step, rho[-1], dom, omega)
+        step = nn = None   # their memory serves the next MICs (freed_memory_kept)
         step, nn = _after_move(engine, X, stats, certify, soon and guess)
         before = pairs(X) if soon and guess else None
         rho.append(_rho(X, nn, verify, dom))

@@ -1,5 +1,6 @@
 """Benchmark scripts that no other test runs, run at a small size: they still run."""
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -38,6 +39,10 @@ def test_cli_poisson_benchmark_runs_at_a_small_size(ctx, tmp_path):
     run = [json.loads(line) for line in rows.read_text().splitlines()][0]
     parts = [run[k] for k in ("start", "global", "local", "rest")]
     assert all(p >= 0 for p in parts) and abs(sum(parts) - run["cli"]) < 1e-9
+    # the process's own usage, not the benchmark's or the warm-up's: some, and less than
+    # its wall time on every core (the check of the points runs after the rounds)
+    assert 0 < run["system"] <= run["cpu"] <= (os.cpu_count() or 1) * run["cli"]
+    assert run["faults"] > 0
 
 
 def test_tiled_benchmark_runs_at_a_small_size(ctx):
