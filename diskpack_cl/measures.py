@@ -224,9 +224,9 @@ def _grid_candidates(X, reach, domain):
     if cells is None:
         return None
     X, cell, shape, extent, lo = cells
-    (order, start, count), ranges = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape,
-                                                      domain.periodic)
-    if sum(int(c.sum()) for _, c in ranges) > _GRID_PAIRS_PER_POINT * len(X):
+    (order, start, count), ranges, total = _candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1],
+                                                             shape, domain.periodic)
+    if total > _GRID_PAIRS_PER_POINT * len(X):
         return None
     # along an axis of one cell (a box's) every point shares it: no limit there
     width = np.where(shape > 1, extent / shape, np.inf).min()
@@ -455,23 +455,33 @@ def _neighbour_cells(cell, shape, periodic):
 
 
 def _candidate_ranges(flat, shape, periodic):
-    """``((order, start, count), ranges)``: the points' order by cell with each
-    flat cell's ``start`` and ``count`` in it, and per neighbour offset ``(first,
-    count)`` of each sorted point's partners (contiguous in that order): the
+    """``((order, start, count), ranges, total)``: the points' order by cell with each
+    flat cell's ``start`` and ``count`` in it; an iterator, per neighbour offset, of
+    ``(first, count)`` of each sorted point's partners (contiguous in that order): the
     later points of its own cell, then all points of each of half its neighbour
-    cells."""
+    cells; and the number of partners in all.  The iterator makes each offset's two
+    arrays when it is reached: held all at once, they were most of a million-point
+    search's memory, and each first touch of a fresh page costs a page fault."""
     order = bucket_order(flat)
     own = flat[order]
     count = np.bincount(own, minlength=int(shape.prod()))
     start = np.cumsum(count) - count
+    cells = count.reshape(tuple(shape))
+    # own cell: each pair once; a neighbour cell: every point of it
+    total = int((count * (count - 1)).sum()) // 2 + sum(
+        int(np.vdot(cells, _shifted(cells, offset, periodic))) for offset in _HALF_NEIGHBOURS)
+    return (order, start, count), _ranges(own, start, count, shape, periodic), total
+
+
+def _ranges(own, start, count, shape, periodic):
+    """The ``(first, count)`` pairs of :func:`_candidate_ranges`, one offset at a time."""
     i = np.arange(len(own))
-    ranges = [(i + 1, start[own] + count[own] - i - 1)]
-    runs = order, start, count
+    yield i + 1, start[own] + count[own] - i - 1
+    del i
     count, start = count.reshape(tuple(shape)), start.reshape(tuple(shape))
     for offset in _HALF_NEIGHBOURS:
-        n_count = _shifted(count, offset, periodic).ravel()
-        ranges.append((_shifted(start, offset, periodic).ravel()[own], n_count[own]))
-    return runs, ranges
+        yield (_shifted(start, offset, periodic).ravel()[own],
+               _shifted(count, offset, periodic).ravel()[own])
 
 
 def bucket_order(bid, hint=None):

@@ -257,6 +257,20 @@ def test_close_pairs_are_the_brute_force_pairs_within_reach(case, reach):
         assert len(got) == len(found.i) and got == want
 
 
+@settings(max_examples=100)
+@given(case=awkward_sets(), reach=st.floats(1e-6, 0.4))
+def test_the_grid_counts_the_partners_it_will_make(case, reach):
+    """The count that sends a clustered set to the KD-tree before any partner list is made
+    (from the cells' counts) is the number of partners the lists then hold."""
+    pts, dom = case
+    cells = measures._grid_cells(np.asarray(pts, np.float64), reach, dom)
+    if cells is not None:
+        _, cell, shape, _, _ = cells
+        _, ranges, total = measures._candidate_ranges(cell[:, 0] * shape[1] + cell[:, 1], shape,
+                                                      dom.periodic)
+        assert total == sum(int(count.sum()) for _, count in ranges)
+
+
 # a third of the sets are too clustered for the grid (close_pairs gives None): 200 kept
 # examples are the ~200 of 300 that were checked when those passed silently
 @settings(max_examples=200)
