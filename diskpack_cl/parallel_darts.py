@@ -225,10 +225,10 @@ class _DeviceGrid(DeviceStage):
         m = np.int64(buf.size // 8)   # 2 g * g passes 2**31 at g = 32768
         self._launch("fill", m, buf, np.float64(value), m)
 
-    def _up(self, a):
-        """A read-only device copy of the non-empty host array `a`."""
-        mf = cl.mem_flags
-        return cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))
+    def _up(self, name, a):
+        """The non-empty host array `a` for the kernels, read-only (:meth:`DeviceStage.lend`:
+        on a CPU device the array itself, which a copy would put in fresh pages), as `name`."""
+        return self.lend(name, np.ascontiguousarray(a))
 
     def _test(self, name, m, *args):
         """Kernel `name` over `m` cells, its other arguments `args` (host arrays are
@@ -236,14 +236,15 @@ class _DeviceGrid(DeviceStage):
         out = np.zeros(m, dtype=bool)
         if m:
             b_out = cl.Buffer(self.ctx, cl.mem_flags.WRITE_ONLY, m)
-            args = [self._up(a) if isinstance(a, np.ndarray) else a for a in args]
+            args = [self._up(f"{name}{k}", a) if isinstance(a, np.ndarray) else a
+                    for k, a in enumerate(args)]
             self._launch(name, m, *args, b_out)
             cl.enqueue_copy(self.queue, out.view(np.int8), b_out)
         return out
 
     def _put(self, name, grid, b_cells, values):
         """Write `values` into device grid `grid` at the cells of `b_cells` (kernel `name`)."""
-        self._launch(name, len(values), grid, b_cells, self._up(values), np.int32(len(values)))
+        self._launch(name, len(values), grid, b_cells, self._up(name, values), np.int32(len(values)))
 
     def _launch(self, name, m, *args):
         """Kernel `name` over `m` work items (the kernels skip the padding past `m`)."""
@@ -253,7 +254,7 @@ class _DeviceGrid(DeviceStage):
     def _darts_at(self, cells, xy):
         """The device buffer of `cells`, with the darts `xy` written there first (None: those
         :meth:`place` put in the dart grid)."""
-        b_cells = self._up(cells)
+        b_cells = self._up("cells", cells)
         if xy is not None:
             self._put("put_pair", self.b_dart, b_cells, xy)
         return b_cells
@@ -274,7 +275,7 @@ class _DeviceGrid(DeviceStage):
     def place(self, cells, ku, kv):
         """Put the darts ``((col + u) c, (row + v) c)`` of the distinct `cells` (int32,
         non-empty) into the dart grid, on the device: u, v the uniforms of keys `ku`, `kv`."""
-        self._place_at(self._up(cells), len(cells), ku, kv)
+        self._place_at(self._up("cells", cells), len(cells), ku, kv)
 
     def _place_at(self, b_cells, m, ku, kv):
         """:meth:`place` at the `m` cells of the device list `b_cells`."""
@@ -303,7 +304,7 @@ class _DeviceGrid(DeviceStage):
     def throw(self, live, rng, room, empty):
         """One round (as :func:`_round`): the cells still live and the points placed."""
         ku, kv, kp = _keys(rng)
-        b_live = self._up(live)   # one copy of the live cells for the round's kernels
+        b_live = self._up("live", live)   # the live cells, for the round's kernels
         self._place_at(b_live, live.size, ku, kv)
         if empty:   # no point yet: every dart is free, and its cells' list is up already
             keep = np.flatnonzero(self._kept_at(b_live, live.size, kp))
@@ -324,7 +325,7 @@ class _DeviceGrid(DeviceStage):
         xy = np.column_stack((x, y))
         self.placed.append((cells, xy))
         if len(cells):
-            self._put("put_pair", self.b_pt, self._up(cells.astype(np.int32)), xy)
+            self._put("put_pair", self.b_pt, self._up("placed", cells.astype(np.int32)), xy)
 
     def covered(self, cells):
         """Cells whose corners and centre all lie within d of a point of the 3 x 3 cells around."""

@@ -203,7 +203,7 @@ def test_dart_place_computes_the_hosts_coordinates_bit_for_bit(ctx, g, seed, key
     row, col = np.divmod(cells, grid.g)
     want = np.column_stack(((col + _uniform(ku, cells)) * grid.c, (row + _uniform(kv, cells)) * grid.c))
     np.testing.assert_array_equal(got[cells], want)
-    grid._launch("set_prio", len(cells), grid.b_prio, grid._up(cells), np.int32(len(cells)), ku, np.int32(0))
+    grid._launch("set_prio", len(cells), grid.b_prio, grid._up("cells", cells), np.int32(len(cells)), ku, np.int32(0))
     prio = np.empty(grid.g * grid.g)
     cl.enqueue_copy(grid.queue, prio, grid.b_prio)
     np.testing.assert_array_equal(prio[cells], _uniform(ku, cells))
