@@ -187,6 +187,10 @@ def test_validate_points_domain():
         validate_points(p, domain=Domain.rect(2, 1))
     ok = validate_points([[0, 0], [2, 1]], domain=Domain.rect(2, 1))
     assert ok.dtype == np.float64 and ok.flags.c_contiguous
+    # each bound alone: the height is not the width (a 2 x 1 box), and -0.0 is inside
+    for row, msg in (([0.5, 1.5], "row 1"), ([1.5, -1e-300], "row 1"), ([2.5, 0.5], "row 1")):
+        with pytest.raises(ValueError, match=rf"1 point lies outside the domain .*\(first: {msg}\)"):
+            validate_points([[0.0, -0.0], row], domain=Domain.rect(2, 1))
 
 
 @pytest.mark.parametrize("suffix", FORMATS)
