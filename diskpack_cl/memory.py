@@ -247,6 +247,12 @@ class PageReserve:
     rather than waiting for it. Outside such a block, or with another C
     library, it reserves nothing.
 
+    With `idle`, the thread takes only the time no other thread wants
+    (``SCHED_IDLE`` where the system has it) and holds no lock of Python's
+    while it touches: for a caller whose work keeps the cores busy at times
+    and leaves them idle at others (a device's kernels, the host's work
+    between them), such as the darts of a Poisson set.
+
     Examples
     --------
     >>> with freed_memory_kept():
@@ -258,20 +264,27 @@ class PageReserve:
     #: chunks in turn.
     CHUNK = 8 << 20
 
-    def __init__(self, nbytes):
+    def __init__(self, nbytes, *, idle=False):
         self._block = self._thread = None
-        self._next, self._lock = 0, threading.Lock()
+        self._next, self._lock, self._idle = 0, threading.Lock(), idle
         if nbytes > 0 and _keeping.on and _glibc() is not None:
             import numpy as np   # (this module is read at start-up without numpy)
 
             self._block = np.empty(int(nbytes), np.uint8)
-            self._thread = threading.Thread(target=self._touch, name="diskpack-reserve", daemon=True)
+            self._thread = threading.Thread(target=self._touch, args=(idle,), name="diskpack-reserve",
+                                            daemon=True)
             self._thread.start()
 
-    def _touch(self):
-        """Touch the pages of the chunks not yet taken, until none is left."""
+    def _touch(self, idle=False):
+        """Touch the pages of the chunks not yet taken, until none is left (`idle`: at the
+        system's idle priority, where it has one)."""
+        if idle:
+            _idle_priority()
         while (at := self._take()) is not None:
-            self._block[at:at + self.CHUNK:mmap.PAGESIZE] = 0   # numpy lets the other threads run
+            if self._idle:   # a C call: Python's lock is let go during the faults
+                ctypes.memset(self._block.ctypes.data + at, 0, min(self.CHUNK, len(self._block) - at))
+            else:
+                self._block[at:at + self.CHUNK:mmap.PAGESIZE] = 0   # numpy lets the other threads run
 
     def _take(self):
         """The start of the next chunk to touch, or None."""
@@ -288,6 +301,24 @@ class PageReserve:
             self._touch()
             self._thread.join()
         self._block = self._thread = None
+
+    def cancel(self):
+        """Stop the thread after its chunk and give the memory to the heap, its pages touched
+        or not: for a run that ends early (an error, Ctrl-C), which needs none of them."""
+        if self._thread is not None:
+            with self._lock:
+                self._next = len(self._block)
+            self._thread.join()
+        self._block = self._thread = None
+
+
+def _idle_priority():
+    """Run the calling thread only when no other thread wants a core (Linux's
+    ``SCHED_IDLE``); elsewhere, or where it is refused, nothing changes."""
+    try:
+        os.sched_setscheduler(threading.get_native_id(), os.SCHED_IDLE, os.sched_param(0))
+    except (AttributeError, OSError):
+        pass
 
 
 def _gib(b):

@@ -29,7 +29,7 @@ import numpy as np
 
 from ._checks import check_point_count, check_seed, count_text, seed_text
 from .domain import Domain, box_sizes
-from .memory import check_poisson_memory
+from .memory import PageReserve, check_poisson_memory, freed_memory_kept
 from .measures import HEXAGONAL_CELL, hexagonal_radius, min_distance as _min_distance
 from .options import check_fields, option
 from .preview import Previewable
@@ -51,6 +51,12 @@ START_RADIUS = 0.72
 #: A box longer than this many times its width throws its start darts folded into a
 #: near-square (:func:`start_points`).
 FOLD_ASPECT = 2.0
+
+#: Bytes a point whose pages a thread touches on the cores' idle time while the darts
+#: are thrown (:class:`~diskpack_cl.memory.PageReserve`): the relaxation's first arrays
+#: (its MIC inputs and outputs, the moves, the local steps) then take pages already
+#: touched, where each fresh one would be a page fault on the way.
+RESERVED_BYTES_PER_POINT = 250
 
 #: The start sets :func:`poisson_disk` draws.
 STARTS = ("dart", "random")
@@ -691,10 +697,17 @@ def _relaxed(n, domain, eps, seed, inside, distance, opt, run):
     from .device.stage import buffers_handed_on
 
     t0 = time.perf_counter()
-    # the relaxation's MIC outputs take the dart grids' device pages, already touched
-    with buffers_handed_on():
-        start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
-                             init=opt.init, dart_radius=opt.dart_radius)
+    # the relaxation's MIC outputs take the dart grids' device pages, already touched, and
+    # its other arrays the pages of the reserve and those the darts freed
+    with freed_memory_kept(), buffers_handed_on():
+        reserve = PageReserve(RESERVED_BYTES_PER_POINT * n, idle=True)
+        try:
+            start = start_points(n, domain, seed, False if opt.backend == "exact" else run["device"],
+                                 init=opt.init, dart_radius=opt.dart_radius)
+        except BaseException:
+            reserve.cancel()
+            raise
+        reserve.release()
         t_start = time.perf_counter() - t0
         res = relax_poisson(start, eps, opt, domain=domain, **run)
     pts = res.points

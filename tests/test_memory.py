@@ -81,6 +81,60 @@ def test_a_page_reserve_release_touches_the_pages_its_thread_did_not(monkeypatch
     assert touched - before > 250 * MIB
 
 
+@pytest.mark.parametrize("idle", [False, True])
+def test_a_page_reserve_is_touched_by_its_thread_and_its_pages_reused(idle):
+    """The thread touches the pages (at the idle priority too, with Python's lock let go)
+    before the release: a reserve on an idle core, not on the caller's."""
+    import time
+
+    with memory.freed_memory_kept():
+        before = _rss()
+        reserve = memory.PageReserve(128 * MIB, idle=idle)
+        deadline = time.monotonic() + 60
+        while _rss() - before < 120 * MIB and time.monotonic() < deadline:
+            time.sleep(0.01)   # the caller's work: none of it touches a page
+        touched = _rss()
+        reserve.release()
+        a = np.ones(128 * MIB // 8)   # the reserve's pages
+        reused = _rss()
+        del a
+    assert touched - before > 120 * MIB
+    assert reused - touched < 16 * MIB
+
+
+@pytest.mark.parametrize("idle", [False, True])
+def test_an_idle_reserve_thread_runs_at_the_idle_priority(monkeypatch, idle):
+    import os
+    import threading
+
+    if not hasattr(os, "SCHED_IDLE"):
+        pytest.skip("no SCHED_IDLE here")
+    seen = []
+    set_idle = memory._idle_priority
+
+    def recorded():
+        set_idle()
+        seen.append((threading.current_thread().name, os.sched_getscheduler(threading.get_native_id())))
+
+    monkeypatch.setattr(memory, "_idle_priority", recorded)
+    with memory.freed_memory_kept():
+        memory.PageReserve(16 * MIB, idle=idle).release()
+    assert seen == ([("diskpack-reserve", os.SCHED_IDLE)] if idle else [])
+    assert os.sched_getscheduler(0) != os.SCHED_IDLE   # the caller's own is left alone
+
+
+def test_a_cancelled_page_reserve_touches_nothing_more(monkeypatch):
+    """A run that ends early (Ctrl-C in the darts) gives the reserve back untouched, where a
+    release would touch every page its thread had not."""
+    monkeypatch.setattr(memory.threading, "Thread", _IdleThread)
+    with memory.freed_memory_kept():
+        before = _rss()
+        reserve = memory.PageReserve(256 * MIB, idle=True)
+        reserve.cancel()
+        after = _rss()
+    assert after - before < 32 * MIB
+
+
 def test_a_page_reserve_outside_the_block_reserves_nothing():
     before = _rss()
     reserve = memory.PageReserve(256 * MIB)
