@@ -358,9 +358,9 @@ def _grid_cells(X, reach, domain):
     if domain.periodic:
         X = domain.wrap(X)
         lo, extent = np.zeros(2), domain.size
-    else:
-        lo = X.min(axis=0)
-        extent = X.max(axis=0) - lo
+    else:   # a column at a time: along rows of two, numpy's reduction runs its loop two long
+        lo = np.array([X[:, 0].min(), X[:, 1].min()])
+        extent = np.array([X[:, 0].max(), X[:, 1].max()]) - lo
     # at most 4n cells, and 4n along a line of points (a box's extent can be 0)
     spacing = max(0.5 * np.sqrt(np.prod(extent) / len(X)), 0.25 * extent.max() / len(X))
     side = max(reach, spacing) * _GRID_MARGIN

@@ -306,7 +306,7 @@ def _darts_in_rect(n, size, rng, device, dart_radius):
     m = int(np.ceil((n + 4.0 * np.sqrt(n) + 8.0) * side ** 2 / np.prod(size)))
     while True:
         pts = parallel_darts(m, rel_radius=dart_radius, seed=rng, device=device) * side
-        pts = pts[np.all(pts <= size, axis=1)]
+        pts = pts[(pts[:, 0] <= size[0]) & (pts[:, 1] <= size[1])]   # a column at a time
         if len(pts) >= n:
             return pts
         m = int(m * 1.1) + 1  # pragma: no cover - 4 sigma short

@@ -380,7 +380,7 @@ def test_a_buffer_handed_on_goes_to_a_stage_it_fits_inside_the_block_only(ctx):
 
 def test_an_interrupted_start_leaves_no_reserve_thread_touching_pages(monkeypatch):
     """Ctrl-C in the darts: the thread that touches the relaxation's pages on idle cores
-    stops with the run, and does not go on touching them (0.75 GB at 3M points)."""
+    stops with the run, and does not go on touching them (375 MB at 1.5M points)."""
     import threading
 
     import diskpack_cl.poisson as poisson
@@ -395,5 +395,5 @@ def test_an_interrupted_start_leaves_no_reserve_thread_touching_pages(monkeypatc
 
     monkeypatch.setattr(poisson, "start_points", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        poisson_disk(3_000_000, seed=0, backend="exact")
+        poisson_disk(1_500_000, seed=0, backend="exact")
     assert not any(t.name == "diskpack-reserve" for t in threading.enumerate())
