@@ -271,15 +271,17 @@ class PageReserve:
             import numpy as np   # (this module is read at start-up without numpy)
 
             self._block = np.empty(int(nbytes), np.uint8)
-            self._thread = threading.Thread(target=self._touch, args=(idle,), name="diskpack-reserve",
-                                            daemon=True)
+            self._thread = threading.Thread(target=self._run, name="diskpack-reserve", daemon=True)
             self._thread.start()
 
-    def _touch(self, idle=False):
-        """Touch the pages of the chunks not yet taken, until none is left (`idle`: at the
-        system's idle priority, where it has one)."""
-        if idle:
+    def _run(self):
+        """The thread's work: :meth:`_touch`, at the system's idle priority if `idle`."""
+        if self._idle:
             _idle_priority()
+        self._touch()
+
+    def _touch(self):
+        """Touch the pages of the chunks not yet taken, until none is left."""
         while (at := self._take()) is not None:
             if self._idle:   # a C call: Python's lock is let go during the faults
                 ctypes.memset(self._block.ctypes.data + at, 0, min(self.CHUNK, len(self._block) - at))
