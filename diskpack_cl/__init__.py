@@ -8,8 +8,8 @@ float64, so returned points and radii are certified.
 import importlib
 import sys
 import types
-from importlib.metadata import PackageNotFoundError
-from importlib.metadata import version as _version
+
+from ._version import __version__
 
 #: The public names of each module.  The package loads a module when one of its names is
 #: first asked for (PEP 562): ``diskpack poisson`` then never loads the stippling stack
@@ -62,7 +62,3 @@ def __dir__():
     return sorted(set(globals()) | set(__all__))
 
 
-try:  # the installed distribution's version (pyproject.toml), read once
-    __version__ = _version("diskpack_cl")
-except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
-    __version__ = "0+unknown"

@@ -13,7 +13,6 @@ Examples
 """
 
 import importlib
-import importlib.abc
 import importlib.util
 import sys
 import warnings
@@ -32,7 +31,10 @@ MOVED = {f"diskpack_cl.{old}": f"diskpack_cl.{new}" for old, new in {
 }.items()}
 
 
-class _Alias(importlib.abc.Loader):
+class _Alias:
+    # the import system's loader protocol, duck-typed: importlib.abc would load
+    # importlib.resources (13 ms) at every start of the package
+
     def create_module(self, spec):
         warnings.warn(f"{spec.name} moved to {MOVED[spec.name]}: import it from there (the old "
                       f"name goes in the next release)", DeprecationWarning, stacklevel=2)
@@ -46,7 +48,9 @@ class _Alias(importlib.abc.Loader):
         module.__spec__ = self.spec
 
 
-class _Finder(importlib.abc.MetaPathFinder):
+class _Finder:
+    # a meta path finder, duck-typed as _Alias
+
     def find_spec(self, name, path=None, target=None):
         if name in MOVED:
             return importlib.util.spec_from_loader(name, _Alias())

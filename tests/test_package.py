@@ -20,6 +20,21 @@ def test_the_command_line_starts_without_the_stippling_stack():
                          "diskpack_cl.qmc", "diskpack_cl.jobs.items", "matplotlib"}
 
 
+def test_the_command_line_starts_without_reading_installed_metadata():
+    # the version comes from diskpack_cl/_version.py, which the build reads too: a lookup of
+    # the installed distribution would load importlib.metadata and scan sys.path (30 ms)
+    assert "importlib.metadata" not in _loaded_after("import diskpack_cl.cli")
+
+
+def test_the_version_is_the_installed_distributions_and_the_commands():
+    from importlib.metadata import version
+
+    assert diskpack_cl.__version__ == version("diskpack_cl")
+    out = subprocess.run([sys.executable, "-m", "diskpack_cl.cli", "--version"],
+                         capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["diskpack", diskpack_cl.__version__]
+
+
 def test_every_public_name_resolves_to_its_module_object():
     for name in diskpack_cl.__all__:
         value = getattr(diskpack_cl, name)

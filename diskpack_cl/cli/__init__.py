@@ -26,7 +26,6 @@ from __future__ import annotations
 import importlib
 import os
 import sys
-from importlib.metadata import version
 import signal
 import threading
 
@@ -34,6 +33,7 @@ from ._batches import raise_terminated, Terminated
 from ._common import (PROG, HelpFormatter, Parser, UsageError, open_closed_streams,
                       show_device_notes)
 from ._help import LEADING, one_line_help
+from diskpack_cl import __version__
 from diskpack_cl.io import OutputIsInputError
 from diskpack_cl.options import NamedOptionError, OptionConflict, flag_name
 
@@ -66,7 +66,7 @@ def build_parser(only=None):
     parser = Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
     try:
-        parser.add_argument("--version", action="version", version=f"%(prog)s {version('diskpack_cl')}")
+        parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     except Exception:  # pragma: no cover - not installed
         pass
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
