@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ._cores import on_cores
 from .domain import Domain
 
 __all__ = ["HEXAGONAL_CELL", "PLANE", "as_domain", "ball_candidates", "bucket_order", "close_pairs",
@@ -183,8 +184,11 @@ def _kdtree_min_distance_at_most(points, bound, domain, grow):
 
 def _pair_distances(X, i, j, domain):
     """Distances of the pairs ``(i[k], j[k])`` of X (minimum image on a torus)."""
-    d = domain.shortest(X[i] - X[j])
-    return np.sqrt((d * d).sum(axis=1))
+    # np.take and a column at a time: numpy's row gather X[i] and its reduction along rows
+    # of two run their inner loops two values long (the same sums: dx^2 + dy^2)
+    d = domain.shortest(np.take(X, i, axis=0) - np.take(X, j, axis=0))
+    dx, dy = d[:, 0], d[:, 1]
+    return np.sqrt(dx * dx + dy * dy)
 
 
 #: A grid's cells are this much wider than the distance asked for, so that
@@ -294,6 +298,10 @@ def close_pairs(points, reach, domain=Domain.torus()):
     return ClosePairs(i, j, d, float(reach), grid)
 
 
+#: Fewest moved points a thread of :func:`min_distance_since` searches from.
+_MOVED_PART = 20_000
+
+
 def min_distance_since(points, before, pairs, domain=Domain.torus()):
     """Smallest pairwise distance of `points` if it is at most ``pairs.reach``
     (else ``inf``), exact, from the :func:`close_pairs` of an earlier state of them.
@@ -331,8 +339,11 @@ def min_distance_since(points, before, pairs, domain=Domain.torus()):
     M = np.flatnonzero(moved)
     if len(M) >= 2:
         best = min(best, min_distance_at_most(X[M], pairs.reach, domain))
-    if len(M):
-        best = min(best, _to_unmoved(X, M, moved, pairs, domain))
+    if len(M):   # on the cores: the end of a local relaxation waits for this search
+        found = []
+        on_cores(lambda rows: found.append(_to_unmoved(X, M[rows], moved, pairs, domain)),
+                 len(M), len(M), _MOVED_PART)
+        best = min(best, *found)
     return best
 
 

@@ -141,11 +141,10 @@ class _Neighbourhoods:
         """Indices of a superset of the points within `radius` (None: `side`) of the points
         `B` (the cells of the stencil around each of B's), and whether it is all of them.
 
-        `among`: sorted indices that hold every point those cells hold: what a near() of
-        a larger radius around the same B found, B not moved since and any point moved
-        since among them (the smaller stencil is part of the larger one).  The search
-        then passes over them alone, not over all points (in a local step's last steps
-        a thousandth of them)."""
+        `among`: sorted indices that hold every point within `radius` of B: what a near()
+        of a larger radius around B found, where no point moved since farther than that
+        radius's margin allows (:func:`local_step`).  The search then passes over them
+        alone, not over all points (in a local step's last steps a thousandth of them)."""
         if self.flat is None:
             return np.arange(self.n), True
         nx = self.nx
@@ -208,11 +207,11 @@ def _index_table(m, periodic):
     return k % m if periodic else np.where((k >= 0) & (k < m), k, -1)
 
 
-def _bad_pairs(X, B, d_eps, domain, cells=None):
+def _bad_pairs(X, B, d_eps, domain, cells=None, among=None):
     """``(i, j, distance)`` of the pairs closer than `d_eps` that hold a point of `B`
     (with `cells`, a :class:`_Neighbourhoods` of X: searched among the points it finds
-    near B only)."""
-    C, B = _candidates(X, B, d_eps, cells)
+    near B only; `among` as in :meth:`_Neighbourhoods.near`)."""
+    C, B = _candidates(X, B, d_eps, cells, among)
     i, j, q = _pairs_near(np.take(X, C, axis=0), B, d_eps, domain)
     d = np.hypot(*q.T)
     keep = (i != j) & (d < d_eps)
@@ -321,8 +320,9 @@ def local_step(X, B, eps, domain, halo=HALO, solver=None, cells=None, d_min=None
     moving = S[A[ok]]   # only these rows change: not all of S written back
     X[moving] = mic.centers[ok]
     cells.moved(moving, X)
-    # a pass over all points: B moved, so S need not hold every point near it now
-    i, j, d = _bad_pairs(X, B, d_eps, domain, cells)
+    # found among S still: a point moved at most half the halo (ok), from within the move
+    # radius of B, so every point within d_eps of B now was within the reach of B before
+    i, j, d = _bad_pairs(X, B, d_eps, domain, cells, S)
     return _distinct(np.concatenate([i, j]), n), float(d.min()) if len(d) else np.inf, held
 
 
