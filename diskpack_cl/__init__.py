@@ -9,7 +9,9 @@ import importlib
 import sys
 import types
 
-from ._version import __version__
+from . import _version
+
+__version__ = _version.__version__
 
 #: The public names of each module.  The package loads a module when one of its names is
 #: first asked for (PEP 562): ``diskpack poisson`` then never loads the stippling stack
