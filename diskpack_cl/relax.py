@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from ._cores import on_cores
 from .domain import Domain
 from .engine import BACKENDS, check_backend, make_engine, stage_record
 from .options import check_fields, option
@@ -122,6 +123,9 @@ FINAL_REACH = 2.1
 #: ``"stalled"``; a set creeping towards a rho it cannot reach stops instead
 #: of running to ``max_iter``, a tiny cluster that grows geometrically goes on.
 STALL_GAIN = 1e-3
+
+#: Fewest points a thread of an over-relaxed move (:func:`_moved`) moves.
+MOVE_PART = 100_000
 
 
 @dataclass
@@ -389,15 +393,25 @@ def _moved(X, mic, rho, domain, omega):
     if omega == 1.0:
         return mic.centers
     d_min = 2.0 * rho * hexagonal_radius(len(X), domain.area)
-    past = domain.shortest(np.subtract(mic.centers, X))
+    moved = np.empty_like(mic.centers)
+    # on the cores: between two MIC calls, whose kernels wait for it
+    on_cores(lambda rows: _move_rows(X[rows], mic.centers[rows], mic.radii[rows], d_min, omega,
+                                     domain, moved[rows]), len(X), len(X), MOVE_PART)
+    return moved
+
+
+def _move_rows(X, centers, radii, d_min, omega, domain, out):
+    """:func:`_moved` of the rows X (their MICs' `centers` and `radii`, the set's smallest
+    distance `d_min`), into `out`."""
+    past = domain.shortest(np.subtract(centers, X, out=out))
     z = past.view(np.complex128).ravel()   # one (x, y) row a number: |z| without column copies
     z *= omega - 1.0
     length = np.abs(z)
-    room = np.maximum(mic.radii - 0.5 * d_min, 0.0)
+    room = np.maximum(radii - 0.5 * d_min, 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):   # fmin takes 1 over 0/0's NaN
         z *= np.fmin(room / length, 1.0)
-    past += mic.centers
-    return domain.wrap(past, copy=False)
+    past += centers
+    domain.wrap(past, copy=False)
 
 
 def _local_state(X, nn, eps, dom):

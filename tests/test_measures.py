@@ -1,5 +1,7 @@
 """Point-set measures and the domain: packing radius, distances, rho, coincident pairs, images."""
 
+from unittest import mock
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -297,6 +299,8 @@ def test_min_distance_since_is_the_brute_force_minimum(case, reach, seed, how):
     best = _all_pairs_min(after, dom)
     got = measures.min_distance_since(after, before, found, dom)
     assert got == (best if best <= reach else np.inf)
+    with mock.patch.object(measures, "_MOVED_PART", 1):   # the moved points on the cores
+        assert measures.min_distance_since(after, before, found, dom) == got
 
 
 def test_min_distance_since_drops_the_pairs_of_moved_points():

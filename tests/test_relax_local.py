@@ -1,12 +1,15 @@
 """Local tail iterations (diskpack_cl.relax_local): the two facts they rest on, checked by
 brute force; a local step against exact_mic of the whole set; relax_poisson(local=True)."""
 
+from unittest import mock
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import reference as ref
+from diskpack_cl import relax
 from diskpack_cl.domain import Domain
 from diskpack_cl.geometry import exact_mic
 from diskpack_cl.measures import hexagonal_radius, min_distance_at_most, nearest_neighbor_distances
@@ -306,7 +309,8 @@ def _over_relaxed_ref(X, mic, d_min, omega):
 def test_an_over_relaxed_move_keeps_the_minimum_distance(n, seed, omega):
     """The local route's over-relaxed global moves (relax._moved) against a point-by-point
     reference, and never closer than the set's minimum distance (brute force; random
-    sets, whose cells are far from their MICs, need the cap)."""
+    sets, whose cells are far from their MICs, need the cap); moved in slices of rows on
+    the cores as in one (MOVE_PART), bit for bit."""
     X = np.random.default_rng(seed).random((n, 2))
     mic = exact_mic(X, domain=TORUS)
     d_min = ref.min_distance_ref(X, TORUS)
@@ -315,6 +319,8 @@ def test_an_over_relaxed_move_keeps_the_minimum_distance(n, seed, omega):
     dz = Y - Z
     np.testing.assert_allclose(dz - np.round(dz), 0.0, rtol=0, atol=1e-14)
     assert ref.min_distance_ref(Y, TORUS) >= d_min * (1 - 1e-12)
+    with mock.patch.object(relax, "MOVE_PART", 2):
+        np.testing.assert_array_equal(_moved(X, mic, d_min / 2 / hexagonal_radius(n), TORUS, omega), Y)
 
 
 def test_only_the_local_routes_first_moves_are_over_relaxed():
