@@ -225,7 +225,8 @@ def _within(X, B, r, domain, cells=None, among=None):
     :meth:`_Neighbourhoods.near`)."""
     C, B = _candidates(X, B, r, cells, among)
     _, j, q = _pairs_near(np.take(X, C, axis=0), B, r, domain)
-    return C[_distinct(j[(q * q).sum(axis=1) <= r * r], len(C))]
+    dx, dy = q[:, 0], q[:, 1]   # a column at a time: the same dx^2 + dy^2 as along rows of two
+    return C[_distinct(j[dx * dx + dy * dy <= r * r], len(C))]
 
 
 def _distinct(idx, size):
