@@ -65,10 +65,7 @@ def build_parser(only=None):
     """
     parser = Parser(
         prog=PROG, description="Poisson disk sampling and image stippling by disk packing.")
-    try:
-        parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    except Exception:  # pragma: no cover - not installed
-        pass
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
                                        parser_class=Parser)
     for name in _SUBCOMMANDS:
