@@ -161,6 +161,33 @@ def test_one_solver_for_sets_of_every_size_answers_as_a_fresh_one(ctx, calls, se
             assert a.tobytes() == b.tobytes()
 
 
+def test_a_solver_takes_the_kernels_of_one_no_longer_alive_and_never_a_live_ones(ctx):
+    """A solver's kernel objects go back to the pool when it is collected, and the next
+    solver takes them (no new kernel objects, no second warm call); two live solvers never
+    share one: each sets a kernel's arguments only where they differ from its own last
+    call's, so a kernel shared by two solvers called in turn would run on the other's
+    sites (planted: a kernel handed to the pool while its solver lives fails)."""
+    import gc
+    from unittest import mock
+
+    dom = Domain.torus()
+    rng = np.random.default_rng(5)
+    first = CellMIC(dom, device=ctx)
+    kernel = first._kernel.kernel
+    first.solve(rng.random((300, 2)))
+    del first
+    gc.collect()
+    with mock.patch.object(CellMIC, "_warm", side_effect=AssertionError("warmed twice")):
+        taker = CellMIC(dom, device=ctx)
+    assert taker._kernel.kernel is kernel
+    other = CellMIC(dom, device=ctx)
+    assert other._kernel.kernel is not kernel
+    for certify in (True, True, False, False):   # each solver's arguments the same as its last
+        for solver in (taker, other):
+            pts = rng.random((200, 2))
+            _same_as_exact(dom, pts, None, solver.solve(pts, certify=certify))
+
+
 @settings(max_examples=15)
 @given(st.sampled_from([Domain.torus(), Domain.rect(30.0, 20.0)]),
        st.lists(st.tuples(st.sampled_from([3, 40, 300, 3000]),

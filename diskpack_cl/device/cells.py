@@ -22,6 +22,7 @@ tells, and the engines fall back to the raster estimate refined by
 
 from __future__ import annotations
 
+import weakref
 
 import numpy as np
 import pyopencl as cl
@@ -55,6 +56,11 @@ LEND_BYTES = 1 << 20
 FLAGS = {"list_full": 1, "pivots": 2, "unbounded": 4, "scan_wide": 8, "near_full": 16,
          "rounds": 32, "shift": 64, "nn": 128}
 _NN = FLAGS["nn"]
+
+#: Kernel objects of launchers no longer alive, by (program, kernel name): :class:`_Launcher`.
+_SPARE_KERNELS = {}
+#: Programs (``cl_program`` addresses) whose cell_mic has run once: :meth:`CellMIC._warm`.
+_WARMED = set()
 
 _EDGE_NORMALS = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
 
@@ -116,11 +122,15 @@ class CellMIC(DeviceStage):
         self._sorts = 0       # sorts so far (_buckets)
         self._basis = None    # (sort, flip): the sort of the last warm call, which of the
                               # two basis buffers holds its bases
-        self._warm()
+        if self._kernel.program not in _WARMED:
+            self._warm()
+            _WARMED.add(self._kernel.program)
 
     def _warm(self):
         """Run the kernel once on a few sites, so that PoCL's lazy compilation
-        is not charged to the first real call."""
+        is not charged to the first real call (once a program: the programs are
+        built once a process, and a relaxation of a thousand sites makes an
+        engine, whose warm call cost about half a millisecond, each time)."""
         dom = self.domain
         pts = (np.random.default_rng(0).random((16, 2)) * (dom.width, dom.height))
         with self.timings.discarded():
@@ -460,13 +470,25 @@ class _Launcher:
     """A kernel of this stage's own (the program's kernels are shared by every stage built
     with the same switches), called as pyopencl's are, that sets its arguments only where
     they differ from the last call's: setting cell_mic's twenty costs about 90 us, more
-    than the kernel at a thousand sites, and a relaxation's steps pass the same ones."""
+    than the kernel at a thousand sites, and a relaxation's steps pass the same ones.
+
+    Its kernel object comes from :data:`_SPARE_KERNELS` where a launcher no longer alive
+    left one (it sets all arguments on its first call), else it is made: a fresh kernel
+    object costs about 0.35 ms (pyopencl looks its invoker up in a cache on disk), and a
+    relaxation of a thousand sites makes two each time it makes an engine."""
 
     def __init__(self, kernel):
-        # a fresh kernel object of the same program: cl.Kernel(kernel.program, name) would
-        # look for the program's source first, by creating a kernel named "_source"
-        self.kernel = next(k for k in kernel.program.all_kernels()
-                           if k.function_name == kernel.function_name)
+        self.program = kernel.program.int_ptr
+        key = (self.program, kernel.function_name)
+        spare = _SPARE_KERNELS.setdefault(key, [])
+        try:
+            self.kernel = spare.pop()
+        except IndexError:
+            # a fresh kernel object of the same program: cl.Kernel(kernel.program, name)
+            # would look for the program's source first, by creating a kernel named "_source"
+            self.kernel = next(k for k in kernel.program.all_kernels()
+                               if k.function_name == kernel.function_name)
+        weakref.finalize(self, spare.append, self.kernel)
         self._args = None   # held: no buffer of theirs is freed and its address reused
 
     def __call__(self, queue, global_size, local_size, *args):
