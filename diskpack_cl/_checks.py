@@ -183,7 +183,9 @@ def check_sites(points, weights, domain, minimum=1):
         raise ValueError("points contain NaN or infinite coordinates")
     if domain.periodic:
         X = domain.wrap(X, copy=False)
-    w = np.zeros(n) if weights is None else np.array(weights, dtype=np.float64)
+    if weights is None:   # zeros: nothing to check (a relaxation's step of a thousand sites)
+        return X, np.zeros(n)
+    w = np.array(weights, dtype=np.float64)
     if w.shape != (n,) or not np.all(np.isfinite(w)):
         raise ValueError("weights must be n finite numbers")
     if n and not np.ptp(w) < WEIGHT_SPREAD:

@@ -22,6 +22,7 @@ tells, and the engines fall back to the raster estimate refined by
 
 from __future__ import annotations
 
+import math
 import weakref
 
 import numpy as np
@@ -409,14 +410,15 @@ class CellMIC(DeviceStage):
             np.int32(warm), *moves, *basis)
             for off in range(0, n, self.chunk)]
 
-    def _refine(self, X, w, out, pos):
-        """Host re-solve and check of the cells at sorted positions `pos`: ``(q, R, accepted)``."""
+    def _refine(self, X, w, out, pos, sites):
+        """Host re-solve and check of the cells at sorted positions `pos` (their `sites`):
+        ``(q, R, accepted)``."""
         with self.timings("refine"):
             q, R, ok = refine_active(X, w, self.domain, out["codes"][:, :3], out["codes"][:, 4:],
                                      cells=pos)
             # the device and the host solved the same 3 x 3 system: same radius, same centre
             scale = max(self.domain.width, self.domain.height)
-            off = np.abs(np.take(X, pos, axis=0) + q - out["mic"][:, :2])
+            off = np.abs(sites + q - out["mic"][:, :2])
             # the larger of the two columns, not np.all along rows (several times slower)
             agree = ((np.abs(R - out["mic"][:, 2]) <= 1e-9 * scale)
                      & (np.maximum(off[:, 0], off[:, 1]) <= 1e-9 * scale))
@@ -460,9 +462,10 @@ class CellMIC(DeviceStage):
         """``(centers, R, refused)``: the host's re-solve of the cells at sorted positions
         `pos`, by result row (`rows`), and the positions in `pos` of the cells the device
         proved and the host refused."""
-        q, R, accepted = self._refine(X, w, out, pos)
+        sites = np.take(X, pos, axis=0)
+        q, R, accepted = self._refine(X, w, out, pos, sites)
         refused = np.flatnonzero(~accepted & ((out["flags"] & ~_NN) == 0))
-        centers, _ = mic_centres(np.take(X, pos, axis=0), q, R, self.domain)
+        centers, _ = mic_centres(sites, q, R, self.domain)
         return _scatter(centers, rows), _scatter(R, rows), refused
 
 
@@ -532,7 +535,7 @@ def _layout(fields, align):
     offsets, at = {}, 0
     for name, dtype, shape in fields:
         offsets[name] = at
-        at += max(1, -(-np.dtype(dtype).itemsize * int(np.prod(shape)) // align)) * align
+        at += max(1, -(-np.dtype(dtype).itemsize * math.prod(shape) // align)) * align
     return offsets, at
 
 
@@ -571,7 +574,8 @@ class _Packed:
                            for (f, o), e in zip(self.offsets.items(), ends)})
 
     def _views(self, host, names):
-        return {f: host[self.offsets[f]:].view(dtype)[:int(np.prod(shape))].reshape(shape)
+        # math.prod: np.prod of a shape tuple costs some microseconds, five fields a call
+        return {f: host[self.offsets[f]:].view(dtype)[:math.prod(shape)].reshape(shape)
                 for f, dtype, shape in self.fields if f in names}
 
     @property
