@@ -1,7 +1,8 @@
 """Seconds per relaxation iteration (Algorithm 1): every engine, and a plain scipy code.
 
 Usage: python benchmarks/bench_relax.py [--sizes 1024,20000,100000,1000000] [--iters 5]
-                                        [--plain-up-to 20000] [--profile] [--json rows.jsonl]
+                                        [--plain-up-to 20000] [--calls 20] [--calls-up-to 20000]
+                                        [--profile] [--json rows.jsonl]
 
 Each size starts from a dart-throwing set (rho ~ 0.74) and runs `iters`
 iterations of Algorithm 1 with each engine in the same process, so that
@@ -16,7 +17,11 @@ seconds per iteration and its stages:
 - ``plain``: an independent plain scipy implementation (Voronoi neighbours
   from ``scipy.spatial.Delaunay`` of the points and their periodic images,
   each cell's Chebyshev LP by enumerating its neighbours' triples), run up
-  to ``--plain-up-to`` points.
+  to ``--plain-up-to`` points;
+- ``call``: ``relax_poisson(start, 0.8)`` as a user calls it, the whole call
+  (engine, MICs, moves, the final rho's check) over its iterations, one row a
+  call of ``--calls`` up to ``--calls-up-to`` points: what a batch of small
+  sets pays an iteration.
 
 Every engine's iterate is checked against ``exact``'s (max centre difference).
 With ``--json`` every iteration is appended as a row (n, engine, seconds,
@@ -30,6 +35,7 @@ from itertools import combinations
 
 import numpy as np
 
+from diskpack_cl import relax_poisson
 from diskpack_cl.domain import Domain
 from diskpack_cl.engine import make_engine
 from diskpack_cl.measures import normalized_radius
@@ -107,19 +113,33 @@ def run_plain(points, iters):
     return seconds, [{}] * iters, X, normalized_radius(X)
 
 
+def run_calls(points, calls):
+    """``calls`` whole ``relax_poisson(points, 0.8)`` calls: each call's seconds per
+    iteration and its iterations."""
+    relax_poisson(points, 0.8)   # programs built outside the timing
+    out = []
+    for _ in range(calls):
+        t0 = time.perf_counter()
+        res = relax_poisson(points, 0.8)
+        out.append(((time.perf_counter() - t0) / max(res.iterations, 1), res.iterations))
+    return out
+
+
 def summary(rows):
     """``(header, rows)`` of the docs' table: per n, each engine's median seconds per iteration and ratios."""
     med = {(r["n"], r["engine"]): r for r in medians(rows, ("n", "engine"), ["seconds", *CELL_STAGES])}
     header = ["n", "cells (opencl default)", "exact (scipy)", "raster route", "plain scipy",
               "cells / exact", "cells / plain", "cells stages: " + " / ".join(CELL_STAGES.values()),
-              "max centre difference from exact"]
+              "max centre difference from exact", "relax_poisson call, per iteration"]
     out = []
     for n in dict.fromkeys(r["n"] for r in rows):
         s = {e: med[n, e]["seconds"] if (n, e) in med else None for e in ("cells", "exact", "raster", "plain")}
         ratio = {e: num(s["cells"] / s[e]) if s[e] else "" for e in ("exact", "plain")}
         stages = " / ".join(num(med[n, "cells"][k]) for k in CELL_STAGES)
-        dx = max(r["max_dx"] for r in rows if r["n"] == n)
-        out.append([count(n), *(num(s[e]) for e in s), ratio["exact"], ratio["plain"], stages, f"{dx:.1e}"])
+        dx = max(r["max_dx"] for r in rows if r["n"] == n and "max_dx" in r)
+        call = num(med[n, "call"]["seconds"]) if (n, "call") in med else ""
+        out.append([count(n), *(num(s[e]) for e in s), ratio["exact"], ratio["plain"], stages, f"{dx:.1e}",
+                    call])
     return header, out
 
 
@@ -128,6 +148,8 @@ def main():
     ap.add_argument("--sizes", default="1024,20000,100000,1000000")
     ap.add_argument("--iters", type=int, default=5)
     ap.add_argument("--plain-up-to", type=int, default=20000)
+    ap.add_argument("--calls", type=int, default=20, help="whole relax_poisson calls a size")
+    ap.add_argument("--calls-up-to", type=int, default=20000)
     ap.add_argument("--profile", action="store_true", help="OpenCL event times (stage 'kernel')")
     ap.add_argument("--json", default=None, help="append one JSON line per iteration to this file")
     args = ap.parse_args()
@@ -155,6 +177,12 @@ def main():
         if "plain" in res:
             print(f"{n:>8} cells / plain scipy = {np.median(res['cells'][0]) / np.median(res['plain'][0]):.3f}",
                   flush=True)
+        if n <= args.calls_up_to and args.calls:
+            calls = run_calls(pts, args.calls)
+            for k, (sec, its) in enumerate(calls):
+                append(args.json, {"n": n, "engine": "call", "iteration": k, "seconds": sec, "iterations": its})
+            print(f"{n:>8} {'call':>7} {np.median([c[0] for c in calls]):9.6f}  s an iteration of a whole "
+                  f"relax_poisson call ({calls[0][1]} iterations)", flush=True)
 
 
 if __name__ == "__main__":

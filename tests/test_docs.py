@@ -144,6 +144,8 @@ def test_summary_takes_the_median_of_the_repeats():
              "stage_device": 0.2 * s, "stage_refine": 0.3 * s, "max_dx": 1e-16}
             for engine, scale in (("cells", 1.0), ("exact", 10.0), ("raster", 20.0))
             for i, s in enumerate((9, 1, 2))]
+    rows += [{"n": 1000, "engine": "call", "iteration": i, "seconds": s, "iterations": 5}
+             for i, s in enumerate((7, 3, 4))]   # whole calls: no stages, no centre difference
     header, table = bench.summary(rows)
     (row,) = table
     cells = dict(zip(header, row))
@@ -152,6 +154,7 @@ def test_summary_takes_the_median_of_the_repeats():
     assert cells["raster route"] == "40" and cells["plain scipy"] == ""
     assert cells["cells / exact"] == "0.1"
     assert cells["cells stages: buckets / device / host check"] == "0.2 / 0.4 / 0.6"
+    assert cells["relax_poisson call, per iteration"] == "4"
 
 
 def test_peers_summary_shows_a_stopped_peer():
