@@ -19,6 +19,7 @@ import numpy as np
 from ._cores import on_cores
 from .domain import Domain
 from .engine import BACKENDS, check_backend, make_engine, stage_record
+from .io import validate_points
 from .options import check_fields, option
 from .memory import check_poisson_memory, freed_memory_kept
 from .preview import Previewable
@@ -189,22 +190,12 @@ class RelaxResult(Previewable):
 
 
 def _check_points(points, domain):
-    X = np.array(points, dtype=np.float64)
-    if X.ndim != 2 or X.shape[1] != 2:
-        raise ValueError(f"points must have shape (n, 2), got {X.shape}")
-    if len(X) < 2:
-        raise ValueError(f"need at least 2 points, got {len(X)}")
-    # the rows at fault are looked for only where there are some: a reduction along
-    # rows of two runs numpy's inner loop two values at a time
-    if not np.isfinite(X).all():
-        bad = ~np.all(np.isfinite(X), axis=1)
-        raise ValueError(f"{bad.sum()} point(s) have NaN or infinite coordinates (first: row {np.argmax(bad)})")
+    """The start set as a float64 copy: :func:`~diskpack_cl.io.validate_points`' checks
+    (two columns, two points at least, finite, inside a box), wrapped onto a torus, no
+    two points the same."""
+    X = np.array(validate_points(points, domain=domain))   # a copy: wrapped in place below
     if domain.periodic:
         X = domain.wrap(X, copy=False)
-    elif not all(X[:, k].min() >= 0 and X[:, k].max() <= s for k, s in enumerate(domain.size)):
-        out = ~np.all((X >= 0) & (X <= domain.size), axis=1)
-        raise ValueError(f"{out.sum()} point(s) lie outside the box {domain.width:g} x "
-                         f"{domain.height:g} (first: row {np.argmax(out)})")
     dup = coincident_pairs(X, domain)
     if len(dup):
         where = "on the torus" if domain.periodic else "in the box"

@@ -71,16 +71,25 @@ def test_reaches_eps_from_random_start(backend):
 @pytest.mark.parametrize("points, match", [
     ([[0.1, 0.2], [np.nan, 0.5], [0.3, 0.3]], "NaN or infinite"),
     ([[0.1, 0.2], [np.inf, 0.5], [0.3, 0.3]], "NaN or infinite"),
-    ([[0.1, 0.2]], "need at least 2 points"),
-    (np.zeros((0, 2)), "need at least 2 points"),
+    ([[0.1, 0.2]], "has 1 point, need at least 2"),
+    (np.zeros((0, 2)), "has 0 points, need at least 2"),
     ([[0.1, 0.2], [0.1, 0.2], [0.3, 0.3]], "coincident"),
     ([[0.25, 0.5], [1.25, 0.5], [0.3, 0.3]], "coincident"),    # same point on the torus
     (np.zeros((4, 3)), r"shape \(n, 2\)"),
     (np.zeros(6), r"shape \(n, 2\)"),
+    ([["a", "b"], ["c", "d"]], "must be numeric"),
 ])
 def test_bad_points(points, match):
     with pytest.raises(ValueError, match=match):
         relax_poisson(points, backend="exact")
+
+
+def test_the_callers_points_are_left_as_they_were():
+    # a float64 array is what the check takes as it is; the torus wraps a copy
+    pts = np.random.default_rng(3).random((64, 2)) + [1.0, -1.0]
+    before = pts.copy()
+    relax_poisson(pts, eps=0.7, backend="exact")
+    assert np.array_equal(pts, before)
 
 
 @pytest.mark.parametrize("eps", [0.0, 1.0, 1.5, -0.1, np.nan])
