@@ -346,13 +346,14 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, p
     best_at = 0
     reason = "eps" if rho[0] >= eps else "max_iter"
     it = 0
-    guess = True   # nearest neighbours alone where the next iterate will probably go local
+    guess = True   # nearest neighbours alone where the next iterate will probably go local or end
     before = None
     while rho[-1] < eps and it < max_iter:
-        nn, ready, soon = _local_state(X, nn, eps, dom) if local else (nn, False, False)
+        nn, ready, soon = (_local_state(X, nn, eps, dom) if local
+                           else (nn, False, _last_soon(rho, eps, it, max_iter)))
         if ready:
             return X, rho, it, "local", nn, before
-        # an iterate without its MICs that did not go local: the guess failed, so no more
+        # an iterate without its MICs that did not go local or end: the guess failed, so no more
         # (at a high eps the share of bad points hovers above the local one for long)
         guess = guess and (it == 0 or step is not None)
         it += 1
@@ -361,7 +362,7 @@ def _iterate(engine, dom, X, eps, max_iter, patience, callback, verify, stats, p
         X = _moved(X, step, rho[-1], dom, omega)
         step = nn = None   # their memory serves the next MICs (freed_memory_kept)
         step, nn = _after_move(engine, X, stats, certify, soon and guess)
-        before = pairs(X) if soon and guess else None
+        before = pairs(X) if local and soon and guess else None
         rho.append(_rho(X, nn, verify, dom))
         if callback is not None:
             callback(it, rho[-1])
@@ -416,11 +417,21 @@ def _local_state(X, nn, eps, dom):
     return nn, share <= LOCAL_SHARE, share <= LOCAL_SOON
 
 
+def _last_soon(rho, eps, it, max_iter):
+    """Whether the next iterate (after `it` of at most `max_iter`) is probably the last:
+    it is the last allowed, or the smaller of the last two gains of rho (list of the
+    iterates' rho so far) once more would reach `eps` (the last gain alone guessed
+    wrong half as often again: the early gains are uneven).  Its nearest neighbours
+    then come alone (:func:`_after_move`): the last iterate's MICs would serve no move."""
+    return it + 1 >= max_iter or (len(rho) >= 3 and rho[-1] + min(rho[-1] - rho[-2], rho[-2] - rho[-3]) >= eps)
+
+
 def _after_move(engine, X, stats, certify, soon):
     """``(step, nn)`` of the moved set X: its MICs and their nearest-neighbour distances
-    from an engine that gives them; where X will `soon` go local and the engine has the
-    per-cell kernel, its nearest-neighbour distances alone (a tenth of the MICs' cost;
-    no step: the MICs are solved if it does not go local after all); else neither."""
+    from an engine that gives them; where X will `soon` go local or be the last iterate
+    and the engine has the per-cell kernel, its nearest-neighbour distances alone (a
+    tenth of the MICs' cost at a million sites, a third at a thousand; no step: the MICs
+    are solved if the loop goes on after all); else neither."""
     cells = getattr(engine, "cells", None)
     if soon and cells is not None:
         return None, cells.nearest(X)

@@ -47,6 +47,32 @@ def test_rho_never_decreases(start, backend):
         ref.min_distance_ref(res.points, Domain.torus()) / 2 / np.sqrt(1 / (2 * np.sqrt(3) * n)), abs=1e-12)
 
 
+@pytest.mark.parametrize("eps, max_iter, reason", [(0.8, 1000, "eps"), (0.9, 3, "max_iter")])
+def test_the_last_iterate_gets_its_nearest_neighbours_alone(ctx, monkeypatch, eps, max_iter, reason):
+    """The iterate that probably ends the run (its rho's last two gains once more reach
+    eps, or it is the last allowed) gets its nearest neighbours alone, not its MICs: one
+    MIC call an iteration (the start's included, the last's left out), one
+    nearest-neighbour call, and the iterates and rho of a run that solves every MIC."""
+    import diskpack_cl.relax as relax
+    from diskpack_cl.device.cells import CellMIC
+    from diskpack_cl.sampling import dart_throwing
+
+    X = dart_throwing(1024, seed=1)
+    calls = {"mic": 0, "nearest": 0}
+    mic, nearest = relax._mic, CellMIC.nearest
+    monkeypatch.setattr(relax, "_mic", lambda *a, **k: calls.__setitem__("mic", calls["mic"] + 1)
+                        or mic(*a, **k))
+    monkeypatch.setattr(CellMIC, "nearest", lambda self, pts: calls.__setitem__(
+        "nearest", calls["nearest"] + 1) or nearest(self, pts))
+    res = relax_poisson(X, eps, max_iter=max_iter, backend="opencl", device=ctx)
+    assert res.stop_reason == reason and calls == {"mic": res.iterations, "nearest": 1}
+    monkeypatch.setattr(relax, "_last_soon", lambda *args: False)
+    want = relax_poisson(X, eps, max_iter=max_iter, backend="opencl", device=ctx)
+    np.testing.assert_array_equal(res.points, want.points)
+    np.testing.assert_array_equal(res.rho, want.rho)
+    assert calls == {"mic": 2 * res.iterations + 1, "nearest": 1}
+
+
 def test_backends_give_the_same_iterates(ctx):
     pts = np.random.default_rng(3).random((200, 2))
     a = relax_poisson(pts, eps=0.99, max_iter=4, backend="exact")
