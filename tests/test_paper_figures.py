@@ -1,4 +1,5 @@
-"""Helpers of examples/paper_figures.py: the six-fold spot measure and the torus Lloyd loop."""
+"""Helpers of examples/paper_figures.py (the six-fold spot measure, the torus Lloyd loop), and
+that its stored numbers are the current default's."""
 
 import importlib.util
 from pathlib import Path
@@ -40,3 +41,21 @@ def test_lloyd_torus_spreads_points(pf, ctx):
     assert x.shape == x0.shape
     assert np.all((x >= 0) & (x < 1))
     assert normalized_radius(x) > normalized_radius(x0) + 0.2
+
+
+def test_the_results_page_shows_the_current_default(pf, ctx):
+    """docs/figures/numbers.json (the numbers docs/results.md quotes) holds what the
+    default stippling gives now: Fig. 8's run again, its steps, k and measures.  When the
+    default changes, rerun ``examples/paper_figures.py`` and update docs/results.md."""
+    import json
+
+    from diskpack_cl import stipple
+
+    stored = json.loads((SCRIPT.parents[1] / "docs" / "figures" / "numbers.json").read_text())["fig8"]
+    gray, dark, _, _ = pf._stipple_input(stored["image"], stored["n"])
+    res = stipple(gray, stored["n"], seed=0)
+    now = pf._stipple_numbers(res.points, dark)
+    assert (len(res.history), round(res.k, 3)) == (stored["diskpack"]["iterations"],
+                                                   round(stored["diskpack"]["k"], 3))
+    for key in ("tone_ssim", "spacing_p01", "psi6_mean"):
+        assert now[key] == pytest.approx(stored["diskpack"][key], abs=5e-4), key
