@@ -46,7 +46,8 @@ def test_lloyd_torus_spreads_points(pf, ctx):
 def test_the_results_page_shows_the_current_default(pf, ctx):
     """docs/figures/numbers.json (the numbers docs/results.md quotes) holds what the
     default stippling gives now: Fig. 8's run again, its steps, k and measures.  When the
-    default changes, rerun ``examples/paper_figures.py`` and update docs/results.md."""
+    default changes, rerun ``examples/paper_figures.py`` and update docs/results.md (whose
+    Fig. 8 row is checked here too)."""
     import json
 
     from diskpack_cl import stipple
@@ -59,3 +60,6 @@ def test_the_results_page_shows_the_current_default(pf, ctx):
                                                    round(stored["diskpack"]["k"], 3))
     for key in ("tone_ssim", "spacing_p01", "psi6_mean"):
         assert now[key] == pytest.approx(stored["diskpack"][key], abs=5e-4), key
+    page = (SCRIPT.parents[1] / "docs" / "results.md").read_text()
+    d = stored["diskpack"]
+    assert f"| disk packing | {d['tone_ssim']:.3f} | {d['spacing_p01']:.2f} |" in page
