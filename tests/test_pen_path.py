@@ -173,3 +173,26 @@ def test_none_keeps_the_given_order():
                                        (1_000_000, 1), (1_000_001, 1), (0, 1_000_000)])
 def test_two_opt_rounds_are_the_work_over_the_dots_rounded_up(n, rounds):
     assert pen_path.two_opt_rounds(n) == rounds
+
+
+@settings(max_examples=60)
+@given(n=st.integers(4, 300), seed=st.integers(0, 2**16), lattice=st.booleans(),
+       rounds=st.sampled_from([1, 2, 5, None]), chunk=st.sampled_from([5, 1 << 16]))
+def test_two_opt_evaluates_again_only_what_its_moves_changed(n, seed, lattice, rounds, chunk):
+    """After the first round a round evaluates only the moves of the positions next to
+    those whose dot changed and of the dots with such a dot among their neighbours, and
+    keeps the others' moves: the order of a 2-opt that evaluates every move every round,
+    on random dots and on lattices (equal gains, whose order decides)."""
+    rng = np.random.default_rng(seed)
+    p = (np.column_stack([np.arange(n) % 9, np.arange(n) // 9]).astype(float) if lattice
+         else rng.random((n, 2)) * 100)
+    order = rng.permutation(n)
+    mp = pytest.MonkeyPatch()
+    mp.setattr(pen_path, "MOVE_CHUNK", chunk)
+    try:
+        kept = two_opt(p, order, rounds=rounds)
+        mp.setattr(pen_path, "_rows_to_evaluate", lambda changed, *rest: np.arange(len(changed)))
+        every = two_opt(p, order, rounds=rounds)
+    finally:
+        mp.undo()
+    np.testing.assert_array_equal(kept, every)

@@ -2,7 +2,8 @@
 
 Orders: a Hilbert curve (vectorized sort), greedy nearest neighbour
 (cKDTree), and either improved by 2-opt and Or-opt moves towards each dot's
-nearest neighbours (all evaluated with numpy each round, the best ones that
+nearest neighbours (evaluated with numpy: all of them in the first round,
+then those the last round's moves may have changed; the best ones that
 change disjoint edges applied) for a number of rounds that depends on the
 number of dots only, so that the order is the same on every machine.
 ``benchmarks/pen_path.py`` measures them on stippled dots; see
@@ -86,7 +87,10 @@ def greedy_order(points, start=(0.0, 0.0)):
     unvisited points.
 
     The tree is rebuilt whenever half of its points have been visited, so a
-    query for the 16 nearest almost always finds an unvisited one.
+    query for the 16 nearest almost always finds an unvisited one.  Each
+    tree's queries from its points are made at once when it is built (a query
+    a dot in a Python loop cost most of the tour); a dot whose 16 nearest are
+    all visited asks the tree again for more.
 
     Examples
     --------
@@ -97,28 +101,29 @@ def greedy_order(points, start=(0.0, 0.0)):
     n = len(p)
     visited = np.zeros(n, dtype=bool)
     order = np.empty(n, dtype=np.int64)
-    alive = np.arange(n)
-    tree = cKDTree(p)
-    cur = np.asarray(start, dtype=np.float64)
-    in_tree = n
+    cur, row = np.asarray(start, dtype=np.float64), -1
+    in_tree = 0
     for step in range(n):
-        if step and (n - step) * 2 < in_tree:
+        if not step or (n - step) * 2 < in_tree:
             alive = np.flatnonzero(~visited)
-            tree = cKDTree(p[alive])
-            in_tree = alive.size
-        kq = min(16, in_tree)
-        while True:
-            _, j = tree.query(cur, k=kq)
-            j = np.atleast_1d(j)
-            cand = alive[j]
+            tree, in_tree = cKDTree(p[alive]), alive.size
+            kq = min(16, in_tree)
+            # the tree's answer to each of its dots, as a query from that dot would give it
+            nearest = alive[tree.query(p[alive], k=kq, workers=-1)[1].reshape(in_tree, kq)]
+            row_of = np.full(n, -1)
+            row_of[alive] = np.arange(in_tree)
+            row = -1 if not step else row_of[order[step - 1]]
+        cand = nearest[row] if row >= 0 else None
+        free = None if cand is None else cand[~visited[cand]]
+        k = kq
+        while free is None or not (free.size or k >= in_tree):
+            k = k if free is None else min(k * 4, in_tree)
+            cand = alive[np.atleast_1d(tree.query(cur, k=k)[1])]
             free = cand[~visited[cand]]
-            if free.size or kq >= in_tree:
-                break
-            kq = min(kq * 4, in_tree)
         nxt = int(free[0])
         visited[nxt] = True
         order[step] = nxt
-        cur = p[nxt]
+        cur, row = p[nxt], row_of[nxt]
     return order
 
 
@@ -127,16 +132,17 @@ def _reversals(q, edge, i, j):
 
     Reversing ``q[a+1 .. b]`` replaces the edges (a, a+1) and (b, b+1) by
     (a, b) and (a+1, b+1); the last point has no edge after it. Returns
-    (gain, first edge, last edge, slice start, slice stop, kind 0).
+    (gain, first edge, last edge, slice start, slice stop, kind 0), and the
+    indices of the pairs ``(i, j)`` these moves are of.
     """
     m = len(q)
     a, b = np.minimum(i, j), np.maximum(i, j)
-    ok = b >= a + 2
+    ok = np.flatnonzero(b >= a + 2)
     a, b = a[ok], b[ok]
     bn = np.minimum(b + 1, m - 1)
     gain = (edge[a] + edge[b] - _dist(q, a, b)
             - np.where(b == m - 1, 0.0, _dist(q, a + 1, bn)))
-    return gain, a, b, a + 1, b + 1, np.zeros_like(a)
+    return (gain, a, b, a + 1, b + 1, np.zeros_like(a)), ok
 
 
 # Or-opt moves a dot at most this many path positions (a longer move rotates a
@@ -148,10 +154,11 @@ def _relocations(q, edge, i, j):
     """Or-opt moves: the dot at position ``i`` moves between positions ``j`` and ``j + 1``
     (next to its near neighbour at ``c``: ``j = c`` or ``c - 1``). Returns
     (gain, first edge, last edge, slice start, slice stop, kind): the slice
-    rotates by -1 (kind 1, i < j) or +1 (kind 2, i > j).
+    rotates by -1 (kind 1, i < j) or +1 (kind 2, i > j); and the indices of the
+    pairs ``(i, j)`` these moves are of.
     """
     m = len(q)
-    ok = (i >= 1) & (j >= 0) & (j != i) & (j != i - 1) & (np.abs(i - j) <= _OR_SPAN)
+    ok = np.flatnonzero((i >= 1) & (j >= 0) & (j != i) & (j != i - 1) & (np.abs(i - j) <= _OR_SPAN))
     i, j = i[ok], j[ok]
     last_i, last_j = i == m - 1, j == m - 1
     inext, jnext = np.minimum(i + 1, m - 1), np.minimum(j + 1, m - 1)
@@ -159,40 +166,76 @@ def _relocations(q, edge, i, j):
     inserted = _dist(q, j, i) + np.where(last_j, 0.0, _dist(q, i, jnext) - edge[j])
     fwd = i < j
     return (removed - inserted, np.where(fwd, i - 1, j), np.where(fwd, j, i),
-            np.where(fwd, i, j + 1), np.where(fwd, j + 1, i + 1), np.where(fwd, 1, 2))
+            np.where(fwd, i, j + 1), np.where(fwd, j + 1, i + 1), np.where(fwd, 1, 2)), ok
 
 
 #: Dots whose candidate moves :func:`_candidates` makes at a time.
 MOVE_CHUNK = 1 << 16
 
 
-def _candidates(q, edge, near, place, pos, tol):
-    """The moves that gain more than `tol`: every dot's 2-opt moves towards its near
-    neighbours, then its Or-opt moves next to them (after, then before each), as one
-    tuple of arrays (:func:`_reversals`).
+def _candidates(q, edge, near, place, pos, tol, rows):
+    """The moves that gain more than `tol` of the dots at positions `rows` (ascending):
+    each one's 2-opt moves towards its near neighbours, then its Or-opt moves next to
+    them (after, then before each), as one tuple of arrays (:func:`_reversals`) and
+    their keys, ``(kind of move, position, neighbour)`` as one number, in increasing
+    order: the order of one pass over all of them.
 
-    Made for :data:`MOVE_CHUNK` dots at a time, and kept in the order of one pass
-    over all of them: a million dots' 18 million candidates would otherwise take
-    temporaries of gigabytes, each touched once, for the few that gain."""
+    Made for :data:`MOVE_CHUNK` dots at a time: a million dots' 18 million candidates
+    would otherwise take temporaries of gigabytes, each touched once, for the few that
+    gain."""
     k = near.shape[1]
     parts = [[], [], []]
-    for a in range(0, len(q), MOVE_CHUNK):
-        rows = np.arange(a, min(a + MOVE_CHUNK, len(q)))
-        i = np.repeat(rows, k)
-        c = pos[near[place[rows]]].ravel()
-        for part, move in zip(parts, (_reversals(q, edge, i, c), _relocations(q, edge, i, c),
-                                      _relocations(q, edge, i, c - 1))):
-            gains = move[0] > tol
-            part.append([field[gains] for field in move])
-    return [np.concatenate([move[f] for part in parts for move in part]) for f in range(6)]
+    for a in range(0, len(rows), MOVE_CHUNK):
+        at = rows[a:a + MOVE_CHUNK]
+        i = np.repeat(at, k)
+        c = pos[near[place[at]]].ravel()
+        key = i * k + np.tile(np.arange(k), len(at))
+        for kind, (part, (move, ok)) in enumerate(zip(parts, (
+                _reversals(q, edge, i, c), _relocations(q, edge, i, c), _relocations(q, edge, i, c - 1)))):
+            gains = np.flatnonzero(move[0] > tol)
+            part.append([field[gains] for field in move] + [key[ok[gains]] + kind * len(q) * k])
+    return [np.concatenate([move[f] for part in parts for move in part]) for f in range(7)]
+
+
+def _merged(kept, new):
+    """The moves `kept` (of rows not evaluated again) and `new`, in the order of their keys
+    (the last of each tuple of arrays)."""
+    if kept is None:
+        return new
+    both = [np.concatenate(pair) for pair in zip(kept, new)]
+    order = np.argsort(both[6], kind="stable")   # two sorted runs: a merge
+    return [field[order] for field in both]
+
+
+def _rows_to_evaluate(changed, near, place, pos):
+    """Positions whose moves may differ once the dots at the positions `changed` (a
+    boolean mask) did: those within one of a changed position (a move reads the
+    positions next to its own and next to its neighbour's), and those whose dots have
+    the dot at such a position among their near neighbours (`near`, by place)."""
+    around = changed.copy()
+    around[1:] |= changed[:-1]
+    around[:-1] |= changed[1:]
+    hit = np.zeros(len(place), dtype=bool)
+    hit[place[around]] = True
+    hit_near = hit[near]
+    mine = hit_near[:, 0].copy()   # by column: numpy's reduction along rows of k is slow
+    for col in range(1, near.shape[1]):
+        mine |= hit_near[:, col]
+    around[pos[mine]] = True
+    return np.flatnonzero(around)
 
 
 def _dist(q, a, b):
-    return np.hypot(*(q[a] - q[b]).T)
+    # rows gathered as complex numbers (one 16-byte load each, not numpy's row gather of
+    # two values); np.hypot of the same differences: the same distances to the bit
+    z = q.view(np.complex128).ravel()
+    d = z[a] - z[b]
+    return np.hypot(d.real, d.imag)
 
 
 def _apply_moves(moves, arrays, pos):
-    """Apply the best of the gaining `moves` that change disjoint edges; return how many."""
+    """Apply the best of the gaining `moves` that change disjoint edges; return the mask of
+    the positions whose dot changed (None where no move gains)."""
     gain, e0, e1, s0, s1, kind = moves
     good = np.lexsort((-gain, e0))
     good = good[np.diff(e0[good], prepend=-1) != 0]  # the best per first edge
@@ -211,17 +254,18 @@ def _apply_moves(moves, arrays, pos):
         else:   # a rotation by -1 (kind 1) or +1 (kind 2)
             sl[:] = np.concatenate((sl[1:], sl[:1]) if kind[k] == 1 else (sl[-1:], sl[:-1]))
         done += 1
-    if done:
-        for arr in arrays:
-            arr[:] = arr[perm]
-        pos[arrays[2]] = np.arange(len(perm))
-    return done
+    if not done:
+        return None
+    for arr in arrays:
+        arr[:] = arr[perm]
+    pos[arrays[2]] = np.arange(len(perm))
+    return perm != np.arange(len(perm))
 
 
 #: Work of the 2-opt of :func:`pen_path_order`'s ``"auto"``, in dots times
-#: rounds: a round costs a few microseconds a dot on two CPU cores, so a few
-#: seconds in all. Counted in rounds, not seconds, so the order never depends on the
-#: machine's speed or load.
+#: rounds: the first round costs a few microseconds a dot, the later ones what the
+#: moves before them changed. Counted in rounds, not seconds, so the order never
+#: depends on the machine's speed or load.
 TWO_OPT_WORK = 1_000_000
 
 
@@ -243,7 +287,10 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None, progre
     nearest dots (a k-d tree, once), the reversal that joins them (2-opt)
     and the moves of the dot next to it (Or-opt), all with numpy, applies
     the best ones that change disjoint edges, and stops when none gains or
-    after `rounds` rounds (None: no limit). The start is fixed.
+    after `rounds` rounds (None: no limit). The start is fixed.  After the
+    first round only the moves that read a position whose dot changed are
+    evaluated again (:func:`_rows_to_evaluate`); the others keep their gains,
+    so the order is that of evaluating every move every round.
     ``progress(done)``, if given, after each round.
 
     Examples
@@ -265,11 +312,20 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None, progre
     pos = np.arange(len(q))  # its inverse
     tol = 1e-9 * float(np.ptp(q, axis=0).max())
     done = 0
+    rows, kept = np.arange(len(q)), None   # every position's moves, then those the last moves may change
     while rounds is None or done < rounds:
         done += 1
         edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
-        if not _apply_moves(_candidates(q, edge, near, place, pos, tol), (q, idx, place), pos):
+        moves = _merged(kept, _candidates(q, edge, near, place, pos, tol, rows))
+        changed = _apply_moves(moves[:6], (q, idx, place), pos)
+        if changed is None:
             break
+        rows = _rows_to_evaluate(changed, near, place, pos)
+        # the other positions' moves read nothing that changed: the same gains, kept
+        again = np.zeros(len(q), dtype=bool)
+        again[rows] = True
+        keep = ~again[moves[6] % (len(q) * k) // k]
+        kept = [field[keep] for field in moves]
         if progress is not None:
             progress(done)
     return idx[1:]
