@@ -6,6 +6,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from PIL import Image
 
 from diskpack_cl.drawing import writers as export
@@ -102,6 +104,28 @@ def test_png_coverage_matches_ink(tmp_path):
     write_png(out, res, dots="packing", png_scale=1.0)
     ink = (255 - np.asarray(Image.open(out), dtype=float)).sum() / 255
     assert ink == pytest.approx(np.pi * 100, rel=0.01)
+
+
+@settings(max_examples=40)
+@given(seed=st.integers(0, 2**16), aa=st.integers(1, 5), n=st.integers(1, 30))
+def test_ink_coverage_counts_the_samples_inside_each_disk(seed, aa, n):
+    """The PNG's ink (:func:`~diskpack_cl.drawing.page.ink_coverage`) against brute force:
+    every sample point of every pixel tested against every disk, dots of every size
+    across the picture's edges too, the sum clipped at 1."""
+    from diskpack_cl.drawing.page import ink_coverage
+
+    rng = np.random.default_rng(seed)
+    W, H = 23, 17
+    c = rng.random((n, 2)) * [W + 8, H + 8] - 4
+    r = rng.uniform(0.05, 6.0, n)
+    s = (np.arange(aa) + 0.5) / aa
+    X, Y = (np.arange(W)[:, None] + s).ravel(), (np.arange(H)[:, None] + s).ravel()
+    want = np.zeros((H, W))
+    for (cx, cy), R in zip(c, r):
+        h2 = R * R - (Y - cy) ** 2
+        inside = (h2[:, None] >= 0) & (np.abs(X[None, :] - cx) <= np.sqrt(np.maximum(h2, 0.0))[:, None])
+        want += inside.reshape(H, aa, W, aa).sum(axis=(1, 3)) / aa ** 2
+    np.testing.assert_allclose(ink_coverage(c, r, W, H, aa), np.minimum(want, 1.0), rtol=0, atol=1e-12)
 
 
 def test_npz_round_trip(tmp_path, result):

@@ -633,14 +633,18 @@ def ink_coverage(c, rad, ow, oh, aa, progress=None):
             lo = np.ceil((cx[:, None] - h) * aa - 0.5)
             hi = np.floor((cx[:, None] + h) * aa - 0.5)
             hi = np.where(h2 >= 0, hi, lo - 1)
-            t0 = (px * aa).astype(np.float64)[:, None, :]  # (k, 1, m) first column
-            cnt = np.minimum(hi[:, :, None], t0 + (aa - 1)) - np.maximum(lo[:, :, None], t0) + 1
-            cnt = np.maximum(cnt, 0.0).reshape(len(i), m, aa, m).sum(axis=2)
-            cov = cnt / float(aa * aa)  # (k, m_y, m_x)
-            gx = np.broadcast_to(px[:, None, :], cov.shape)
-            gy = np.broadcast_to(py[:, :, None], cov.shape)
-            ok = (cov > 0) & (gx >= 0) & (gx < ow) & (gy >= 0) & (gy < oh)
-            np.add.at(ink, gy[ok] * ow + gx[ok], cov[ok])
+            # samples a pixel per sample row, as int32: exact counts, in half float64's
+            # memory (this tensor of every dot's window is most of the work)
+            t0 = (px * aa).astype(np.int32)[:, None, :]  # (k, 1, m) first column
+            cnt = np.minimum(hi.astype(np.int32)[:, :, None], t0 + (aa - 1))
+            cnt -= np.maximum(lo.astype(np.int32)[:, :, None], t0)
+            cnt += 1
+            np.maximum(cnt, 0, out=cnt)
+            cnt = cnt.reshape(len(i), m, aa, m).sum(axis=2, dtype=np.int32)  # (k, m_y, m_x)
+            inside = ((px >= 0) & (px < ow))[:, None, :] & ((py >= 0) & (py < oh))[:, :, None]
+            ok = np.flatnonzero(((cnt > 0) & inside).ravel())
+            at = (py[:, :, None] * ow + px[:, None, :]).ravel()[ok]
+            np.add.at(ink, at, cnt.ravel()[ok] / float(aa * aa))
             if progress is not None:
                 progress(len(i))
     return np.minimum(ink, 1.0).reshape(oh, ow)
