@@ -30,7 +30,7 @@ _FIX = (
     "install an OpenCL driver: on Linux x86-64 `pip install pocl-binary-distribution` "
     "gives a CPU device; on CPUs newer than its LLVM, such as AMD Zen 5, "
     "`sudo apt install pocl-opencl-icd` gives one on Debian and Ubuntu, and a stippling "
-    "about 20x faster than on the host; GPUs: your vendor's OpenCL runtime. "
+    "about 13x faster than on the host; GPUs: your vendor's OpenCL runtime. "
     "Both algorithms also run without OpenCL on the exact backend"
 )
 
