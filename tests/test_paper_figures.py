@@ -56,10 +56,12 @@ def test_the_results_page_shows_the_current_default(pf, ctx):
     gray, dark, _, _ = pf._stipple_input(stored["image"], stored["n"])
     res = stipple(gray, stored["n"], seed=0)
     now = pf._stipple_numbers(res.points, dark)
-    assert (len(res.history), round(res.k, 3)) == (stored["diskpack"]["iterations"],
-                                                   round(stored["diskpack"]["k"], 3))
+    # tolerances for another device's last bits (a GPU's raster sums); a new default
+    # moves these by far more (k 10.0 against 8.0 and tone SSIM 0.920 against 0.955)
+    assert len(res.history) == stored["diskpack"]["iterations"]
+    assert res.k == pytest.approx(stored["diskpack"]["k"], rel=2e-3)
     for key in ("tone_ssim", "spacing_p01", "psi6_mean"):
-        assert now[key] == pytest.approx(stored["diskpack"][key], abs=5e-4), key
+        assert now[key] == pytest.approx(stored["diskpack"][key], abs=2e-3), key
     page = (SCRIPT.parents[1] / "docs" / "results.md").read_text()
     d = stored["diskpack"]
     assert f"| disk packing | {d['tone_ssim']:.3f} | {d['spacing_p01']:.2f} |" in page
