@@ -423,7 +423,8 @@ def _last_soon(rho, eps, it, max_iter):
     iterates' rho so far) once more would reach `eps` (the last gain alone guessed
     wrong half as often again: the early gains are uneven).  Its nearest neighbours
     then come alone (:func:`_after_move`): the last iterate's MICs would serve no move."""
-    return it + 1 >= max_iter or (len(rho) >= 3 and rho[-1] + min(rho[-1] - rho[-2], rho[-2] - rho[-3]) >= eps)
+    return it + 1 >= max_iter or (
+        len(rho) >= 3 and rho[-1] + min(rho[-1] - rho[-2], rho[-2] - rho[-3]) >= eps)
 
 
 def _after_move(engine, X, stats, certify, soon):

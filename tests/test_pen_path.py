@@ -191,7 +191,7 @@ def test_two_opt_evaluates_again_only_what_its_moves_changed(n, seed, lattice, r
     mp.setattr(pen_path, "MOVE_CHUNK", chunk)
     try:
         kept = two_opt(p, order, rounds=rounds)
-        mp.setattr(pen_path, "_rows_to_evaluate", lambda changed, *rest: np.arange(len(changed)))
+        mp.setattr(pen_path, "_rows_to_evaluate", lambda changed, *rest: np.ones(len(changed), dtype=bool))
         every = two_opt(p, order, rounds=rounds)
     finally:
         mp.undo()

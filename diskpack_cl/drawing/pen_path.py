@@ -208,10 +208,10 @@ def _merged(kept, new):
 
 
 def _rows_to_evaluate(changed, near, place, pos):
-    """Positions whose moves may differ once the dots at the positions `changed` (a
-    boolean mask) did: those within one of a changed position (a move reads the
-    positions next to its own and next to its neighbour's), and those whose dots have
-    the dot at such a position among their near neighbours (`near`, by place)."""
+    """The mask of the positions whose moves may differ once the dots at the positions
+    `changed` (a boolean mask) did: those within one of a changed position (a move reads
+    the positions next to its own and next to its neighbour's), and those whose dots
+    have the dot at such a position among their near neighbours (`near`, by place)."""
     around = changed.copy()
     around[1:] |= changed[:-1]
     around[:-1] |= changed[1:]
@@ -222,7 +222,7 @@ def _rows_to_evaluate(changed, near, place, pos):
     for col in range(1, near.shape[1]):
         mine |= hit_near[:, col]
     around[pos[mine]] = True
-    return np.flatnonzero(around)
+    return around
 
 
 def _dist(q, a, b):
@@ -312,7 +312,8 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None, progre
     pos = np.arange(len(q))  # its inverse
     tol = 1e-9 * float(np.ptp(q, axis=0).max())
     done = 0
-    rows, kept = np.arange(len(q)), None   # every position's moves, then those the last moves may change
+    # every position's moves, then those of the positions the last moves may have changed
+    rows, kept = np.arange(len(q)), None
     while rounds is None or done < rounds:
         done += 1
         edge = np.append(np.hypot(*np.diff(q, axis=0).T), 0.0)  # edge[a] = |q[a+1] - q[a]|
@@ -320,10 +321,9 @@ def two_opt(points, order, *, start=(0.0, 0.0), neighbors=8, rounds=None, progre
         changed = _apply_moves(moves[:6], (q, idx, place), pos)
         if changed is None:
             break
-        rows = _rows_to_evaluate(changed, near, place, pos)
+        again = _rows_to_evaluate(changed, near, place, pos)
+        rows = np.flatnonzero(again)
         # the other positions' moves read nothing that changed: the same gains, kept
-        again = np.zeros(len(q), dtype=bool)
-        again[rows] = True
         keep = ~again[moves[6] % (len(q) * k) // k]
         kept = [field[keep] for field in moves]
         if progress is not None:
