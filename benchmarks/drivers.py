@@ -5,8 +5,10 @@ For each driver (pip's PoCL, from pyopencl's ``.libs/pocl.icd``, and every
 no cached device verdict (the known-answer checks run first) and ``--runs``
 times warm, in alternation; prints the wall seconds, the median warm time,
 its ratio to the first driver's, and the summary's engine and device.
+With ``--cold`` the first run also starts with an empty PoCL kernel cache
+(``POCL_CACHE_DIR``), as a new user's does: every build is paid there.
 
-    .venv/bin/python benchmarks/drivers.py --runs 3
+    .venv/bin/python benchmarks/drivers.py --runs 3 [--cold]
 """
 
 from __future__ import annotations
@@ -33,9 +35,12 @@ def drivers():
     return found + [(f"system {Path(p).stem}", p) for p in sorted(glob.glob("/etc/OpenCL/vendors/*.icd"))]
 
 
-def run(icd, cache, out):
-    """Wall seconds of one stippling with only `icd` visible, and its summary line."""
+def run(icd, cache, out, pocl_cache=None):
+    """Wall seconds of one stippling with only `icd` visible, and its summary line;
+    PoCL's kernel cache in `pocl_cache` where given."""
     env = dict(os.environ, OCL_ICD_VENDORS=icd, DISKPACK_CL_CACHE_DIR=cache)
+    if pocl_cache is not None:
+        env["POCL_CACHE_DIR"] = pocl_cache
     cmd = [str(Path(sys.executable).parent / "diskpack")] + [a.format(out=out) for a in COMMAND]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
@@ -49,15 +54,17 @@ def run(icd, cache, out):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--cold", action="store_true", help="first runs with an empty PoCL kernel cache")
     args = ap.parse_args()
     found = drivers()
     with tempfile.TemporaryDirectory(prefix="diskpack-drivers-") as tmp:
         caches = {name: f"{tmp}/cache-{i}" for i, (name, _) in enumerate(found)}
-        cold = {name: run(icd, caches[name], tmp) for name, icd in found}
+        pocl = {name: f"{caches[name]}-pocl" if args.cold else None for name, _ in found}
+        cold = {name: run(icd, caches[name], tmp, pocl[name]) for name, icd in found}
         warm = {name: [] for name, _ in found}
         for _ in range(args.runs):
             for name, icd in found:
-                warm[name].append(run(icd, caches[name], tmp)[0])
+                warm[name].append(run(icd, caches[name], tmp, pocl[name])[0])
     base = statistics.median(warm[found[0][0]])
     for name, _ in found:
         med = statistics.median(warm[name])

@@ -111,6 +111,34 @@ def test_a_hang_is_killed_at_the_time_limit_and_refused(fresh, monkeypatch):
     np.testing.assert_array_equal(got, parallel_darts(3000, seed=4, device=False))
 
 
+def test_the_checks_run_in_children_side_by_side(fresh, monkeypatch):
+    """On two cores the programs are dealt to two children that run at once (each waits at
+    a barrier only both pass together), and the verdict is that of one child for all."""
+    import threading
+
+    real = device_checks._children
+    barrier, dealt = threading.Barrier(2, timeout=60), []
+
+    def side_by_side(address, stems, wide, salt, limit=None):
+        if limit is None and len(dealt) < 2:   # the two children of the first pass
+            dealt.append(list(stems))
+            barrier.wait()
+        return real(address, stems, wide, salt, limit)
+
+    monkeypatch.setattr(device_checks, "_cores", lambda: 2)
+    monkeypatch.setattr(device_checks, "_children", side_by_side)
+    both = device_checks._run_checks(fresh.devices[0])
+    assert len(dealt) == 2 and not set(dealt[0]) & set(dealt[1])
+    assert {"raster_labels", "raster_sums"} <= set(dealt[0]) or {"raster_labels", "raster_sums"} <= set(dealt[1])
+    monkeypatch.setattr(device_checks, "_cores", lambda: 1)
+    monkeypatch.setattr(device_checks, "_children", real)
+    one = device_checks._run_checks(fresh.devices[0])
+    assert list(both.programs) == list(one.programs) == list(device_checks.PROGRAMS)
+    assert both.wide == one.wide
+    assert {k: (e["ok"], e["why"]) for k, e in both.programs.items()} == {
+        k: (e["ok"], e["why"]) for k, e in one.programs.items()}
+
+
 def test_a_damaged_verdict_file_is_checked_again(fresh, tmp_path, monkeypatch):
     verdict_of(fresh)
     (path,) = _cached_files(tmp_path)

@@ -47,6 +47,7 @@ import sys
 import tempfile
 import time
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -79,6 +80,12 @@ _FORMAT = 1
 TIME_LIMIT_S = 120.0
 #: Seconds the probe of 512-bit builtins may take (``kernels/checks_wide_probe.cl``).
 PROBE_LIMIT_S = 10.0
+
+#: Each program's share of the checks' time with a cold kernel cache (mostly its builds):
+#: the checks are dealt by it to one child process a core (:func:`_in_children`).  The
+#: raster programs are one entry, checked in one child: a raster stage builds all three.
+CHECK_COST = {("raster_labels", "raster_mic", "raster_sums"): 18.0, ("cells",): 4.7,
+              ("parallel_darts",): 3.7, ("cells3",): 3.3, ("blur",): 2.6, ("cells_nearest",): 0.5}
 
 
 class UntrustedProgram(RuntimeError):
@@ -350,20 +357,19 @@ def _run_checks(device):
             results.update(narrow)
             notes += more
             wide = False
-    for s in PROGRAMS:
-        results.setdefault(s, {"ok": False, "why": "the device has no float64", "seconds": 0.0, "salt": 0})
-    results.pop("checks_wide_probe", None)
+    no_fp64 = {"ok": False, "why": "the device has no float64", "seconds": 0.0, "salt": 0}
+    results = {s: results.get(s) or dict(no_fp64) for s in PROGRAMS}
     return Verdict(_describe(device), wide, results, time.perf_counter() - start, False, notes)
 
 
 def _checked(address, stems, wide):
     """Verdicts of `stems` (each retried once with a fresh kernel-cache entry where it
     crashed or its build failed), and the notes of those retries."""
-    results = _children(address, stems, wide, salt=0)
+    results = _in_children(address, stems, wide, salt=0)
     notes = []
     retry = [s for s in stems if not results[s]["ok"] and results[s].get("retry")]
     if retry:
-        again = _children(address, retry, wide, salt=_salt())
+        again = _in_children(address, retry, wide, salt=_salt())
         for s in retry:
             if again[s]["ok"]:
                 notes.append(f"{s}: {results[s]['why']}; built again in a fresh kernel-cache entry")
@@ -375,6 +381,53 @@ def _checked(address, stems, wide):
 
 def _salt():
     return int.from_bytes(os.urandom(3), "little") + 1
+
+
+def _in_children(address, stems, wide, salt):
+    """:func:`_children` for `stems` dealt among child processes that run side by side,
+    one a core: the checks' time is mostly single-threaded builds.  The results are in
+    the order of `stems` whatever child gave them."""
+    groups = _dealt(stems, _cores())
+    if len(groups) < 2:
+        return _children(address, stems, wide, salt)
+    with ThreadPoolExecutor(len(groups)) as pool:
+        parts = list(pool.map(lambda group: _children(address, group, wide, salt), groups))
+    merged = {k: v for part in parts for k, v in part.items()}
+    return {s: merged[s] for s in stems}
+
+
+def _cores():
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not on Linux
+        return os.cpu_count() or 1
+
+
+def _dealt(stems, workers):
+    """`stems` dealt into at most `workers` lists of about equal :data:`CHECK_COST`, the
+    costliest first (a program outside the table costs as much as the cheapest there); a
+    list keeps the order of `stems`.
+
+    Examples
+    --------
+    >>> _dealt(["raster_labels", "raster_sums", "cells", "blur", "cells3"], 2)
+    [['raster_labels', 'raster_sums'], ['cells', 'blur', 'cells3']]
+    >>> _dealt(["cells", "blur"], 1)
+    [['cells', 'blur']]
+    """
+    cost = {s: c for group, c in CHECK_COST.items() for s in group}
+    family = {s: group[0] for group in CHECK_COST for s in group}
+    units = {}
+    for s in stems:
+        units.setdefault(family.get(s, s), []).append(s)
+    cheapest = min(CHECK_COST.values())
+    loads = [[0.0, []] for _ in range(max(1, min(workers, len(units))))]
+    for unit in sorted(units, key=lambda u: -cost.get(u, cheapest)):
+        least = min(loads, key=lambda load: load[0])
+        least[0] += cost.get(unit, cheapest)
+        least[1].extend(units[unit])
+    return [sorted(group, key=stems.index) for _, group in loads if group]
 
 
 def _children(address, stems, wide, salt, limit=None):
