@@ -6,8 +6,9 @@ to its builtins).  So before a program's results are used on a device,
 each program runs on small fixed inputs that take its code paths (full
 vectors, partial tiles, image edges, ties, periodic seams) and its answers
 are compared with the host's (numpy and scipy, float64).  The checks run in
-a **child process**, one program after another, each under a time limit:
-a crash or a hang there is a verdict, not the end of the user's run.
+**child processes**, one a core, each over its share of the programs one
+after another, each program under a time limit: a crash or a hang there is
+a verdict, not the end of the user's run.
 
 Verdicts are kept in the user's cache folder (:func:`cache_dir`), one file
 per driver version, device, kernel sources and package version, so the
@@ -254,7 +255,7 @@ _MEMO: dict = {}
 
 def verdict_of(ctx, *, refresh=False):
     """The :class:`Verdict` of the context's device: from this process, the cache folder,
-    or the checks run now in a child process (and then kept in the cache).
+    or the checks run now in child processes (and then kept in the cache).
 
     Parameters
     ----------

@@ -318,7 +318,7 @@ def get_context(device=None):
     """Return a cached ``pyopencl.Context`` for the chosen device, once it is trusted.
 
     A device is taken once its core programs gave the host's answers (:mod:`diskpack_cl.device.checks`: run
-    once per driver, device and kernel sources, in a child process, and
+    once per driver, device and kernel sources, in child processes, and
     cached); a device that fails them is passed over, with one line saying
     why, for the next one the device string allows.
 
