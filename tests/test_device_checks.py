@@ -129,7 +129,7 @@ def test_the_checks_run_in_children_side_by_side(fresh, monkeypatch):
     monkeypatch.setattr(device_checks, "_children", side_by_side)
     both = device_checks._run_checks(fresh.devices[0])
     assert len(dealt) == 2 and not set(dealt[0]) & set(dealt[1])
-    assert {"raster_labels", "raster_sums"} <= set(dealt[0]) or {"raster_labels", "raster_sums"} <= set(dealt[1])
+    assert any({"raster_labels", "raster_sums"} <= set(group) for group in dealt)
     monkeypatch.setattr(device_checks, "_cores", lambda: 1)
     monkeypatch.setattr(device_checks, "_children", real)
     one = device_checks._run_checks(fresh.devices[0])
@@ -137,6 +137,40 @@ def test_the_checks_run_in_children_side_by_side(fresh, monkeypatch):
     assert both.wide == one.wide
     assert {k: (e["ok"], e["why"]) for k, e in both.programs.items()} == {
         k: (e["ok"], e["why"]) for k, e in one.programs.items()}
+
+
+@pytest.mark.parametrize("workers", [1, 2, 3, 4, 9])
+def test_programs_built_together_are_checked_in_one_child(workers):
+    """Each program once, the programs one stage builds together in one child (two
+    children building one program would build it twice, at once, into one cache)."""
+    stems = list(device_checks.PROGRAMS)
+    groups = device_checks._dealt(stems, workers)
+    assert sorted(s for g in groups for s in g) == sorted(stems)
+    assert len(groups) == min(workers, len(device_checks.CHECK_COST))
+    for family in device_checks.CHECK_COST:
+        assert sum(bool(set(family) & set(g)) for g in groups) == 1, (family, groups)
+
+
+def test_each_check_builds_only_programs_of_its_own_child(ctx, monkeypatch):
+    """What a program's check builds lies in its entry of CHECK_COST (the nearest
+    neighbours' engine builds the MIC program too): no two children build one program."""
+    from diskpack_cl.device import stage as _stage
+    from diskpack_cl.device.known_answers import CHECKS
+
+    real, built = _stage.build_program, []
+
+    def recorded(c, stem, defines=None):
+        built.append(stem)
+        return real(c, stem, defines)
+
+    monkeypatch.setattr(_stage, "build_program", recorded)
+    family = {s: set(group) for group in device_checks.CHECK_COST for s in group}
+    fp64 = "cl_khr_fp64" in ctx.devices[0].extensions
+    for stem in device_checks.PROGRAMS:
+        if fp64 or stem not in device_checks.FP64_PROGRAMS:
+            built.clear()
+            assert CHECKS[stem](ctx, False) is None
+            assert built and set(built) <= family[stem], (stem, built)
 
 
 def test_a_damaged_verdict_file_is_checked_again(fresh, tmp_path, monkeypatch):
