@@ -10,6 +10,19 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 
+def usable_cores():
+    """Cores this process may run on (its CPU set where the system has one).
+
+    Examples
+    --------
+    >>> usable_cores() >= 1
+    True
+    """
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
+
+
 def on_cores(run, length, work, part):
     """Call ``run(rows)`` for consecutive slices `rows` covering ``range(length)``, together.
 

@@ -52,6 +52,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .._cores import usable_cores
 from ..io import atomic_write
 from .cache import cache_dir   # (one of the checks' names too: where the verdicts are)
 
@@ -390,21 +391,13 @@ def _in_children(address, stems, wide, salt):
     """:func:`_children` for `stems` dealt among child processes that run side by side,
     one a core: the checks' time is mostly single-threaded builds.  The results are in
     the order of `stems` whatever child gave them."""
-    groups = _dealt(stems, _cores())
+    groups = _dealt(stems, usable_cores())
     if len(groups) < 2:
         return _children(address, stems, wide, salt)
     with ThreadPoolExecutor(len(groups)) as pool:
         parts = list(pool.map(lambda group: _children(address, group, wide, salt), groups))
     merged = {k: v for part in parts for k, v in part.items()}
     return {s: merged[s] for s in stems}
-
-
-def _cores():
-    """Cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:   # not on Linux
-        return os.cpu_count() or 1
 
 
 def _dealt(stems, workers):

@@ -27,6 +27,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import replace
 from pathlib import Path
 
+from .._cores import usable_cores
 from ..extras import install_command
 from ..io import atomic_write, atomic_writes, remove_partial_files
 from ..io import json_default
@@ -148,8 +149,7 @@ def default_jobs(devices=None):
     """
     if devices:
         return len(devices)
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-               else os.cpu_count() or 1)
+    return usable_cores()
 
 
 def peak_rss_mib():
